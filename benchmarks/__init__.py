@@ -1,0 +1,1 @@
+"""Monte-Carlo harness, the paper's reproduction, plots, performance measurements."""

@@ -1,0 +1,148 @@
+"""The radar model of a scenario: every constant the simulation needs, computed once.
+
+:class:`RadarModel` turns a :class:`~mimo_radar_env.scenario.Scenario` into
+arrays: station positions, the per-channel SINR gain including the scenario
+constant ``C`` (SPEC 3), the per-target minimum SINR of eq32, the maneuver
+transition matrices and the noise-free nominal trajectories.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..scenario import Scenario, turn_rate_schedule
+from .geometry import station_ranges
+from .motion import nominal_trajectories, noise_gain, process_covariance, transition_matrix
+
+#: eq32: the lower end of the measurement-quality factor lambda.
+LAMBDA_FLOOR = 0.2
+
+
+@dataclass(frozen=True)
+class RadarModel:
+    """Constants of a scenario's radar model (all lengths in metres).
+
+    Attributes
+    ----------
+    tx, rx : arrays (M, 2), (N, 2)
+    gain : array (K, M, N)
+        ``C * psi * P_m / (sigma_noise^2 + sigma_int_n^2)``: the mean SINR is
+        ``gain / (R_tx R_rx)^2`` (eq5 with SPEC 3's constant).
+    sinr_constant : float
+        ``C`` of SPEC 3.
+    min_sinr : array (K,)
+        ``S_min_k`` of eq32, from the nominal trajectory of target k.
+    transitions : array (K, T, 4, 4)
+        ``F`` of the transition ``t -> t+1`` for each target.
+    nominal : array (K, T+1, 4)
+        Noise-free trajectories from the initial estimates.
+    """
+
+    scenario: Scenario
+    tx: NDArray[np.float64]
+    rx: NDArray[np.float64]
+    gain: NDArray[np.float64]
+    sinr_constant: float
+    min_sinr: NDArray[np.float64]
+    transitions: NDArray[np.float64]
+    nominal: NDArray[np.float64]
+    process_cov: NDArray[np.float64]
+    noise_gain: NDArray[np.float64]
+    initial_states: NDArray[np.float64]
+    initial_cov_sqrt: NDArray[np.float64]
+
+    @classmethod
+    def from_scenario(cls, scenario: Scenario) -> RadarModel:
+        sc = scenario
+        transitions = transition_matrix(turn_rate_schedule(sc), sc.sample_time)
+        initial_states = np.stack([t.initial_state for t in sc.targets])
+        nominal = nominal_trajectories(initial_states, transitions)
+        raw_gain = sc.rcs * sc.tx_power[None, :, None] / (
+            sc.noise_power + sc.interference_power[None, None, :]
+        )
+        raw_max, raw_min = _sinr_extremes(raw_gain, sc.tx_positions, sc.rx_positions, nominal)
+        constant = sc.peak_sinr / raw_max.max()
+        return cls(
+            scenario=sc,
+            tx=sc.tx_positions,
+            rx=sc.rx_positions,
+            gain=constant * raw_gain,
+            sinr_constant=float(constant),
+            min_sinr=constant * raw_min,
+            transitions=transitions,
+            nominal=nominal,
+            process_cov=process_covariance(sc.sample_time, sc.process_noise),
+            noise_gain=noise_gain(sc.sample_time),
+            initial_states=initial_states,
+            initial_cov_sqrt=np.stack([np.linalg.cholesky(t.initial_covariance) for t in sc.targets]),
+        )
+
+    # ----------------------------------------------------------- sizes
+    @property
+    def num_tx(self) -> int:
+        return self.tx.shape[0]
+
+    @property
+    def num_rx(self) -> int:
+        return self.rx.shape[0]
+
+    @property
+    def num_targets(self) -> int:
+        return self.gain.shape[0]
+
+    @property
+    def weights(self) -> NDArray[np.float64]:
+        return self.scenario.weights
+
+    # ---------------------------------------------------------- physics
+    def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Mean SINR ``S[k, m, n]`` (eq5, SPEC 3) for positions (..., K, 2): shape (..., K, M, N)."""
+        tx_sq = station_ranges(positions, self.tx) ** 2
+        rx_sq = station_ranges(positions, self.rx) ** 2
+        return self.gain / (tx_sq[..., :, None] * rx_sq[..., None, :])
+
+    def channel_weights(self, mean_sinr: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``sum_k Omega_k S[k, m, n]``: the expected reward of each channel, (..., M, N)."""
+        return np.einsum("k,...kmn->...mn", self.weights, mean_sinr)
+
+    def quality(self, sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
+        """``lambda`` of eq32 from linear SINR, clipped into [0.2, 1.2] (SPEC 4).
+
+        ``target_axis`` is the axis of ``sinr`` that indexes targets.
+        """
+        shape = [1] * sinr.ndim
+        shape[target_axis] = self.num_targets
+        s_min = self.min_sinr.reshape(shape)
+        peak = self.scenario.peak_sinr
+        lam = (sinr - s_min) / (peak - s_min) + LAMBDA_FLOOR
+        return np.clip(lam, LAMBDA_FLOOR, 1.0 + LAMBDA_FLOOR)
+
+
+def _sinr_extremes(
+    raw_gain: NDArray[np.float64],
+    tx: NDArray[np.float64],
+    rx: NDArray[np.float64],
+    nominal: NDArray[np.float64],
+    chunk_elements: int = 4_000_000,
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per-target max and min over channels and steps of ``raw_gain / (R_tx R_rx)^2``.
+
+    Processed in chunks of steps so that large layouts do not build the whole
+    (K, T+1, M, N) array at once.
+    """
+    num_targets, num_steps = nominal.shape[:2]
+    per_step = num_targets * raw_gain.shape[1] * raw_gain.shape[2]
+    chunk = max(1, chunk_elements // per_step)
+    highest = np.full(num_targets, -np.inf)
+    lowest = np.full(num_targets, np.inf)
+    for start in range(0, num_steps, chunk):
+        positions = nominal[:, start : start + chunk][..., [0, 2]]  # (K, c, 2)
+        tx_sq = station_ranges(positions, tx) ** 2
+        rx_sq = station_ranges(positions, rx) ** 2
+        sinr = raw_gain[:, None] / (tx_sq[..., :, None] * rx_sq[..., None, :])
+        highest = np.maximum(highest, sinr.max(axis=(1, 2, 3)))
+        lowest = np.minimum(lowest, sinr.min(axis=(1, 2, 3)))
+    return highest, lowest

@@ -1,0 +1,188 @@
+"""Batch-first simulation of targets, channels and measurements.
+
+:class:`RadarSimulation` holds the truth of B Monte-Carlo trials and draws what
+the radar observes. Every array has the trial axis first. The single env is the
+B = 1 case of this class.
+
+Time: reset puts the targets at step 0 (``X_0 ~ N(X1_hat, P1_hat)``); each
+:meth:`advance` moves them from ``t`` to ``t + 1`` with the transition of step
+``t`` (SPEC 2). Observations at step ``t`` use the state at ``t``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .geometry import bistatic_measurement, wrap_angle
+from .model import RadarModel
+from .motion import transition_matrix
+from .random import (
+    STREAM_INITIAL_STATE,
+    STREAM_MEASUREMENT,
+    STREAM_PROCESS_NOISE,
+    STREAM_SINR,
+    TrialStreams,
+    full_index,
+)
+
+
+@dataclass
+class ChannelObservations:
+    """What the selected channels of one step observe, for B trials.
+
+    ``C = Ms * Ns`` channels per trial, ordered TX-major. For trials whose action
+    was invalid the arrays hold placeholder channels and ``valid`` is False.
+
+    Attributes
+    ----------
+    tx_index, rx_index : int arrays (B, C)
+    valid : bool array (B,)
+    mean_sinr : (B, K, C) true mean SINR of the probed channels
+    sinr : (B, K, C) Swerling-I samples, Exponential with mean ``mean_sinr``
+    measurement : (B, K, C, 2) range sum (m) and azimuth (rad, wrapped)
+    noise_variance : (B, K, C, 2) the true variances ``diag(Sigma0) / lambda``
+    """
+
+    tx_index: NDArray[np.int64]
+    rx_index: NDArray[np.int64]
+    valid: NDArray[np.bool_]
+    mean_sinr: NDArray[np.float64]
+    sinr: NDArray[np.float64]
+    measurement: NDArray[np.float64]
+    noise_variance: NDArray[np.float64]
+
+
+class RadarSimulation:
+    """Truth and observations of B trials of one scenario.
+
+    Parameters
+    ----------
+    model : RadarModel
+    batch_size : int
+        Number of trials B.
+    """
+
+    def __init__(self, model: RadarModel, batch_size: int) -> None:
+        if batch_size < 1:
+            raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        self.model = model
+        self.batch_size = batch_size
+        self.step_index = 0
+        self.state = np.zeros((batch_size, model.num_targets, 4))
+        self._streams: TrialStreams | None = None
+        self._upcoming: NDArray[np.float64] | None = None
+        self._mean_sinr: NDArray[np.float64] | None = None
+        sc = model.scenario
+        self._sigma0_diag = np.array([sc.range_variance, sc.azimuth_variance])
+        self._process_std = np.sqrt(sc.process_noise)
+
+    # -------------------------------------------------------------- truth
+    def reset(self, keys: NDArray[np.uint64]) -> None:
+        """Start B new trials; ``keys`` (B, 2) from :func:`keys_from_generator`."""
+        self._streams = TrialStreams(keys)
+        if self._streams.batch_size != self.batch_size:
+            raise ValueError(f"expected keys for {self.batch_size} trials, got {self._streams.batch_size}")
+        model = self.model
+        draws = self._streams.normal(
+            STREAM_INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4))
+        )
+        self.state = model.initial_states + np.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
+        self.step_index = 0
+        self._upcoming = None
+        self._mean_sinr = None
+
+    @property
+    def streams(self) -> TrialStreams:
+        if self._streams is None:
+            raise RuntimeError("call reset() before stepping the simulation")
+        return self._streams
+
+    def upcoming_state(self) -> NDArray[np.float64]:
+        """The true state at step ``t + 1`` (B, K, 4), without advancing.
+
+        The truth does not depend on the radar's actions, so the oracle may look
+        one step ahead; steps past the horizon continue with NCV.
+        """
+        if self._upcoming is None:
+            model = self.model
+            t = self.step_index
+            if t < model.transitions.shape[1]:
+                F = model.transitions[:, t]
+            else:
+                F = np.broadcast_to(
+                    transition_matrix(0.0, model.scenario.sample_time), (model.num_targets, 4, 4)
+                )
+            noise = self._process_std * self.streams.normal(
+                STREAM_PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
+            )
+            self._upcoming = np.einsum("kij,bkj->bki", F, self.state) + noise @ model.noise_gain.T
+        return self._upcoming
+
+    def advance(self) -> None:
+        """Move every trial's targets from step ``t`` to ``t + 1``."""
+        self.state = self.upcoming_state()
+        self.step_index += 1
+        self._upcoming = None
+        self._mean_sinr = None
+
+    @property
+    def positions(self) -> NDArray[np.float64]:
+        """True positions (B, K, 2)."""
+        return self.state[..., [0, 2]]
+
+    def mean_sinr(self) -> NDArray[np.float64]:
+        """True mean SINR at the current step, (B, K, M, N)."""
+        if self._mean_sinr is None:
+            self._mean_sinr = self.model.mean_sinr(self.positions)
+        return self._mean_sinr
+
+    # ------------------------------------------------------- observations
+    def sinr_samples_all(self) -> NDArray[np.float64]:
+        """Swerling-I SINR samples of every channel at the current step, (B, K, M, N).
+
+        Used for the reset probe of Algorithm 1's initialisation.
+        """
+        model = self.model
+        shape = (model.num_targets, model.num_tx, model.num_rx)
+        draws = self.streams.exponential(STREAM_SINR, self.step_index, full_index(self.batch_size, shape))
+        return self.mean_sinr() * draws
+
+    def observe(
+        self, tx_index: NDArray[np.int64], rx_index: NDArray[np.int64], valid: NDArray[np.bool_]
+    ) -> ChannelObservations:
+        """Observe the channels ``tx_index x rx_index`` (B, Ms), (B, Ns) at the current step.
+
+        The draw of channel ``(k, m, n)`` depends only on the trial key, the step
+        and ``(k, m, n)``, never on which other channels are probed.
+        """
+        model = self.model
+        num_targets, num_tx, num_rx = model.num_targets, model.num_tx, model.num_rx
+        batch = np.arange(self.batch_size)[:, None, None]
+        channel_tx = np.repeat(tx_index, rx_index.shape[1], axis=1)  # (B, C)
+        channel_rx = np.tile(rx_index, (1, tx_index.shape[1]))  # (B, C)
+        targets = np.arange(num_targets)[None, :, None]
+        mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
+        flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
+        sinr = mean * self.streams.exponential(STREAM_SINR, self.step_index, flat)
+        lam = model.quality(mean, target_axis=1)
+        variance = self._sigma0_diag / lam[..., None]  # (B, K, C, 2)
+        clean = bistatic_measurement(
+            self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
+        )
+        noise_index = flat[..., None] * 2 + np.arange(2)
+        noise = np.sqrt(variance) * self.streams.normal(STREAM_MEASUREMENT, self.step_index, noise_index)
+        measurement = clean + noise
+        measurement[..., 1] = wrap_angle(measurement[..., 1])
+        return ChannelObservations(
+            tx_index=channel_tx,
+            rx_index=channel_rx,
+            valid=valid,
+            mean_sinr=mean,
+            sinr=sinr,
+            measurement=measurement,
+            noise_variance=variance,
+        )
+

@@ -1,0 +1,240 @@
+"""The batch engine shared by the single env and the native vector env.
+
+:class:`RadarEngine` runs B trials in lockstep: it checks actions, advances the
+truth, probes the selected channels, runs the tracker and assembles the
+observation and info dictionaries with a leading trial axis. The single env is
+the B = 1 case and squeezes that axis; there is no second implementation.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.model import RadarModel
+from ..core.random import keys_from_generator
+from ..core.simulation import ChannelObservations, RadarSimulation
+from ..core.superarm import best_super_arm, super_arm_value
+from ..scenario import Scenario, ScenarioError, load_scenario
+from ..tracking import FUSIONS, IMMUKFTracker
+
+INVALID_ACTION_MODES = ("probe-nothing", "raise")
+FILTER_NOISE_MODES = ("true", "estimated")
+
+
+def default_config() -> dict[str, Any]:
+    """Options of ``MimoRadarSelect-v0``; any of them can be given to ``gym.make``.
+
+    * ``scenario``: a shipped scenario name (``paper-1``, ``paper-2``,
+      ``paper-3``), a path to a YAML/TOML file, or a :class:`Scenario`.
+    * ``fusion``: ``"average"`` (the paper's eq22) or ``"centralized"``.
+    * ``filter_noise``: ``"true"`` (the tracker uses each channel's true
+      measurement covariance) or ``"estimated"`` (``Sigma0 / lambda_hat`` from
+      the SINR the channel observed).
+    * ``invalid_action``: ``"probe-nothing"`` (an action that does not select
+      exactly Ms TX and Ns RX probes nothing, reward 0) or ``"raise"``.
+
+    Every other keyword is a scenario field override (``horizon=200``...).
+    """
+    return {
+        "scenario": "paper-1",
+        "fusion": "average",
+        "filter_noise": "true",
+        "invalid_action": "probe-nothing",
+    }
+
+
+def resolve_config(kwargs: Mapping[str, Any]) -> tuple[dict[str, Any], Scenario]:
+    """Split ``gym.make`` keywords into env options and scenario overrides, validate both."""
+    config = default_config()
+    overrides = {}
+    for key, value in kwargs.items():
+        if key in config:
+            config[key] = value
+        else:
+            overrides[key] = value
+    if config["fusion"] not in FUSIONS:
+        raise ValueError(f"fusion must be one of {FUSIONS}, got {config['fusion']!r}")
+    if config["filter_noise"] not in FILTER_NOISE_MODES:
+        raise ValueError(f"filter_noise must be one of {FILTER_NOISE_MODES}, got {config['filter_noise']!r}")
+    if config["invalid_action"] not in INVALID_ACTION_MODES:
+        raise ValueError(
+            f"invalid_action must be one of {INVALID_ACTION_MODES}, got {config['invalid_action']!r}"
+        )
+    try:
+        scenario = load_scenario(config["scenario"], **overrides)
+    except ScenarioError as exc:
+        if "unknown scenario key" in str(exc):
+            raise ScenarioError(f"{exc}; env options are {sorted(default_config())}") from exc
+        raise
+    config["scenario"] = scenario
+    return config, scenario
+
+
+def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.int8]:
+    """Validate actions against ``MultiBinary``: shape, a real dtype, values 0/1 only.
+
+    Raises ``ValueError`` naming what is wrong; returns the actions as int8.
+    """
+    arr = np.asarray(actions)
+    if arr.dtype.kind not in "biuf":
+        raise ValueError(
+            f"action must be an array of 0/1 integers (MultiBinary), got dtype {arr.dtype}"
+        )
+    if arr.shape != expected_shape:
+        raise ValueError(
+            f"action must have shape {expected_shape} (first M bits choose transmitters, "
+            f"the last N receivers), got shape {arr.shape}"
+        )
+    if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
+        raise ValueError("action contains NaN or infinite values; expected only 0 and 1")
+    if not np.all((arr == 0) | (arr == 1)):
+        bad = np.unique(arr[(arr != 0) & (arr != 1)])[:5]
+        raise ValueError(f"action values must be 0 or 1, got {bad.tolist()}")
+    return arr.astype(np.int8)
+
+
+def true_indices(mask: NDArray[np.bool_], count: int) -> NDArray[np.int64]:
+    """Indices of the first ``count`` True entries of each row, ascending."""
+    return np.sort(np.argsort(~mask, axis=1, kind="stable")[:, :count], axis=1)
+
+
+class RadarEngine:
+    """B trials of ``MimoRadarSelect`` in lockstep.
+
+    Parameters
+    ----------
+    config : dict
+        Resolved options (see :func:`default_config`).
+    scenario : Scenario
+    batch_size : int
+    """
+
+    def __init__(self, config: dict[str, Any], scenario: Scenario, batch_size: int) -> None:
+        self.config = config
+        self.scenario = scenario
+        self.model = RadarModel.from_scenario(scenario)
+        self.batch_size = batch_size
+        self.simulation = RadarSimulation(self.model, batch_size)
+        self.tracker = IMMUKFTracker(self.model, batch_size, fusion=config["fusion"])
+        self.num_tx, self.num_rx = scenario.num_tx, scenario.num_rx
+        self.action_size = self.num_tx + self.num_rx
+        self.step_index = 0
+        self.last_action = np.zeros((batch_size, self.action_size), dtype=np.int8)
+        self.last_valid = np.zeros(batch_size, dtype=bool)
+
+    @property
+    def horizon(self) -> int:
+        return self.scenario.horizon
+
+    # ----------------------------------------------------------- episode
+    def reset(
+        self, generators: Sequence[np.random.Generator]
+    ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+        """Start an episode in every trial; trial i draws its keys from ``generators[i]``."""
+        keys = np.stack([keys_from_generator(g) for g in generators])
+        self.simulation.reset(keys)
+        self.tracker.reset()
+        self.step_index = 0
+        self.last_action[:] = 0
+        self.last_valid[:] = False
+        sinr = self.simulation.sinr_samples_all()  # Algorithm 1: every channel probed once
+        probed = np.ones((self.batch_size, self.num_tx, self.num_rx), dtype=np.int8)
+        obs = self._observation(sinr, probed)
+        info = self._truth_info()
+        return obs, info
+
+    def step(
+        self, actions: Any
+    ) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
+        """Apply actions (B, M + N); returns obs, reward, terminated, truncated, info."""
+        if self.step_index >= self.horizon:
+            raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
+        actions = check_actions(actions, (self.batch_size, self.action_size))
+        tx_mask = actions[:, : self.num_tx].astype(bool)
+        rx_mask = actions[:, self.num_tx :].astype(bool)
+        sc = self.scenario
+        valid = (tx_mask.sum(axis=1) == sc.tx_per_step) & (rx_mask.sum(axis=1) == sc.rx_per_step)
+        if self.config["invalid_action"] == "raise" and not valid.all():
+            bad = int(np.flatnonzero(~valid)[0])
+            raise ValueError(
+                f"action of trial {bad} selects {int(tx_mask[bad].sum())} TX and {int(rx_mask[bad].sum())} RX; "
+                f"exactly tx_per_step={sc.tx_per_step} and rx_per_step={sc.rx_per_step} are required "
+                "(or make the env with invalid_action='probe-nothing')"
+            )
+        self.simulation.advance()
+        self.step_index += 1
+        # invalid trials get placeholder channels (the first stations) and are masked out
+        tx_index = np.where(valid[:, None], true_indices(tx_mask, sc.tx_per_step), np.arange(sc.tx_per_step))
+        rx_index = np.where(valid[:, None], true_indices(rx_mask, sc.rx_per_step), np.arange(sc.rx_per_step))
+        channels = self.simulation.observe(tx_index, rx_index, valid)
+
+        reward = np.einsum("k,bkc->b", self.model.weights, channels.sinr) * valid
+        sinr = np.zeros((self.batch_size, self.model.num_targets, self.num_tx, self.num_rx))
+        probed = (tx_mask[:, :, None] & rx_mask[:, None, :] & valid[:, None, None]).astype(np.int8)
+        batch = np.arange(self.batch_size)[:, None, None]
+        targets = np.arange(self.model.num_targets)[None, :, None]
+        sinr[batch, targets, channels.tx_index[:, None, :], channels.rx_index[:, None, :]] = channels.sinr
+        sinr *= valid[:, None, None, None]
+
+        self._track(channels)
+        self.last_action = actions
+        self.last_valid = valid
+
+        info = self._truth_info()
+        weights = self.model.channel_weights(self.simulation.mean_sinr())
+        info["expected_reward"] = super_arm_value(weights, tx_mask, rx_mask) * valid
+        best_tx, best_rx, best_value = best_super_arm(weights, sc.tx_per_step, sc.rx_per_step)
+        info["optimal_reward"] = best_value
+        info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
+        info["action_valid"] = valid
+        obs = self._observation(sinr, probed)
+        terminated = np.zeros(self.batch_size, dtype=bool)
+        truncated = np.full(self.batch_size, self.step_index >= self.horizon)
+        return obs, reward, terminated, truncated, info
+
+    def oracle_action(self) -> NDArray[np.int8]:
+        """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
+        upcoming = self.simulation.upcoming_state()[..., [0, 2]]
+        weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
+        tx, rx, _ = best_super_arm(weights, self.scenario.tx_per_step, self.scenario.rx_per_step)
+        return np.concatenate([tx, rx], axis=1).astype(np.int8)
+
+    # ----------------------------------------------------------- helpers
+    def _track(self, channels: ChannelObservations) -> None:
+        if self.config["filter_noise"] == "true":
+            variance = channels.noise_variance
+        else:
+            lam_hat = self.model.quality(channels.sinr, target_axis=1)
+            sigma0 = np.array([self.scenario.range_variance, self.scenario.azimuth_variance])
+            variance = sigma0 / lam_hat[..., None]
+        self.tracker.step(
+            self.model.tx[channels.tx_index],
+            self.model.rx[channels.rx_index],
+            channels.measurement,
+            variance,
+            channels.valid,
+        )
+
+    def _observation(self, sinr: NDArray, probed: NDArray) -> dict[str, NDArray]:
+        tracker = self.tracker
+        return {
+            "sinr": sinr,
+            "probed": probed,
+            "track": tracker.estimate.copy(),
+            "track_pred": tracker.predicted_state(),
+            "track_pos_cov": tracker.covariance[..., [[0], [2]], [0, 2]],
+            "mode_prob": tracker.model_probabilities,
+        }
+
+    def _truth_info(self) -> dict[str, NDArray]:
+        state = self.simulation.state
+        error = np.linalg.norm(self.tracker.estimate[..., [0, 2]] - state[..., [0, 2]], axis=-1)
+        return {
+            "mean_sinr": self.simulation.mean_sinr(),
+            "true_state": state.copy(),
+            "position_error": error,
+        }

@@ -1,0 +1,291 @@
+"""``MimoRadarSelect-v0``: transmitter/receiver selection for a distributed MIMO radar.
+
+The single env and the native vector env stand side by side, as in Gymnasium's
+``cartpole.py``; both drive the same :class:`~mimo_radar_env.envs.engine.RadarEngine`.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from gymnasium.utils import seeding
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
+from numpy.typing import NDArray
+
+from ..rendering import draw_scenario, figure_to_rgb
+from ..scenario import Scenario
+from .engine import RadarEngine, resolve_config
+
+
+def observation_space(scenario: Scenario, num_models: int = 3) -> spaces.Dict:
+    """The observation space of one trial (see :class:`MimoRadarSelectEnv`)."""
+    K, M, N = scenario.num_targets, scenario.num_tx, scenario.num_rx
+    big = np.finfo(np.float64).max  # unbounded in principle; finite so that Box samples are finite
+    return spaces.Dict(
+        {
+            "sinr": spaces.Box(0.0, big, (K, M, N), np.float64),
+            "probed": spaces.MultiBinary((M, N)),
+            "track": spaces.Box(-big, big, (K, 4), np.float64),
+            "track_pred": spaces.Box(-big, big, (K, 4), np.float64),
+            "track_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64),
+            "mode_prob": spaces.Box(0.0, 1.0, (K, num_models), np.float64),
+        }
+    )
+
+
+def _squeeze(batch: dict[str, NDArray]) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in batch.items():
+        value = value[0]
+        out[key] = value.item() if np.ndim(value) == 0 else value
+    return out
+
+
+class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
+    """
+    ## Description
+
+    A distributed MIMO radar with M transmitters (TX) and N receivers (RX) tracks
+    K moving targets (Hao et al., "Combinatorial-restless-bandit-based
+    Transmitter-Receiver Online Selection for Distributed MIMO Radars With
+    Non-Stationary Channels"). Every step the controller selects exactly ``Ms``
+    transmitters and ``Ns`` receivers; each selected TX-RX pair is a channel that
+    returns, for every target, a Swerling-I SINR sample (Exponential with the
+    channel's mean SINR, eq5) and a range-sum/azimuth measurement whose noise
+    shrinks with the SINR (eq6, eq9, eq32). An IMM-UKF inside the env turns the
+    measurements into target estimates, so a policy is judged on the SINR it
+    collects and on how well the targets are tracked. The channel SINRs change
+    as the targets move: the bandit is restless and non-stationary.
+
+    ## Action Space
+
+    ``MultiBinary(M + N)``: the first M bits select transmitters, the last N
+    receivers. A valid action has exactly ``Ms`` ones among the first M bits and
+    ``Ns`` among the last N. An action inside the space that breaks this probes
+    nothing (reward 0, ``info["action_valid"] = False``, the tracker only
+    predicts) unless the env is made with ``invalid_action="raise"``. An action
+    outside the space (wrong shape, non-numeric dtype, values other than 0/1,
+    NaN) raises ``ValueError``.
+
+    ## Observation Space
+
+    A ``Dict`` of what the radar controller knows after the step:
+
+    | key | shape | meaning |
+    |---|---|---|
+    | ``sinr`` | (K, M, N) | SINR samples of the probed channels (linear), 0 elsewhere |
+    | ``probed`` | (M, N) | 1 for the channels probed this step |
+    | ``track`` | (K, 4) | fused IMM-UKF estimate ``[x, vx, y, vy]`` (eq22) |
+    | ``track_pred`` | (K, 4) | one-step prediction for the next step (eq24) |
+    | ``track_pos_cov`` | (K, 2, 2) | position covariance of ``track`` (m^2) |
+    | ``mode_prob`` | (K, 3) | model probabilities: NCV, NCT(+3 deg/s), NCT(-3 deg/s) |
+
+    The reset observation probes every channel once (Algorithm 1's
+    initialisation): ``probed`` is all ones and ``track`` is the initial
+    estimate ``X1_hat``.
+
+    ## Rewards
+
+    ``sum_k Omega_k sum_{(m, n) selected} gamma[k, m, n]`` (eq17): the weighted
+    sum of the SINR samples of the selected channels.
+
+    ## Info (truth, for evaluation only)
+
+    ``mean_sinr`` (K, M, N), ``true_state`` (K, 4), ``position_error`` (K,) in
+    metres; after a step also ``expected_reward`` (``mu_t`` of eq13 for the
+    action), ``optimal_reward`` (``mu*_t``), ``optimal_action`` (M + N,) and
+    ``action_valid``. Non-oracle agents must not read them. The Best oracle reads
+    the optimal super arm of the coming step with ``env.unwrapped.oracle_action()``.
+
+    ## Starting State
+
+    The true state of each target is drawn from ``N(X1_hat, P1_hat)`` of the
+    scenario; the tracker starts at ``X1_hat, P1_hat``.
+
+    ## Episode End
+
+    Truncation after the scenario's horizon ``T`` steps (1000 in the paper's
+    scenarios). There is no termination.
+
+    ## Arguments
+
+    ``gym.make("MimoRadarSelect-v0", scenario="paper-1", fusion="average",
+    filter_noise="true", invalid_action="probe-nothing", render_mode=None,
+    **scenario_overrides)``; see :func:`~mimo_radar_env.envs.engine.default_config`.
+    ``scenario`` is ``paper-1``, ``paper-2``, ``paper-3``, a YAML/TOML file or a
+    :class:`~mimo_radar_env.Scenario`; other keywords override scenario fields
+    (``horizon=200``).
+
+    ## Seeding
+
+    ``reset(seed=s)`` determines every random draw of the episode. Trial ``i`` of
+    the vector env reset with ``seed=s`` equals this env reset with ``seed=s + i``.
+    The truth (initial states and process noise) has its own stream, so two
+    policies run with the same seed see the same target trajectories.
+    """
+
+    metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
+
+    def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
+        if render_mode is not None and render_mode not in self.metadata["render_modes"]:
+            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
+        self.config, self.scenario = resolve_config(kwargs)
+        self.engine = RadarEngine(self.config, self.scenario, batch_size=1)
+        self.action_space = spaces.MultiBinary(self.engine.action_size)
+        self.observation_space = observation_space(self.scenario, self.engine.tracker.num_models)
+        self.render_mode = render_mode
+        self._truth_history: list[NDArray] = []
+        self._track_history: list[NDArray] = []
+        self._figure: Any = None
+
+    def reset(
+        self, *, seed: int | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, NDArray], dict[str, Any]]:
+        super().reset(seed=seed)
+        obs, info = self.engine.reset([self.np_random])
+        self._truth_history = [info["true_state"][0][:, [0, 2]]]
+        self._track_history = [obs["track"][0][:, [0, 2]]]
+        if self.render_mode == "human":
+            self.render()
+        return _squeeze(obs), _squeeze(info)
+
+    def step(
+        self, action: NDArray[np.int8]
+    ) -> tuple[dict[str, NDArray], float, bool, bool, dict[str, Any]]:
+        obs, reward, terminated, truncated, info = self.engine.step(
+            _single_action(action, self.engine.action_size)
+        )
+        self._truth_history.append(info["true_state"][0][:, [0, 2]])
+        self._track_history.append(obs["track"][0][:, [0, 2]])
+        if self.render_mode == "human":
+            self.render()
+        return (
+            _squeeze(obs),
+            float(reward[0]),
+            bool(terminated[0]),
+            bool(truncated[0]),
+            _squeeze(info),
+        )
+
+    def oracle_action(self) -> NDArray[np.int8]:
+        """The optimal super arm for the coming step (reads the truth: oracle only)."""
+        return self.engine.oracle_action()[0]
+
+    def render(self) -> NDArray[np.uint8] | None:
+        if self.render_mode is None:
+            gym.logger.warn("render() called without a render_mode; make the env with render_mode='rgb_array'")
+            return None
+        if self.render_mode == "rgb_array":
+            from matplotlib.backends.backend_agg import FigureCanvasAgg
+            from matplotlib.figure import Figure
+
+            fig = Figure(figsize=(6, 6), dpi=80)
+            FigureCanvasAgg(fig)
+            ax = fig.add_subplot()
+        else:
+            import matplotlib.pyplot as plt
+
+            if self._figure is None:
+                plt.ion()
+                self._figure = plt.figure(figsize=(6, 6), dpi=80)
+            fig = self._figure
+            fig.clf()
+            ax = fig.add_subplot()
+        draw_scenario(
+            ax,
+            self.scenario,
+            true_tracks=np.array(self._truth_history),
+            estimated_tracks=np.array(self._track_history),
+            selection=self.engine.last_action[0] if self.engine.last_valid[0] else None,
+            title=f"{self.scenario.name}  t = {self.engine.step_index}",
+        )
+        if self.render_mode == "rgb_array":
+            return figure_to_rgb(fig)
+        fig.canvas.draw_idle()
+        fig.canvas.flush_events()
+        return None
+
+    def close(self) -> None:
+        if self._figure is not None:
+            import matplotlib.pyplot as plt
+
+            plt.close(self._figure)
+            self._figure = None
+
+
+def _single_action(action: Any, size: int) -> NDArray:
+    arr = np.asarray(action)
+    if arr.shape != (size,):
+        raise ValueError(
+            f"action must have shape ({size},) (first M bits choose transmitters, the last N "
+            f"receivers), got shape {arr.shape}"
+        )
+    return arr[None]
+
+
+class MimoRadarSelectVectorEnv(VectorEnv):
+    """B trials of :class:`MimoRadarSelectEnv` as one numpy computation.
+
+    Observations, rewards and every ``info`` entry carry a leading trial axis.
+    All trials run in lockstep and end together after ``T`` steps; the step
+    after that resets them all (``AutoresetMode.NEXT_STEP``) and returns the
+    reset observation. ``reset(seed=s)`` seeds trial ``i`` with ``s + i``, exactly
+    like a single env reset with ``seed=s + i``; ``seed`` may also be a list of
+    per-trial seeds. :meth:`oracle_action` returns the optimal super arms of the
+    coming step, (B, M + N).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(self, num_envs: int = 1, render_mode: str | None = None, **kwargs: Any) -> None:
+        if num_envs < 1:
+            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if render_mode is not None:
+            raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
+        self.config, self.scenario = resolve_config(kwargs)
+        self.num_envs = num_envs
+        self.engine = RadarEngine(self.config, self.scenario, batch_size=num_envs)
+        self.single_action_space = spaces.MultiBinary(self.engine.action_size)
+        self.single_observation_space = observation_space(self.scenario, self.engine.tracker.num_models)
+        self.action_space = batch_space(self.single_action_space, num_envs)
+        self.observation_space = batch_space(self.single_observation_space, num_envs)
+        self.render_mode = None
+        self._trial_generators: list[np.random.Generator] | None = None
+        self._needs_reset = False
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+        if seed is None and self._trial_generators is None:
+            base = int(np.random.SeedSequence().entropy % (2**62))  # fresh entropy, like gym's np_random(None)
+            seed = base
+        if seed is not None:
+            seeds = [seed + i for i in range(self.num_envs)] if np.ndim(seed) == 0 else list(seed)
+            if len(seeds) != self.num_envs:
+                raise ValueError(f"seed must be an int or a list of {self.num_envs} ints, got {len(seeds)}")
+            self._trial_generators = [seeding.np_random(int(s))[0] for s in seeds]
+            self._np_random, self._np_random_seed = seeding.np_random(int(seeds[0]))
+        assert self._trial_generators is not None
+        self._needs_reset = False
+        return self.engine.reset(self._trial_generators)
+
+    def step(
+        self, actions: NDArray[np.int8]
+    ) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
+        if self._trial_generators is None:
+            raise RuntimeError("call reset() before step()")
+        if self._needs_reset:
+            obs, info = self.reset()
+            zeros = np.zeros(self.num_envs, dtype=bool)
+            return obs, np.zeros(self.num_envs), zeros, zeros.copy(), info
+        obs, reward, terminated, truncated, info = self.engine.step(actions)
+        self._needs_reset = bool(truncated.all())
+        return obs, reward, terminated, truncated, info
+
+    def oracle_action(self) -> NDArray[np.int8]:
+        """Optimal super arms for the coming step, (B, M + N) (reads the truth: oracle only)."""
+        return self.engine.oracle_action()

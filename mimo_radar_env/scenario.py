@@ -1,0 +1,453 @@
+"""Scenarios: the radar layout, the targets and every model constant, as validated data.
+
+A :class:`Scenario` is plain data. The paper's three scenarios ship as TOML files
+(``paper-1``, ``paper-2``, ``paper-3``); users load their own from YAML or TOML
+with :func:`load_scenario`, or build one in Python with :meth:`Scenario.from_dict`.
+Every field is checked when the scenario is built; a bad field raises
+:class:`ScenarioError` naming the field and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tomllib
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+
+__all__ = [
+    "Maneuver",
+    "Scenario",
+    "ScenarioError",
+    "Target",
+    "available_scenarios",
+    "load_scenario",
+]
+
+
+class ScenarioError(ValueError):
+    """A scenario field is missing, unknown or out of its allowed range."""
+
+
+@dataclass(frozen=True)
+class Maneuver:
+    """A coordinated turn: NCT with ``turn_rate_deg`` (deg/s) for ``start <= t < stop``.
+
+    Positive turn rates turn counter-clockwise.
+    """
+
+    turn_rate_deg: float
+    start: int
+    stop: int
+
+
+@dataclass(frozen=True)
+class Target:
+    """One point target: its initial estimate, covariance and maneuver schedule.
+
+    The true initial state of each trial is drawn from
+    ``N(initial_state, initial_covariance)``; the tracker starts at
+    ``initial_state``, ``initial_covariance``.
+    """
+
+    initial_state: NDArray[np.float64]  # [x, vx, y, vy] in m, m/s
+    initial_covariance: NDArray[np.float64]  # (4, 4)
+    maneuvers: tuple[Maneuver, ...] = ()
+
+
+_TARGET_KEYS = {"initial_state", "initial_covariance", "maneuvers"}
+_MANEUVER_KEYS = {"turn_rate_deg", "start", "stop"}
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A distributed MIMO radar scenario (SPEC sections 1-4 and 8).
+
+    Attributes
+    ----------
+    name : str
+        Label used in reports.
+    tx_positions, rx_positions : arrays (M, 2), (N, 2)
+        Station coordinates in metres.
+    tx_per_step, rx_per_step : int
+        ``Ms`` and ``Ns``: how many transmitters and receivers are used each step.
+    targets : tuple of Target
+        The K targets.
+    weights : array (K,)
+        Target weights ``Omega`` of eq17/eq34 (non-negative, not all zero).
+    horizon : int
+        ``T``, the number of steps of an episode.
+    sample_time : float
+        ``Ts`` in seconds.
+    process_noise : float
+        ``Qs``, the acceleration noise variance (m^2/s^4) of eq1/eq3.
+    tx_power : array (M,)
+        ``P_m`` in watts.
+    noise_power : float
+        ``sigma_noise^2``.
+    interference_power : array (N,)
+        ``sigma_int_n^2`` per receiver.
+    rcs : array (K, M, N)
+        ``psi`` of eq5 per target and channel.
+    range_variance, azimuth_variance : float
+        ``Sigma0 = diag(range_variance, azimuth_variance)`` (m^2, rad^2) of eq32.
+    peak_sinr : float
+        ``S_max`` of eq32: the per-scenario constant ``C`` puts the largest
+        noise-free mean SINR at this value (linear; 10 = 10 dB).
+    """
+
+    name: str
+    tx_positions: NDArray[np.float64]
+    rx_positions: NDArray[np.float64]
+    tx_per_step: int
+    rx_per_step: int
+    targets: tuple[Target, ...]
+    weights: NDArray[np.float64]
+    horizon: int = 1000
+    sample_time: float = 1.0
+    process_noise: float = 0.1
+    tx_power: NDArray[np.float64] = field(default_factory=lambda: np.array(1000.0))
+    noise_power: float = 1e-26
+    interference_power: NDArray[np.float64] = field(default_factory=lambda: np.array(0.5e-21))
+    rcs: NDArray[np.float64] = field(default_factory=lambda: np.array(1.0))
+    range_variance: float = 5.0
+    azimuth_variance: float = 0.002
+    peak_sinr: float = 10.0
+
+    # ------------------------------------------------------------------ sizes
+    @property
+    def num_tx(self) -> int:
+        return self.tx_positions.shape[0]
+
+    @property
+    def num_rx(self) -> int:
+        return self.rx_positions.shape[0]
+
+    @property
+    def num_targets(self) -> int:
+        return len(self.targets)
+
+    @property
+    def num_channels_per_step(self) -> int:
+        return self.tx_per_step * self.rx_per_step
+
+    @property
+    def measurement_covariance(self) -> NDArray[np.float64]:
+        """``Sigma0`` of eq32."""
+        return np.diag([self.range_variance, self.azimuth_variance])
+
+    # --------------------------------------------------------- construction
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> Scenario:
+        """Build and validate a scenario from plain data (as read from YAML/TOML)."""
+        data = dict(data)
+        allowed = {f.name for f in dataclasses.fields(cls)}
+        unknown = sorted(set(data) - allowed)
+        if unknown:
+            raise ScenarioError(
+                f"unknown scenario key(s) {unknown}; allowed keys are {sorted(allowed)}"
+            )
+        missing = sorted(
+            f.name
+            for f in dataclasses.fields(cls)
+            if f.default is dataclasses.MISSING
+            and f.default_factory is dataclasses.MISSING
+            and f.name not in data
+        )
+        # weights default to equal weights; name defaults to "custom"
+        missing = [m for m in missing if m not in {"weights", "name"}]
+        if missing:
+            raise ScenarioError(f"scenario is missing required key(s) {missing}")
+        data.setdefault("name", "custom")
+        targets = data.get("targets")
+        if not isinstance(targets, list | tuple) or len(targets) == 0:
+            raise ScenarioError("targets must be a non-empty list of target tables")
+        data["targets"] = tuple(_parse_target(i, t) for i, t in enumerate(targets))
+        if "weights" not in data:
+            data["weights"] = [1.0 / len(targets)] * len(targets) if len(targets) > 1 else [1.0]
+        return cls._validated(data)
+
+    @classmethod
+    def _validated(cls, data: dict[str, Any]) -> Scenario:
+        out: dict[str, Any] = {"name": str(data["name"]), "targets": data["targets"]}
+        out["tx_positions"] = _positions("tx_positions", data["tx_positions"])
+        out["rx_positions"] = _positions("rx_positions", data["rx_positions"])
+        num_tx, num_rx = out["tx_positions"].shape[0], out["rx_positions"].shape[0]
+        num_targets = len(out["targets"])
+        out["tx_per_step"] = _int_in("tx_per_step", data["tx_per_step"], 1, num_tx, "M (the number of transmitters)")
+        out["rx_per_step"] = _int_in("rx_per_step", data["rx_per_step"], 1, num_rx, "N (the number of receivers)")
+        defaults = {f.name: f for f in dataclasses.fields(cls)}
+
+        def get(name: str) -> Any:
+            if name in data:
+                return data[name]
+            f = defaults[name]
+            return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
+
+        out["horizon"] = _int_in("horizon", get("horizon"), 1, None, "a positive number of steps")
+        for name in ("sample_time", "noise_power", "range_variance", "azimuth_variance", "peak_sinr"):
+            out[name] = _positive_float(name, get(name))
+        out["process_noise"] = _float(name := "process_noise", get(name))
+        if out["process_noise"] < 0:
+            raise ScenarioError(f"process_noise must be >= 0, got {out['process_noise']}")
+        out["tx_power"] = _positive_array("tx_power", get("tx_power"), (num_tx,))
+        out["interference_power"] = _nonnegative_array(
+            "interference_power", get("interference_power"), (num_rx,)
+        )
+        out["rcs"] = _positive_array("rcs", get("rcs"), (num_targets, num_tx, num_rx))
+        weights = _array("weights", get("weights"))
+        if weights.shape != (num_targets,):
+            raise ScenarioError(
+                f"weights must hold one value per target ({num_targets}), got shape {weights.shape}"
+            )
+        if np.any(weights < 0) or not np.any(weights > 0):
+            raise ScenarioError(f"weights must be >= 0 and not all zero, got {weights.tolist()}")
+        out["weights"] = weights
+        _check_distinct("tx_positions", out["tx_positions"])
+        _check_distinct("rx_positions", out["rx_positions"])
+        stations = np.concatenate([out["tx_positions"], out["rx_positions"]])
+        for k, target in enumerate(out["targets"]):
+            position = target.initial_state[[0, 2]]
+            if np.any(np.all(np.isclose(stations, position, rtol=0, atol=1e-6), axis=1)):
+                raise ScenarioError(
+                    f"targets[{k}].initial_state puts the target on a station at {position.tolist()} m; "
+                    "ranges would be zero and the SINR infinite. Move the target or the station."
+                )
+            for j, man in enumerate(target.maneuvers):
+                if not (0 <= man.start < man.stop <= out["horizon"]):
+                    raise ScenarioError(
+                        f"targets[{k}].maneuvers[{j}] window [{man.start}, {man.stop}) must lie in "
+                        f"[0, horizon={out['horizon']}) with start < stop"
+                    )
+            windows = sorted((m.start, m.stop) for m in target.maneuvers)
+            for (a0, a1), (b0, _) in zip(windows, windows[1:], strict=False):
+                if b0 < a1:
+                    raise ScenarioError(
+                        f"targets[{k}].maneuvers overlap: [{a0}, {a1}) and one starting at {b0}"
+                    )
+        return cls(**out)
+
+    def replace(self, **overrides: Any) -> Scenario:
+        """A copy with some fields replaced, validated again."""
+        data = self.to_dict()
+        data.update(overrides)
+        return Scenario.from_dict(data)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain, serialisable data (lists and numbers); ``from_dict`` inverts it."""
+        return {
+            "name": self.name,
+            "tx_positions": self.tx_positions.tolist(),
+            "rx_positions": self.rx_positions.tolist(),
+            "tx_per_step": self.tx_per_step,
+            "rx_per_step": self.rx_per_step,
+            "targets": [
+                {
+                    "initial_state": t.initial_state.tolist(),
+                    "initial_covariance": t.initial_covariance.tolist(),
+                    "maneuvers": [dataclasses.asdict(m) for m in t.maneuvers],
+                }
+                for t in self.targets
+            ],
+            "weights": self.weights.tolist(),
+            "horizon": self.horizon,
+            "sample_time": self.sample_time,
+            "process_noise": self.process_noise,
+            "tx_power": self.tx_power.tolist(),
+            "noise_power": self.noise_power,
+            "interference_power": self.interference_power.tolist(),
+            "rcs": self.rcs.tolist(),
+            "range_variance": self.range_variance,
+            "azimuth_variance": self.azimuth_variance,
+            "peak_sinr": self.peak_sinr,
+        }
+
+
+# ---------------------------------------------------------------- parsing
+def _parse_target(index: int, raw: Any) -> Target:
+    where = f"targets[{index}]"
+    if isinstance(raw, Target):
+        return raw
+    if not isinstance(raw, Mapping):
+        raise ScenarioError(f"{where} must be a table with keys {sorted(_TARGET_KEYS)}")
+    unknown = sorted(set(raw) - _TARGET_KEYS)
+    if unknown:
+        raise ScenarioError(f"unknown key(s) {unknown} in {where}; allowed: {sorted(_TARGET_KEYS)}")
+    if "initial_state" not in raw:
+        raise ScenarioError(f"{where}.initial_state is required ([x, vx, y, vy] in m and m/s)")
+    state = _array(f"{where}.initial_state", raw["initial_state"])
+    if state.shape != (4,):
+        raise ScenarioError(f"{where}.initial_state must be [x, vx, y, vy], got shape {state.shape}")
+    cov = _array(f"{where}.initial_covariance", raw.get("initial_covariance", [20.0] * 4))
+    if cov.shape == (4,):
+        cov = np.diag(cov)
+    if cov.shape != (4, 4):
+        raise ScenarioError(
+            f"{where}.initial_covariance must be 4 variances or a 4x4 matrix, got shape {cov.shape}"
+        )
+    if not np.allclose(cov, cov.T) or np.any(np.linalg.eigvalsh((cov + cov.T) / 2) <= 0):
+        raise ScenarioError(f"{where}.initial_covariance must be symmetric positive definite")
+    maneuvers = []
+    for j, man in enumerate(raw.get("maneuvers", []) or []):
+        mwhere = f"{where}.maneuvers[{j}]"
+        if isinstance(man, Maneuver):
+            maneuvers.append(man)
+            continue
+        if not isinstance(man, Mapping) or set(man) != _MANEUVER_KEYS:
+            raise ScenarioError(f"{mwhere} must be a table with exactly the keys {sorted(_MANEUVER_KEYS)}")
+        rate = _float(f"{mwhere}.turn_rate_deg", man["turn_rate_deg"])
+        if rate == 0:
+            raise ScenarioError(f"{mwhere}.turn_rate_deg must be non-zero (NCV needs no maneuver entry)")
+        maneuvers.append(
+            Maneuver(
+                rate,
+                _int_in(f"{mwhere}.start", man["start"], 0, None, "a step index >= 0"),
+                _int_in(f"{mwhere}.stop", man["stop"], 1, None, "a step index >= 1"),
+            )
+        )
+    return Target(state, cov, tuple(maneuvers))
+
+
+def _array(name: str, value: Any) -> NDArray[np.float64]:
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ScenarioError(f"{name} must be numeric, got {value!r}") from exc
+    if not np.all(np.isfinite(arr)):
+        raise ScenarioError(f"{name} must be finite numbers, got {arr.tolist()}")
+    return arr
+
+
+def _float(name: str, value: Any) -> float:
+    if isinstance(value, bool):
+        raise ScenarioError(f"{name} must be a number, got {value!r}")
+    arr = _array(name, value)
+    if arr.shape != ():
+        raise ScenarioError(f"{name} must be a single number, got shape {arr.shape}")
+    return float(arr)
+
+
+def _positive_float(name: str, value: Any) -> float:
+    out = _float(name, value)
+    if out <= 0:
+        raise ScenarioError(f"{name} must be > 0, got {out}")
+    return out
+
+
+def _int_in(name: str, value: Any, low: int, high: int | None, allowed: str) -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            raise ScenarioError(f"{name} must be an integer, got {value!r}")
+    value = int(value)
+    if value < low or (high is not None and value > high):
+        bound = f"between {low} and {high}" if high is not None else f">= {low}"
+        raise ScenarioError(f"{name} must be {bound} ({allowed}), got {value}")
+    return value
+
+
+def _positions(name: str, value: Any) -> NDArray[np.float64]:
+    arr = _array(name, value)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
+        raise ScenarioError(f"{name} must be a list of [x, y] pairs in metres, got shape {arr.shape}")
+    return arr
+
+
+def _broadcast(name: str, arr: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    try:
+        return np.broadcast_to(arr, shape).copy()
+    except ValueError as exc:
+        raise ScenarioError(
+            f"{name} must be a single number or an array of shape {shape}, got shape {arr.shape}"
+        ) from exc
+
+
+def _positive_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    arr = _broadcast(name, _array(name, value), shape)
+    if np.any(arr <= 0):
+        raise ScenarioError(f"{name} must be > 0 everywhere, got {arr.min()}")
+    return arr
+
+
+def _nonnegative_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    arr = _broadcast(name, _array(name, value), shape)
+    if np.any(arr < 0):
+        raise ScenarioError(f"{name} must be >= 0 everywhere, got {arr.min()}")
+    return arr
+
+
+def _check_distinct(name: str, positions: NDArray[np.float64]) -> None:
+    diff = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=-1)
+    i, j = np.nonzero(np.triu(diff < 1e-6, k=1))
+    if len(i):
+        raise ScenarioError(
+            f"{name} has duplicate stations {int(i[0])} and {int(j[0])} at "
+            f"{positions[i[0]].tolist()} m; every station needs its own position"
+        )
+
+
+# ---------------------------------------------------------------- loading
+def available_scenarios() -> list[str]:
+    """Names of the scenarios shipped with the package."""
+    folder = resources.files("mimo_radar_env") / "scenarios"
+    return sorted(p.name.removesuffix(".toml") for p in folder.iterdir() if p.name.endswith(".toml"))
+
+
+def _read_file(path: Path) -> dict[str, Any]:
+    text = path.read_text()
+    suffix = path.suffix.lower()
+    try:
+        if suffix == ".toml":
+            data = tomllib.loads(text)
+        elif suffix in (".yaml", ".yml"):
+            data = yaml.safe_load(text)
+        else:
+            raise ScenarioError(f"scenario file {path} must end in .toml, .yaml or .yml")
+    except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
+        raise ScenarioError(f"cannot parse scenario file {path}: {exc}") from exc
+    if not isinstance(data, Mapping):
+        raise ScenarioError(f"scenario file {path} must hold a table of scenario keys")
+    data = dict(data)
+    data.setdefault("name", path.stem)
+    return data
+
+
+def load_scenario(name_or_path: str | Path | Scenario, **overrides: Any) -> Scenario:
+    """Load a shipped scenario by name (``paper-1``...) or a YAML/TOML file.
+
+    Keyword overrides replace fields before validation, e.g.
+    ``load_scenario("paper-1", horizon=200)``.
+    """
+    if isinstance(name_or_path, Scenario):
+        return name_or_path.replace(**overrides) if overrides else name_or_path
+    text = str(name_or_path)
+    if text in available_scenarios():
+        resource = resources.files("mimo_radar_env") / "scenarios" / f"{text}.toml"
+        data = tomllib.loads(resource.read_text())
+    else:
+        path = Path(text)
+        if not path.is_file():
+            raise ScenarioError(
+                f"unknown scenario {text!r}: not a shipped scenario ({', '.join(available_scenarios())}) "
+                "and not an existing .toml/.yaml file"
+            )
+        data = _read_file(path)
+    data.update(overrides)
+    return Scenario.from_dict(data)
+
+
+def turn_rate_schedule(scenario: Scenario) -> NDArray[np.float64]:
+    """Turn rate (rad/s) of the transition ``t -> t+1`` for each target: shape (K, T)."""
+    rates = np.zeros((scenario.num_targets, scenario.horizon))
+    for k, target in enumerate(scenario.targets):
+        for man in target.maneuvers:
+            rates[k, man.start : man.stop] = math.radians(man.turn_rate_deg)
+    return rates

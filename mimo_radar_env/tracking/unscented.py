@@ -1,0 +1,170 @@
+"""Batched unscented transform pieces: sigma points and the measurement update.
+
+Conventions follow filterpy 2.x (``MerweScaledSigmaPoints`` and
+``UnscentedKalmanFilter.update``) so that the two can be compared number for
+number: sigma points ``x, x + U_k, x - U_k`` with ``U`` the Cholesky factor of
+``(n + lambda) P``; weights of van der Merwe's scaled transform; the update uses
+the sigma points of the prior. Every function works on arbitrary leading batch
+axes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.geometry import wrap_angle
+
+_LOG_2PI = float(np.log(2.0 * np.pi))
+
+
+@dataclass(frozen=True)
+class SigmaPointParameters:
+    """Van der Merwe's scaled sigma points (alpha, beta, kappa).
+
+    The default ``alpha = 1, beta = 2, kappa = 0`` gives non-negative weights
+    (``Wm0 = 0``, ``Wc0 = 2``, the others ``1/(2n)``), so every unscented
+    covariance is positive semi-definite by construction.
+    """
+
+    alpha: float = 1.0
+    beta: float = 2.0
+    kappa: float = 0.0
+
+    def scale(self, n: int) -> float:
+        """``n + lambda = alpha^2 (n + kappa)``."""
+        return self.alpha**2 * (n + self.kappa)
+
+    def weights(self, n: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Mean and covariance weights ``Wm``, ``Wc`` (2n + 1,)."""
+        scale = self.scale(n)
+        lam = scale - n
+        wm = np.full(2 * n + 1, 0.5 / scale)
+        wc = wm.copy()
+        wm[0] = lam / scale
+        wc[0] = lam / scale + (1.0 - self.alpha**2 + self.beta)
+        return wm, wc
+
+
+def symmetrize(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
+    return 0.5 * (matrix + np.swapaxes(matrix, -1, -2))
+
+
+def robust_cholesky(
+    matrix: NDArray[np.float64], relative_floor: float = 1e-12
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Lower Cholesky factors of a batch of symmetric matrices, repairing failures.
+
+    A matrix that is not numerically positive definite is re-symmetrised and its
+    eigenvalues are raised to ``relative_floor * max(|eigenvalue|)`` (at least a
+    tiny absolute jitter); only the failing matrices are touched.
+
+    Returns the factors and a mask (batch shape) of the repaired matrices.
+    """
+    try:
+        return np.linalg.cholesky(matrix), np.zeros(matrix.shape[:-2], dtype=bool)
+    except np.linalg.LinAlgError:
+        pass
+    sym = symmetrize(matrix)
+    sym = np.where(np.isfinite(sym), sym, 0.0)
+    eigenvalues, eigenvectors = np.linalg.eigh(sym)
+    top = np.max(np.abs(eigenvalues), axis=-1, keepdims=True)
+    floor = np.maximum(relative_floor * top, 1e-12)
+    repaired = np.any(eigenvalues < floor, axis=-1)
+    clipped = np.maximum(eigenvalues, floor)
+    rebuilt = symmetrize(np.einsum("...ij,...j,...kj->...ik", eigenvectors, clipped, eigenvectors))
+    fixed = np.where(repaired[..., None, None], rebuilt, sym)
+    return np.linalg.cholesky(fixed), repaired
+
+
+def sigma_points(
+    mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Sigma points (..., 2n + 1, n) from a mean (..., n) and the lower Cholesky
+    factor of ``(n + lambda) P`` (..., n, n)."""
+    offsets = np.swapaxes(chol_scaled, -1, -2)  # rows = columns of L = rows of filterpy's U
+    return np.concatenate([mean[..., None, :], mean[..., None, :] + offsets, mean[..., None, :] - offsets], axis=-2)
+
+
+def measurement_mean(sigmas_h: NDArray[np.float64], wm: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Weighted mean of measurement sigma points (..., S, d).
+
+    Measurements are (range sum, azimuth) pairs: even components are averaged
+    linearly, odd ones (azimuths) as circular means.
+    """
+    mean = np.empty(sigmas_h.shape[:-2] + sigmas_h.shape[-1:])
+    mean[..., 0::2] = np.einsum("s,...sd->...d", wm, sigmas_h[..., 0::2])
+    angles = sigmas_h[..., 1::2]
+    mean[..., 1::2] = np.arctan2(
+        np.einsum("s,...sd->...d", wm, np.sin(angles)), np.einsum("s,...sd->...d", wm, np.cos(angles))
+    )
+    return mean
+
+
+def measurement_residual(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``a - b`` for (range sum, azimuth) pairs, azimuths wrapped into (-pi, pi]."""
+    diff = a - b
+    diff[..., 1::2] = wrap_angle(diff[..., 1::2])
+    return diff
+
+
+def _inverse_and_logdet(
+    matrix: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Inverse and log-determinant of symmetric positive definite matrices (..., d, d)."""
+    if matrix.shape[-1] == 2:  # closed form: the per-channel case of the paper's fusion
+        a, b, c = matrix[..., 0, 0], matrix[..., 0, 1], matrix[..., 1, 1]
+        det = a * c - b * b
+        inverse = np.stack([np.stack([c, -b], -1), np.stack([-b, a], -1)], -2) / det[..., None, None]
+        return inverse, np.log(det)
+    _, logdet = np.linalg.slogdet(matrix)
+    return np.linalg.inv(matrix), logdet
+
+
+@dataclass
+class UpdateResult:
+    mean: NDArray[np.float64]
+    covariance: NDArray[np.float64]
+    log_likelihood: NDArray[np.float64]
+
+
+def unscented_update(
+    prior_mean: NDArray[np.float64],
+    prior_cov: NDArray[np.float64],
+    sigmas: NDArray[np.float64],
+    sigmas_h: NDArray[np.float64],
+    measurement: NDArray[np.float64],
+    noise_variance: NDArray[np.float64],
+    wm: NDArray[np.float64],
+    wc: NDArray[np.float64],
+) -> UpdateResult:
+    """One unscented measurement update, batched over leading axes.
+
+    Parameters
+    ----------
+    prior_mean, prior_cov : (..., n), (..., n, n)
+    sigmas : (..., S, n) sigma points of the prior
+    sigmas_h : (..., S, d) the sigma points through the measurement function
+    measurement : (..., d)
+        (range sum, azimuth) pairs, stacked when several channels are fused.
+    noise_variance : (..., d) diagonal of the measurement covariance R
+    """
+    z_pred = measurement_mean(sigmas_h, wm)
+    dz = measurement_residual(sigmas_h, z_pred[..., None, :])
+    dx = sigmas - prior_mean[..., None, :]
+    weighted_dz = dz * wc[:, None]
+    innovation_cov = np.swapaxes(weighted_dz, -1, -2) @ dz
+    d = dz.shape[-1]
+    diag = np.arange(d)
+    innovation_cov[..., diag, diag] += noise_variance
+    cross_cov = np.swapaxes(dx, -1, -2) @ weighted_dz
+    innovation_inv, logdet = _inverse_and_logdet(innovation_cov)
+    gain = cross_cov @ innovation_inv
+    residual = measurement_residual(measurement, z_pred)
+    mean = prior_mean + (gain @ residual[..., None])[..., 0]
+    cov = symmetrize(prior_cov - gain @ innovation_cov @ np.swapaxes(gain, -1, -2))
+    mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
+    log_likelihood = -0.5 * (mahalanobis + logdet + d * _LOG_2PI)
+    return UpdateResult(mean, cov, log_likelihood)

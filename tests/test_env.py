@@ -1,0 +1,198 @@
+import warnings
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+from gymnasium.vector import AutoresetMode, VectorEnv
+
+from mimo_radar_env import MimoRadarSelectEnv
+
+from tests.helpers import random_valid_actions
+
+
+@pytest.mark.parametrize("scenario", ["paper-1", "paper-2", "paper-3"])
+def test_check_env_passes_without_warning(scenario):
+    env = gym.make("MimoRadarSelect-v0", scenario=scenario, render_mode="rgb_array")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        check_env(env.unwrapped)
+
+
+def test_quickstart_and_registration_is_idempotent():
+    import importlib
+
+    import mimo_radar_env
+
+    importlib.reload(mimo_radar_env)  # registering twice must not warn or fail
+    env = gym.make("MimoRadarSelect-v0", scenario="paper-1")
+    obs, info = env.reset(seed=0)
+    assert obs["probed"].all() and obs["sinr"].shape == (1, 4, 6)
+    obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
+    assert set(info) >= {"mean_sinr", "true_state", "expected_reward", "optimal_reward", "action_valid"}
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point", scenario="paper-3")
+    assert isinstance(venv, VectorEnv)
+    assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
+    obs, info = venv.reset(seed=0)
+    assert obs["sinr"].shape == (5, 2, 4, 6) and info["true_state"].shape == (5, 2, 4)
+
+
+def _run_single(seed, actions, scenario="paper-3"):
+    env = gym.make("MimoRadarSelect-v0", scenario=scenario)
+    obs, info = env.reset(seed=seed)
+    out = [(obs, 0.0, info)]
+    for action in actions:
+        obs, reward, _, _, info = env.step(action)
+        out.append((obs, reward, info))
+    return out
+
+
+def test_vector_env_equals_single_envs_trial_for_trial():
+    batch, steps = 3, 12
+    rng = np.random.default_rng(0)
+    actions = [random_valid_actions(rng, batch, 4, 6, 2, 3) for _ in range(steps)]
+    actions[4][1, :] = 0  # an invalid action in trial 1
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=batch, vectorization_mode="vector_entry_point", scenario="paper-3")
+    obs, info = venv.reset(seed=40)
+    vector = [(obs, np.zeros(batch), info)]
+    for action in actions:
+        obs, reward, _, _, info = venv.step(action)
+        vector.append((obs, reward, info))
+    for i in range(batch):
+        single = _run_single(40 + i, [a[i] for a in actions])
+        for (vobs, vrew, vinfo), (sobs, srew, sinfo) in zip(vector, single, strict=True):
+            for key in sobs:
+                np.testing.assert_allclose(vobs[key][i], sobs[key], rtol=1e-12, atol=1e-12, err_msg=key)
+            assert vrew[i] == pytest.approx(srew, rel=1e-12)
+            for key in sinfo:
+                np.testing.assert_allclose(vinfo[key][i], sinfo[key], rtol=1e-12, err_msg=key)
+
+
+def test_same_seed_same_numbers_and_policies_share_the_truth():
+    rng = np.random.default_rng(3)
+    actions_a = [a[0] for a in (random_valid_actions(rng, 1, 4, 6, 2, 3) for _ in range(15))]
+    actions_b = [a[0] for a in (random_valid_actions(rng, 1, 4, 6, 2, 3) for _ in range(15))]
+    run1, run2 = _run_single(9, actions_a), _run_single(9, actions_a)
+    for (o1, r1, i1), (o2, r2, i2) in zip(run1, run2, strict=True):
+        assert r1 == r2
+        for key in o1:
+            np.testing.assert_array_equal(o1[key], o2[key])
+    other = _run_single(9, actions_b)
+    for (_, _, i1), (_, _, i2) in zip(run1, other, strict=True):
+        np.testing.assert_array_equal(i1["true_state"], i2["true_state"])
+    different_seed = _run_single(10, actions_a)
+    assert not np.array_equal(different_seed[-1][2]["true_state"], run1[-1][2]["true_state"])
+
+
+def test_rewards_and_expected_rewards_follow_eq17_and_eq13():
+    env = gym.make("MimoRadarSelect-v0", scenario="paper-3")
+    obs, info = env.reset(seed=2)
+    omega = np.array([0.6, 0.4])
+    for _ in range(10):
+        action = env.action_space.sample()
+        obs, reward, _, _, info = env.step(action)
+        tx, rx = action[:4].astype(bool), action[4:].astype(bool)
+        if info["action_valid"]:
+            mask = tx[:, None] & rx[None, :]
+            assert reward == pytest.approx(np.einsum("k,kmn->", omega, obs["sinr"] * mask))
+            assert np.array_equal(obs["probed"], mask.astype(np.int8))
+            assert info["expected_reward"] == pytest.approx(np.einsum("k,kmn->", omega, info["mean_sinr"] * mask))
+        else:
+            assert reward == 0 and info["expected_reward"] == 0 and not obs["probed"].any()
+        # optimal reward: brute force over every super arm
+        from itertools import combinations
+
+        weights = np.einsum("k,kmn->mn", omega, info["mean_sinr"])
+        best = max(weights[np.ix_(t, r)].sum() for t in combinations(range(4), 2) for r in combinations(range(6), 3))
+        assert info["optimal_reward"] == pytest.approx(best)
+        assert info["optimal_reward"] >= info["expected_reward"]
+
+
+def test_oracle_action_is_the_optimum_of_the_coming_step():
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=4, vectorization_mode="vector_entry_point", scenario="paper-3")
+    venv.reset(seed=1)
+    for _ in range(5):
+        oracle = venv.oracle_action()
+        _, _, _, _, info = venv.step(oracle)
+        np.testing.assert_array_equal(oracle, info["optimal_action"])
+        np.testing.assert_allclose(info["expected_reward"], info["optimal_reward"])
+    env = gym.make("MimoRadarSelect-v0")
+    env.reset(seed=0)
+    assert env.unwrapped.oracle_action().shape == (10,)
+
+
+def test_invalid_actions_probe_nothing_or_raise():
+    env = gym.make("MimoRadarSelect-v0")
+    env.reset(seed=0)
+    action = np.zeros(10, dtype=np.int8)
+    action[[0, 1, 2, 4, 5, 6]] = 1  # three transmitters
+    obs, reward, _, _, info = env.step(action)
+    assert reward == 0.0 and not info["action_valid"] and not obs["probed"].any() and not obs["sinr"].any()
+    strict = gym.make("MimoRadarSelect-v0", invalid_action="raise")
+    strict.reset(seed=0)
+    with pytest.raises(ValueError, match="selects 3 TX and 3 RX; exactly tx_per_step=2 and rx_per_step=3"):
+        strict.step(action)
+
+
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [
+        (np.zeros(9, dtype=np.int8), r"shape \(10,\)"),
+        (np.zeros((1, 10), dtype=np.int8), r"shape \(10,\)"),
+        (np.array(["1"] * 10), "dtype <U1"),
+        (np.array([2, 0, 0, 0, 1, 1, 1, 0, 0, 0]), r"values must be 0 or 1, got \[2\]"),
+        (np.array([np.nan, 1, 0, 0, 1, 1, 1, 0, 0, 0]), "NaN"),
+    ],
+)
+def test_actions_outside_the_space_raise(action, message):
+    env = gym.make("MimoRadarSelect-v0")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(action)
+
+
+def test_vector_env_bad_actions_and_float_actions():
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match=r"shape \(2, 10\)"):
+        venv.step(np.zeros((3, 10), dtype=np.int8))
+    action = np.array([[1, 1, 0, 0, 1, 1, 1, 0, 0, 0]] * 2, dtype=np.float32)  # 0/1 floats are accepted
+    _, _, _, _, info = venv.step(action)
+    assert info["action_valid"].all()
+
+
+def test_truncation_and_autoreset():
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point", horizon=3)
+    obs, _ = venv.reset(seed=0)
+    action = np.array([[1, 1, 0, 0, 1, 1, 1, 0, 0, 0]] * 2, dtype=np.int8)
+    for t in range(3):
+        _, _, terminated, truncated, _ = venv.step(action)
+        assert not terminated.any()
+        assert truncated.all() == (t == 2)
+    obs, reward, terminated, truncated, _ = venv.step(action)  # NEXT_STEP autoreset
+    assert obs["probed"].all() and not truncated.any() and (reward == 0).all()
+    env = gym.make("MimoRadarSelect-v0", horizon=2)
+    env.reset(seed=0)
+    env.step(action[0])
+    assert env.step(action[0])[3] is True
+
+
+def test_rgb_array_rendering_draws_the_scene():
+    env = gym.make("MimoRadarSelect-v0", scenario="paper-3", render_mode="rgb_array")
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.unwrapped.oracle_action())
+    frame = env.render()
+    assert frame.dtype == np.uint8 and frame.ndim == 3 and frame.shape[2] == 3
+    assert len(np.unique(frame.reshape(-1, 3), axis=0)) > 10  # not a blank canvas
+    # the selected channels are drawn: the frame changes with the selection
+    env2 = gym.make("MimoRadarSelect-v0", scenario="paper-3", render_mode="rgb_array")
+    env2.reset(seed=0)
+    for _ in range(3):
+        env2.step(np.array([0, 0, 1, 1, 0, 0, 0, 1, 1, 1], dtype=np.int8))
+    assert not np.array_equal(env2.render(), frame)
+
+
+def test_env_class_docstring_documents_the_sections():
+    for section in ("## Description", "## Action Space", "## Observation Space", "## Rewards", "## Episode End", "## Arguments"):
+        assert section in MimoRadarSelectEnv.__doc__
