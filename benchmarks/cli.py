@@ -13,9 +13,13 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True)
     demo = sub.add_parser("demo", help="run one episode of a scenario with a random policy and the oracle")
-    demo.add_argument("--scenario", default="paper-1", help="scenario name or YAML/TOML file (default paper-1)")
+    demo.add_argument(
+        "--scenario", default="paper-1", help="scenario name or YAML/TOML file (default paper-1)"
+    )
     demo.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
-    demo.add_argument("--steps", type=int, default=None, help="stop after this many steps (default: the horizon)")
+    demo.add_argument(
+        "--steps", type=int, default=None, help="stop after this many steps (default: the horizon)"
+    )
     return parser
 
 

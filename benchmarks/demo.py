@@ -8,7 +8,9 @@ import numpy as np
 import mimo_radar_env  # noqa: F401  (registers the env)
 
 
-def run_demo(scenario: str = "paper-1", seed: int = 0, steps: int | None = None) -> dict[str, dict[str, float]]:
+def run_demo(
+    scenario: str = "paper-1", seed: int = 0, steps: int | None = None
+) -> dict[str, dict[str, float]]:
     """Run one episode per policy (same seed, so the same target trajectory) and summarise it."""
     results: dict[str, dict[str, float]] = {}
     for policy in ("random-valid", "oracle"):

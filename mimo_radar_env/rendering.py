@@ -54,7 +54,9 @@ def draw_scenario(
                 ax.plot([tx[m, 0], position[0]], [tx[m, 1], position[1]], c="tab:red", lw=0.6, alpha=0.6)
             for n in chosen_rx:
                 ax.plot([position[0], rx[n, 0]], [position[1], rx[n, 1]], c="tab:blue", lw=0.6, alpha=0.6)
-    points = [tx, rx] + ([true_tracks.reshape(-1, 2) * km] if true_tracks is not None and len(true_tracks) else [])
+    points = [tx, rx] + (
+        [true_tracks.reshape(-1, 2) * km] if true_tracks is not None and len(true_tracks) else []
+    )
     allp = np.concatenate(points)
     low, high = allp.min(axis=0), allp.max(axis=0)
     pad = 0.05 * max(float(np.max(high - low)), 1.0)

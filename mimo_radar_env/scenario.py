@@ -151,9 +151,7 @@ class Scenario:
         allowed = {f.name for f in dataclasses.fields(cls)}
         unknown = sorted(set(data) - allowed)
         if unknown:
-            raise ScenarioError(
-                f"unknown scenario key(s) {unknown}; allowed keys are {sorted(allowed)}"
-            )
+            raise ScenarioError(f"unknown scenario key(s) {unknown}; allowed keys are {sorted(allowed)}")
         missing = sorted(
             f.name
             for f in dataclasses.fields(cls)
@@ -181,8 +179,12 @@ class Scenario:
         out["rx_positions"] = _positions("rx_positions", data["rx_positions"])
         num_tx, num_rx = out["tx_positions"].shape[0], out["rx_positions"].shape[0]
         num_targets = len(out["targets"])
-        out["tx_per_step"] = _int_in("tx_per_step", data["tx_per_step"], 1, num_tx, "M (the number of transmitters)")
-        out["rx_per_step"] = _int_in("rx_per_step", data["rx_per_step"], 1, num_rx, "N (the number of receivers)")
+        out["tx_per_step"] = _int_in(
+            "tx_per_step", data["tx_per_step"], 1, num_tx, "M (the number of transmitters)"
+        )
+        out["rx_per_step"] = _int_in(
+            "rx_per_step", data["rx_per_step"], 1, num_rx, "N (the number of receivers)"
+        )
         defaults = {f.name: f for f in dataclasses.fields(cls)}
 
         def get(name: str) -> Any:

@@ -7,7 +7,6 @@ from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from mimo_radar_env import MimoRadarSelectEnv
-
 from tests.helpers import random_valid_actions
 
 
@@ -30,7 +29,9 @@ def test_quickstart_and_registration_is_idempotent():
     assert obs["probed"].all() and obs["sinr"].shape == (1, 4, 6)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert set(info) >= {"mean_sinr", "true_state", "expected_reward", "optimal_reward", "action_valid"}
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point", scenario="paper-3")
+    venv = gym.make_vec(
+        "MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point", scenario="paper-3"
+    )
     assert isinstance(venv, VectorEnv)
     assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
     obs, info = venv.reset(seed=0)
@@ -52,7 +53,9 @@ def test_vector_env_equals_single_envs_trial_for_trial():
     rng = np.random.default_rng(0)
     actions = [random_valid_actions(rng, batch, 4, 6, 2, 3) for _ in range(steps)]
     actions[4][1, :] = 0  # an invalid action in trial 1
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=batch, vectorization_mode="vector_entry_point", scenario="paper-3")
+    venv = gym.make_vec(
+        "MimoRadarSelect-v0", num_envs=batch, vectorization_mode="vector_entry_point", scenario="paper-3"
+    )
     obs, info = venv.reset(seed=40)
     vector = [(obs, np.zeros(batch), info)]
     for action in actions:
@@ -75,6 +78,7 @@ def test_same_seed_same_numbers_and_policies_share_the_truth():
     run1, run2 = _run_single(9, actions_a), _run_single(9, actions_a)
     for (o1, r1, i1), (o2, r2, i2) in zip(run1, run2, strict=True):
         assert r1 == r2
+        np.testing.assert_array_equal(i1["true_state"], i2["true_state"])
         for key in o1:
             np.testing.assert_array_equal(o1[key], o2[key])
     other = _run_single(9, actions_b)
@@ -96,20 +100,26 @@ def test_rewards_and_expected_rewards_follow_eq17_and_eq13():
             mask = tx[:, None] & rx[None, :]
             assert reward == pytest.approx(np.einsum("k,kmn->", omega, obs["sinr"] * mask))
             assert np.array_equal(obs["probed"], mask.astype(np.int8))
-            assert info["expected_reward"] == pytest.approx(np.einsum("k,kmn->", omega, info["mean_sinr"] * mask))
+            assert info["expected_reward"] == pytest.approx(
+                np.einsum("k,kmn->", omega, info["mean_sinr"] * mask)
+            )
         else:
             assert reward == 0 and info["expected_reward"] == 0 and not obs["probed"].any()
         # optimal reward: brute force over every super arm
         from itertools import combinations
 
         weights = np.einsum("k,kmn->mn", omega, info["mean_sinr"])
-        best = max(weights[np.ix_(t, r)].sum() for t in combinations(range(4), 2) for r in combinations(range(6), 3))
+        best = max(
+            weights[np.ix_(t, r)].sum() for t in combinations(range(4), 2) for r in combinations(range(6), 3)
+        )
         assert info["optimal_reward"] == pytest.approx(best)
         assert info["optimal_reward"] >= info["expected_reward"]
 
 
 def test_oracle_action_is_the_optimum_of_the_coming_step():
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=4, vectorization_mode="vector_entry_point", scenario="paper-3")
+    venv = gym.make_vec(
+        "MimoRadarSelect-v0", num_envs=4, vectorization_mode="vector_entry_point", scenario="paper-3"
+    )
     venv.reset(seed=1)
     for _ in range(5):
         oracle = venv.oracle_action()
@@ -194,5 +204,12 @@ def test_rgb_array_rendering_draws_the_scene():
 
 
 def test_env_class_docstring_documents_the_sections():
-    for section in ("## Description", "## Action Space", "## Observation Space", "## Rewards", "## Episode End", "## Arguments"):
+    for section in (
+        "## Description",
+        "## Action Space",
+        "## Observation Space",
+        "## Rewards",
+        "## Episode End",
+        "## Arguments",
+    ):
         assert section in MimoRadarSelectEnv.__doc__

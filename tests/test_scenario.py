@@ -94,16 +94,36 @@ def _paper(**changes):
             r"targets\[0\].initial_state puts the target on a station",
         ),
         (
-            {"targets": [{"initial_state": [5, 1, 5, 1], "maneuvers": [{"turn_rate_deg": 3, "start": 990, "stop": 1001}]}]},
+            {
+                "targets": [
+                    {
+                        "initial_state": [5, 1, 5, 1],
+                        "maneuvers": [{"turn_rate_deg": 3, "start": 990, "stop": 1001}],
+                    }
+                ]
+            },
             r"targets\[0\].maneuvers\[0\] window \[990, 1001\) must lie in \[0, horizon=1000\)",
         ),
         (
-            {"targets": [{"initial_state": [5, 1, 5, 1], "maneuvers": [{"turn_rate_deg": 3, "start": -1, "stop": 10}]}]},
+            {
+                "targets": [
+                    {
+                        "initial_state": [5, 1, 5, 1],
+                        "maneuvers": [{"turn_rate_deg": 3, "start": -1, "stop": 10}],
+                    }
+                ]
+            },
             r"targets\[0\].maneuvers\[0\].start must be >= 0",
         ),
         ({"targets": [{"initial_state": [5, 1, 5]}]}, r"initial_state must be \[x, vx, y, vy\]"),
-        ({"targets": [{"initial_state": [5, 1, 5, 1], "speed": 3}]}, r"unknown key\(s\) \['speed'\] in targets\[0\]"),
-        ({"targets": [{"initial_state": [5, 1, 5, 1], "initial_covariance": [1, -1, 1, 1]}]}, r"positive definite"),
+        (
+            {"targets": [{"initial_state": [5, 1, 5, 1], "speed": 3}]},
+            r"unknown key\(s\) \['speed'\] in targets\[0\]",
+        ),
+        (
+            {"targets": [{"initial_state": [5, 1, 5, 1], "initial_covariance": [1, -1, 1, 1]}]},
+            r"positive definite",
+        ),
         ({"targets": []}, r"targets must be a non-empty list"),
     ],
 )

@@ -19,7 +19,9 @@ def spec_mean_sinr(scenario, constant, positions):
                 r_tx = np.hypot(x - xt, y - yt)
                 r_rx = np.hypot(x - xr, y - yr)
                 out[k, m, n] = (
-                    constant * scenario.rcs[k, m, n] * scenario.tx_power[m]
+                    constant
+                    * scenario.rcs[k, m, n]
+                    * scenario.tx_power[m]
                     / ((r_tx * r_rx) ** 2 * (scenario.noise_power + scenario.interference_power[n]))
                 )
     return out
@@ -106,7 +108,11 @@ def test_measurement_residuals_have_covariance_sigma0_over_lambda():
     obs = sim.observe(tx_index, rx_index, np.ones(batch, dtype=bool))
     # independent lambda of eq32 and the residuals
     s_max = 10.0
-    lam = np.clip((obs.mean_sinr - model.min_sinr[None, :, None]) / (s_max - model.min_sinr[None, :, None]) + 0.2, 0.2, 1.2)
+    lam = np.clip(
+        (obs.mean_sinr - model.min_sinr[None, :, None]) / (s_max - model.min_sinr[None, :, None]) + 0.2,
+        0.2,
+        1.2,
+    )
     np.testing.assert_allclose(obs.noise_variance[..., 0], 5.0 / lam, rtol=1e-12)
     np.testing.assert_allclose(obs.noise_variance[..., 1], 0.002 / lam, rtol=1e-12)
     pos = sim.state[..., [0, 2]][:, :, None, :]
@@ -115,7 +121,9 @@ def test_measurement_residuals_have_covariance_sigma0_over_lambda():
     true_range = np.linalg.norm(pos - tx, axis=-1) + np.linalg.norm(pos - rx, axis=-1)
     true_azimuth = np.arctan2(pos[..., 1] - rx[..., 1], pos[..., 0] - rx[..., 0])
     res_r = (obs.measurement[..., 0] - true_range) / np.sqrt(obs.noise_variance[..., 0])
-    res_a = np.angle(np.exp(1j * (obs.measurement[..., 1] - true_azimuth))) / np.sqrt(obs.noise_variance[..., 1])
+    res_a = np.angle(np.exp(1j * (obs.measurement[..., 1] - true_azimuth))) / np.sqrt(
+        obs.noise_variance[..., 1]
+    )
     for res in (res_r.ravel(), res_a.ravel()):
         assert abs(res.mean()) < 4 / np.sqrt(res.size)
         assert stats.kstest(res, "norm").pvalue > 0.01
@@ -131,7 +139,9 @@ def test_truth_follows_the_motion_model():
     rng = np.random.default_rng(2)
     sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
     start = sim.state.copy()
-    np.testing.assert_allclose(np.cov(start[:, 0].T), np.diag([20.0] * 4), atol=1.5)  # 4.7 sigma of a sample covariance
+    np.testing.assert_allclose(
+        np.cov(start[:, 0].T), np.diag([20.0] * 4), atol=1.5
+    )  # 4.7 sigma of a sample covariance
     sim.advance()
     F = np.array([[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1.0]])
     noise = sim.state[:, 0] - start[:, 0] @ F.T

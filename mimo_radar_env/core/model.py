@@ -15,7 +15,7 @@ from numpy.typing import NDArray
 
 from ..scenario import Scenario, turn_rate_schedule
 from .geometry import station_ranges
-from .motion import nominal_trajectories, noise_gain, process_covariance, transition_matrix
+from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
 
 #: eq32: the lower end of the measurement-quality factor lambda.
 LAMBDA_FLOOR = 0.2
@@ -60,8 +60,8 @@ class RadarModel:
         transitions = transition_matrix(turn_rate_schedule(sc), sc.sample_time)
         initial_states = np.stack([t.initial_state for t in sc.targets])
         nominal = nominal_trajectories(initial_states, transitions)
-        raw_gain = sc.rcs * sc.tx_power[None, :, None] / (
-            sc.noise_power + sc.interference_power[None, None, :]
+        raw_gain = (
+            sc.rcs * sc.tx_power[None, :, None] / (sc.noise_power + sc.interference_power[None, None, :])
         )
         raw_max, raw_min = _sinr_extremes(raw_gain, sc.tx_positions, sc.rx_positions, nominal)
         constant = sc.peak_sinr / raw_max.max()

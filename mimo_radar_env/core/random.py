@@ -84,9 +84,7 @@ class TrialStreams:
         """U[0, 1) draws, one per element of ``index`` (shape (B, ...))."""
         return (self._bits(stream, step, index) >> _S11).astype(np.float64) * _TWO_POW_M53
 
-    def exponential(
-        self, stream: int, step: int, index: NDArray[np.integer]
-    ) -> NDArray[np.float64]:
+    def exponential(self, stream: int, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Exponential(1) draws."""
         return -np.log1p(-self.uniform(stream, step, index))
 

@@ -63,13 +63,19 @@ class RadarSimulation:
     model : RadarModel
     batch_size : int
         Number of trials B.
+    measurement_quality : float, optional
+        Replace eq32's SINR-driven ``lambda`` by this constant on every channel
+        (an ablation that decouples measurement accuracy from the selection).
     """
 
-    def __init__(self, model: RadarModel, batch_size: int) -> None:
+    def __init__(self, model: RadarModel, batch_size: int, measurement_quality: float | None = None) -> None:
         if batch_size < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size}")
+        if measurement_quality is not None and not measurement_quality > 0:
+            raise ValueError(f"measurement_quality must be > 0 or None, got {measurement_quality}")
         self.model = model
         self.batch_size = batch_size
+        self.measurement_quality = measurement_quality
         self.step_index = 0
         self.state = np.zeros((batch_size, model.num_targets, 4))
         self._streams: TrialStreams | None = None
@@ -167,7 +173,10 @@ class RadarSimulation:
         mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
         sinr = mean * self.streams.exponential(STREAM_SINR, self.step_index, flat)
-        lam = model.quality(mean, target_axis=1)
+        if self.measurement_quality is None:
+            lam = model.quality(mean, target_axis=1)
+        else:
+            lam = np.full_like(mean, self.measurement_quality)
         variance = self._sigma0_diag / lam[..., None]  # (B, K, C, 2)
         clean = bistatic_measurement(
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
@@ -185,4 +194,3 @@ class RadarSimulation:
             measurement=measurement,
             noise_variance=variance,
         )
-

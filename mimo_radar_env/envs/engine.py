@@ -36,6 +36,9 @@ def default_config() -> dict[str, Any]:
       the SINR the channel observed).
     * ``invalid_action``: ``"probe-nothing"`` (an action that does not select
       exactly Ms TX and Ns RX probes nothing, reward 0) or ``"raise"``.
+    * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or
+      a constant ``lambda`` for every channel, to decouple measurement accuracy
+      from the selection (ablations).
 
     Every other keyword is a scenario field override (``horizon=200``...).
     """
@@ -44,6 +47,7 @@ def default_config() -> dict[str, Any]:
         "fusion": "average",
         "filter_noise": "true",
         "invalid_action": "probe-nothing",
+        "measurement_quality": None,
     }
 
 
@@ -81,9 +85,7 @@ def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.i
     """
     arr = np.asarray(actions)
     if arr.dtype.kind not in "biuf":
-        raise ValueError(
-            f"action must be an array of 0/1 integers (MultiBinary), got dtype {arr.dtype}"
-        )
+        raise ValueError(f"action must be an array of 0/1 integers (MultiBinary), got dtype {arr.dtype}")
     if arr.shape != expected_shape:
         raise ValueError(
             f"action must have shape {expected_shape} (first M bits choose transmitters, "
@@ -118,7 +120,7 @@ class RadarEngine:
         self.scenario = scenario
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
-        self.simulation = RadarSimulation(self.model, batch_size)
+        self.simulation = RadarSimulation(self.model, batch_size, config["measurement_quality"])
         self.tracker = IMMUKFTracker(self.model, batch_size, fusion=config["fusion"])
         self.num_tx, self.num_rx = scenario.num_tx, scenario.num_rx
         self.action_size = self.num_tx + self.num_rx
@@ -147,9 +149,7 @@ class RadarEngine:
         info = self._truth_info()
         return obs, info
 
-    def step(
-        self, actions: Any
-    ) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
+    def step(self, actions: Any) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
         """Apply actions (B, M + N); returns obs, reward, terminated, truncated, info."""
         if self.step_index >= self.horizon:
             raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
@@ -160,8 +160,9 @@ class RadarEngine:
         valid = (tx_mask.sum(axis=1) == sc.tx_per_step) & (rx_mask.sum(axis=1) == sc.rx_per_step)
         if self.config["invalid_action"] == "raise" and not valid.all():
             bad = int(np.flatnonzero(~valid)[0])
+            num_tx, num_rx = int(tx_mask[bad].sum()), int(rx_mask[bad].sum())
             raise ValueError(
-                f"action of trial {bad} selects {int(tx_mask[bad].sum())} TX and {int(rx_mask[bad].sum())} RX; "
+                f"action of trial {bad} selects {num_tx} TX and {num_rx} RX; "
                 f"exactly tx_per_step={sc.tx_per_step} and rx_per_step={sc.rx_per_step} are required "
                 "(or make the env with invalid_action='probe-nothing')"
             )

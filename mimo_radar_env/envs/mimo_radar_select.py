@@ -153,9 +153,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
             self.render()
         return _squeeze(obs), _squeeze(info)
 
-    def step(
-        self, action: NDArray[np.int8]
-    ) -> tuple[dict[str, NDArray], float, bool, bool, dict[str, Any]]:
+    def step(self, action: NDArray[np.int8]) -> tuple[dict[str, NDArray], float, bool, bool, dict[str, Any]]:
         obs, reward, terminated, truncated, info = self.engine.step(
             _single_action(action, self.engine.action_size)
         )
@@ -177,7 +175,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     def render(self) -> NDArray[np.uint8] | None:
         if self.render_mode is None:
-            gym.logger.warn("render() called without a render_mode; make the env with render_mode='rgb_array'")
+            gym.logger.warn(
+                "render() called without a render_mode; make the env with render_mode='rgb_array'"
+            )
             return None
         if self.render_mode == "rgb_array":
             from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -261,7 +261,9 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
         if seed is None and self._trial_generators is None:
-            base = int(np.random.SeedSequence().entropy % (2**62))  # fresh entropy, like gym's np_random(None)
+            base = int(
+                np.random.SeedSequence().entropy % (2**62)
+            )  # fresh entropy, like gym's np_random(None)
             seed = base
         if seed is not None:
             seeds = [seed + i for i in range(self.num_envs)] if np.ndim(seed) == 0 else list(seed)

@@ -79,13 +79,13 @@ def robust_cholesky(
     return np.linalg.cholesky(fixed), repaired
 
 
-def sigma_points(
-    mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]
-) -> NDArray[np.float64]:
+def sigma_points(mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]) -> NDArray[np.float64]:
     """Sigma points (..., 2n + 1, n) from a mean (..., n) and the lower Cholesky
     factor of ``(n + lambda) P`` (..., n, n)."""
     offsets = np.swapaxes(chol_scaled, -1, -2)  # rows = columns of L = rows of filterpy's U
-    return np.concatenate([mean[..., None, :], mean[..., None, :] + offsets, mean[..., None, :] - offsets], axis=-2)
+    return np.concatenate(
+        [mean[..., None, :], mean[..., None, :] + offsets, mean[..., None, :] - offsets], axis=-2
+    )
 
 
 def measurement_mean(sigmas_h: NDArray[np.float64], wm: NDArray[np.float64]) -> NDArray[np.float64]:
