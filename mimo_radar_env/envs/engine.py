@@ -36,6 +36,8 @@ def default_config() -> dict[str, Any]:
       the SINR the channel observed).
     * ``invalid_action``: ``"probe-nothing"`` (an action that does not select
       exactly Ms TX and Ns RX probes nothing, reward 0) or ``"raise"``.
+    * ``tracking``: ``True`` runs the IMM-UKF in the loop; ``False`` drops it
+      (and the track keys of the observation) for pure bandit studies.
     * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or
       a constant ``lambda`` for every channel, to decouple measurement accuracy
       from the selection (ablations).
@@ -48,6 +50,7 @@ def default_config() -> dict[str, Any]:
         "filter_noise": "true",
         "invalid_action": "probe-nothing",
         "measurement_quality": None,
+        "tracking": True,
     }
 
 
@@ -64,6 +67,8 @@ def resolve_config(kwargs: Mapping[str, Any]) -> tuple[dict[str, Any], Scenario]
         raise ValueError(f"fusion must be one of {FUSIONS}, got {config['fusion']!r}")
     if config["filter_noise"] not in FILTER_NOISE_MODES:
         raise ValueError(f"filter_noise must be one of {FILTER_NOISE_MODES}, got {config['filter_noise']!r}")
+    if not isinstance(config["tracking"], bool):
+        raise ValueError(f"tracking must be True or False, got {config['tracking']!r}")
     if config["invalid_action"] not in INVALID_ACTION_MODES:
         raise ValueError(
             f"invalid_action must be one of {INVALID_ACTION_MODES}, got {config['invalid_action']!r}"
@@ -121,7 +126,9 @@ class RadarEngine:
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
         self.simulation = RadarSimulation(self.model, batch_size, config["measurement_quality"])
-        self.tracker = IMMUKFTracker(self.model, batch_size, fusion=config["fusion"])
+        self.tracker = (
+            IMMUKFTracker(self.model, batch_size, fusion=config["fusion"]) if config["tracking"] else None
+        )
         self.num_tx, self.num_rx = scenario.num_tx, scenario.num_rx
         self.action_size = self.num_tx + self.num_rx
         self.step_index = 0
@@ -139,7 +146,8 @@ class RadarEngine:
         """Start an episode in every trial; trial i draws its keys from ``generators[i]``."""
         keys = np.stack([keys_from_generator(g) for g in generators])
         self.simulation.reset(keys)
-        self.tracker.reset()
+        if self.tracker is not None:
+            self.tracker.reset()
         self.step_index = 0
         self.last_action[:] = 0
         self.last_valid[:] = False
@@ -206,6 +214,8 @@ class RadarEngine:
 
     # ----------------------------------------------------------- helpers
     def _track(self, channels: ChannelObservations) -> None:
+        if self.tracker is None:
+            return
         if self.config["filter_noise"] == "true":
             variance = channels.noise_variance
         else:
@@ -221,10 +231,11 @@ class RadarEngine:
         )
 
     def _observation(self, sinr: NDArray, probed: NDArray) -> dict[str, NDArray]:
+        obs = {"sinr": sinr, "probed": probed}
         tracker = self.tracker
-        return {
-            "sinr": sinr,
-            "probed": probed,
+        if tracker is None:
+            return obs
+        return obs | {
             "track": tracker.estimate.copy(),
             "track_pred": tracker.predicted_state(),
             "track_pos_cov": tracker.covariance[..., [[0], [2]], [0, 2]],
@@ -233,9 +244,9 @@ class RadarEngine:
 
     def _truth_info(self) -> dict[str, NDArray]:
         state = self.simulation.state
-        error = np.linalg.norm(self.tracker.estimate[..., [0, 2]] - state[..., [0, 2]], axis=-1)
-        return {
-            "mean_sinr": self.simulation.mean_sinr(),
-            "true_state": state.copy(),
-            "position_error": error,
-        }
+        info = {"mean_sinr": self.simulation.mean_sinr(), "true_state": state.copy()}
+        if self.tracker is not None:
+            info["position_error"] = np.linalg.norm(
+                self.tracker.estimate[..., [0, 2]] - state[..., [0, 2]], axis=-1
+            )
+        return info

@@ -21,14 +21,22 @@ from ..scenario import Scenario
 from .engine import RadarEngine, resolve_config
 
 
-def observation_space(scenario: Scenario, num_models: int = 3) -> spaces.Dict:
-    """The observation space of one trial (see :class:`MimoRadarSelectEnv`)."""
+def observation_space(scenario: Scenario, num_models: int | None = 3) -> spaces.Dict:
+    """The observation space of one trial (see :class:`MimoRadarSelectEnv`).
+
+    ``num_models=None`` is the space without a tracker (``tracking=False``).
+    """
     K, M, N = scenario.num_targets, scenario.num_tx, scenario.num_rx
     big = np.finfo(np.float64).max  # unbounded in principle; finite so that Box samples are finite
+    radar = {
+        "sinr": spaces.Box(0.0, big, (K, M, N), np.float64),
+        "probed": spaces.MultiBinary((M, N)),
+    }
+    if num_models is None:
+        return spaces.Dict(radar)
     return spaces.Dict(
-        {
-            "sinr": spaces.Box(0.0, big, (K, M, N), np.float64),
-            "probed": spaces.MultiBinary((M, N)),
+        radar
+        | {
             "track": spaces.Box(-big, big, (K, 4), np.float64),
             "track_pred": spaces.Box(-big, big, (K, 4), np.float64),
             "track_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64),
@@ -114,8 +122,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     ## Arguments
 
     ``gym.make("MimoRadarSelect-v0", scenario="paper-1", fusion="average",
-    filter_noise="true", invalid_action="probe-nothing", render_mode=None,
-    **scenario_overrides)``; see :func:`~mimo_radar_env.envs.engine.default_config`.
+    filter_noise="true", invalid_action="probe-nothing", measurement_quality=None,
+    tracking=True, render_mode=None, **scenario_overrides)``; see
+    :func:`~mimo_radar_env.envs.engine.default_config`. ``tracking=False`` drops the
+    in-loop tracker and the ``track*``/``mode_prob`` keys (pure bandit studies, ~7x faster).
     ``scenario`` is ``paper-1``, ``paper-2``, ``paper-3``, a YAML/TOML file or a
     :class:`~mimo_radar_env.Scenario`; other keywords override scenario fields
     (``horizon=200``).
@@ -136,7 +146,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         self.config, self.scenario = resolve_config(kwargs)
         self.engine = RadarEngine(self.config, self.scenario, batch_size=1)
         self.action_space = spaces.MultiBinary(self.engine.action_size)
-        self.observation_space = observation_space(self.scenario, self.engine.tracker.num_models)
+        self.observation_space = observation_space(self.scenario, _num_models(self.engine))
         self.render_mode = render_mode
         self._truth_history: list[NDArray] = []
         self._track_history: list[NDArray] = []
@@ -148,7 +158,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         super().reset(seed=seed)
         obs, info = self.engine.reset([self.np_random])
         self._truth_history = [info["true_state"][0][:, [0, 2]]]
-        self._track_history = [obs["track"][0][:, [0, 2]]]
+        self._track_history = [obs["track"][0][:, [0, 2]]] if "track" in obs else []
         if self.render_mode == "human":
             self.render()
         return _squeeze(obs), _squeeze(info)
@@ -158,7 +168,8 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
             _single_action(action, self.engine.action_size)
         )
         self._truth_history.append(info["true_state"][0][:, [0, 2]])
-        self._track_history.append(obs["track"][0][:, [0, 2]])
+        if "track" in obs:
+            self._track_history.append(obs["track"][0][:, [0, 2]])
         if self.render_mode == "human":
             self.render()
         return (
@@ -217,6 +228,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
             self._figure = None
 
 
+def _num_models(engine: RadarEngine) -> int | None:
+    return None if engine.tracker is None else engine.tracker.num_models
+
+
 def _single_action(action: Any, size: int) -> NDArray:
     arr = np.asarray(action)
     if arr.shape != (size,):
@@ -250,7 +265,7 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         self.num_envs = num_envs
         self.engine = RadarEngine(self.config, self.scenario, batch_size=num_envs)
         self.single_action_space = spaces.MultiBinary(self.engine.action_size)
-        self.single_observation_space = observation_space(self.scenario, self.engine.tracker.num_models)
+        self.single_observation_space = observation_space(self.scenario, _num_models(self.engine))
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.render_mode = None

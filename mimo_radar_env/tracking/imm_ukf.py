@@ -32,9 +32,7 @@ from typing import Literal
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.special import logsumexp
 
-from ..core.geometry import bistatic_measurement
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from .unscented import (
@@ -54,6 +52,13 @@ DEFAULT_INITIAL_PROBABILITIES = (0.8, 0.1, 0.1)
 DEFAULT_STAY_PROBABILITY = 0.8
 
 
+def logsumexp(values: NDArray[np.float64], axis: int, keepdims: bool = False) -> NDArray[np.float64]:
+    """``log(sum(exp(values)))`` along an axis, stable for finite inputs."""
+    top = np.max(values, axis=axis, keepdims=True)
+    out = top + np.log(np.sum(np.exp(values - top), axis=axis, keepdims=True))
+    return out if keepdims else np.squeeze(out, axis=axis)
+
+
 def markov_matrix(num_models: int, stay_probability: float) -> NDArray[np.float64]:
     """``pi[i, j] = P(model j at t | model i at t-1)``: ``stay`` on the diagonal, the rest shared."""
     if num_models == 1:
@@ -70,6 +75,66 @@ def combine(
     spread = means - mean[..., None, :]
     cov = np.einsum("...r,...rij->...ij", probs, covs + spread[..., :, None] * spread[..., None, :])
     return mean, symmetrize(cov)
+
+
+def average_channels(
+    prior_covs: NDArray[np.float64],
+    means: NDArray[np.float64],
+    probs: NDArray[np.float64],
+    gain: NDArray[np.float64],
+    cross_cov: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """eq22 fusion of per-channel IMM posteriors that share one prior.
+
+    Parameters
+    ----------
+    prior_covs : (B, K, R, n, n) the common predicted covariances
+    means : (B, K, C, R, n) per-channel, per-model posterior means
+    probs : (B, K, C, R) per-channel model probabilities
+    gain, cross_cov : (B, K, C, R, n, d) per-channel Kalman gains and cross covariances;
+        channel c's posterior covariance is ``prior_covs - gain_c @ cross_cov_c'``.
+
+    Returns
+    -------
+    model_means, model_covs : (B, K, R, n), (B, K, R, n, n) means over channels
+    estimate, covariance : (B, K, n), (B, K, n, n) the mean over channels of each
+        channel's combined estimate and covariance
+
+    The channel axis is folded into the inner dimension of one matrix product, so
+    no per-channel (n, n) covariance is ever formed.
+    """
+    B, K, C, R, n = means.shape
+    d = gain.shape[-1]
+
+    def fold(a: NDArray[np.float64]) -> NDArray[np.float64]:  # (B, K, C, R, n, d) -> (B, K, R, n, C*d)
+        return np.moveaxis(a, 2, -2).reshape(B, K, R, n, C * d)
+
+    folded_cross_t = np.swapaxes(fold(cross_cov), -1, -2)
+    model_covs = symmetrize(prior_covs - (fold(gain) @ folded_cross_t) / C)
+    weights = probs / C  # each channel's combined estimate enters the mean with 1/C
+    channel_mean = np.einsum("bkcr,bkcri->bkci", probs, means)
+    spread = (means - channel_mean[..., None, :]).reshape(B, K, C * R, n)
+    weighted_spread = spread * weights.reshape(B, K, C * R, 1)
+    covariance = np.einsum("bkr,bkrij->bkij", weights.sum(axis=2), prior_covs)
+    covariance -= (fold(gain * weights[..., None, None]) @ folded_cross_t).sum(axis=2)
+    covariance += np.swapaxes(weighted_spread, -1, -2) @ spread
+    return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
+
+
+def _sigma_measurements(
+    sigmas: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
+) -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
+    """Bistatic measurements (eq6) of sigma points against channels, broadcast.
+
+    ``sigmas`` (..., 4) and the station positions (..., 2) broadcast to the batch
+    shape; returns ``h`` (..., 2) laid out as (range sum, azimuth) and the sines
+    and cosines of the azimuths (...), which the circular mean reuses.
+    """
+    tx_dx, tx_dy = sigmas[..., 0] - tx[..., 0], sigmas[..., 2] - tx[..., 1]
+    rx_dx, rx_dy = sigmas[..., 0] - rx[..., 0], sigmas[..., 2] - rx[..., 1]
+    rx_range = np.sqrt(rx_dx * rx_dx + rx_dy * rx_dy)
+    h = np.stack([np.sqrt(tx_dx * tx_dx + tx_dy * tx_dy) + rx_range, np.arctan2(rx_dy, rx_dx)], axis=-1)
+    return h, (rx_dy / rx_range, rx_dx / rx_range)
 
 
 class IMMUKFTracker:
@@ -189,48 +254,51 @@ class IMMUKFTracker:
         chol, repaired = robust_cholesky(scale * pred_covs)
         self.repairs += repaired.reshape(self.batch_size, -1).sum(axis=1)
         sigmas = sigma_points(pred_means, chol)  # (B, K, R, S, 4)
-        positions = sigmas[..., [0, 2]]
-        tx = tx_positions[:, None, None, None]  # (B, 1, 1, 1, C, 2)
-        rx = rx_positions[:, None, None, None]
-        sigmas_h = bistatic_measurement(positions[..., None, :], tx, rx)  # (B, K, R, S, C, 2)
-
         if self.fusion == "centralized":
-            B, K, R, S, C, _ = sigmas_h.shape
+            # (B, K, R, S, C): channels innermost, stacked into one 2C measurement
+            h, sin_cos = _sigma_measurements(
+                sigmas[..., None, :], tx_positions[:, None, None, None], rx_positions[:, None, None, None]
+            )
+            B, K, R, S, C, _ = h.shape
             result = unscented_update(
                 pred_means,
                 pred_covs,
                 sigmas,
-                sigmas_h.reshape(B, K, R, S, 2 * C),
+                h.reshape(B, K, R, S, 2 * C),
                 measurement.reshape(B, K, 1, 2 * C),
                 noise_variance.reshape(B, K, 1, 2 * C),
                 self.wm,
                 self.wc,
+                sin_cos,
             )
             log_post = result.log_likelihood + log_c
             log_post -= logsumexp(log_post, axis=-1, keepdims=True)
-            post_means, post_covs = result.mean, result.covariance
+            post_means, post_covs = result.mean, symmetrize(result.covariance)
             estimate, covariance = combine(post_means, post_covs, np.exp(log_post))
         else:
-            # channel axis next to the target axis: (B, K, C, R, ...)
+            # (B, K, C, R, S): every channel updates the common prior on its own
+            tx = tx_positions[:, None, :, None, None]
+            rx = rx_positions[:, None, :, None, None]
+            h, (sin, cos) = _sigma_measurements(sigmas[:, :, None], tx, rx)
+            sin_cos = (sin[..., None], cos[..., None])
             result = unscented_update(
                 pred_means[:, :, None],
                 pred_covs[:, :, None],
                 sigmas[:, :, None],
-                np.moveaxis(sigmas_h, 4, 2),
+                h,
                 measurement[:, :, :, None],
                 noise_variance[:, :, :, None],
                 self.wm,
                 self.wc,
+                sin_cos,
+                with_covariance=False,
             )
             log_post = result.log_likelihood + log_c[:, :, None]
             log_post -= logsumexp(log_post, axis=-1, keepdims=True)  # (B, K, C, R)
-            channel_probs = np.exp(log_post)
-            channel_est, channel_cov = combine(result.mean, result.covariance, channel_probs)
-            post_means = result.mean.mean(axis=2)
-            post_covs = result.covariance.mean(axis=2)
+            post_means, post_covs, estimate, covariance = average_channels(
+                pred_covs, result.mean, np.exp(log_post), result.gain, result.cross_cov
+            )
             log_post = logsumexp(log_post, axis=2) - np.log(log_post.shape[2])
-            estimate = channel_est.mean(axis=2)
-            covariance = channel_cov.mean(axis=2)
 
         # predict-only trials and numerically failed updates keep the prediction
         finite = (

@@ -15,9 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.geometry import wrap_angle
-
 _LOG_2PI = float(np.log(2.0 * np.pi))
+_TWO_PI = 2.0 * np.pi
 
 
 @dataclass(frozen=True)
@@ -88,25 +87,32 @@ def sigma_points(mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]) ->
     )
 
 
-def measurement_mean(sigmas_h: NDArray[np.float64], wm: NDArray[np.float64]) -> NDArray[np.float64]:
+def measurement_mean(
+    sigmas_h: NDArray[np.float64],
+    wm: NDArray[np.float64],
+    azimuth_sin_cos: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+) -> NDArray[np.float64]:
     """Weighted mean of measurement sigma points (..., S, d).
 
     Measurements are (range sum, azimuth) pairs: even components are averaged
-    linearly, odd ones (azimuths) as circular means.
+    linearly, odd ones (azimuths) as circular means. ``azimuth_sin_cos`` may give
+    the sines and cosines of the azimuths (..., S, d/2) when they are at hand.
     """
     mean = np.empty(sigmas_h.shape[:-2] + sigmas_h.shape[-1:])
     mean[..., 0::2] = np.einsum("s,...sd->...d", wm, sigmas_h[..., 0::2])
-    angles = sigmas_h[..., 1::2]
-    mean[..., 1::2] = np.arctan2(
-        np.einsum("s,...sd->...d", wm, np.sin(angles)), np.einsum("s,...sd->...d", wm, np.cos(angles))
-    )
+    if azimuth_sin_cos is None:
+        angles = sigmas_h[..., 1::2]
+        azimuth_sin_cos = (np.sin(angles), np.cos(angles))
+    sin, cos = azimuth_sin_cos
+    mean[..., 1::2] = np.arctan2(np.einsum("s,...sd->...d", wm, sin), np.einsum("s,...sd->...d", wm, cos))
     return mean
 
 
 def measurement_residual(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``a - b`` for (range sum, azimuth) pairs, azimuths wrapped into (-pi, pi]."""
+    """``a - b`` for (range sum, azimuth) pairs, azimuths wrapped into [-pi, pi]."""
     diff = a - b
-    diff[..., 1::2] = wrap_angle(diff[..., 1::2])
+    angles = diff[..., 1::2]
+    angles -= _TWO_PI * np.rint(angles / _TWO_PI)
     return diff
 
 
@@ -125,9 +131,17 @@ def _inverse_and_logdet(
 
 @dataclass
 class UpdateResult:
+    """Posterior of an unscented update.
+
+    ``covariance`` is ``None`` when the update was asked not to form it; the
+    posterior covariance is then ``prior_cov - gain @ cross_cov'``.
+    """
+
     mean: NDArray[np.float64]
-    covariance: NDArray[np.float64]
+    covariance: NDArray[np.float64] | None
     log_likelihood: NDArray[np.float64]
+    gain: NDArray[np.float64]
+    cross_cov: NDArray[np.float64]
 
 
 def unscented_update(
@@ -139,6 +153,8 @@ def unscented_update(
     noise_variance: NDArray[np.float64],
     wm: NDArray[np.float64],
     wc: NDArray[np.float64],
+    azimuth_sin_cos: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None,
+    with_covariance: bool = True,
 ) -> UpdateResult:
     """One unscented measurement update, batched over leading axes.
 
@@ -150,8 +166,12 @@ def unscented_update(
     measurement : (..., d)
         (range sum, azimuth) pairs, stacked when several channels are fused.
     noise_variance : (..., d) diagonal of the measurement covariance R
+    azimuth_sin_cos : optional sines and cosines of the sigma azimuths (..., S, d/2)
+    with_covariance : bool
+        False skips forming the posterior covariances (callers that only need
+        sums of them fold the correction ``gain @ cross_cov'`` themselves).
     """
-    z_pred = measurement_mean(sigmas_h, wm)
+    z_pred = measurement_mean(sigmas_h, wm, azimuth_sin_cos)
     dz = measurement_residual(sigmas_h, z_pred[..., None, :])
     dx = sigmas - prior_mean[..., None, :]
     weighted_dz = dz * wc[:, None]
@@ -164,7 +184,8 @@ def unscented_update(
     gain = cross_cov @ innovation_inv
     residual = measurement_residual(measurement, z_pred)
     mean = prior_mean + (gain @ residual[..., None])[..., 0]
-    cov = symmetrize(prior_cov - gain @ innovation_cov @ np.swapaxes(gain, -1, -2))
+    # K S K' = K Pxz' (as K S = Pxz); symmetric up to rounding: callers symmetrise what they keep
+    cov = prior_cov - gain @ np.swapaxes(cross_cov, -1, -2) if with_covariance else None
     mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
     log_likelihood = -0.5 * (mahalanobis + logdet + d * _LOG_2PI)
-    return UpdateResult(mean, cov, log_likelihood)
+    return UpdateResult(mean, cov, log_likelihood, gain, cross_cov)
