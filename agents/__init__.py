@@ -1,0 +1,39 @@
+"""Selection policies for MimoRadarSelect-v0 and their super-arm solvers.
+
+``make_agent(name, scenario, **params)`` creates an agent by name;
+``available_agents()`` lists them. Every agent is batch-native: the same object
+acts on the single env and on the vector env.
+"""
+
+from .base import Agent, IndexPolicy
+from .baselines import PAPER_FIXED, BestAgent, FixedAgent, RandomAgent
+from .greedy import EpsilonGreedy
+from .mg_crb_cl import MGCRBCL
+from .registry import agent_parameters, agent_summary, available_agents, make_agent, register_agent
+from .solvers import SOLVERS, SuperArmSolver, make_solver
+from .thompson import DiscountedThompson
+from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
+
+__all__ = [
+    "CUCB",
+    "MGCRBCL",
+    "PAPER_FIXED",
+    "SOLVERS",
+    "UCB1",
+    "Agent",
+    "BestAgent",
+    "DiscountedThompson",
+    "DiscountedUCB",
+    "EpsilonGreedy",
+    "FixedAgent",
+    "IndexPolicy",
+    "RandomAgent",
+    "SlidingWindowUCB",
+    "SuperArmSolver",
+    "agent_parameters",
+    "agent_summary",
+    "available_agents",
+    "make_agent",
+    "make_solver",
+    "register_agent",
+]

@@ -1,0 +1,62 @@
+"""Epsilon-greedy, the paper's second baseline."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mimo_radar_env import Scenario
+
+from .base import IndexPolicy, Observation
+from .solvers import SuperArmSolver
+from .ucb import eq29_update
+
+
+class EpsilonGreedy(IndexPolicy):
+    """Epsilon-greedy (Section IV): eq29 state; with probability ``epsilon`` a
+    uniformly random valid super arm, otherwise the best super arm for the fused
+    estimates ``sum_k Omega_k Y_hat[k, m, n]``. Each trial explores independently.
+
+    Parameters
+    ----------
+    epsilon : float
+        Exploration rate (paper 0.1).
+    alpha_star : float
+        ``alpha_bar*`` of eq29 (paper 0.998).
+    """
+
+    name = "epsilon-greedy"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        epsilon: float = 0.1,
+        alpha_star: float = 0.998,
+        solver: str | SuperArmSolver | None = None,
+        solver_params: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__(scenario, seed, solver, solver_params)
+        if not 0.0 <= epsilon <= 1.0:
+            raise ValueError(f"epsilon must be in [0, 1], got {epsilon}")
+        if not 0.0 <= alpha_star <= 1.0:
+            raise ValueError(f"alpha_star must be in [0, 1], got {alpha_star}")
+        self.epsilon, self.alpha_star = epsilon, alpha_star
+        self.explored = np.zeros(0, dtype=bool)
+
+    def _reset(self, obs: Observation) -> None:
+        self.estimate = np.array(obs["sinr"], dtype=np.float64)
+        self.counts = np.array(obs["probed"], dtype=np.float64)
+
+    def index(self, obs: Observation) -> NDArray[np.float64]:
+        return self.fuse(self.estimate)
+
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        greedy = super()._act(obs)
+        self.explored = self.rng.random(self.batch_size) < self.epsilon
+        return np.where(self.explored[:, None], self.random_super_arms(self.batch_size), greedy)
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        self.estimate, self.counts = eq29_update(self.estimate, self.counts, obs, self.alpha_star)

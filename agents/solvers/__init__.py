@@ -1,0 +1,29 @@
+"""Super-arm solvers, pluggable into every index policy (``solver="bpso" | "exact" | "alternating"``)."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from .alternating import AlternatingSolver
+from .base import SuperArmSolver
+from .bpso import BPSOSolver
+from .exact import ExactSolver
+
+SOLVERS: dict[str, type[SuperArmSolver]] = {
+    cls.name: cls for cls in (ExactSolver, BPSOSolver, AlternatingSolver)
+}
+
+
+def make_solver(name: str | SuperArmSolver, tx_count: int, rx_count: int, **params: Any) -> SuperArmSolver:
+    """A solver by name, or pass an instance through."""
+    if isinstance(name, SuperArmSolver):
+        return name
+    if name not in SOLVERS:
+        raise ValueError(f"unknown solver {name!r}; available solvers are {sorted(SOLVERS)}")
+    try:
+        return SOLVERS[name](tx_count, rx_count, **params)
+    except TypeError as exc:
+        raise ValueError(f"bad parameters for solver {name!r}: {exc}") from exc
+
+
+__all__ = ["SOLVERS", "AlternatingSolver", "BPSOSolver", "ExactSolver", "SuperArmSolver", "make_solver"]

@@ -1,0 +1,52 @@
+"""The super-arm solver interface.
+
+A solver picks, for each trial of a batch, the super arm (exactly ``Ms``
+transmitters and ``Ns`` receivers) that maximises ``sum_{m in tx, n in rx} I[m, n]``
+for an index matrix ``I`` (B, M, N) (Section III-B).
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+class SuperArmSolver(ABC):
+    """Base class of super-arm solvers.
+
+    Parameters
+    ----------
+    tx_count, rx_count : int
+        ``Ms`` and ``Ns``.
+    """
+
+    #: Registry name.
+    name: str = ""
+    #: True when the solver always returns the optimum.
+    exact: bool = False
+
+    def __init__(self, tx_count: int, rx_count: int) -> None:
+        if tx_count < 1 or rx_count < 1:
+            raise ValueError(f"tx_count and rx_count must be >= 1, got {tx_count}, {rx_count}")
+        self.tx_count = tx_count
+        self.rx_count = rx_count
+
+    def check(self, index: NDArray[np.float64]) -> NDArray[np.float64]:
+        index = np.asarray(index, dtype=np.float64)
+        if index.ndim != 3:
+            raise ValueError(f"index must have shape (B, M, N), got {index.shape}")
+        if index.shape[1] < self.tx_count or index.shape[2] < self.rx_count:
+            raise ValueError(
+                f"index of shape {index.shape} has fewer stations than Ms={self.tx_count}, Ns={self.rx_count}"
+            )
+        if not np.all(np.isfinite(index)):
+            raise ValueError("index contains NaN or infinite values")
+        return index
+
+    @abstractmethod
+    def solve(
+        self, index: NDArray[np.float64], rng: np.random.Generator
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """Best super arm per trial: boolean masks (B, M) and (B, N)."""

@@ -1,0 +1,226 @@
+"""UCB-family index policies: the paper's UCB1, CUCB, discounted and sliding-window UCB."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mimo_radar_env import Scenario
+
+from .base import IndexPolicy, Observation
+from .solvers import SuperArmSolver
+
+#: Index of an arm with no sample in the window: finite, larger than any SINR index.
+UNEXPLORED_INDEX = 1e6
+
+
+class UCB1(IndexPolicy):
+    """The paper's UCB1 baseline (Section IV, eq29).
+
+    State ``Y_hat[k, m, n]`` and counts ``d[m, n]`` from the reset probe. Played
+    channels: ``Y_hat = (1 - alpha_star) Y_hat + alpha_star gamma`` (eq29), others
+    frozen; index ``Y_hat + sqrt(beta ln t / d)`` fused over targets with eq34.
+
+    Parameters
+    ----------
+    alpha_star : float
+        ``alpha_bar*`` of eq29 (paper 0.998).
+    beta : float
+        Exploration constant (paper 2).
+    """
+
+    name = "ucb1"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        alpha_star: float = 0.998,
+        beta: float = 2.0,
+        solver: str | SuperArmSolver | None = None,
+        solver_params: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__(scenario, seed, solver, solver_params)
+        if not 0.0 <= alpha_star <= 1.0:
+            raise ValueError(f"alpha_star must be in [0, 1], got {alpha_star}")
+        if beta < 0:
+            raise ValueError(f"beta must be >= 0, got {beta}")
+        self.alpha_star, self.beta = alpha_star, beta
+
+    def _reset(self, obs: Observation) -> None:
+        self.estimate = np.array(obs["sinr"], dtype=np.float64)
+        self.counts = np.array(obs["probed"], dtype=np.float64)
+
+    def index(self, obs: Observation) -> NDArray[np.float64]:
+        bonus = np.sqrt(self.beta * np.log(self.t) / self.counts)
+        return self.fuse(self.estimate + bonus[:, None])
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        self.estimate, self.counts = eq29_update(self.estimate, self.counts, obs, self.alpha_star)
+
+
+def eq29_update(
+    estimate: NDArray[np.float64], counts: NDArray[np.float64], obs: Observation, alpha_star: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """eq29: exponential smoothing of played channels, the others frozen; counts += played."""
+    played = np.asarray(obs["probed"], dtype=bool)
+    sample = np.asarray(obs["sinr"], dtype=np.float64)
+    smoothed = (1.0 - alpha_star) * estimate + alpha_star * sample
+    return np.where(played[:, None], smoothed, estimate), counts + played
+
+
+class CUCB(IndexPolicy):
+    """CUCB (Chen, Wang, Yuan & Wang, "Combinatorial multi-armed bandit and its
+    extension to probabilistically triggered arms", JMLR 2016).
+
+    Base arms are the channels; the estimate is the sample mean of all SINR samples
+    (stationary assumption), the index ``mean + scale * sqrt(3 ln t / (2 T_i))``
+    (rewards are not in [0, 1] here, hence ``scale``), and the oracle is the solver.
+
+    Parameters
+    ----------
+    scale : float
+        Multiplies the confidence radius (default 1).
+    """
+
+    name = "cucb"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        scale: float = 1.0,
+        solver: str | SuperArmSolver | None = None,
+        solver_params: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__(scenario, seed, solver, solver_params)
+        if scale < 0:
+            raise ValueError(f"scale must be >= 0, got {scale}")
+        self.scale = scale
+
+    def _reset(self, obs: Observation) -> None:
+        self.sums = np.array(obs["sinr"], dtype=np.float64)
+        self.counts = np.array(obs["probed"], dtype=np.float64)
+
+    def index(self, obs: Observation) -> NDArray[np.float64]:
+        mean = self.sums / self.counts[:, None]
+        bonus = self.scale * np.sqrt(3.0 * np.log(self.t) / (2.0 * self.counts))
+        return self.fuse(mean + bonus[:, None])
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        played = np.asarray(obs["probed"], dtype=np.float64)
+        self.sums = self.sums + np.asarray(obs["sinr"]) * played[:, None]
+        self.counts = self.counts + played
+
+
+class DiscountedUCB(IndexPolicy):
+    """Discounted UCB (Garivier & Moulines, "On upper-confidence bound policies for
+    switching bandit problems", ALT 2011).
+
+    Discounted counts ``N = sum_s discount^(t-s) 1[played]`` and sums of samples
+    give the mean; the index is ``mean + sqrt(beta ln(n) / N)`` with ``n`` the sum of
+    ``N`` over channels (their ``2B sqrt(xi log n / N)`` with the paper's UCB1
+    exploration constant ``beta`` in place of ``4 B^2 xi``, rewards being
+    unbounded SINRs).
+
+    Parameters
+    ----------
+    discount : float
+        ``gamma`` in (0, 1] (default 0.99: an effective memory of about 100 steps).
+    beta : float
+        Exploration constant (default 2).
+    """
+
+    name = "discounted-ucb"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        discount: float = 0.99,
+        beta: float = 2.0,
+        solver: str | SuperArmSolver | None = None,
+        solver_params: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__(scenario, seed, solver, solver_params)
+        if not 0.0 < discount <= 1.0:
+            raise ValueError(f"discount must be in (0, 1], got {discount}")
+        if beta < 0:
+            raise ValueError(f"beta must be >= 0, got {beta}")
+        self.discount, self.beta = discount, beta
+
+    def _reset(self, obs: Observation) -> None:
+        self.sums = np.array(obs["sinr"], dtype=np.float64)
+        self.counts = np.array(obs["probed"], dtype=np.float64)
+
+    def index(self, obs: Observation) -> NDArray[np.float64]:
+        total = np.maximum(self.counts.sum(axis=(1, 2), keepdims=True), np.e)
+        mean = self.sums / self.counts[:, None]
+        bonus = np.sqrt(self.beta * np.log(total) / self.counts)
+        return self.fuse(mean + bonus[:, None])
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        played = np.asarray(obs["probed"], dtype=np.float64)
+        self.sums = self.discount * self.sums + np.asarray(obs["sinr"]) * played[:, None]
+        self.counts = self.discount * self.counts + played
+
+
+class SlidingWindowUCB(IndexPolicy):
+    """Sliding-window UCB (Garivier & Moulines, ALT 2011).
+
+    Means and counts over the last ``window`` steps only; index
+    ``mean + sqrt(beta ln(min(t, window)) / N)``. A channel without a sample in the
+    window gets the index ``UNEXPLORED_INDEX`` (1e6) so that it is probed next.
+    Memory: a ring buffer of (B, window, K, M, N) samples.
+
+    Parameters
+    ----------
+    window : int
+        ``tau`` (default 100 steps).
+    beta : float
+        Exploration constant (default 2).
+    """
+
+    name = "sliding-window-ucb"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        window: int = 100,
+        beta: float = 2.0,
+        solver: str | SuperArmSolver | None = None,
+        solver_params: dict[str, Any] | None = None,
+    ) -> None:
+        super().__init__(scenario, seed, solver, solver_params)
+        if window < 1:
+            raise ValueError(f"window must be >= 1, got {window}")
+        if beta < 0:
+            raise ValueError(f"beta must be >= 0, got {beta}")
+        self.window, self.beta = window, beta
+
+    def _reset(self, obs: Observation) -> None:
+        sinr = np.asarray(obs["sinr"], dtype=np.float64)
+        self.samples = np.zeros((sinr.shape[0], self.window) + sinr.shape[1:])
+        self.played = np.zeros((sinr.shape[0], self.window) + sinr.shape[2:])
+        self.slot = 0
+        self._store(obs)
+
+    def _store(self, obs: Observation) -> None:
+        played = np.asarray(obs["probed"], dtype=np.float64)
+        self.samples[:, self.slot] = np.asarray(obs["sinr"]) * played[:, None]
+        self.played[:, self.slot] = played
+        self.slot = (self.slot + 1) % self.window
+
+    def index(self, obs: Observation) -> NDArray[np.float64]:
+        counts = self.played.sum(axis=1)
+        safe = np.maximum(counts, 1.0)
+        mean = self.samples.sum(axis=1) / safe[:, None]
+        bonus = np.sqrt(self.beta * np.log(max(min(self.t, self.window), 1)) / safe)
+        fused = self.fuse(mean + bonus[:, None])
+        return np.where(counts > 0, fused, UNEXPLORED_INDEX)
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        self._store(obs)

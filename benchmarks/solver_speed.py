@@ -1,0 +1,84 @@
+"""Super-arm solvers at the paper's size: time per batched selection and optimality.
+
+Run: ``python benchmarks/solver_speed.py [--trials 500] [--repeats 5]``.
+Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
+Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
+once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
+against ``exact``, and the alternating solver's gap on a 10 x 12 layout.
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
+from agents.solvers._bpso_kernels import HAVE_NUMBA
+
+
+def _time(solver, index, repeats: int) -> tuple[float, tuple]:
+    solver.solve(index, np.random.default_rng(0))  # warm-up (numba compilation)
+    best, result = np.inf, None
+    for r in range(repeats):
+        start = time.perf_counter()
+        result = solver.solve(index, np.random.default_rng(r))
+        best = min(best, time.perf_counter() - start)
+    return best, result
+
+
+def optimality(index, tx, rx, etx, erx) -> tuple[float, float]:
+    same = (tx == etx).all(axis=1) & (rx == erx).all(axis=1)
+    value = np.einsum("bm,bmn,bn->b", tx, index, rx)
+    best = np.einsum("bm,bmn,bn->b", etx, index, erx)
+    return float(same.mean()), float(np.mean(1 - value / best))
+
+
+def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
+    index = np.random.default_rng(7).exponential(size=(trials, 4, 6))
+    exact_s, (etx, erx) = _time(ExactSolver(2, 3), index, repeats)
+    bpso_s, (btx, brx) = _time(BPSOSolver(2, 3), index, repeats)
+    numpy_s, _ = _time(BPSOSolver(2, 3, use_numba=False), index, 1)
+    rate, gap = optimality(index, btx, brx, etx, erx)
+    big = np.random.default_rng(8).exponential(size=(trials, 10, 12))
+    alt_s, (atx, arx) = _time(AlternatingSolver(3, 4), big, repeats)
+    _, (xtx, xrx) = _time(ExactSolver(3, 4), big, 1)
+    alt_rate, alt_gap = optimality(big, atx, arx, xtx, xrx)
+    return {
+        "exact_ms": exact_s * 1e3,
+        "bpso_ms": bpso_s * 1e3,
+        "bpso_numpy_ms": numpy_s * 1e3,
+        "exact_vs_bpso_speedup": bpso_s / exact_s,
+        "bpso_optimality_rate": rate,
+        "bpso_mean_gap": gap,
+        "alternating_ms_10x12": alt_s * 1e3,
+        "alternating_optimality_rate_10x12": alt_rate,
+        "alternating_mean_gap_10x12": alt_gap,
+    }
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="super-arm solver speed and optimality")
+    parser.add_argument("--trials", type=int, default=500)
+    parser.add_argument("--repeats", type=int, default=5)
+    args = parser.parse_args()
+    r = measure(args.trials, args.repeats)
+    print(
+        f"super-arm solvers, M=4 N=6 Ms=2 Ns=3, {args.trials} trials per batched selection"
+        f" (numba {'on' if HAVE_NUMBA else 'not installed'})"
+    )
+    print(f"  exact                    {r['exact_ms']:10.2f} ms")
+    rate, gap = 100 * r["bpso_optimality_rate"], 100 * r["bpso_mean_gap"]
+    print(f"  bpso (Npop=50, q=100)    {r['bpso_ms']:10.2f} ms   optimal in {rate:.1f} %, gap {gap:.2f} %")
+    print(f"  bpso, numpy kernel       {r['bpso_numpy_ms']:10.2f} ms")
+    print(f"  exact is {r['exact_vs_bpso_speedup']:.0f}x faster than bpso")
+    rate, gap = 100 * r["alternating_optimality_rate_10x12"], 100 * r["alternating_mean_gap_10x12"]
+    print(
+        f"  alternating, 10x12, Ms=3 Ns=4: {r['alternating_ms_10x12']:.2f} ms, optimal in {rate:.1f} %,"
+        f" mean gap {gap:.3f} %"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,123 @@
+"""Super-arm solvers against brute force."""
+
+from itertools import combinations
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver, _bpso_kernels, make_solver
+
+
+def brute_force(index, ms, ns):
+    best = (-np.inf, None, None)
+    M, N = index.shape
+    for tx in combinations(range(M), ms):
+        for rx in combinations(range(N), ns):
+            value = index[np.ix_(tx, rx)].sum()
+            if value > best[0]:
+                best = (value, tx, rx)
+    return best
+
+
+def value_of(index, tx, rx):
+    return index[np.ix_(np.flatnonzero(tx), np.flatnonzero(rx))].sum()
+
+
+def assert_valid(tx, rx, ms, ns):
+    assert tx.dtype == bool and rx.dtype == bool
+    assert (tx.sum(axis=1) == ms).all() and (rx.sum(axis=1) == ns).all()
+
+
+@st.composite
+def problems(draw):
+    M = draw(st.integers(1, 7))
+    N = draw(st.integers(1, 7))
+    ms = draw(st.integers(1, M))
+    ns = draw(st.integers(1, N))
+    seed = draw(st.integers(0, 2**31))
+    return M, N, ms, ns, seed
+
+
+@settings(max_examples=60, deadline=None)
+@given(problems())
+def test_exact_equals_brute_force(problem):
+    M, N, ms, ns, seed = problem
+    rng = np.random.default_rng(seed)
+    index = rng.exponential(size=(3, M, N))
+    tx, rx = ExactSolver(ms, ns).solve(index, rng)
+    assert_valid(tx, rx, ms, ns)
+    for b in range(3):
+        expected, _, _ = brute_force(index[b], ms, ns)
+        assert value_of(index[b], tx[b], rx[b]) == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("solver", ["exact", "bpso", "alternating"])
+def test_every_solver_is_valid_on_ties_and_zeros(solver):
+    rng = np.random.default_rng(0)
+    s = make_solver(solver, 2, 3, **({"iterations": 10} if solver == "bpso" else {}))
+    for index in (np.zeros((4, 4, 6)), np.ones((4, 4, 6)), np.round(rng.random((4, 4, 6)))):
+        tx, rx = s.solve(index, rng)
+        assert_valid(tx, rx, 2, 3)
+
+
+def test_bpso_returns_valid_selections_and_its_optimality_rate():
+    rng = np.random.default_rng(1)
+    index = rng.exponential(size=(300, 4, 6))
+    tx, rx = BPSOSolver(2, 3).solve(index, rng)
+    assert_valid(tx, rx, 2, 3)
+    etx, erx = ExactSolver(2, 3).solve(index, rng)
+    optimal = (tx == etx).all(axis=1) & (rx == erx).all(axis=1)
+    values = np.array([value_of(index[b], tx[b], rx[b]) for b in range(300)])
+    best = np.array([value_of(index[b], etx[b], erx[b]) for b in range(300)])
+    # docs/agents.md states the measured rate (about 0.5 with eq21 as written); guard its order
+    assert 0.3 < optimal.mean() < 0.8
+    assert (values <= best + 1e-12).all() and (values / best).mean() > 0.9
+
+
+def test_bpso_numba_and_numpy_kernels_give_the_same_numbers():
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    index = np.random.default_rng(2).exponential(size=(40, 5, 7))
+    fast = BPSOSolver(2, 3, iterations=30).solve(index, np.random.default_rng(9))
+    slow = BPSOSolver(2, 3, iterations=30, use_numba=False).solve(index, np.random.default_rng(9))
+    np.testing.assert_array_equal(fast[0], slow[0])
+    np.testing.assert_array_equal(fast[1], slow[1])
+
+
+def test_bpso_exp_polynomial_is_accurate():
+    v = np.linspace(-6, 6, 10001)
+    np.testing.assert_allclose(_bpso_kernels.exp_negative(v), np.exp(-v), rtol=1e-7)
+
+
+def test_alternating_gap_against_exact():
+    rng = np.random.default_rng(3)
+    index = rng.exponential(size=(400, 10, 12))
+    tx, rx = AlternatingSolver(3, 4).solve(index, rng)
+    assert_valid(tx, rx, 3, 4)
+    etx, erx = ExactSolver(3, 4).solve(index, rng)
+    values = np.array([value_of(index[b], tx[b], rx[b]) for b in range(400)])
+    best = np.array([value_of(index[b], etx[b], erx[b]) for b in range(400)])
+    assert (values <= best + 1e-9).all()
+    # measured: optimal in about 99 % of cases, mean gap below 0.1 % (docs/agents.md)
+    assert np.mean(np.isclose(values, best)) > 0.9
+    assert np.mean(1 - values / best) < 0.01
+
+
+def test_alternating_scales_beyond_enumeration():
+    rng = np.random.default_rng(4)
+    index = rng.exponential(size=(2, 64, 64))
+    with pytest.raises(ValueError, match="local-search"):
+        ExactSolver(8, 8).solve(index, rng)
+    tx, rx = AlternatingSolver(8, 8).solve(index, rng)
+    assert_valid(tx, rx, 8, 8)
+
+
+def test_solver_errors():
+    with pytest.raises(ValueError, match="unknown solver 'simplex'; available solvers are"):
+        make_solver("simplex", 2, 3)
+    with pytest.raises(ValueError, match="bad parameters for solver 'bpso'"):
+        make_solver("bpso", 2, 3, swarm=3)
+    with pytest.raises(ValueError, match="NaN"):
+        ExactSolver(2, 3).solve(np.full((1, 4, 6), np.nan), np.random.default_rng())
