@@ -1,18 +1,103 @@
-"""``mimo-radar-bench``: the command-line entry point."""
+"""``mimo-radar-bench``: the command-line entry point (also ``python -m benchmarks``)."""
 
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Sequence
+from pathlib import Path
+
+EPILOG = """examples:
+  mimo-radar-bench paper --scenario 1 --trials 20 --out runs/paper1
+  mimo-radar-bench run --scenario paper-3 --policies mg-crb-cl,discounted-thompson \\
+      --agent-param mg-crb-cl.solver=exact --fusion centralized --trials 100 --out runs/mine
+  mimo-radar-bench run --scenario my_layout.yaml --policies ucb1,best --steps 200 --out runs/custom
+
+Outputs (docs/benchmark.md): summary.json, curves.csv, table.md and PNG figures in --out.
+An interrupted run started again with the same arguments and --out continues where it stopped."""
+
+
+def _add_run_options(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--trials", type=int, default=500, help="Monte-Carlo trials (default 500)")
+    parser.add_argument(
+        "--steps",
+        type=int,
+        default=None,
+        help="steps per episode (default: the scenario horizon, 1000 for the paper)",
+    )
+    parser.add_argument("--seed", type=int, default=0, help="base seed: trial i uses seed + i (default 0)")
+    parser.add_argument(
+        "--fusion",
+        choices=("average", "centralized"),
+        default="average",
+        help="tracker fusion: the paper's 'average' (eq22, default) or 'centralized'",
+    )
+    parser.add_argument("--out", required=True, help="output directory (created; reused to resume)")
+    parser.add_argument(
+        "--shard-size",
+        type=int,
+        default=50,
+        help="trials per shard; each finished shard is saved at once (default 50)",
+    )
+    parser.add_argument(
+        "--workers", type=int, default=None, help="local worker processes (default: the number of cores)"
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="'local' processes (default) or a Ray cluster ('ray')",
+    )
+    parser.add_argument(
+        "--address", default=None, help="Ray cluster address (default: start a local Ray instance)"
+    )
+    parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mimo-radar-bench",
-        description="Benchmarks for transmitter/receiver selection in distributed MIMO radar.",
+        description="Monte-Carlo benchmarks of transmitter/receiver selection for distributed MIMO radar.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     sub = parser.add_subparsers(dest="command", required=True)
-    demo = sub.add_parser("demo", help="run one episode of a scenario with a random policy and the oracle")
+
+    paper = sub.add_parser(
+        "paper",
+        help="the paper's study: six policies on a paper scenario",
+        description="Run best, mg-crb-cl, ucb1, epsilon-greedy, fix1 and fix2 on a paper "
+        "scenario with common random numbers and print the table.",
+    )
+    paper.add_argument(
+        "--scenario", type=int, choices=(1, 2, 3), required=True, help="paper scenario 1, 2 or 3"
+    )
+    _add_run_options(paper)
+
+    run = sub.add_parser(
+        "run",
+        help="any scenario, any registered policies",
+        description="Run registered agents (or ppo:PATH) on a scenario and print the table.",
+    )
+    run.add_argument("--scenario", required=True, help="shipped name (paper-1...) or a YAML/TOML file")
+    run.add_argument(
+        "--policies",
+        required=True,
+        help="comma-separated agents (see 'mimo-radar-bench agents') or ppo:PATH/model.zip",
+    )
+    run.add_argument(
+        "--agent-param",
+        action="append",
+        default=[],
+        metavar="AGENT.KEY=VALUE",
+        help="agent parameter, repeatable, e.g. mg-crb-cl.solver=exact (values read as YAML)",
+    )
+    _add_run_options(run)
+
+    sub.add_parser("agents", help="list the registered agents and their parameters")
+
+    demo = sub.add_parser("demo", help="one episode of a scenario with a random policy and the oracle")
     demo.add_argument(
         "--scenario", default="paper-1", help="scenario name or YAML/TOML file (default paper-1)"
     )
@@ -24,9 +109,56 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    from mimo_radar_env import ScenarioError
+
+    from .harness import HarnessError
+
+    try:
+        return _dispatch(args)
+    except (HarnessError, ScenarioError) as exc:
+        parser.exit(2, f"mimo-radar-bench: error: {exc}\n")
+    return 0
+
+
+def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "demo":
         from .demo import print_demo, run_demo
 
         print_demo(run_demo(args.scenario, args.seed, args.steps), args.scenario)
+        return 0
+    if args.command == "agents":
+        import agents
+
+        for name in agents.available_agents():
+            print(f"{name:<22}{agents.agent_summary(name)}")
+            print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
+        return 0
+
+    from .harness import PAPER_POLICIES, make_config, parse_agent_params, run
+    from .report import write_outputs
+
+    if args.command == "paper":
+        scenario = f"paper-{args.scenario}"
+        policies = list(PAPER_POLICIES)
+        params: dict = {}
+    else:
+        scenario = args.scenario
+        policies = [p.strip() for p in args.policies.split(",") if p.strip()]
+        params = parse_agent_params(args.agent_param)
+    config = make_config(
+        scenario, policies, args.trials, args.steps, args.seed, args.fusion, args.shard_size, params
+    )
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+    totals = run(
+        config,
+        args.out,
+        workers=workers,
+        backend=args.backend,
+        address=args.address,
+        progress=not args.quiet,
+    )
+    write_outputs(config, totals, args.out, figures=not args.no_figures)
+    print(Path(args.out, "table.md").read_text())
     return 0

@@ -1,0 +1,363 @@
+"""The Monte-Carlo harness: policies x trials x steps, in shards, resumable.
+
+A run is fixed by a :class:`RunConfig`. Its trials are cut into shards of
+``shard_size`` trials; one task runs one policy on one shard with the vector env
+(trial ``i`` seeded ``seed + i``, so every policy sees the same target trajectories
+for trial ``i``) and returns per-step sums over the shard's trials. Each finished
+task is written at once to ``DIR/shards/<policy>/shard_<k>.npz`` (atomically), so
+an interrupted run started again with the same configuration and ``DIR`` skips
+what is done and loses or double-counts nothing; a different configuration
+pointed at the same ``DIR`` is refused.
+
+Tasks run in the calling process (``workers=1``), in local worker processes, or on
+a Ray cluster (``backend="ray"``). A task's result depends only on the
+configuration and its shard, so every backend gives the same numbers.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable, Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+from tqdm.auto import tqdm
+
+import agents
+from mimo_radar_env import MimoRadarSelectVectorEnv, Scenario, load_scenario
+
+CONFIG_FILE = "config.json"
+SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
+PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
+
+
+class HarnessError(ValueError):
+    """A run cannot start: bad configuration, or a different one already in DIR."""
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """Everything that determines a run's numbers.
+
+    Attributes
+    ----------
+    scenario : dict
+        The scenario's data (``Scenario.to_dict()``): a changed file changes the run.
+    policies : list of str
+        Registered agent names (``mg-crb-cl``...) or ``ppo:PATH``.
+    agent_params : dict
+        ``{policy: {parameter: value}}``.
+    trials, steps, seed, shard_size : int
+    fusion : str
+    """
+
+    scenario: dict[str, Any]
+    policies: list[str]
+    trials: int
+    steps: int
+    seed: int = 0
+    fusion: str = "average"
+    shard_size: int = 50
+    agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    @property
+    def num_shards(self) -> int:
+        return -(-self.trials // self.shard_size)
+
+    def shard_trials(self, shard: int) -> range:
+        start = shard * self.shard_size
+        return range(start, min(start + self.shard_size, self.trials))
+
+    def to_json(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def make_config(
+    scenario: str | Path | Scenario,
+    policies: Sequence[str],
+    trials: int,
+    steps: int | None = None,
+    seed: int = 0,
+    fusion: str = "average",
+    shard_size: int = 50,
+    agent_params: dict[str, dict[str, Any]] | None = None,
+) -> RunConfig:
+    """Validate the pieces of a run and build its configuration."""
+    sc = load_scenario(scenario)
+    if trials < 1:
+        raise HarnessError(f"--trials must be >= 1, got {trials}")
+    if shard_size < 1:
+        raise HarnessError(f"--shard-size must be >= 1, got {shard_size}")
+    steps = sc.horizon if steps is None else steps
+    if not 1 <= steps <= sc.horizon:
+        raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps}")
+    if not policies:
+        raise HarnessError("give at least one policy")
+    if len(set(policies)) != len(policies):
+        raise HarnessError(f"policies are listed twice: {list(policies)}")
+    available = agents.available_agents()
+    for policy in policies:
+        if policy.startswith("ppo:"):
+            if not Path(policy[4:]).exists():
+                raise HarnessError(
+                    f"PPO model {policy[4:]!r} does not exist (expected ppo:PATH/TO/model.zip)"
+                )
+        elif policy not in available:
+            raise HarnessError(f"unknown policy {policy!r}; available policies are {available} and ppo:PATH")
+    params = agent_params or {}
+    for policy, values in params.items():
+        if policy not in policies:
+            raise HarnessError(
+                f"--agent-param names policy {policy!r}, which is not in the run {list(policies)}"
+            )
+        if policy.startswith("ppo:"):
+            continue
+        allowed = agents.agent_parameters(policy)
+        unknown = sorted(set(values) - set(allowed))
+        if unknown:
+            raise HarnessError(f"unknown parameter(s) {unknown} for agent {policy!r}; allowed: {allowed}")
+    if fusion not in ("average", "centralized"):
+        raise HarnessError(f"--fusion must be 'average' or 'centralized', got {fusion!r}")
+    return RunConfig(
+        scenario=sc.to_dict(),
+        policies=list(policies),
+        trials=trials,
+        steps=steps,
+        seed=seed,
+        fusion=fusion,
+        shard_size=shard_size,
+        agent_params={k: dict(v) for k, v in params.items()},
+    )
+
+
+def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """``["mg-crb-cl.beta=1.5", "ucb1.solver=bpso"]`` -> ``{"mg-crb-cl": {"beta": 1.5}, ...}``.
+
+    Values are read as YAML scalars (numbers, booleans, lists, strings).
+    """
+    import yaml
+
+    params: dict[str, dict[str, Any]] = {}
+    for item in items:
+        if "=" not in item or "." not in item.split("=", 1)[0]:
+            raise HarnessError(f"--agent-param must look like agent.key=value, got {item!r}")
+        target, raw = item.split("=", 1)
+        policy, key = target.rsplit(".", 1)
+        params.setdefault(policy, {})[key] = yaml.safe_load(raw)
+    return params
+
+
+# ------------------------------------------------------------------ one task
+def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArray]:
+    """Run ``policy`` on shard ``shard`` of the run; per-step sums over its trials.
+
+    Returns arrays: ``expected`` (T,) sum of mu_t, ``optimal`` (T,) sum of mu*_t,
+    ``squared_error`` (T, K) sum of squared position errors, ``matches`` (T,) number
+    of trials whose super arm equals the optimal one, ``selections`` (T, M + N) how
+    often each station was selected, ``valid`` (T,) valid actions, ``wall_s``.
+    """
+    cfg = RunConfig(**config)
+    scenario = Scenario.from_dict(cfg.scenario)
+    trials = cfg.shard_trials(shard)
+    start = time.perf_counter()
+    env = MimoRadarSelectVectorEnv(num_envs=len(trials), scenario=scenario, fusion=cfg.fusion)
+    agent = make_policy(policy, scenario, cfg.agent_params.get(policy, {}), seed=cfg.seed + trials.start)
+    if getattr(agent, "needs_oracle", False):
+        agent.attach(env)
+    obs, _ = env.reset(seed=cfg.seed + trials.start)
+    agent.reset(obs)
+    T, K = cfg.steps, scenario.num_targets
+    out = {
+        "expected": np.zeros(T),
+        "optimal": np.zeros(T),
+        "squared_error": np.zeros((T, K)),
+        "matches": np.zeros(T),
+        "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
+        "valid": np.zeros(T),
+    }
+    for t in range(T):
+        action = agent.act(obs)
+        obs, reward, _, _, info = env.step(action)
+        agent.update(obs, reward)
+        out["expected"][t] = info["expected_reward"].sum()
+        out["optimal"][t] = info["optimal_reward"].sum()
+        out["squared_error"][t] = (info["position_error"] ** 2).sum(axis=0)
+        out["matches"][t] = np.all(np.asarray(action) == info["optimal_action"], axis=1).sum()
+        out["selections"][t] = np.asarray(action).sum(axis=0)
+        out["valid"][t] = info["action_valid"].sum()
+    out["wall_s"] = np.array(time.perf_counter() - start)
+    return out
+
+
+def make_policy(policy: str, scenario: Scenario, params: dict[str, Any], seed: int) -> agents.Agent:
+    """A registered agent, or a trained PPO policy for ``ppo:PATH``."""
+    if policy.startswith("ppo:"):
+        from .ppo import PPOAgent
+
+        return PPOAgent(scenario, policy[4:], seed=seed, **params)
+    return agents.make_agent(policy, scenario, seed=seed, **params)
+
+
+def _worker_init() -> None:
+    """One compute thread per worker process: the processes are the parallelism."""
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except ImportError:  # pragma: no cover
+        pass
+
+
+# ------------------------------------------------------------------ storage
+def shard_path(out: Path, policy: str, shard: int) -> Path:
+    safe = policy.replace("/", "_").replace(":", "_")
+    return out / "shards" / safe / f"shard_{shard:05d}.npz"
+
+
+def _write_shard(path: Path, result: dict[str, NDArray]) -> None:
+    path.parent.mkdir(parents=True, exist_ok=True)
+    tmp = path.with_suffix(".tmp.npz")
+    np.savez(tmp, **result)
+    os.replace(tmp, path)  # atomic: a shard file is complete or absent
+
+
+def prepare_output(out: Path, config: RunConfig) -> None:
+    """Create DIR, or check that the run already in it has the same configuration."""
+    out.mkdir(parents=True, exist_ok=True)
+    path = out / CONFIG_FILE
+    wanted = json.loads(json.dumps(config.to_json()))
+    if path.exists():
+        existing = json.loads(path.read_text())
+        if existing != wanted:
+            changed = sorted(k for k in set(existing) | set(wanted) if existing.get(k) != wanted.get(k))
+            raise HarnessError(
+                f"{out} holds a run with a different configuration (differs in {changed}); "
+                "resume it with the same arguments or choose another --out"
+            )
+    else:
+        path.write_text(json.dumps(wanted, indent=2))
+
+
+# ------------------------------------------------------------------ running
+def run(
+    config: RunConfig,
+    out: str | Path,
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    progress: bool = True,
+    max_tasks: int | None = None,
+) -> dict[str, dict[str, NDArray]] | None:
+    """Run every (policy, shard) task not yet in ``out``; return the per-policy totals.
+
+    ``max_tasks`` stops after that many new tasks (to test resumption); the run is
+    then incomplete and ``None`` is returned.
+    """
+    out = Path(out)
+    prepare_output(out, config)
+    todo = [
+        (policy, shard)
+        for shard in range(config.num_shards)
+        for policy in config.policies
+        if not shard_path(out, policy, shard).exists()
+    ]
+    if max_tasks is not None:
+        todo = todo[:max_tasks]
+    total = config.trials * config.steps * len(config.policies)
+    done_units = total - sum(len(config.shard_trials(s)) * config.steps for _, s in todo)
+    bar = tqdm(
+        total=total,
+        initial=done_units,
+        unit="trial-step",
+        disable=not progress,
+        smoothing=0.1,
+        desc=f"{config.scenario['name']}",
+    )
+    payload = config.to_json()
+
+    def finished(policy: str, shard: int, result: dict[str, NDArray]) -> None:
+        _write_shard(shard_path(out, policy, shard), result)
+        bar.update(len(config.shard_trials(shard)) * config.steps)
+        bar.set_postfix_str(policy)
+
+    try:
+        if backend == "ray":
+            _run_ray(payload, todo, finished, address)
+        elif backend != "local":
+            raise HarnessError(f"--backend must be 'local' or 'ray', got {backend!r}")
+        elif workers <= 1:
+            for policy, shard in todo:
+                finished(policy, shard, run_task(payload, policy, shard))
+        else:
+            _run_processes(payload, todo, finished, workers)
+    finally:
+        bar.close()
+    complete = all(shard_path(out, p, s).exists() for p in config.policies for s in range(config.num_shards))
+    return load_totals(out, config) if complete else None
+
+
+def _run_processes(
+    payload: dict[str, Any], todo: list[tuple[str, int]], finished: Callable[..., None], workers: int
+) -> None:
+    import multiprocessing
+
+    context = multiprocessing.get_context("spawn")  # no inherited threads or state
+    with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_init) as pool:
+        pending = {pool.submit(run_task, payload, policy, shard): (policy, shard) for policy, shard in todo}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                policy, shard = pending.pop(future)
+                finished(policy, shard, future.result())
+
+
+def _run_ray(
+    payload: dict[str, Any], todo: list[tuple[str, int]], finished: Callable[..., None], address: str | None
+) -> None:
+    try:
+        import ray
+    except ImportError as exc:
+        raise HarnessError("--backend ray needs Ray: pip install -e '.[ray]'") from exc
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+    try:
+        remote_task = ray.remote(run_task)
+        pending = {remote_task.remote(payload, policy, shard): (policy, shard) for policy, shard in todo}
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                policy, shard = pending.pop(ref)
+                finished(policy, shard, ray.get(ref))
+    finally:
+        if started_here:
+            ray.shutdown()
+
+
+def load_totals(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
+    """Sum the shards of every policy, in shard order (the same sums whatever the backend)."""
+    totals: dict[str, dict[str, NDArray]] = {}
+    for policy in config.policies:
+        parts = []
+        for shard in range(config.num_shards):
+            path = shard_path(out, policy, shard)
+            if not path.exists():
+                raise HarnessError(
+                    f"shard {shard} of {policy!r} is missing in {out}; run again to complete it"
+                )
+            with np.load(path) as data:
+                parts.append({key: data[key] for key in SHARD_FIELDS})
+        summed = {}
+        for key in SHARD_FIELDS:
+            total = parts[0][key].copy()
+            for part in parts[1:]:
+                total = total + part[key]
+            summed[key] = total
+        totals[policy] = summed
+    return totals

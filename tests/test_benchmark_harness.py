@@ -1,0 +1,274 @@
+"""The Monte-Carlo harness and its CLI on small runs."""
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from benchmarks.cli import main
+from benchmarks.harness import HarnessError, load_totals, make_config, parse_agent_params, run, shard_path
+from benchmarks.report import write_outputs
+from mimo_radar_env import metrics
+
+SUMMARY_KEYS = {"armse", "armse_per_target", "asr", "final_regret", "mean_sinr_db", "wall_s"}
+
+
+def _read_curves(path):
+    with open(path) as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_metrics_on_a_hand_made_case():
+    # 2 trials, 3 steps, 2 targets; squared errors summed over trials
+    squared = np.array([[2 * 1.0, 2 * 4.0], [2 * 9.0, 2 * 16.0], [2 * 0.0, 2 * 1.0]])
+    overall, per_target = metrics.armse(squared, trials=2)
+    assert per_target == pytest.approx([(1 + 3 + 0) / 3, (2 + 4 + 1) / 3])
+    assert overall == pytest.approx(np.mean(per_target))
+    assert metrics.asr(np.array([2, 1, 0]), trials=2) == pytest.approx(0.5)
+    regret = metrics.regret_curve(np.array([10.0, 10.0, 12.0]), np.array([6.0, 10.0, 4.0]), trials=2)
+    np.testing.assert_allclose(regret, [2.0, 2.0, 6.0])
+    assert metrics.mean_sinr_db(np.array([60.0, 60.0]), trials=1, channels=6) == pytest.approx(10.0)
+
+
+def test_paper_subcommand_writes_every_output(tmp_path, capsys):
+    out = tmp_path / "paper"
+    code = main(
+        [
+            "paper",
+            "--scenario",
+            "3",
+            "--trials",
+            "4",
+            "--steps",
+            "25",
+            "--shard-size",
+            "2",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    assert "| mg-crb-cl |" in printed and "paper ARMSE" in printed
+    for name in (
+        "summary.json",
+        "curves.csv",
+        "table.md",
+        "sinr.png",
+        "regret.png",
+        "rmse.png",
+        "geometry.png",
+        "selection_mg-crb-cl.png",
+        "selection_fix2.png",
+        "config.json",
+    ):
+        assert (out / name).exists(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary) >= {"scenario", "trials", "steps", "seed", "policies"}
+    assert summary["scenario"] == "paper-3" and summary["trials"] == 4 and summary["steps"] == 25
+    assert list(summary["policies"]) == ["best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"]
+    rows = _read_curves(out / "curves.csv")
+    for policy, row in summary["policies"].items():
+        assert set(row) == SUMMARY_KEYS and 0.0 <= row["asr"] <= 1.0 and len(row["armse_per_target"]) == 2
+        # independent computation from the saved per-step data
+        mine = [r for r in rows if r["policy"] == policy]
+        assert len(mine) == 25
+        per_target = [np.mean([float(r[f"rmse_target{k}"]) for r in mine]) for k in (1, 2)]
+        assert row["armse_per_target"] == pytest.approx(per_target, rel=1e-9)
+        assert row["armse"] == pytest.approx(np.mean(per_target), rel=1e-9)
+        assert row["asr"] == pytest.approx(np.mean([float(r["asr"]) for r in mine]), rel=1e-9)
+        assert row["final_regret"] == pytest.approx(float(mine[-1]["cumulative_regret"]), rel=1e-9, abs=1e-9)
+        linear = np.mean([10 ** (float(r["mean_sinr_db"]) / 10) for r in mine])
+        assert row["mean_sinr_db"] == pytest.approx(10 * np.log10(linear), rel=1e-9)
+    assert summary["policies"]["best"]["asr"] == 1.0 and summary["policies"]["best"][
+        "final_regret"
+    ] == pytest.approx(0)
+
+
+def test_run_subcommand_with_agent_params_and_a_scenario_file(tmp_path, capsys):
+    scenario = tmp_path / "tiny.yaml"
+    scenario.write_text(
+        "tx_positions: [[0, 0], [20000, 0], [0, 20000]]\n"
+        "rx_positions: [[20000, 20000], [10000, 0], [0, 10000]]\n"
+        "tx_per_step: 2\nrx_per_step: 2\nhorizon: 40\ntargets:\n  - initial_state: [5000, 50, 7000, 20]\n"
+    )
+    out = tmp_path / "run"
+    main(
+        [
+            "run",
+            "--scenario",
+            str(scenario),
+            "--policies",
+            "mg-crb-cl,discounted-thompson,random",
+            "--agent-param",
+            "mg-crb-cl.solver=exact",
+            "--agent-param",
+            "discounted-thompson.discount=0.95",
+            "--trials",
+            "3",
+            "--seed",
+            "7",
+            "--fusion",
+            "centralized",
+            "--workers",
+            "1",
+            "--no-figures",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["scenario"] == "tiny" and summary["seed"] == 7 and summary["steps"] == 40
+    assert list(summary["policies"]) == ["mg-crb-cl", "discounted-thompson", "random"]
+    config = json.loads((out / "config.json").read_text())
+    assert config["agent_params"] == {
+        "mg-crb-cl": {"solver": "exact"},
+        "discounted-thompson": {"discount": 0.95},
+    }
+    assert not (out / "sinr.png").exists()
+
+
+def test_agents_and_demo_subcommands(capsys):
+    assert main(["agents"]) == 0
+    listing = capsys.readouterr().out
+    assert "mg-crb-cl" in listing and "alpha_bar" in listing
+    assert main(["demo", "--steps", "5"]) == 0
+    assert "oracle" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["run", "--scenario", "paper-9", "--policies", "ucb1"], "unknown scenario 'paper-9'"),
+        (
+            ["run", "--scenario", "paper-1", "--policies", "ucb2"],
+            "unknown policy 'ucb2'; available policies are",
+        ),
+        (
+            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--agent-param", "ucb1.gamma=2"],
+            r"unknown parameter\(s\) \['gamma'\] for agent 'ucb1'; allowed:",
+        ),
+        (
+            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--agent-param", "ucb1gamma"],
+            "must look like agent.key=value",
+        ),
+        (
+            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--steps", "5000"],
+            "--steps must be between 1 and",
+        ),
+        (["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "0"], "--trials must be >= 1"),
+        (["run", "--scenario", "paper-1", "--policies", "ppo:/nonexistent.zip"], "does not exist"),
+    ],
+)
+def test_bad_arguments_give_their_errors(argv, message, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(tmp_path / "x"), "--quiet"])
+    assert exit_info.value.code == 2
+    import re
+
+    assert re.search(message, capsys.readouterr().err)
+
+
+def test_a_changed_configuration_in_the_same_dir_is_refused(tmp_path):
+    config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
+    run(config, tmp_path, progress=False)
+    other = make_config("paper-1", ["fix1"], trials=2, steps=6, shard_size=1)
+    with pytest.raises(HarnessError, match=r"different configuration \(differs in \['steps'\]\)"):
+        run(other, tmp_path, progress=False)
+
+
+def test_resume_after_a_partial_run_gives_the_same_numbers(tmp_path):
+    config = make_config("paper-3", ["mg-crb-cl", "epsilon-greedy"], trials=6, steps=20, shard_size=2)
+    whole = run(config, tmp_path / "whole", progress=False)
+    assert run(config, tmp_path / "part", progress=False, max_tasks=3) is None  # stops after 3 of 6 tasks
+    assert len(list((tmp_path / "part" / "shards").rglob("*.npz"))) == 3
+    resumed = run(config, tmp_path / "part", progress=False)
+    for policy in config.policies:
+        for key, value in whole[policy].items():
+            if key != "wall_s":
+                np.testing.assert_array_equal(resumed[policy][key], value)
+
+
+def test_a_killed_run_restarted_gives_exactly_the_uninterrupted_numbers(tmp_path):
+    args = [
+        "run",
+        "--scenario",
+        "paper-1",
+        "--policies",
+        "ucb1,fix1",
+        "--trials",
+        "8",
+        "--shard-size",
+        "1",
+        "--steps",
+        "300",
+        "--workers",
+        "1",
+        "--no-figures",
+        "--quiet",
+    ]
+    killed = tmp_path / "killed"
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "benchmarks", *args, "--out", str(killed)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    deadline = time.time() + 120
+    while time.time() < deadline and len(list(killed.glob("shards/*/*.npz"))) < 3:
+        time.sleep(0.05)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    done = len(list(killed.glob("shards/*/*.npz")))
+    assert 3 <= done < 16, "the run must be killed part-way"
+    assert main([*args, "--out", str(killed)]) == 0
+    assert main([*args, "--out", str(tmp_path / "whole")]) == 0
+    a = json.loads((killed / "summary.json").read_text())["policies"]
+    b = json.loads((tmp_path / "whole" / "summary.json").read_text())["policies"]
+    for policy in a:
+        for key in SUMMARY_KEYS - {"wall_s"}:
+            assert a[policy][key] == b[policy][key], (policy, key)
+
+
+def test_local_workers_give_the_numbers_of_one_process(tmp_path):
+    config = make_config("paper-1", ["mg-crb-cl", "ucb1"], trials=4, steps=15, shard_size=1)
+    one = run(config, tmp_path / "one", workers=1, progress=False)
+    two = run(config, tmp_path / "two", workers=2, progress=False)
+    for policy in config.policies:
+        for key in ("expected", "optimal", "squared_error", "matches", "selections"):
+            np.testing.assert_array_equal(one[policy][key], two[policy][key])
+
+
+def test_ray_backend_gives_the_numbers_of_the_local_path(tmp_path):
+    pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
+    config = make_config("paper-3", ["mg-crb-cl", "fix2"], trials=4, steps=15, shard_size=2)
+    local = run(config, tmp_path / "local", workers=1, progress=False)
+    remote = run(config, tmp_path / "ray", backend="ray", progress=False)
+    for policy in config.policies:
+        for key in ("expected", "optimal", "squared_error", "matches", "selections"):
+            np.testing.assert_array_equal(local[policy][key], remote[policy][key])
+
+
+def test_parse_agent_params_reads_yaml_values():
+    assert parse_agent_params(
+        ["mg-crb-cl.beta=1.5", "mg-crb-cl.solver=exact", "sliding-window-ucb.window=20"]
+    ) == {"mg-crb-cl": {"beta": 1.5, "solver": "exact"}, "sliding-window-ucb": {"window": 20}}
+
+
+def test_outputs_regenerate_from_saved_shards(tmp_path):
+    config = make_config("paper-1", ["fix1", "best"], trials=2, steps=10, shard_size=1)
+    totals = run(config, tmp_path, progress=False)
+    first = write_outputs(config, totals, tmp_path, figures=False)
+    again = write_outputs(config, load_totals(Path(tmp_path), config), tmp_path, figures=False)
+    assert first == again
+    assert shard_path(tmp_path, "fix1", 1).exists()
