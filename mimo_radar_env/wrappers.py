@@ -1,0 +1,224 @@
+"""Wrappers for learning agents (PPO and other deep RL): valid actions and flat features.
+
+* :class:`SuperArmDiscreteAction`: ``Discrete(C(M, Ms) * C(N, Ns))``, one action per super
+  arm, for layouts where that number is small.
+* :class:`StationScoreAction`: ``Box(-1, 1, (M + N,))`` scores; the top-``Ms``
+  transmitters and top-``Ns`` receivers are selected, for large arrays.
+* :class:`RadarFeatureObservation`: a flat ``Box`` feature vector an MLP can learn from
+  (docs/ppo.md), computed by :class:`RadarFeatures`, which is batch-first so that the
+  harness computes the same features for B trials at once.
+
+All three keep every action valid by construction: a policy never has to learn the
+``Ms``/``Ns`` constraint.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+from numpy.typing import NDArray
+
+from .core.geometry import station_ranges
+from .core.superarm import top_mask
+from .scenario import Scenario
+
+#: Largest number of super arms :class:`SuperArmDiscreteAction` enumerates.
+MAX_DISCRETE_SUPER_ARMS = 100_000
+
+
+def _scenario_of(env: gym.Env) -> Scenario:
+    return env.unwrapped.scenario
+
+
+class SuperArmIndex:
+    """The bijection between ``0..C(M,Ms)*C(N,Ns)-1`` and valid super arms.
+
+    Index ``i`` selects the ``i // C(N, Ns)``-th transmitter subset and the
+    ``i % C(N, Ns)``-th receiver subset, subsets in lexicographic order.
+    """
+
+    def __init__(self, scenario: Scenario) -> None:
+        sc = scenario
+        self.num_tx, self.num_rx = sc.num_tx, sc.num_rx
+        count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
+        if count > MAX_DISCRETE_SUPER_ARMS:
+            raise ValueError(
+                f"{count} super arms are too many for a Discrete action (limit {MAX_DISCRETE_SUPER_ARMS}); "
+                "use StationScoreAction for this layout"
+            )
+        tx = list(itertools.combinations(range(sc.num_tx), sc.tx_per_step))
+        rx = list(itertools.combinations(range(sc.num_rx), sc.rx_per_step))
+        self.actions = np.zeros((len(tx) * len(rx), sc.num_tx + sc.num_rx), dtype=np.int8)
+        for i, (t, r) in enumerate(itertools.product(tx, rx)):
+            self.actions[i, list(t)] = 1
+            self.actions[i, [sc.num_tx + n for n in r]] = 1
+
+    @property
+    def size(self) -> int:
+        return len(self.actions)
+
+    def to_action(self, index: Any) -> NDArray[np.int8]:
+        """Env action(s) ``(..., M + N)`` for super-arm index(es)."""
+        index = np.asarray(index, dtype=np.int64)
+        if np.any((index < 0) | (index >= self.size)):
+            raise ValueError(f"super-arm index must be in [0, {self.size}), got {index}")
+        return self.actions[index]
+
+
+class SuperArmDiscreteAction(gym.ActionWrapper):
+    """``Discrete(C(M, Ms) * C(N, Ns))``: every action is one valid super arm (a bijection)."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.index = SuperArmIndex(_scenario_of(env))
+        self.action_space = spaces.Discrete(self.index.size)
+
+    def action(self, action: Any) -> NDArray[np.int8]:
+        return self.index.to_action(action)
+
+
+def scores_to_action(
+    scores: NDArray[np.float64], num_tx: int, tx_count: int, rx_count: int
+) -> NDArray[np.int8]:
+    """Top-``Ms`` transmitter and top-``Ns`` receiver scores (ties: lowest index), (..., M + N)."""
+    scores = np.asarray(scores, dtype=np.float64)
+    if not np.all(np.isfinite(scores)):
+        raise ValueError("station scores must be finite")
+    tx = top_mask(scores[..., :num_tx], tx_count)
+    rx = top_mask(scores[..., num_tx:], rx_count)
+    return np.concatenate([tx, rx], axis=-1).astype(np.int8)
+
+
+class StationScoreAction(gym.ActionWrapper):
+    """``Box(-1, 1, (M + N,))``: a score per station; the top-``Ms`` TX and top-``Ns`` RX are used."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        sc = _scenario_of(env)
+        self._sizes = (sc.num_tx, sc.tx_per_step, sc.rx_per_step)
+        self.action_space = spaces.Box(-1.0, 1.0, (sc.num_tx + sc.num_rx,), np.float32)
+
+    def action(self, action: Any) -> NDArray[np.int8]:
+        return scores_to_action(action, *self._sizes)
+
+
+class RadarFeatures:
+    """Batch-first feature vectors from env observations (docs/ppo.md).
+
+    An MLP has no memory, so the features carry what a bandit agent keeps as state:
+
+    * ``latest_sinr`` (K*M*N): the last SINR sample of every target and channel,
+      ``log10(1 + sample)``; with
+    * ``age`` (M*N): steps since the channel was last probed, ``min(age, 100) / 100``;
+    * ``path_gain`` (K*M*N): ``log10`` of the geometric gain ``(R_tx R_rx)^-2`` at the
+      tracker's one-step prediction, relative to its maximum over channels (so in
+      ``[-inf, 0]``, clipped at -6): which channels the geometry favours next;
+    * ``track`` (K*4): predicted position in units of the layout's extent and
+      velocity in units of 100 m/s; ``mode_prob`` (K*3);
+    * ``time`` (1): ``t / T``.
+
+    With ``tracking=False`` envs the track-based parts are zeros.
+    """
+
+    MAX_AGE = 100.0
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        sc = scenario
+        self.shape = (sc.num_targets, sc.num_tx, sc.num_rx)
+        stations = np.concatenate([sc.tx_positions, sc.rx_positions])
+        self.centre = stations.mean(axis=0)
+        self.extent = max(float(np.ptp(stations, axis=0).max()), 1.0)
+        K, M, N = self.shape
+        self.size = 2 * K * M * N + M * N + K * 4 + K * 3 + 1
+
+    def reset(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
+        sinr = np.asarray(obs["sinr"], dtype=np.float64)
+        self.latest = np.log10(1.0 + sinr)
+        self.age = np.where(np.asarray(obs["probed"]) > 0, 0.0, self.MAX_AGE)
+        self.t = 0
+        return self._features(obs)
+
+    def step(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
+        probed = np.asarray(obs["probed"]) > 0
+        self.latest = np.where(probed[:, None], np.log10(1.0 + np.asarray(obs["sinr"])), self.latest)
+        self.age = np.where(probed, 0.0, np.minimum(self.age + 1.0, self.MAX_AGE))
+        self.t += 1
+        return self._features(obs)
+
+    def _features(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
+        batch = self.latest.shape[0]
+        K, M, N = self.shape
+        if "track_pred" in obs:
+            pred = np.asarray(obs["track_pred"], dtype=np.float64)
+            positions = pred[..., [0, 2]]
+            tx_sq = station_ranges(positions, self.scenario.tx_positions) ** 2
+            rx_sq = station_ranges(positions, self.scenario.rx_positions) ** 2
+            log_gain = -np.log10(tx_sq[..., :, None] * rx_sq[..., None, :])
+            log_gain = np.maximum(log_gain - log_gain.max(axis=(-1, -2), keepdims=True), -6.0)
+            track = np.concatenate(
+                [
+                    (positions - self.centre) / self.extent,
+                    pred[..., [1, 3]] / 100.0,
+                ],
+                axis=-1,
+            )
+            modes = np.asarray(obs["mode_prob"], dtype=np.float64)
+        else:
+            log_gain = np.zeros((batch, K, M, N))
+            track = np.zeros((batch, K, 4))
+            modes = np.zeros((batch, K, 3))
+        parts = [
+            self.latest.reshape(batch, -1),
+            (self.age / self.MAX_AGE).reshape(batch, -1),
+            log_gain.reshape(batch, -1),
+            track.reshape(batch, -1),
+            modes.reshape(batch, -1),
+            np.full((batch, 1), self.t / self.scenario.horizon),
+        ]
+        return np.concatenate(parts, axis=1).astype(np.float32)
+
+
+class RadarFeatureObservation(gym.ObservationWrapper):
+    """A flat ``Box`` of :class:`RadarFeatures` (float32) for MLP policies."""
+
+    def __init__(self, env: gym.Env) -> None:
+        super().__init__(env)
+        self.features = RadarFeatures(_scenario_of(env))
+        self.observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
+
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):  # noqa: ANN201
+        obs, info = self.env.reset(seed=seed, options=options)
+        return self.features.reset(_batch(obs))[0], info
+
+    def observation(self, observation: dict[str, NDArray]) -> NDArray[np.float32]:
+        return self.features.step(_batch(observation))[0]
+
+
+def _batch(obs: dict[str, NDArray]) -> dict[str, NDArray]:
+    return {key: np.asarray(value)[None] for key, value in obs.items()}
+
+
+def make_ppo_env(scenario: Any = "paper-1", action: str = "auto", **kwargs: Any) -> gym.Env:
+    """``MimoRadarSelect-v0`` wrapped for PPO: flat features and valid actions.
+
+    ``action``: ``"discrete"`` (one action per super arm), ``"scores"`` (station
+    scores) or ``"auto"`` (discrete when there are at most 1,000 super arms).
+    """
+    env = gym.make("MimoRadarSelect-v0", scenario=scenario, **kwargs)
+    sc = env.unwrapped.scenario
+    count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
+    if action == "auto":
+        action = "discrete" if count <= 1000 else "scores"
+    if action == "discrete":
+        env = SuperArmDiscreteAction(env)
+    elif action == "scores":
+        env = StationScoreAction(env)
+    else:
+        raise ValueError(f"action must be 'auto', 'discrete' or 'scores', got {action!r}")
+    return RadarFeatureObservation(env)

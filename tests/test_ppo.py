@@ -1,0 +1,157 @@
+"""PPO: wrappers with valid actions by construction, a short training run, the harness path."""
+
+import json
+import math
+import subprocess
+import sys
+import warnings
+from itertools import combinations
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from mimo_radar_env.wrappers import (
+    RadarFeatureObservation,
+    StationScoreAction,
+    SuperArmDiscreteAction,
+    make_ppo_env,
+)
+from tests.helpers import large_scenario
+
+
+def test_discrete_super_arm_index_is_a_bijection():
+    env = SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario="paper-1"))
+    assert env.action_space.n == math.comb(4, 2) * math.comb(6, 3) == 120
+    actions = env.index.to_action(np.arange(120))
+    assert (actions[:, :4].sum(axis=1) == 2).all() and (actions[:, 4:].sum(axis=1) == 3).all()
+    every = {(t, r) for t in combinations(range(4), 2) for r in combinations(range(6), 3)}
+    seen = {(tuple(np.flatnonzero(a[:4])), tuple(np.flatnonzero(a[4:]))) for a in actions}
+    assert seen == every  # onto and, with 120 distinct images of 120 indices, one-to-one
+    env.reset(seed=0)
+    for i in (0, 57, 119):
+        _, _, _, _, info = env.step(i)
+        assert info["action_valid"]
+    with pytest.raises(ValueError, match=r"super-arm index must be in \[0, 120\)"):
+        env.index.to_action(120)
+
+
+def test_station_scores_give_valid_selections_on_paper_and_16x16_layouts():
+    rng = np.random.default_rng(0)
+    for scenario in ("paper-3", large_scenario(16, 16, 5)):
+        env = StationScoreAction(gym.make("MimoRadarSelect-v0", scenario=scenario))
+        sc = env.unwrapped.scenario
+        env.reset(seed=1)
+        for _ in range(20):
+            scores = rng.uniform(-1, 1, size=sc.num_tx + sc.num_rx).astype(np.float32)
+            action = env.action(scores)
+            assert action[: sc.num_tx].sum() == sc.tx_per_step and action[sc.num_tx :].sum() == sc.rx_per_step
+            top_tx = np.argsort(-scores[: sc.num_tx])[: sc.tx_per_step]
+            assert set(np.flatnonzero(action[: sc.num_tx])) == set(top_tx)
+            assert env.step(scores)[4]["action_valid"]
+        env.step(np.zeros(sc.num_tx + sc.num_rx, dtype=np.float32))  # ties resolve to a valid selection
+    with pytest.raises(ValueError, match="use StationScoreAction"):
+        SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario=large_scenario(16, 16, 5)))
+    assert isinstance(make_ppo_env(large_scenario(16, 16, 5)).env, StationScoreAction)
+    assert isinstance(make_ppo_env("paper-1").env, SuperArmDiscreteAction)
+
+
+def test_features_track_age_and_latest_samples():
+    env = make_ppo_env("paper-1")
+    assert isinstance(env, RadarFeatureObservation)
+    obs, _ = env.reset(seed=0)
+    assert obs.shape == env.observation_space.shape and obs.dtype == np.float32
+    features = env.features
+    assert (features.age == 0).all()
+    env.step(0)  # super arm 0: TX1, TX2; RX1, RX2, RX3
+    probed = np.zeros((4, 6), bool)
+    probed[np.ix_([0, 1], [0, 1, 2])] = True
+    assert (features.age[0][probed] == 0).all() and (features.age[0][~probed] == 1).all()
+
+
+def test_sb3_check_env_on_the_env_and_the_training_wrapper():
+    sb3 = pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
+    from stable_baselines3.common.env_checker import check_env
+
+    # the raw env passes; SB3 only advises on its multi-dimensional Dict entries (it takes 3-D
+    # arrays for images), which the training wrapper flattens
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(gym.make("MimoRadarSelect-v0", scenario="paper-3").unwrapped)
+    shape_advice = ("unconventional shape", "is an image", "minimal resolution for an image")
+    for w in caught:
+        assert any(text in str(w.message) for text in shape_advice), str(w.message)
+    for env in (make_ppo_env("paper-3"), make_ppo_env(large_scenario(16, 16, 5))):
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            check_env(env)
+    del sb3
+
+
+def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
+    import agents
+    from benchmarks.cli import main
+    from benchmarks.ppo import PPOAgent, train_ppo
+
+    meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False)
+    assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.pkl").exists()
+    assert json.loads((tmp_path / "ppo" / "ppo.json").read_text())["timesteps"] == 2048 == meta["timesteps"]
+    agent = PPOAgent("paper-1", tmp_path / "ppo" / "model.zip")
+    assert isinstance(agent, agents.Agent)
+    # single env
+    env = gym.make("MimoRadarSelect-v0", scenario="paper-1")
+    obs, _ = env.reset(seed=0)
+    agent.reset(obs)
+    for _ in range(20):
+        obs, reward, _, _, info = env.step(agent.act(obs))
+        agent.update(obs, reward)
+        assert info["action_valid"]
+    # vector env
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point")
+    obs, _ = venv.reset(seed=0)
+    agent.reset(obs)
+    for _ in range(20):
+        obs, reward, _, _, info = venv.step(agent.act(obs))
+        agent.update(obs, reward)
+        assert info["action_valid"].all()
+    # the harness, next to the bandits on the same trials
+    out = tmp_path / "bench"
+    model = str(tmp_path / "ppo" / "model.zip")
+    assert (
+        main(
+            [
+                "run",
+                "--scenario",
+                "paper-1",
+                "--policies",
+                f"ppo:{model},ucb1",
+                "--trials",
+                "3",
+                "--steps",
+                "30",
+                "--workers",
+                "1",
+                "--no-figures",
+                "--quiet",
+                "--out",
+                str(out),
+            ]
+        )
+        == 0
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary["policies"]) == {f"ppo:{model}", "ucb1"}
+
+
+def test_core_imports_and_runs_without_the_rl_extra():
+    code = (
+        "import sys; sys.modules['stable_baselines3'] = None; sys.modules['torch'] = None\n"
+        "import gymnasium as gym, mimo_radar_env, agents, benchmarks.harness, mimo_radar_env.wrappers\n"
+        "env = gym.make('MimoRadarSelect-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
+        "from benchmarks.ppo import PPOAgent\n"
+        "try:\n    PPOAgent('paper-1', 'x.zip')\nexcept ImportError as e:\n    print('ERR', e)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert result.returncode == 0, result.stderr
+    assert "ERR PPO needs the rl extra" in result.stdout
