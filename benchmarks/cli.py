@@ -133,6 +133,18 @@ def build_parser() -> argparse.ArgumentParser:
     train.add_argument("--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard")
     train.add_argument("--quiet", action="store_true", help="no progress bar")
 
+    perf = sub.add_parser(
+        "perf",
+        help="performance figures, each as a ratio to a reference measured in the same run",
+        description="Measure the tracker against filterpy, exact vs BPSO, the vector env's "
+        "throughput and the wall time of the paper's study; write DIR/perf.json and print a table.",
+    )
+    perf.add_argument("--out", required=True, help="output directory for perf.json")
+    perf.add_argument("--quick", action="store_true", help="small sizes, under a minute (CI smoke test)")
+    perf.add_argument(
+        "--workers", type=int, default=None, help="worker processes for the study (default: cores)"
+    )
+
     sub.add_parser("agents", help="list the registered agents and their parameters")
 
     demo = sub.add_parser("demo", help="one episode of a scenario with a random policy and the oracle")
@@ -185,6 +197,11 @@ def _dispatch(args: argparse.Namespace) -> int:
             f"trained PPO for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
             f"saved {Path(args.out, 'model.zip')}"
         )
+        return 0
+    if args.command == "perf":
+        from .perf import main as perf_main
+
+        perf_main(args.out, quick=args.quick, workers=args.workers)
         return 0
     if args.command == "agents":
         import agents
