@@ -38,7 +38,9 @@ def _record_inputs(trials: int, steps: int, seed: int = 0):
     for _ in range(steps):
         sim.advance()
         obs = sim.observe(tx_index, rx_index, valid)
-        inputs.append((model.tx[obs.tx_index], model.rx[obs.rx_index], obs.measurement, obs.noise_variance))
+        inputs.append(
+            (model.tx[obs.tx_stations], model.rx[obs.rx_stations], obs.measurement, obs.noise_variance)
+        )
     return model, inputs
 
 
@@ -89,8 +91,9 @@ def run_filterpy(model, inputs, trials: int) -> float:
         for b in range(trials):
             means, covs, probs = states[b]
             results = []
-            for c in range(tx.shape[1]):
-                imm = _filterpy_channel_imm(model, means, covs, probs, tx[b, c], rx[b, c], variance[b, 0, c])
+            for c in range(z.shape[2]):
+                i, j = divmod(c, rx.shape[1])  # channels are the TX-major pairs of the stations
+                imm = _filterpy_channel_imm(model, means, covs, probs, tx[b, i], rx[b, j], variance[b, 0, c])
                 imm.predict()
                 imm.update(z[b, 0, c])
                 results.append(imm)
@@ -115,7 +118,7 @@ def run_batched(model, inputs, trials: int) -> float:
 
 def measure(trials: int = 500, steps: int = 20, reference_trials: int = 10) -> dict[str, float]:
     model, inputs = _record_inputs(trials, steps)
-    channels = inputs[0][0].shape[1]
+    channels = inputs[0][2].shape[2]
     batched_s = run_batched(model, inputs, trials)
     reference_inputs = [
         (tx[:reference_trials], rx[:reference_trials], z[:reference_trials], v[:reference_trials])

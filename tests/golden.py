@@ -18,8 +18,13 @@ GOLDEN = Path(__file__).with_name("data") / "golden.npz"
 def record() -> dict[str, np.ndarray]:
     out = {}
     for scenario, fusion in (("paper-3", "average"), ("paper-2", "centralized")):
-        venv = gym.make_vec("MimoRadarSelect-v0", num_envs=6, vectorization_mode="vector_entry_point",
-                            scenario=scenario, fusion=fusion)
+        venv = gym.make_vec(
+            "MimoRadarSelect-v0",
+            num_envs=6,
+            vectorization_mode="vector_entry_point",
+            scenario=scenario,
+            fusion=fusion,
+        )
         for name in ("mg-crb-cl", "ucb1"):
             agent = agents.make_agent(name, venv.scenario, seed=4)
             obs, _ = venv.reset(seed=11)

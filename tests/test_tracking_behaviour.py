@@ -26,7 +26,7 @@ def _nees(batch, steps, turn_rates, probabilities, seed=0):
         sim.advance()
         obs = sim.observe(tx, rx, valid)
         tracker.step(
-            model.tx[obs.tx_index], model.rx[obs.rx_index], obs.measurement, obs.noise_variance, valid
+            model.tx[obs.tx_stations], model.rx[obs.rx_stations], obs.measurement, obs.noise_variance, valid
         )
         error = tracker.estimate - sim.state
         out.append(np.einsum("bki,bkij,bkj->b", error, np.linalg.inv(tracker.covariance), error))

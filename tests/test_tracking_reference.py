@@ -205,7 +205,9 @@ def test_average_fusion_is_the_mean_of_per_channel_imm_cycles():
         refs.append(copy.deepcopy(imm))
     tracker = IMMUKFTracker(model, 1, fusion="average")
     _set_prior(tracker, means, covs, probs)
-    tracker.step(tx[None], rx[None], z[None, None], variance[None, None], np.array([True]))
+    # the tracker takes the selected stations; channels are their pairs, TX-major
+    tx_stations, rx_stations = model.tx[[0, 3]], model.rx[[1, 2, 4]]
+    tracker.step(tx_stations[None], rx_stations[None], z[None, None], variance[None, None], np.array([True]))
     np.testing.assert_allclose(tracker.estimate[0, 0], np.mean([r.x for r in refs], axis=0), rtol=RTOL)
     np.testing.assert_allclose(tracker.covariance[0, 0], np.mean([r.P for r in refs], axis=0), rtol=1e-7)
     np.testing.assert_allclose(
@@ -234,7 +236,8 @@ def test_centralized_fusion_equals_filterpy_with_stacked_measurements():
     imm.update(z.ravel())
     tracker = IMMUKFTracker(model, 1, fusion="centralized")
     _set_prior(tracker, means, covs, probs)
-    tracker.step(tx[None], rx[None], z[None, None], variance[None, None], np.array([True]))
+    tx_stations, rx_stations = model.tx[[0, 1]], model.rx[[0, 5]]  # channels 0-0, 0-5, 1-0, 1-5
+    tracker.step(tx_stations[None], rx_stations[None], z[None, None], variance[None, None], np.array([True]))
     np.testing.assert_allclose(tracker.estimate[0, 0], imm.x, rtol=RTOL)
     np.testing.assert_allclose(tracker.model_probabilities[0, 0], imm.mu, rtol=RTOL)
     np.testing.assert_allclose(tracker.covariance[0, 0], imm.P, rtol=1e-7, atol=1e-10)

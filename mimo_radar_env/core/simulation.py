@@ -39,6 +39,9 @@ class ChannelObservations:
     Attributes
     ----------
     tx_index, rx_index : int arrays (B, C)
+        Transmitter and receiver of each channel.
+    tx_stations, rx_stations : int arrays (B, Ms), (B, Ns)
+        The selected stations; channel ``i * Ns + j`` is ``tx_stations[i]``-``rx_stations[j]``.
     valid : bool array (B,)
     mean_sinr : (B, K, C) true mean SINR of the probed channels
     sinr : (B, K, C) Swerling-I samples, Exponential with mean ``mean_sinr``
@@ -48,6 +51,8 @@ class ChannelObservations:
 
     tx_index: NDArray[np.int64]
     rx_index: NDArray[np.int64]
+    tx_stations: NDArray[np.int64]
+    rx_stations: NDArray[np.int64]
     valid: NDArray[np.bool_]
     mean_sinr: NDArray[np.float64]
     sinr: NDArray[np.float64]
@@ -188,6 +193,8 @@ class RadarSimulation:
         return ChannelObservations(
             tx_index=channel_tx,
             rx_index=channel_rx,
+            tx_stations=tx_index,
+            rx_stations=rx_index,
             valid=valid,
             mean_sinr=mean,
             sinr=sinr,

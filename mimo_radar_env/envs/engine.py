@@ -223,8 +223,8 @@ class RadarEngine:
             sigma0 = np.array([self.scenario.range_variance, self.scenario.azimuth_variance])
             variance = sigma0 / lam_hat[..., None]
         self.tracker.step(
-            self.model.tx[channels.tx_index],
-            self.model.rx[channels.rx_index],
+            self.model.tx[channels.tx_stations],
+            self.model.rx[channels.rx_stations],
             channels.measurement,
             variance,
             channels.valid,

@@ -121,20 +121,22 @@ def average_channels(
     return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
 
 
-def _sigma_measurements(
+def _station_geometry(
     sigmas: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], tuple[NDArray[np.float64], NDArray[np.float64]]]:
-    """Bistatic measurements (eq6) of sigma points against channels, broadcast.
+) -> tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
+]:
+    """Ranges to the transmitters, and ranges, azimuths (eq6), sines and cosines to the receivers.
 
-    ``sigmas`` (..., 4) and the station positions (..., 2) broadcast to the batch
-    shape; returns ``h`` (..., 2) laid out as (range sum, azimuth) and the sines
-    and cosines of the azimuths (...), which the circular mean reuses.
+    ``sigmas`` (..., 4) broadcasts against the station positions (..., 2). A channel's range
+    sum is ``tx_range + rx_range`` and its azimuth the receiver's: computing per station and
+    broadcasting over channels saves the work of ``Ms * Ns`` channels on ``Ms + Ns`` stations.
     """
     tx_dx, tx_dy = sigmas[..., 0] - tx[..., 0], sigmas[..., 2] - tx[..., 1]
     rx_dx, rx_dy = sigmas[..., 0] - rx[..., 0], sigmas[..., 2] - rx[..., 1]
+    tx_range = np.sqrt(tx_dx * tx_dx + tx_dy * tx_dy)
     rx_range = np.sqrt(rx_dx * rx_dx + rx_dy * rx_dy)
-    h = np.stack([np.sqrt(tx_dx * tx_dx + tx_dy * tx_dy) + rx_range, np.arctan2(rx_dy, rx_dx)], axis=-1)
-    return h, (rx_dy / rx_range, rx_dx / rx_range)
+    return tx_range, rx_range, np.arctan2(rx_dy, rx_dx), rx_dy / rx_range, rx_dx / rx_range
 
 
 class IMMUKFTracker:
@@ -240,11 +242,12 @@ class IMMUKFTracker:
 
         Parameters
         ----------
-        tx_positions, rx_positions : (B, C, 2)
-            Positions of the transmitter and receiver of each selected channel.
-        measurement : (B, K, C, 2)
+        tx_positions, rx_positions : (B, Ms, 2), (B, Ns, 2)
+            Positions of the selected transmitters and receivers; every pair is a
+            channel, ordered TX-major (channel ``i * Ns + j``).
+        measurement : (B, K, Ms * Ns, 2)
             Range sum and azimuth of each target on each channel.
-        noise_variance : (B, K, C, 2)
+        noise_variance : (B, K, Ms * Ns, 2)
             Diagonal measurement covariance the filter uses.
         valid : (B,) bool
             False for trials that probed nothing: those only predict.
@@ -254,12 +257,20 @@ class IMMUKFTracker:
         chol, repaired = robust_cholesky(scale * pred_covs)
         self.repairs += repaired.reshape(self.batch_size, -1).sum(axis=1)
         sigmas = sigma_points(pred_means, chol)  # (B, K, R, S, 4)
+        B, K = self.batch_size, self.model.num_targets
+        num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]
         if self.fusion == "centralized":
-            # (B, K, R, S, C): channels innermost, stacked into one 2C measurement
-            h, sin_cos = _sigma_measurements(
-                sigmas[..., None, :], tx_positions[:, None, None, None], rx_positions[:, None, None, None]
+            # (B, K, R, S, Ms, Ns): channels innermost, stacked TX-major into one 2C measurement
+            tx_range, rx_range, azimuth, sin, cos = _station_geometry(
+                sigmas[..., None, None, :],
+                tx_positions[:, None, None, None, :, None],
+                rx_positions[:, None, None, None, None, :],
             )
-            B, K, R, S, C, _ = h.shape
+            range_sum = tx_range + rx_range
+            full = range_sum.shape
+            h = np.stack([range_sum, np.broadcast_to(azimuth, full)], axis=-1)
+            R, S = h.shape[2], h.shape[3]
+            C = num_tx * num_rx
             result = unscented_update(
                 pred_means,
                 pred_covs,
@@ -269,18 +280,31 @@ class IMMUKFTracker:
                 noise_variance.reshape(B, K, 1, 2 * C),
                 self.wm,
                 self.wc,
-                sin_cos,
+                (
+                    np.broadcast_to(sin, full).reshape(B, K, R, S, C),
+                    np.broadcast_to(cos, full).reshape(B, K, R, S, C),
+                ),
             )
             log_post = result.log_likelihood + log_c
             log_post -= logsumexp(log_post, axis=-1, keepdims=True)
             post_means, post_covs = result.mean, symmetrize(result.covariance)
             estimate, covariance = combine(post_means, post_covs, np.exp(log_post))
         else:
-            # (B, K, C, R, S): every channel updates the common prior on its own
-            tx = tx_positions[:, None, :, None, None]
-            rx = rx_positions[:, None, :, None, None]
-            h, (sin, cos) = _sigma_measurements(sigmas[:, :, None], tx, rx)
-            sin_cos = (sin[..., None], cos[..., None])
+            # (B, K, C, R, S): every channel updates the common prior on its own; geometry is
+            # computed per station, then laid out per channel (contiguous arrays are fastest)
+            tx_range, rx_range, azimuth, sin, cos = _station_geometry(
+                sigmas[:, :, None, None],
+                tx_positions[:, None, :, None, None, None],
+                rx_positions[:, None, None, :, None, None],
+            )
+            R, S = sigmas.shape[2], sigmas.shape[3]
+            C = num_tx * num_rx
+            full = (B, K, num_tx, num_rx, R, S)
+
+            def per_channel(a: NDArray[np.float64]) -> NDArray[np.float64]:
+                return np.broadcast_to(a, full).reshape(B, K, C, R, S)
+
+            h = np.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
             result = unscented_update(
                 pred_means[:, :, None],
                 pred_covs[:, :, None],
@@ -290,7 +314,7 @@ class IMMUKFTracker:
                 noise_variance[:, :, :, None],
                 self.wm,
                 self.wc,
-                sin_cos,
+                (per_channel(sin)[..., None], per_channel(cos)[..., None]),
                 with_covariance=False,
             )
             log_post = result.log_likelihood + log_c[:, :, None]
