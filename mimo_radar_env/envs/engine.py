@@ -23,6 +23,7 @@ from ..tracking import FUSIONS, IMMUKFTracker
 
 INVALID_ACTION_MODES = ("probe-nothing", "raise")
 FILTER_NOISE_MODES = ("true", "estimated")
+ORACLE_SOLVERS = ("auto", "exact", "local-search")
 
 
 def default_config() -> dict[str, Any]:
@@ -36,6 +37,10 @@ def default_config() -> dict[str, Any]:
       the SINR the channel observed).
     * ``invalid_action``: ``"probe-nothing"`` (an action that does not select
       exactly Ms TX and Ns RX probes nothing, reward 0) or ``"raise"``.
+    * ``oracle_solver``: how ``optimal_reward``, ``optimal_action`` and
+      ``oracle_action()`` are found: ``"auto"`` (exact enumeration when the smaller
+      side has at most 20,000 subsets, deterministic local search beyond, a lower
+      bound), ``"exact"`` or ``"local-search"``.
     * ``tracking``: ``True`` runs the IMM-UKF in the loop; ``False`` drops it
       (and the track keys of the observation) for pure bandit studies.
     * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or
@@ -51,6 +56,7 @@ def default_config() -> dict[str, Any]:
         "invalid_action": "probe-nothing",
         "measurement_quality": None,
         "tracking": True,
+        "oracle_solver": "auto",
     }
 
 
@@ -67,6 +73,8 @@ def resolve_config(kwargs: Mapping[str, Any]) -> tuple[dict[str, Any], Scenario]
         raise ValueError(f"fusion must be one of {FUSIONS}, got {config['fusion']!r}")
     if config["filter_noise"] not in FILTER_NOISE_MODES:
         raise ValueError(f"filter_noise must be one of {FILTER_NOISE_MODES}, got {config['filter_noise']!r}")
+    if config["oracle_solver"] not in ORACLE_SOLVERS:
+        raise ValueError(f"oracle_solver must be one of {ORACLE_SOLVERS}, got {config['oracle_solver']!r}")
     if not isinstance(config["tracking"], bool):
         raise ValueError(f"tracking must be True or False, got {config['tracking']!r}")
     if config["invalid_action"] not in INVALID_ACTION_MODES:
@@ -196,7 +204,9 @@ class RadarEngine:
         info = self._truth_info()
         weights = self.model.channel_weights(self.simulation.mean_sinr())
         info["expected_reward"] = super_arm_value(weights, tx_mask, rx_mask) * valid
-        best_tx, best_rx, best_value = best_super_arm(weights, sc.tx_per_step, sc.rx_per_step)
+        best_tx, best_rx, best_value = best_super_arm(
+            weights, sc.tx_per_step, sc.rx_per_step, self.config["oracle_solver"]
+        )
         info["optimal_reward"] = best_value
         info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
         info["action_valid"] = valid
@@ -209,7 +219,9 @@ class RadarEngine:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
-        tx, rx, _ = best_super_arm(weights, self.scenario.tx_per_step, self.scenario.rx_per_step)
+        tx, rx, _ = best_super_arm(
+            weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.config["oracle_solver"]
+        )
         return np.concatenate([tx, rx], axis=1).astype(np.int8)
 
     # ----------------------------------------------------------- helpers

@@ -1,0 +1,134 @@
+"""Cost per step against array size (M*N), targets (K) and trials (B), with memory peaks.
+
+Run: ``python benchmarks/scaling.py [--steps 10]``. Each row runs the vector env with its
+in-loop tracker and a UCB1 agent on a random layout in 100 km x 100 km (the exact solver
+where ``min(C(M,Ms), C(N,Ns)) <= 20,000``, alternating maximisation beyond, as the env's
+oracle does), and reports
+milliseconds per step, microseconds per trial-step, and the peak of numpy allocations
+(tracemalloc) during the steps. Growth exponents are fitted on log-log scales.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import tracemalloc
+
+import numpy as np
+
+import agents
+from mimo_radar_env import MimoRadarSelectVectorEnv, Scenario
+from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
+
+
+def random_layout(
+    num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, seed: int = 0
+) -> Scenario:
+    rng = np.random.default_rng(seed)
+    targets = []
+    for _ in range(num_targets):
+        heading, speed = rng.uniform(0, 2 * np.pi), rng.uniform(50, 150)
+        targets.append(
+            {
+                "initial_state": [
+                    rng.uniform(20e3, 80e3),
+                    speed * np.cos(heading),
+                    rng.uniform(20e3, 80e3),
+                    speed * np.sin(heading),
+                ]
+            }
+        )
+    return Scenario.from_dict(
+        {
+            "name": f"random-{num_tx}x{num_rx}-K{num_targets}",
+            "tx_positions": rng.uniform(0, 100e3, (num_tx, 2)).tolist(),
+            "rx_positions": rng.uniform(0, 100e3, (num_rx, 2)).tolist(),
+            "tx_per_step": tx_count,
+            "rx_per_step": rx_count,
+            "targets": targets,
+            "horizon": 1000,
+        }
+    )
+
+
+def measure(
+    num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, trials: int, steps: int
+) -> dict[str, float]:
+    scenario = random_layout(num_tx, num_rx, num_targets, tx_count, rx_count)
+    solver = (
+        "exact"
+        if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
+        else "alternating"
+    )
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario)
+    agent = agents.make_agent("ucb1", scenario, seed=0, solver=solver)
+    obs, _ = env.reset(seed=0)
+    agent.reset(obs)
+    obs, reward, _, _, _ = env.step(agent.act(obs))  # warm-up
+    agent.update(obs, reward)
+    tracemalloc.start()
+    start = time.perf_counter()
+    for _ in range(steps):
+        obs, reward, _, _, _ = env.step(agent.act(obs))
+        agent.update(obs, reward)
+    elapsed = time.perf_counter() - start
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    per_step = elapsed / steps
+    return {
+        "M": num_tx,
+        "N": num_rx,
+        "Ms": tx_count,
+        "Ns": rx_count,
+        "K": num_targets,
+        "B": trials,
+        "solver": solver,
+        "ms_per_step": 1e3 * per_step,
+        "us_per_trial_step": 1e6 * per_step / trials,
+        "peak_mib": peak / 2**20,
+    }
+
+
+GRID = {
+    "trials (paper size, K=1)": [(4, 6, 1, 2, 3, b) for b in (50, 100, 200, 500, 1000)],
+    "targets (16x16, Ms=Ns=4, B=50)": [(16, 16, k, 4, 4, 50) for k in (1, 2, 5, 10, 20)],
+    "array size (K=5, Ms=Ns=4, B=20)": [(m, m, 5, 4, 4, 20) for m in (8, 16, 32, 64)],
+    "the issue's large runs": [(32, 32, 10, 4, 4, 20), (64, 64, 20, 8, 8, 10)],
+}
+
+
+def growth(xs: list[float], ys: list[float]) -> float:
+    return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="cost per step against M*N, K and trials")
+    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
+    args = parser.parse_args()
+    rows = {}
+    for title, grid in GRID.items():
+        print(f"\n{title}")
+        head = f"{'M x N':>9}{'Ms,Ns':>7}{'K':>4}{'B':>6}  {'solver':<12}{'ms/step':>10}"
+        print(f"{head}{'us/trial-step':>15}{'peak MiB':>10}")
+        rows[title] = [measure(*config, steps=args.steps) for config in grid]
+        for r in rows[title]:
+            print(
+                f"{r['M']:>4} x {r['N']:<3}{r['Ms']:>3},{r['Ns']:<3}{r['K']:>4}{r['B']:>6}  {r['solver']:<12}"
+                f"{r['ms_per_step']:>10.1f}{r['us_per_trial_step']:>15.1f}{r['peak_mib']:>10.1f}"
+            )
+    t = rows["trials (paper size, K=1)"]
+    k = rows["targets (16x16, Ms=Ns=4, B=50)"]
+    a = rows["array size (K=5, Ms=Ns=4, B=20)"]
+    print("\nfitted growth of ms/step (log-log slope):")
+    print(f"  trials B: {growth([r['B'] for r in t], [r['ms_per_step'] for r in t]):.2f}")
+    print(f"  targets K: {growth([r['K'] for r in k], [r['ms_per_step'] for r in k]):.2f}")
+    print(f"  stations M*N: {growth([r['M'] * r['N'] for r in a], [r['ms_per_step'] for r in a]):.2f}")
+    if args.json:
+        with open(args.json, "w") as handle:
+            json.dump(rows, handle, indent=2)
+
+
+if __name__ == "__main__":
+    main()
