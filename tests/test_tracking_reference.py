@@ -260,3 +260,35 @@ def test_predict_only_trials_and_eq24():
     F = transition_matrix(np.radians([0.0, 3.0, -3.0]), 1.0)
     expected = sum(tracker.model_probabilities[0, 0, i] * F[i] @ tracker.estimate[0, 0] for i in range(3))
     np.testing.assert_allclose(tracker.predicted_state()[0, 0], expected, rtol=1e-12)
+
+
+@pytest.mark.parametrize("scenario", ["paper-3", "large"])
+def test_compiled_average_fusion_equals_the_numpy_path(scenario):
+    from mimo_radar_env.tracking import _average_kernel
+    from tests.helpers import large_scenario
+
+    if not _average_kernel.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy path exists")
+    sc = large_scenario(16, 16, 5, horizon=100) if scenario == "large" else load_scenario(scenario)
+    model = RadarModel.from_scenario(sc)
+    from mimo_radar_env.core.random import keys_from_generator
+    from mimo_radar_env.core.simulation import RadarSimulation
+
+    batch = 7
+    sim = RadarSimulation(model, batch)
+    rng = np.random.default_rng(5)
+    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    trackers = [IMMUKFTracker(model, batch, use_numba=flag) for flag in (True, False)]
+    for _ in range(40):
+        sim.advance()
+        tx = np.sort(np.argsort(rng.random((batch, sc.num_tx)), axis=1)[:, : sc.tx_per_step], axis=1)
+        rx = np.sort(np.argsort(rng.random((batch, sc.num_rx)), axis=1)[:, : sc.rx_per_step], axis=1)
+        valid = rng.random(batch) > 0.1
+        obs = sim.observe(tx, rx, valid)
+        for tracker in trackers:
+            tracker.step(model.tx[tx], model.rx[rx], obs.measurement, obs.noise_variance, valid)
+    fast, slow = trackers
+    for name in ("estimate", "covariance", "means", "covs", "log_probs"):
+        np.testing.assert_allclose(
+            getattr(fast, name), getattr(slow, name), rtol=1e-10, atol=1e-10, err_msg=name
+        )

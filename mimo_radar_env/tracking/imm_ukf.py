@@ -35,6 +35,7 @@ from numpy.typing import NDArray
 
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
+from . import _average_kernel
 from .unscented import (
     SigmaPointParameters,
     robust_cholesky,
@@ -154,6 +155,9 @@ class IMMUKFTracker:
     stay_probability : float
         Diagonal of the Markov matrix; the rest of each row is shared equally.
     sigma_points : SigmaPointParameters
+    use_numba : bool
+        Run the average fusion's update in the compiled kernel when numba is installed
+        (default); the numpy path gives the same numbers to round-off.
     """
 
     def __init__(
@@ -165,6 +169,7 @@ class IMMUKFTracker:
         initial_probabilities: tuple[float, ...] = DEFAULT_INITIAL_PROBABILITIES,
         stay_probability: float = DEFAULT_STAY_PROBABILITY,
         sigma_point_parameters: SigmaPointParameters | None = None,
+        use_numba: bool = True,
     ) -> None:
         if fusion not in FUSIONS:
             raise ValueError(f"fusion must be one of {FUSIONS}, got {fusion!r}")
@@ -185,6 +190,7 @@ class IMMUKFTracker:
         self.sigma_params = sigma_point_parameters or SigmaPointParameters()
         self.wm, self.wc = self.sigma_params.weights(4)
         self.repairs = np.zeros(batch_size, dtype=np.int64)
+        self.use_numba = use_numba and _average_kernel.HAVE_NUMBA
         self.reset()
 
     # ------------------------------------------------------------ state
@@ -229,6 +235,55 @@ class IMMUKFTracker:
         pred_covs = self.transitions @ mixed_covs @ np.swapaxes(self.transitions, -1, -2)
         pred_covs = symmetrize(pred_covs + self.model.process_cov)
         return pred_means, pred_covs, log_c
+
+    def _average_numpy(
+        self,
+        sigmas: NDArray[np.float64],
+        pred_means: NDArray[np.float64],
+        pred_covs: NDArray[np.float64],
+        log_c: NDArray[np.float64],
+        tx_positions: NDArray[np.float64],
+        rx_positions: NDArray[np.float64],
+        measurement: NDArray[np.float64],
+        noise_variance: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], ...]:
+        """The paper's average fusion with numpy arrays (the reference of the numba kernel)."""
+        B, K = self.batch_size, self.model.num_targets
+        num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]
+        # (B, K, C, R, S): every channel updates the common prior on its own; geometry is
+        # computed per station, then laid out per channel (contiguous arrays are fastest)
+        tx_range, rx_range, azimuth, sin, cos = _station_geometry(
+            sigmas[:, :, None, None],
+            tx_positions[:, None, :, None, None, None],
+            rx_positions[:, None, None, :, None, None],
+        )
+        R, S = sigmas.shape[2], sigmas.shape[3]
+        C = num_tx * num_rx
+        full = (B, K, num_tx, num_rx, R, S)
+
+        def per_channel(a: NDArray[np.float64]) -> NDArray[np.float64]:
+            return np.broadcast_to(a, full).reshape(B, K, C, R, S)
+
+        h = np.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
+        result = unscented_update(
+            pred_means[:, :, None],
+            pred_covs[:, :, None],
+            sigmas[:, :, None],
+            h,
+            measurement[:, :, :, None],
+            noise_variance[:, :, :, None],
+            self.wm,
+            self.wc,
+            (per_channel(sin)[..., None], per_channel(cos)[..., None]),
+            with_covariance=False,
+        )
+        log_post = result.log_likelihood + log_c[:, :, None]
+        log_post -= logsumexp(log_post, axis=-1, keepdims=True)  # (B, K, C, R)
+        post_means, post_covs, estimate, covariance = average_channels(
+            pred_covs, result.mean, np.exp(log_post), result.gain, result.cross_cov
+        )
+        log_post = logsumexp(log_post, axis=2) - np.log(log_post.shape[2])
+        return post_means, post_covs, log_post, estimate, covariance
 
     def step(
         self,
@@ -290,39 +345,30 @@ class IMMUKFTracker:
             post_means, post_covs = result.mean, symmetrize(result.covariance)
             estimate, covariance = combine(post_means, post_covs, np.exp(log_post))
         else:
-            # (B, K, C, R, S): every channel updates the common prior on its own; geometry is
-            # computed per station, then laid out per channel (contiguous arrays are fastest)
-            tx_range, rx_range, azimuth, sin, cos = _station_geometry(
-                sigmas[:, :, None, None],
-                tx_positions[:, None, :, None, None, None],
-                rx_positions[:, None, None, :, None, None],
-            )
-            R, S = sigmas.shape[2], sigmas.shape[3]
-            C = num_tx * num_rx
-            full = (B, K, num_tx, num_rx, R, S)
-
-            def per_channel(a: NDArray[np.float64]) -> NDArray[np.float64]:
-                return np.broadcast_to(a, full).reshape(B, K, C, R, S)
-
-            h = np.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
-            result = unscented_update(
-                pred_means[:, :, None],
-                pred_covs[:, :, None],
-                sigmas[:, :, None],
-                h,
-                measurement[:, :, :, None],
-                noise_variance[:, :, :, None],
-                self.wm,
-                self.wc,
-                (per_channel(sin)[..., None], per_channel(cos)[..., None]),
-                with_covariance=False,
-            )
-            log_post = result.log_likelihood + log_c[:, :, None]
-            log_post -= logsumexp(log_post, axis=-1, keepdims=True)  # (B, K, C, R)
-            post_means, post_covs, estimate, covariance = average_channels(
-                pred_covs, result.mean, np.exp(log_post), result.gain, result.cross_cov
-            )
-            log_post = logsumexp(log_post, axis=2) - np.log(log_post.shape[2])
+            if self.use_numba:
+                post_means, post_covs, log_post, estimate, covariance = _average_kernel.average_fusion_update(
+                    sigmas,
+                    pred_means,
+                    pred_covs,
+                    log_c,
+                    self.wm,
+                    self.wc,
+                    tx_positions,
+                    rx_positions,
+                    measurement,
+                    noise_variance,
+                )
+            else:
+                post_means, post_covs, log_post, estimate, covariance = self._average_numpy(
+                    sigmas,
+                    pred_means,
+                    pred_covs,
+                    log_c,
+                    tx_positions,
+                    rx_positions,
+                    measurement,
+                    noise_variance,
+                )
 
         # predict-only trials and numerically failed updates keep the prediction
         finite = (
