@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario, load_scenario
+from mimo_radar_env.core.superarm import random_super_arms
 
 from .solvers import SuperArmSolver, make_solver
 
@@ -108,12 +109,7 @@ class Agent(ABC):
 
     def random_super_arms(self, count: int) -> NDArray[np.int8]:
         """``count`` uniformly random valid super arms, (count, M + N)."""
-        tx = np.argsort(self.rng.random((count, self.num_tx)), axis=1)[:, : self.tx_count]
-        rx = np.argsort(self.rng.random((count, self.num_rx)), axis=1)[:, : self.rx_count]
-        action = np.zeros((count, self.num_tx + self.num_rx), dtype=np.int8)
-        np.put_along_axis(action, tx, 1, axis=1)
-        np.put_along_axis(action, self.num_tx + rx, 1, axis=1)
-        return action
+        return random_super_arms(self.rng, count, self.num_tx, self.num_rx, self.tx_count, self.rx_count)
 
 
 class IndexPolicy(Agent):

@@ -15,15 +15,7 @@ import gymnasium as gym
 import numpy as np
 
 import mimo_radar_env  # noqa: F401  (registers the env)
-
-
-def random_valid_actions(rng: np.random.Generator, batch: int, scenario) -> np.ndarray:
-    tx = np.argsort(rng.random((batch, scenario.num_tx)), axis=1)[:, : scenario.tx_per_step]
-    rx = np.argsort(rng.random((batch, scenario.num_rx)), axis=1)[:, : scenario.rx_per_step]
-    action = np.zeros((batch, scenario.num_tx + scenario.num_rx), dtype=np.int8)
-    np.put_along_axis(action, tx, 1, axis=1)
-    np.put_along_axis(action, scenario.num_tx + rx, 1, axis=1)
-    return action
+from mimo_radar_env.core.superarm import random_super_arms
 
 
 def measure(scenario: str, trials: int, steps: int, tracking: bool, fusion: str = "average") -> float:
@@ -38,7 +30,10 @@ def measure(scenario: str, trials: int, steps: int, tracking: bool, fusion: str 
     )
     sc = venv.scenario
     rng = np.random.default_rng(0)
-    actions = [random_valid_actions(rng, trials, sc) for _ in range(steps)]
+    actions = [
+        random_super_arms(rng, trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        for _ in range(steps)
+    ]
     venv.reset(seed=0)
     venv.step(actions[0])  # warm-up
     start = time.perf_counter()

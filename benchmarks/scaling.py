@@ -18,44 +18,14 @@ import tracemalloc
 import numpy as np
 
 import agents
-from mimo_radar_env import MimoRadarSelectVectorEnv, Scenario
+from mimo_radar_env import MimoRadarSelectVectorEnv, random_scenario
 from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
-
-
-def random_layout(
-    num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, seed: int = 0
-) -> Scenario:
-    rng = np.random.default_rng(seed)
-    targets = []
-    for _ in range(num_targets):
-        heading, speed = rng.uniform(0, 2 * np.pi), rng.uniform(50, 150)
-        targets.append(
-            {
-                "initial_state": [
-                    rng.uniform(20e3, 80e3),
-                    speed * np.cos(heading),
-                    rng.uniform(20e3, 80e3),
-                    speed * np.sin(heading),
-                ]
-            }
-        )
-    return Scenario.from_dict(
-        {
-            "name": f"random-{num_tx}x{num_rx}-K{num_targets}",
-            "tx_positions": rng.uniform(0, 100e3, (num_tx, 2)).tolist(),
-            "rx_positions": rng.uniform(0, 100e3, (num_rx, 2)).tolist(),
-            "tx_per_step": tx_count,
-            "rx_per_step": rx_count,
-            "targets": targets,
-            "horizon": 1000,
-        }
-    )
 
 
 def measure(
     num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, trials: int, steps: int
 ) -> dict[str, float]:
-    scenario = random_layout(num_tx, num_rx, num_targets, tx_count, rx_count)
+    scenario = random_scenario(num_tx, num_rx, num_targets, tx_count, rx_count)
     solver = (
         "exact"
         if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)

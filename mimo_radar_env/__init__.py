@@ -7,7 +7,15 @@ from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
 from .envs import MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
-from .scenario import Maneuver, Scenario, ScenarioError, Target, available_scenarios, load_scenario
+from .scenario import (
+    Maneuver,
+    Scenario,
+    ScenarioError,
+    Target,
+    available_scenarios,
+    load_scenario,
+    random_scenario,
+)
 
 ENV_ID = "MimoRadarSelect-v0"
 
@@ -32,4 +40,5 @@ __all__ = [
     "available_scenarios",
     "default_config",
     "load_scenario",
+    "random_scenario",
 ]

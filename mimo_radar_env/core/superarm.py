@@ -43,6 +43,18 @@ def top_mask(scores: NDArray[np.float64], count: int) -> NDArray[np.bool_]:
     return mask
 
 
+def random_super_arms(
+    rng: np.random.Generator, count: int, num_tx: int, num_rx: int, tx_count: int, rx_count: int
+) -> NDArray[np.int8]:
+    """``count`` uniformly random valid super arms as actions (count, M + N)."""
+    tx = np.argsort(rng.random((count, num_tx)), axis=1)[:, :tx_count]
+    rx = np.argsort(rng.random((count, num_rx)), axis=1)[:, :rx_count]
+    action = np.zeros((count, num_tx + num_rx), dtype=np.int8)
+    np.put_along_axis(action, tx, 1, axis=1)
+    np.put_along_axis(action, num_tx + rx, 1, axis=1)
+    return action
+
+
 def super_arm_value(
     weights: NDArray[np.float64], tx: NDArray[np.bool_], rx: NDArray[np.bool_]
 ) -> NDArray[np.float64]:
