@@ -203,6 +203,15 @@ def test_rgb_array_rendering_draws_the_scene():
     assert not np.array_equal(env2.render(), frame)
 
 
+def test_human_rendering_runs_headless():
+    env = gym.make("MimoRadarSelect-v0", render_mode="human")  # Agg in tests: draws, shows nothing
+    env.reset(seed=0)
+    env.step(env.unwrapped.oracle_action())
+    assert env.unwrapped._figure is not None
+    env.close()
+    assert env.unwrapped._figure is None
+
+
 def test_env_class_docstring_documents_the_sections():
     for section in (
         "## Description",

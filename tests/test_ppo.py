@@ -94,7 +94,8 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     from benchmarks.cli import main
     from benchmarks.ppo import PPOAgent, train_ppo
 
-    meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False)
+    meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
+    assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
     assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.pkl").exists()
     assert json.loads((tmp_path / "ppo" / "ppo.json").read_text())["timesteps"] == 2048 == meta["timesteps"]
     agent = PPOAgent("paper-1", tmp_path / "ppo" / "model.zip")
