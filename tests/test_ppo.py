@@ -156,3 +156,29 @@ def test_core_imports_and_runs_without_the_rl_extra():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
     assert "ERR PPO needs the rl extra" in result.stdout
+
+
+def test_native_training_vec_env_matches_the_checked_gym_wrapper():
+    """PPO trains on a VecEnv over the native batch env: same features and rewards as make_ppo_env."""
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
+    from benchmarks.ppo import make_native_vec_env
+    from mimo_radar_env import load_scenario
+
+    scenario = load_scenario("paper-3")
+    venv = make_native_vec_env(scenario, n_envs=2, seed=5)
+    singles = [make_ppo_env(scenario) for _ in range(2)]
+    batch = venv.reset()
+    for i, env in enumerate(singles):
+        obs, _ = env.reset(seed=5 + i)
+        np.testing.assert_allclose(batch[i], obs, rtol=1e-6)
+    assert venv.observation_space == singles[0].observation_space
+    assert venv.action_space == singles[0].action_space
+    rng = np.random.default_rng(0)
+    for _ in range(5):
+        actions = rng.integers(0, venv.action_space.n, size=2)
+        batch, rewards, dones, _ = venv.step(actions)
+        for i, env in enumerate(singles):
+            obs, reward, _, _, _ = env.step(actions[i])
+            np.testing.assert_allclose(batch[i], obs, rtol=1e-6)
+            assert rewards[i] == pytest.approx(reward, rel=1e-6)
+        assert not dones.any()
