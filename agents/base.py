@@ -35,6 +35,17 @@ from .solvers import SuperArmSolver, make_solver
 Observation = dict[str, NDArray[Any]]
 
 
+def check_parameter(
+    name: str, value: float, low: float, high: float = np.inf, low_open: bool = False
+) -> None:
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is in [low, high] (or (low, high])."""
+    inside = (value > low if low_open else value >= low) and value <= high
+    if not inside:
+        bracket = "(" if low_open else "["
+        upper = "inf)" if high == np.inf else f"{high:g}]"
+        raise ValueError(f"{name} must be in {bracket}{low:g}, {upper}, got {value}")
+
+
 class Agent(ABC):
     """Base class of selection policies.
 

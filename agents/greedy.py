@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
 
-from .base import IndexPolicy, Observation
+from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
 from .ucb import eq29_update
 
@@ -39,10 +39,8 @@ class EpsilonGreedy(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if not 0.0 <= epsilon <= 1.0:
-            raise ValueError(f"epsilon must be in [0, 1], got {epsilon}")
-        if not 0.0 <= alpha_star <= 1.0:
-            raise ValueError(f"alpha_star must be in [0, 1], got {alpha_star}")
+        check_parameter("epsilon", epsilon, 0.0, 1.0)
+        check_parameter("alpha_star", alpha_star, 0.0, 1.0)
         self.epsilon, self.alpha_star = epsilon, alpha_star
         self.explored = np.zeros(0, dtype=bool)
 

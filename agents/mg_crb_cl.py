@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import station_ranges
 
-from .base import IndexPolicy, Observation
+from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
 
 
@@ -58,11 +58,9 @@ class MGCRBCL(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        for label, value in (("alpha", alpha), ("alpha_bar", alpha_bar)):
-            if not 0.0 <= value <= 1.0:
-                raise ValueError(f"{label} must be in [0, 1], got {value}")
-        if beta < 0:
-            raise ValueError(f"beta must be >= 0, got {beta}")
+        check_parameter("alpha", alpha, 0.0, 1.0)
+        check_parameter("alpha_bar", alpha_bar, 0.0, 1.0)
+        check_parameter("beta", beta, 0.0)
         self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
         self.tx = self.scenario.tx_positions
         self.rx = self.scenario.rx_positions

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
 
-from .base import IndexPolicy, Observation
+from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
 
 
@@ -45,10 +45,9 @@ class DiscountedThompson(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if not 0.0 < discount <= 1.0:
-            raise ValueError(f"discount must be in (0, 1], got {discount}")
-        if prior_shape <= 0 or prior_rate <= 0:
-            raise ValueError("prior_shape and prior_rate must be > 0")
+        check_parameter("discount", discount, 0.0, 1.0, low_open=True)
+        check_parameter("prior_shape", prior_shape, 0.0, low_open=True)
+        check_parameter("prior_rate", prior_rate, 0.0, low_open=True)
         self.discount, self.prior_shape, self.prior_rate = discount, prior_shape, prior_rate
 
     def _reset(self, obs: Observation) -> None:

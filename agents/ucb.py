@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
 
-from .base import IndexPolicy, Observation
+from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
 
 #: Index of an arm with no sample in the window: finite, larger than any SINR index.
@@ -43,10 +43,8 @@ class UCB1(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if not 0.0 <= alpha_star <= 1.0:
-            raise ValueError(f"alpha_star must be in [0, 1], got {alpha_star}")
-        if beta < 0:
-            raise ValueError(f"beta must be >= 0, got {beta}")
+        check_parameter("alpha_star", alpha_star, 0.0, 1.0)
+        check_parameter("beta", beta, 0.0)
         self.alpha_star, self.beta = alpha_star, beta
 
     def _reset(self, obs: Observation) -> None:
@@ -96,8 +94,7 @@ class CUCB(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if scale < 0:
-            raise ValueError(f"scale must be >= 0, got {scale}")
+        check_parameter("scale", scale, 0.0)
         self.scale = scale
 
     def _reset(self, obs: Observation) -> None:
@@ -145,10 +142,8 @@ class DiscountedUCB(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if not 0.0 < discount <= 1.0:
-            raise ValueError(f"discount must be in (0, 1], got {discount}")
-        if beta < 0:
-            raise ValueError(f"beta must be >= 0, got {beta}")
+        check_parameter("discount", discount, 0.0, 1.0, low_open=True)
+        check_parameter("beta", beta, 0.0)
         self.discount, self.beta = discount, beta
 
     def _reset(self, obs: Observation) -> None:
@@ -195,10 +190,8 @@ class SlidingWindowUCB(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        if window < 1:
-            raise ValueError(f"window must be >= 1, got {window}")
-        if beta < 0:
-            raise ValueError(f"beta must be >= 0, got {beta}")
+        check_parameter("window", window, 1)
+        check_parameter("beta", beta, 0.0)
         self.window, self.beta = window, beta
 
     def _reset(self, obs: Observation) -> None:

@@ -232,3 +232,19 @@ def test_paper1_mg_crb_cl_beats_ucb1_and_best_has_the_highest_sinr():
         results[name] = (regret, sinr)
     assert results["mg-crb-cl"][0] < results["ucb1"][0]
     assert max(results, key=lambda n: results[n][1]) == "best"
+
+
+@pytest.mark.parametrize(
+    ("name", "params", "message"),
+    [
+        ("mg-crb-cl", {"alpha": 1.5}, r"alpha must be in \[0, 1\], got 1.5"),
+        ("mg-crb-cl", {"beta": -1}, r"beta must be in \[0, inf\), got -1"),
+        ("discounted-ucb", {"discount": 0.0}, r"discount must be in \(0, 1\], got 0.0"),
+        ("discounted-thompson", {"prior_rate": 0}, r"prior_rate must be in \(0, inf\), got 0"),
+        ("sliding-window-ucb", {"window": 0}, r"window must be in \[1, inf\), got 0"),
+        ("epsilon-greedy", {"epsilon": 2}, r"epsilon must be in \[0, 1\], got 2"),
+    ],
+)
+def test_bad_agent_parameters_are_named(name, params, message):
+    with pytest.raises(ValueError, match=message):
+        agents.make_agent(name, PAPER, **params)
