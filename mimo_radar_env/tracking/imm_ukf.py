@@ -311,6 +311,9 @@ class IMMUKFTracker:
         scale = self.sigma_params.scale(4)
         chol, repaired = robust_cholesky(scale * pred_covs)
         self.repairs += repaired.reshape(self.batch_size, -1).sum(axis=1)
+        if repaired.any():  # the update must start from the repaired prior its sigma points describe
+            rebuilt = chol @ np.swapaxes(chol, -1, -2) / scale
+            pred_covs = np.where(repaired[..., None, None], rebuilt, pred_covs)
         sigmas = sigma_points(pred_means, chol)  # (B, K, R, S, 4)
         B, K = self.batch_size, self.model.num_targets
         num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]
