@@ -6,6 +6,7 @@ import gymnasium as gym
 import numpy as np
 
 import mimo_radar_env  # noqa: F401  (registers the env)
+from mimo_radar_env.core.superarm import random_super_arms
 
 
 def run_demo(
@@ -24,9 +25,7 @@ def run_demo(
             if policy == "oracle":
                 action = env.unwrapped.oracle_action()
             else:
-                action = np.zeros(sc.num_tx + sc.num_rx, dtype=np.int8)
-                action[rng.choice(sc.num_tx, sc.tx_per_step, replace=False)] = 1
-                action[sc.num_tx + rng.choice(sc.num_rx, sc.rx_per_step, replace=False)] = 1
+                action = random_super_arms(rng, 1, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)[0]
             _, reward, _, _, info = env.step(action)
             reward_sum += reward
             regret += info["optimal_reward"] - info["expected_reward"]
