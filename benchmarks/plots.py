@@ -13,7 +13,7 @@ from mimo_radar_env.rendering import draw_scenario
 from .harness import RunConfig
 
 
-def _figure(width: float = 7.0, height: float = 4.0):  # noqa: ANN202
+def _figure(width: float = 7.0, height: float = 4.0):
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
@@ -112,6 +112,6 @@ def _safe(policy: str) -> str:
     return policy.replace("/", "_").replace(":", "_")
 
 
-def _save(fig, path: Path) -> Path:  # noqa: ANN001
+def _save(fig, path: Path) -> Path:
     fig.savefig(path)
     return path

@@ -116,7 +116,7 @@ def train_ppo(
 
 def make_native_vec_env(
     scenario: Scenario, n_envs: int, seed: int, action: str = "auto", fusion: str = "average"
-):  # noqa: ANN201
+):
     """An SB3 ``VecEnv`` over the native batch env: one numpy step for all training envs."""
     require_sb3()
     from stable_baselines3.common.vec_env.base_vec_env import VecEnv
@@ -155,7 +155,7 @@ def make_native_vec_env(
         def step_async(self, actions: NDArray) -> None:
             self._actions = actions
 
-        def step_wait(self):  # noqa: ANN202
+        def step_wait(self):
             assert self._actions is not None
             if self.discrete:
                 env_actions = self.index.to_action(np.asarray(self._actions).reshape(-1))
@@ -243,7 +243,7 @@ class PPOAgent(agents.Agent):
             import pickle
 
             with open(norm_file, "rb") as handle:
-                stats = pickle.load(handle)  # noqa: S301 - our own file, written by train_ppo
+                stats = pickle.load(handle)
             self.obs_rms, self.clip_obs, self.epsilon = stats.obs_rms, stats.clip_obs, stats.epsilon
         self.discrete = self.model.action_space.__class__.__name__ == "Discrete"
         self.index = SuperArmIndex(self.scenario) if self.discrete else None

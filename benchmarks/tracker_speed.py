@@ -20,8 +20,8 @@ from filterpy.kalman import IMMEstimator, MerweScaledSigmaPoints, UnscentedKalma
 
 from mimo_radar_env import RadarModel, load_scenario
 from mimo_radar_env.core.motion import transition_matrix
-from mimo_radar_env.core.random import keys_from_generator
 from mimo_radar_env.core.simulation import RadarSimulation
+from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.tracking import IMMUKFTracker, markov_matrix
 from mimo_radar_env.tracking.imm_ukf import DEFAULT_TURN_RATES_DEG
 

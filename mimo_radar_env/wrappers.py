@@ -192,7 +192,7 @@ class RadarFeatureObservation(gym.ObservationWrapper):
         self.features = RadarFeatures(_scenario_of(env))
         self.observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
 
-    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):  # noqa: ANN201
+    def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):
         obs, info = self.env.reset(seed=seed, options=options)
         return self.features.reset(_batch(obs))[0], info
 

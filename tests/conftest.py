@@ -3,7 +3,7 @@ import pytest
 
 matplotlib.use("Agg")
 
-import mimo_radar_env  # noqa: E402  (registers the env)
+import mimo_radar_env
 
 
 @pytest.fixture(scope="session")

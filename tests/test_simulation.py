@@ -5,8 +5,8 @@ import numpy as np
 from scipy import stats
 
 from mimo_radar_env import RadarModel, load_scenario
-from mimo_radar_env.core.random import keys_from_generator
 from mimo_radar_env.core.simulation import RadarSimulation
+from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import exact_super_arm
 
 

@@ -6,8 +6,8 @@ import pytest
 from scipy import stats
 
 from mimo_radar_env import RadarModel, load_scenario
-from mimo_radar_env.core.random import keys_from_generator
 from mimo_radar_env.core.simulation import RadarSimulation
+from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.tracking import IMMUKFTracker
 from tests.helpers import large_scenario, random_valid_actions
 

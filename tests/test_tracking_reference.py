@@ -271,8 +271,8 @@ def test_compiled_average_fusion_equals_the_numpy_path(scenario):
         pytest.skip("numba is not installed: only the numpy path exists")
     sc = large_scenario(16, 16, 5, horizon=100) if scenario == "large" else load_scenario(scenario)
     model = RadarModel.from_scenario(sc)
-    from mimo_radar_env.core.random import keys_from_generator
     from mimo_radar_env.core.simulation import RadarSimulation
+    from mimo_radar_env.core.streams import keys_from_generator
 
     batch = 7
     sim = RadarSimulation(model, batch)

@@ -12,18 +12,21 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-try:  # pragma: no cover - exercised when numba is installed
+from mimo_radar_env.core.counter_hash import (
+    HAVE_NUMBA,
+    Stream,
+    element_bits,
+    stream_base,
+    to_unit,
+)
+
+if HAVE_NUMBA:  # pragma: no branch
     import numba
 
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    numba = None
-    HAVE_NUMBA = False
+    from mimo_radar_env.core.counter_hash import element_bits_nb, stream_base_nb, to_unit_nb
 
-GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_M1 = np.uint64(0xBF58476D1CE4E5B9)
-_M2 = np.uint64(0x94D049BB133111EB)
-STREAM_R1, STREAM_R2, STREAM_FLIP = 1, 2, 3
+# numba reads module globals as compile-time constants
+_R1, _R2, _FLIP = int(Stream.BPSO_R1), int(Stream.BPSO_R2), int(Stream.BPSO_FLIP)
 _C3, _C4, _C5, _C6 = 1.0 / 6.0, 1.0 / 24.0, 1.0 / 120.0, 1.0 / 720.0
 
 
@@ -38,27 +41,11 @@ def exp_negative(v: NDArray[np.float64]) -> NDArray[np.float64]:
     return e
 
 
-def _mix_np(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
-    z = (z ^ (z >> np.uint64(30))) * _M1
-    z = (z ^ (z >> np.uint64(27))) * _M2
-    return z ^ (z >> np.uint64(31))
-
-
-def _bases_np(keys: NDArray[np.uint64], stream: int, iteration: int) -> NDArray[np.uint64]:
-    counter = np.array([(stream << 32) + iteration + 1], dtype=np.uint64)
-    return _mix_np(keys ^ _mix_np(counter * GOLDEN))
-
-
-def _uniform_np(base: NDArray[np.uint64], element: NDArray[np.uint64]) -> NDArray[np.float64]:
-    return (_mix_np(base + (element + np.uint64(1)) * GOLDEN) >> np.uint64(11)).astype(np.float64) * 2.0**-53
-
-
 def _flip_uniform_np(
     base: NDArray[np.uint64], element: NDArray[np.uint64], shift: NDArray[np.uint64]
 ) -> NDArray[np.float64]:
     """16-bit uniforms, four per hash: ``(lane + 0.5) / 65536``."""
-    h = _mix_np(base + (element + np.uint64(1)) * GOLDEN)
-    lane = (h >> shift) & np.uint64(0xFFFF)
+    lane = (element_bits(base, element) >> shift) & np.uint64(0xFFFF)
     return (lane.astype(np.float64) + 0.5) * (1.0 / 65536.0)
 
 
@@ -95,9 +82,9 @@ def run_numpy(
     steps = max(iterations - 1, 1)
     for q in range(iterations):
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        r1 = _uniform_np(_bases_np(keys, STREAM_R1, q)[:, None], particle)
-        r2 = _uniform_np(_bases_np(keys, STREAM_R2, q)[:, None], particle)
-        u = _flip_uniform_np(_bases_np(keys, STREAM_FLIP, q)[:, None, None], hash_element, lane_shift)
+        r1 = to_unit(element_bits(stream_base(keys, Stream.BPSO_R1, q)[:, None], particle))
+        r2 = to_unit(element_bits(stream_base(keys, Stream.BPSO_R2, q)[:, None], particle))
+        u = _flip_uniform_np(stream_base(keys, Stream.BPSO_FLIP, q)[:, None, None], hash_element, lane_shift)
         velocities = (
             inertia * velocities
             + (c1 * r1)[..., None] * (personal_best - positions)
@@ -134,38 +121,6 @@ def _fitness_np(
 
 if HAVE_NUMBA:  # pragma: no branch
 
-    @numba.njit(cache=True, inline="always")
-    def _mix_nb(z):  # noqa: ANN001, ANN202
-        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        return z ^ (z >> np.uint64(31))
-
-    @numba.njit(cache=True, inline="always")
-    def _base_nb(key, stream, iteration):  # noqa: ANN001, ANN202
-        counter = np.uint64((stream << 32) + iteration + 1)
-        return _mix_nb(key ^ _mix_nb(counter * np.uint64(0x9E3779B97F4A7C15)))
-
-    @numba.njit(cache=True, inline="always")
-    def _uniform_nb(base, element):  # noqa: ANN001, ANN202
-        h = _mix_nb(base + (np.uint64(element) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15))
-        return np.float64(h >> np.uint64(11)) * 2.0**-53
-
-    @numba.njit(cache=True, inline="always")
-    def _fitness_nb(index, b, position, num_tx, num_rx, tx_count, rx_count):  # noqa: ANN001, ANN202
-        ct = 0
-        for m in range(num_tx):
-            ct += position[m]
-        cr = 0
-        for n in range(num_rx):
-            cr += position[num_tx + n]
-        if ct != tx_count or cr != rx_count:
-            return 0.0, False
-        value = 0.0
-        for m in range(num_tx):
-            for n in range(num_rx):
-                value += np.float64(position[m]) * np.float64(position[num_tx + n]) * index[b, m, n]
-        return value, True
-
     @numba.njit(cache=True, parallel=True)
     def run_numba(
         index,
@@ -175,7 +130,7 @@ if HAVE_NUMBA:  # pragma: no branch
         keys,
         iterations,
         c1,
-        c2,  # noqa: ANN001, ANN201
+        c2,
         inertia_start,
         inertia_end,
         velocity_clamp,
@@ -186,7 +141,6 @@ if HAVE_NUMBA:  # pragma: no branch
         num_tx = index.shape[1]
         num_rx = index.shape[2]
         lanes = (length + 3) // 4
-        golden = np.uint64(0x9E3779B97F4A7C15)
         result = np.empty((batch, length), dtype=np.int8)
         steps = max(iterations - 1, 1)
         for b in numba.prange(batch):
@@ -206,17 +160,15 @@ if HAVE_NUMBA:  # pragma: no branch
                 if q > 0:
                     it = q - 1
                     inertia = inertia_start - (inertia_start - inertia_end) * it / steps
-                    base_r1 = _base_nb(key, 1, it)
-                    base_r2 = _base_nb(key, 2, it)
-                    base_flip = _base_nb(key, 3, it)
+                    base_r1 = stream_base_nb(key, _R1, it)
+                    base_r2 = stream_base_nb(key, _R2, it)
+                    base_flip = stream_base_nb(key, _FLIP, it)
                     for p in range(population):
-                        a1[p] = c1 * _uniform_nb(base_r1, p)
-                        a2[p] = c2 * _uniform_nb(base_r2, p)
+                        a1[p] = c1 * to_unit_nb(element_bits_nb(base_r1, p))
+                        a2[p] = c2 * to_unit_nb(element_bits_nb(base_r2, p))
                     for lane in range(lanes):
                         for p in range(population):
-                            hashes[lane, p] = _mix_nb(
-                                base_flip + (np.uint64(p * lanes + lane) + np.uint64(1)) * golden
-                            )
+                            hashes[lane, p] = element_bits_nb(base_flip, p * lanes + lane)
                     for j in range(length):
                         shift = np.uint64(16 * (j % 4))
                         lane = j // 4

@@ -16,17 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from .counter_hash import Stream
 from .geometry import bistatic_measurement, wrap_angle
 from .model import RadarModel
 from .motion import transition_matrix
-from .random import (
-    STREAM_INITIAL_STATE,
-    STREAM_MEASUREMENT,
-    STREAM_PROCESS_NOISE,
-    STREAM_SINR,
-    TrialStreams,
-    full_index,
-)
+from .streams import TrialStreams, full_index
 
 
 @dataclass
@@ -98,7 +92,7 @@ class RadarSimulation:
             raise ValueError(f"expected keys for {self.batch_size} trials, got {self._streams.batch_size}")
         model = self.model
         draws = self._streams.normal(
-            STREAM_INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4))
+            Stream.INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4))
         )
         self.state = model.initial_states + np.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
         self.step_index = 0
@@ -127,7 +121,7 @@ class RadarSimulation:
                     transition_matrix(0.0, model.scenario.sample_time), (model.num_targets, 4, 4)
                 )
             noise = self._process_std * self.streams.normal(
-                STREAM_PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
+                Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
             )
             self._upcoming = np.einsum("kij,bkj->bki", F, self.state) + noise @ model.noise_gain.T
         return self._upcoming
@@ -158,7 +152,7 @@ class RadarSimulation:
         """
         model = self.model
         shape = (model.num_targets, model.num_tx, model.num_rx)
-        draws = self.streams.exponential(STREAM_SINR, self.step_index, full_index(self.batch_size, shape))
+        draws = self.streams.exponential(Stream.SINR, self.step_index, full_index(self.batch_size, shape))
         return self.mean_sinr() * draws
 
     def observe(
@@ -177,7 +171,7 @@ class RadarSimulation:
         targets = np.arange(num_targets)[None, :, None]
         mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
-        sinr = mean * self.streams.exponential(STREAM_SINR, self.step_index, flat)
+        sinr = mean * self.streams.exponential(Stream.SINR, self.step_index, flat)
         if self.measurement_quality is None:
             lam = model.quality(mean, target_axis=1)
         else:
@@ -187,7 +181,7 @@ class RadarSimulation:
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
         )
         noise_index = flat[..., None] * 2 + np.arange(2)
-        noise = np.sqrt(variance) * self.streams.normal(STREAM_MEASUREMENT, self.step_index, noise_index)
+        noise = np.sqrt(variance) * self.streams.normal(Stream.MEASUREMENT, self.step_index, noise_index)
         measurement = clean + noise
         measurement[..., 1] = wrap_angle(measurement[..., 1])
         return ChannelObservations(

@@ -15,8 +15,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.model import RadarModel
-from ..core.random import keys_from_generator
 from ..core.simulation import ChannelObservations, RadarSimulation
+from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
 from ..scenario import Scenario, ScenarioError, load_scenario
 from ..tracking import FUSIONS, IMMUKFTracker

@@ -37,7 +37,7 @@ if HAVE_NUMBA:  # pragma: no branch
         wc,
         tx,
         rx,
-        measurement,  # noqa: ANN001, ANN201, PLR0913
+        measurement,
         variance,
     ):
         """Returns ``(model_means, model_covs, log_probs, estimate, covariance, finite)``.

@@ -1,9 +1,8 @@
-"""Counter-based random streams, vectorised over Monte-Carlo trials.
+"""Counter-based random streams of the simulation, vectorised over Monte-Carlo trials.
 
 Every random number of the simulation is a pure function of
-``(trial key, stream, step, element index)``: a SplitMix64 hash of those four
-integers.  This gives three properties at once, with no Python loop over
-trials:
+``(trial key, stream, step, element index)`` through :mod:`.counter_hash`. This gives
+three properties at once, with no Python loop over trials:
 
 * trial ``i`` of a vector env draws exactly what a single env with the same key
   draws (the keys of a vector env are derived per trial from ``seed + i``);
@@ -13,9 +12,8 @@ trials:
   ``t`` are the same number whichever other channels are probed with it, which
   lowers the variance of policy comparisons further.
 
-SplitMix64 (Steele, Lea & Flood, OOPSLA 2014) passes BigCrush on sequential
-inputs; the tests check the laws the simulation relies on (uniform, normal,
-exponential) with fixed seeds.
+SplitMix64 passes BigCrush on sequential inputs; the tests check the laws the
+simulation relies on (uniform, normal, exponential) with fixed seeds.
 """
 
 from __future__ import annotations
@@ -23,28 +21,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-_GOLDEN = np.uint64(0x9E3779B97F4A7C15)
-_MUL1 = np.uint64(0xBF58476D1CE4E5B9)
-_MUL2 = np.uint64(0x94D049BB133111EB)
-_S30 = np.uint64(30)
-_S27 = np.uint64(27)
-_S31 = np.uint64(31)
-_S11 = np.uint64(11)
-_TWO_POW_M53 = 2.0**-53
-
-# Stream identifiers. New streams get new numbers; existing ones never change,
-# so results stay reproducible across versions.
-STREAM_INITIAL_STATE = 1
-STREAM_PROCESS_NOISE = 2
-STREAM_SINR = 3
-STREAM_MEASUREMENT = 4
-
-
-def _mix(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
-    """SplitMix64 finaliser (a bijection of uint64 with good avalanche)."""
-    z = (z ^ (z >> _S30)) * _MUL1
-    z = (z ^ (z >> _S27)) * _MUL2
-    return z ^ (z >> _S31)
+from .counter_hash import OBSERVATION_STREAMS, Stream, element_bits, stream_base, to_unit
 
 
 def keys_from_generator(generator: np.random.Generator) -> NDArray[np.uint64]:
@@ -72,23 +49,21 @@ class TrialStreams:
     def batch_size(self) -> int:
         return self.keys.shape[0]
 
-    def _bits(self, stream: int, step: int, index: NDArray[np.integer]) -> NDArray[np.uint64]:
+    def _bits(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.uint64]:
         """Hash of (key, stream, step, index); ``index`` has shape (B, ...)."""
-        key = self.keys[:, 1 if stream >= STREAM_SINR else 0]
-        counter = np.array([(stream << 40) + step + 1], dtype=np.uint64)
-        base = _mix(key ^ _mix(counter * _GOLDEN))
-        base = base.reshape((-1,) + (1,) * (index.ndim - 1))
-        return _mix(base + (index.astype(np.uint64) + np.uint64(1)) * _GOLDEN)
+        key = self.keys[:, 1 if stream in OBSERVATION_STREAMS else 0]
+        base = stream_base(key, stream, step).reshape((-1,) + (1,) * (index.ndim - 1))
+        return element_bits(base, index)
 
-    def uniform(self, stream: int, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
+    def uniform(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """U[0, 1) draws, one per element of ``index`` (shape (B, ...))."""
-        return (self._bits(stream, step, index) >> _S11).astype(np.float64) * _TWO_POW_M53
+        return to_unit(self._bits(stream, step, index))
 
-    def exponential(self, stream: int, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
+    def exponential(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Exponential(1) draws."""
         return -np.log1p(-self.uniform(stream, step, index))
 
-    def normal(self, stream: int, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
+    def normal(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Standard normal draws (Box-Muller on two hashed uniforms per element)."""
         doubled = 2 * np.asarray(index, dtype=np.int64)
         u1 = self.uniform(stream, step, doubled)

@@ -1,0 +1,105 @@
+"""The counter-based hash behind every random draw of the project (numpy and numba twins).
+
+A draw is a pure function of ``(key, stream, step, element)``: the SplitMix64 finaliser
+(Steele, Lea & Flood, OOPSLA 2014) applied twice,
+
+* ``base = mix(key ^ mix(counter(stream, step) * GOLDEN))`` with
+  ``counter(stream, step) = stream * 2^32 + step + 1`` (the one counter layout), then
+* ``bits = mix(base + (element + 1) * GOLDEN)``.
+
+Every stream has one identifier in :class:`Stream`; the env's truth and observation
+streams and the BPSO solver's streams share the layout, so no two of them can collide.
+Identifiers never change once published: they are part of every recorded number.
+
+numba is optional: the ``*_nb`` twins exist when it is installed and compute the same
+integers as the numpy functions.
+"""
+
+from __future__ import annotations
+
+from enum import IntEnum
+
+import numpy as np
+from numpy.typing import NDArray
+
+try:  # pragma: no cover - exercised when numba is installed
+    import numba
+
+    HAVE_NUMBA = True
+except ImportError:  # pragma: no cover
+    numba = None
+    HAVE_NUMBA = False
+
+GOLDEN = np.uint64(0x9E3779B97F4A7C15)
+MUL1 = np.uint64(0xBF58476D1CE4E5B9)
+MUL2 = np.uint64(0x94D049BB133111EB)
+#: Steps (or iterations) of one stream: ``step < 2^32``.
+STEP_BITS = 32
+TWO_POW_M53 = 2.0**-53
+
+
+class Stream(IntEnum):
+    """Identifiers of the random streams (never renumbered)."""
+
+    BPSO_R1 = 1  #: BPSO's ``r1`` of eq20, per particle and iteration
+    BPSO_R2 = 2  #: BPSO's ``r2`` of eq20
+    BPSO_FLIP = 3  #: BPSO's position draws of eq21 (four 16-bit lanes per hash)
+    INITIAL_STATE = 0x100  #: the truth: initial states
+    PROCESS_NOISE = 0x200  #: the truth: process noise
+    SINR = 0x300  #: observations: Swerling-I SINR samples
+    MEASUREMENT = 0x400  #: observations: measurement noise
+
+
+#: Streams drawn from a trial's observation key; the others use its truth key.
+OBSERVATION_STREAMS = frozenset({Stream.SINR, Stream.MEASUREMENT})
+
+
+def mix(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
+    """SplitMix64 finaliser: a bijection of uint64 with good avalanche."""
+    z = (z ^ (z >> np.uint64(30))) * MUL1
+    z = (z ^ (z >> np.uint64(27))) * MUL2
+    return z ^ (z >> np.uint64(31))
+
+
+def counter(stream: int, step: int) -> np.uint64:
+    """The one counter layout: ``stream * 2^32 + step + 1``."""
+    if not 0 <= step < 2**STEP_BITS:
+        raise ValueError(f"step must be in [0, 2^{STEP_BITS}), got {step}")
+    return np.uint64((int(stream) << STEP_BITS) + step + 1)
+
+
+def stream_base(keys: NDArray[np.uint64], stream: int, step: int) -> NDArray[np.uint64]:
+    """``mix(key ^ mix(counter * GOLDEN))`` for every key."""
+    return mix(np.asarray(keys, dtype=np.uint64) ^ mix(np.array([counter(stream, step)]) * GOLDEN))
+
+
+def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDArray[np.uint64]:
+    """64 hashed bits per element: ``mix(base + (element + 1) * GOLDEN)``."""
+    return mix(base + (np.asarray(element).astype(np.uint64) + np.uint64(1)) * GOLDEN)
+
+
+def to_unit(bits: NDArray[np.uint64]) -> NDArray[np.float64]:
+    """The top 53 bits as a uniform double in [0, 1)."""
+    return (bits >> np.uint64(11)).astype(np.float64) * TWO_POW_M53
+
+
+if HAVE_NUMBA:  # pragma: no branch
+
+    @numba.njit(cache=True, inline="always")
+    def mix_nb(z):
+        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
+        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
+        return z ^ (z >> np.uint64(31))
+
+    @numba.njit(cache=True, inline="always")
+    def stream_base_nb(key, stream, step):
+        count = np.uint64((stream << 32) + step + 1)
+        return mix_nb(key ^ mix_nb(count * np.uint64(0x9E3779B97F4A7C15)))
+
+    @numba.njit(cache=True, inline="always")
+    def element_bits_nb(base, element):
+        return mix_nb(base + (np.uint64(element) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15))
+
+    @numba.njit(cache=True, inline="always")
+    def to_unit_nb(bits):
+        return np.float64(bits >> np.uint64(11)) * 2.0**-53
