@@ -7,7 +7,7 @@ from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
 from .envs import MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
-from .scenario import (
+from .scenarios import (
     Maneuver,
     Scenario,
     ScenarioError,

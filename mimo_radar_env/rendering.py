@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .scenario import Scenario
+from .scenarios import Scenario
 
 
 def draw_scenario(

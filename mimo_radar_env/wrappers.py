@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from .core.geometry import station_ranges
 from .core.superarm import top_mask
-from .scenario import Scenario
+from .scenarios import Scenario
 
 #: Largest number of super arms :class:`SuperArmDiscreteAction` enumerates.
 MAX_DISCRETE_SUPER_ARMS = 100_000

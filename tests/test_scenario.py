@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mimo_radar_env import Scenario, ScenarioError, available_scenarios, load_scenario
-from mimo_radar_env.scenario import turn_rate_schedule
+from mimo_radar_env.scenarios import turn_rate_schedule
 
 
 def test_paper_scenarios_match_spec():

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..scenario import Scenario, turn_rate_schedule
+from ..scenarios import Scenario, turn_rate_schedule
 from .geometry import station_ranges
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
 

@@ -18,7 +18,7 @@ from ..core.model import RadarModel
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
-from ..scenario import Scenario, ScenarioError, load_scenario
+from ..scenarios import Scenario, ScenarioError, load_scenario
 from ..tracking import FUSIONS, IMMUKFTracker
 
 INVALID_ACTION_MODES = ("probe-nothing", "raise")

@@ -17,7 +17,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from ..rendering import draw_scenario, figure_to_rgb
-from ..scenario import Scenario
+from ..scenarios import Scenario
 from .engine import RadarEngine, resolve_config
 
 

@@ -1,40 +1,22 @@
-"""Scenarios: the radar layout, the targets and every model constant, as validated data.
+"""The scenario: the radar layout, the targets and every model constant, as validated data.
 
-A :class:`Scenario` is plain data. The paper's three scenarios ship as TOML files
-(``paper-1``, ``paper-2``, ``paper-3``); users load their own from YAML or TOML
-with :func:`load_scenario`, or build one in Python with :meth:`Scenario.from_dict`.
-Every field is checked when the scenario is built; a bad field raises
-:class:`ScenarioError` naming the field and what is allowed.
+A :class:`Scenario` is plain data. Every field is checked when the scenario is built;
+a bad field raises :class:`ScenarioError` naming the field and what is allowed.
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
-import tomllib
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from importlib import resources
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
-__all__ = [
-    "Maneuver",
-    "Scenario",
-    "ScenarioError",
-    "Target",
-    "available_scenarios",
-    "load_scenario",
-    "random_scenario",
-]
-
-
-class ScenarioError(ValueError):
-    """A scenario field is missing, unknown or out of its allowed range."""
+from . import validation as check
+from .validation import ScenarioError
 
 
 @dataclass(frozen=True)
@@ -69,7 +51,7 @@ _MANEUVER_KEYS = {"turn_rate_deg", "start", "stop"}
 
 @dataclass(frozen=True)
 class Scenario:
-    """A distributed MIMO radar scenario (SPEC sections 1-4 and 8).
+    """A distributed MIMO radar scenario (docs/model.md).
 
     Attributes
     ----------
@@ -168,7 +150,7 @@ class Scenario:
         targets = data.get("targets")
         if not isinstance(targets, list | tuple) or len(targets) == 0:
             raise ScenarioError("targets must be a non-empty list of target tables")
-        data["targets"] = tuple(_parse_target(i, t) for i, t in enumerate(targets))
+        data["targets"] = tuple(parse_target(i, t) for i, t in enumerate(targets))
         if "weights" not in data:
             data["weights"] = [1.0 / len(targets)] * len(targets) if len(targets) > 1 else [1.0]
         return cls._validated(data)
@@ -176,14 +158,14 @@ class Scenario:
     @classmethod
     def _validated(cls, data: dict[str, Any]) -> Scenario:
         out: dict[str, Any] = {"name": str(data["name"]), "targets": data["targets"]}
-        out["tx_positions"] = _positions("tx_positions", data["tx_positions"])
-        out["rx_positions"] = _positions("rx_positions", data["rx_positions"])
+        out["tx_positions"] = check.positions("tx_positions", data["tx_positions"])
+        out["rx_positions"] = check.positions("rx_positions", data["rx_positions"])
         num_tx, num_rx = out["tx_positions"].shape[0], out["rx_positions"].shape[0]
         num_targets = len(out["targets"])
-        out["tx_per_step"] = _int_in(
+        out["tx_per_step"] = check.integer_in(
             "tx_per_step", data["tx_per_step"], 1, num_tx, "M (the number of transmitters)"
         )
-        out["rx_per_step"] = _int_in(
+        out["rx_per_step"] = check.integer_in(
             "rx_per_step", data["rx_per_step"], 1, num_rx, "N (the number of receivers)"
         )
         defaults = {f.name: f for f in dataclasses.fields(cls)}
@@ -194,18 +176,18 @@ class Scenario:
             f = defaults[name]
             return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
 
-        out["horizon"] = _int_in("horizon", get("horizon"), 1, None, "a positive number of steps")
+        out["horizon"] = check.integer_in("horizon", get("horizon"), 1, None, "a positive number of steps")
         for name in ("sample_time", "noise_power", "range_variance", "azimuth_variance", "peak_sinr"):
-            out[name] = _positive_float(name, get(name))
-        out["process_noise"] = _float(name := "process_noise", get(name))
+            out[name] = check.positive_number(name, get(name))
+        out["process_noise"] = check.number(name := "process_noise", get(name))
         if out["process_noise"] < 0:
             raise ScenarioError(f"process_noise must be >= 0, got {out['process_noise']}")
-        out["tx_power"] = _positive_array("tx_power", get("tx_power"), (num_tx,))
-        out["interference_power"] = _nonnegative_array(
+        out["tx_power"] = check.positive_array("tx_power", get("tx_power"), (num_tx,))
+        out["interference_power"] = check.nonnegative_array(
             "interference_power", get("interference_power"), (num_rx,)
         )
-        out["rcs"] = _positive_array("rcs", get("rcs"), (num_targets, num_tx, num_rx))
-        weights = _array("weights", get("weights"))
+        out["rcs"] = check.positive_array("rcs", get("rcs"), (num_targets, num_tx, num_rx))
+        weights = check.numeric_array("weights", get("weights"))
         if weights.shape != (num_targets,):
             raise ScenarioError(
                 f"weights must hold one value per target ({num_targets}), got shape {weights.shape}"
@@ -213,8 +195,8 @@ class Scenario:
         if np.any(weights < 0) or not np.any(weights > 0):
             raise ScenarioError(f"weights must be >= 0 and not all zero, got {weights.tolist()}")
         out["weights"] = weights
-        _check_distinct("tx_positions", out["tx_positions"])
-        _check_distinct("rx_positions", out["rx_positions"])
+        check.distinct_positions("tx_positions", out["tx_positions"])
+        check.distinct_positions("rx_positions", out["rx_positions"])
         stations = np.concatenate([out["tx_positions"], out["rx_positions"]])
         for k, target in enumerate(out["targets"]):
             position = target.initial_state[[0, 2]]
@@ -273,8 +255,7 @@ class Scenario:
         }
 
 
-# ---------------------------------------------------------------- parsing
-def _parse_target(index: int, raw: Any) -> Target:
+def parse_target(index: int, raw: Any) -> Target:
     where = f"targets[{index}]"
     if isinstance(raw, Target):
         return raw
@@ -285,10 +266,10 @@ def _parse_target(index: int, raw: Any) -> Target:
         raise ScenarioError(f"unknown key(s) {unknown} in {where}; allowed: {sorted(_TARGET_KEYS)}")
     if "initial_state" not in raw:
         raise ScenarioError(f"{where}.initial_state is required ([x, vx, y, vy] in m and m/s)")
-    state = _array(f"{where}.initial_state", raw["initial_state"])
+    state = check.numeric_array(f"{where}.initial_state", raw["initial_state"])
     if state.shape != (4,):
         raise ScenarioError(f"{where}.initial_state must be [x, vx, y, vy], got shape {state.shape}")
-    cov = _array(f"{where}.initial_covariance", raw.get("initial_covariance", [20.0] * 4))
+    cov = check.numeric_array(f"{where}.initial_covariance", raw.get("initial_covariance", [20.0] * 4))
     if cov.shape == (4,):
         cov = np.diag(cov)
     if cov.shape != (4, 4):
@@ -305,193 +286,17 @@ def _parse_target(index: int, raw: Any) -> Target:
             continue
         if not isinstance(man, Mapping) or set(man) != _MANEUVER_KEYS:
             raise ScenarioError(f"{mwhere} must be a table with exactly the keys {sorted(_MANEUVER_KEYS)}")
-        rate = _float(f"{mwhere}.turn_rate_deg", man["turn_rate_deg"])
+        rate = check.number(f"{mwhere}.turn_rate_deg", man["turn_rate_deg"])
         if rate == 0:
             raise ScenarioError(f"{mwhere}.turn_rate_deg must be non-zero (NCV needs no maneuver entry)")
         maneuvers.append(
             Maneuver(
                 rate,
-                _int_in(f"{mwhere}.start", man["start"], 0, None, "a step index >= 0"),
-                _int_in(f"{mwhere}.stop", man["stop"], 1, None, "a step index >= 1"),
+                check.integer_in(f"{mwhere}.start", man["start"], 0, None, "a step index >= 0"),
+                check.integer_in(f"{mwhere}.stop", man["stop"], 1, None, "a step index >= 1"),
             )
         )
     return Target(state, cov, tuple(maneuvers))
-
-
-def _array(name: str, value: Any) -> NDArray[np.float64]:
-    try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ScenarioError(f"{name} must be numeric, got {value!r}") from exc
-    if not np.all(np.isfinite(arr)):
-        raise ScenarioError(f"{name} must be finite numbers, got {arr.tolist()}")
-    return arr
-
-
-def _float(name: str, value: Any) -> float:
-    if isinstance(value, bool):
-        raise ScenarioError(f"{name} must be a number, got {value!r}")
-    arr = _array(name, value)
-    if arr.shape != ():
-        raise ScenarioError(f"{name} must be a single number, got shape {arr.shape}")
-    return float(arr)
-
-
-def _positive_float(name: str, value: Any) -> float:
-    out = _float(name, value)
-    if out <= 0:
-        raise ScenarioError(f"{name} must be > 0, got {out}")
-    return out
-
-
-def _int_in(name: str, value: Any, low: int, high: int | None, allowed: str) -> int:
-    if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ScenarioError(f"{name} must be an integer, got {value!r}")
-    value = int(value)
-    if value < low or (high is not None and value > high):
-        bound = f"between {low} and {high}" if high is not None else f">= {low}"
-        raise ScenarioError(f"{name} must be {bound} ({allowed}), got {value}")
-    return value
-
-
-def _positions(name: str, value: Any) -> NDArray[np.float64]:
-    arr = _array(name, value)
-    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
-        raise ScenarioError(f"{name} must be a list of [x, y] pairs in metres, got shape {arr.shape}")
-    return arr
-
-
-def _broadcast(name: str, arr: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
-    try:
-        return np.broadcast_to(arr, shape).copy()
-    except ValueError as exc:
-        raise ScenarioError(
-            f"{name} must be a single number or an array of shape {shape}, got shape {arr.shape}"
-        ) from exc
-
-
-def _positive_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    arr = _broadcast(name, _array(name, value), shape)
-    if np.any(arr <= 0):
-        raise ScenarioError(f"{name} must be > 0 everywhere, got {arr.min()}")
-    return arr
-
-
-def _nonnegative_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
-    arr = _broadcast(name, _array(name, value), shape)
-    if np.any(arr < 0):
-        raise ScenarioError(f"{name} must be >= 0 everywhere, got {arr.min()}")
-    return arr
-
-
-def _check_distinct(name: str, positions: NDArray[np.float64]) -> None:
-    diff = np.linalg.norm(positions[:, None, :] - positions[None, :, :], axis=-1)
-    i, j = np.nonzero(np.triu(diff < 1e-6, k=1))
-    if len(i):
-        raise ScenarioError(
-            f"{name} has duplicate stations {int(i[0])} and {int(j[0])} at "
-            f"{positions[i[0]].tolist()} m; every station needs its own position"
-        )
-
-
-# ---------------------------------------------------------------- loading
-def available_scenarios() -> list[str]:
-    """Names of the scenarios shipped with the package."""
-    folder = resources.files("mimo_radar_env") / "scenarios"
-    return sorted(p.name.removesuffix(".toml") for p in folder.iterdir() if p.name.endswith(".toml"))
-
-
-def _read_file(path: Path) -> dict[str, Any]:
-    text = path.read_text()
-    suffix = path.suffix.lower()
-    try:
-        if suffix == ".toml":
-            data = tomllib.loads(text)
-        elif suffix in (".yaml", ".yml"):
-            data = yaml.safe_load(text)
-        else:
-            raise ScenarioError(f"scenario file {path} must end in .toml, .yaml or .yml")
-    except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
-        raise ScenarioError(f"cannot parse scenario file {path}: {exc}") from exc
-    if not isinstance(data, Mapping):
-        raise ScenarioError(f"scenario file {path} must hold a table of scenario keys")
-    data = dict(data)
-    data.setdefault("name", path.stem)
-    return data
-
-
-def load_scenario(name_or_path: str | Path | Scenario, **overrides: Any) -> Scenario:
-    """Load a shipped scenario by name (``paper-1``...) or a YAML/TOML file.
-
-    Keyword overrides replace fields before validation, e.g.
-    ``load_scenario("paper-1", horizon=200)``.
-    """
-    if isinstance(name_or_path, Scenario):
-        return name_or_path.replace(**overrides) if overrides else name_or_path
-    text = str(name_or_path)
-    if text in available_scenarios():
-        resource = resources.files("mimo_radar_env") / "scenarios" / f"{text}.toml"
-        data = tomllib.loads(resource.read_text())
-    else:
-        path = Path(text)
-        if not path.is_file():
-            raise ScenarioError(
-                f"unknown scenario {text!r}: not a shipped scenario ({', '.join(available_scenarios())}) "
-                "and not an existing .toml/.yaml file"
-            )
-        data = _read_file(path)
-    data.update(overrides)
-    return Scenario.from_dict(data)
-
-
-def random_scenario(
-    num_tx: int,
-    num_rx: int,
-    num_targets: int,
-    tx_per_step: int,
-    rx_per_step: int,
-    horizon: int = 1000,
-    seed: int = 0,
-    extent: float = 100e3,
-) -> Scenario:
-    """A random layout for studies beyond the paper's arrays.
-
-    Stations uniform in an ``extent`` x ``extent`` square (metres), targets starting in its
-    central 60 % with random headings and speeds of 50-150 m/s; every other target (the
-    1st, 3rd...) turns at -3 deg/s for 30 steps from ``horizon // 3`` when the horizon
-    allows. Every other field keeps the paper's value.
-    """
-    rng = np.random.default_rng(seed)
-    start = horizon // 3
-    targets = []
-    for k in range(num_targets):
-        heading, speed = rng.uniform(0, 2 * np.pi), rng.uniform(50, 150)
-        turn = k % 2 == 0 and start + 30 <= horizon
-        targets.append(
-            {
-                "initial_state": [
-                    rng.uniform(0.2 * extent, 0.8 * extent),
-                    speed * np.cos(heading),
-                    rng.uniform(0.2 * extent, 0.8 * extent),
-                    speed * np.sin(heading),
-                ],
-                "maneuvers": [{"turn_rate_deg": -3.0, "start": start, "stop": start + 30}] if turn else [],
-            }
-        )
-    return Scenario.from_dict(
-        {
-            "name": f"random-{num_tx}x{num_rx}-K{num_targets}",
-            "tx_positions": rng.uniform(0, extent, (num_tx, 2)).tolist(),
-            "rx_positions": rng.uniform(0, extent, (num_rx, 2)).tolist(),
-            "tx_per_step": tx_per_step,
-            "rx_per_step": rx_per_step,
-            "targets": targets,
-            "horizon": horizon,
-        }
-    )
 
 
 def turn_rate_schedule(scenario: Scenario) -> NDArray[np.float64]:

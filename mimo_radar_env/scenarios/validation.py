@@ -1,0 +1,96 @@
+"""Checks of scenario fields: each raises :class:`ScenarioError` naming the field and what is allowed."""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+class ScenarioError(ValueError):
+    """A scenario field is missing, unknown or out of its allowed range."""
+
+
+def numeric_array(name: str, value: Any) -> NDArray[np.float64]:
+    """``value`` as a float array of finite numbers."""
+    try:
+        arr = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ScenarioError(f"{name} must be numeric, got {value!r}") from exc
+    if not np.all(np.isfinite(arr)):
+        raise ScenarioError(f"{name} must be finite numbers, got {arr.tolist()}")
+    return arr
+
+
+def number(name: str, value: Any) -> float:
+    """A single finite number (not a boolean)."""
+    if isinstance(value, bool):
+        raise ScenarioError(f"{name} must be a number, got {value!r}")
+    arr = numeric_array(name, value)
+    if arr.shape != ():
+        raise ScenarioError(f"{name} must be a single number, got shape {arr.shape}")
+    return float(arr)
+
+
+def positive_number(name: str, value: Any) -> float:
+    out = number(name, value)
+    if out <= 0:
+        raise ScenarioError(f"{name} must be > 0, got {out}")
+    return out
+
+
+def integer_in(name: str, value: Any, low: int, high: int | None, allowed: str) -> int:
+    """An integer in ``[low, high]`` (``high=None``: no upper bound); ``allowed`` explains the range."""
+    if isinstance(value, bool) or not isinstance(value, int | np.integer):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            raise ScenarioError(f"{name} must be an integer, got {value!r}")
+    value = int(value)
+    if value < low or (high is not None and value > high):
+        bound = f"between {low} and {high}" if high is not None else f">= {low}"
+        raise ScenarioError(f"{name} must be {bound} ({allowed}), got {value}")
+    return value
+
+
+def positions(name: str, value: Any) -> NDArray[np.float64]:
+    """A non-empty list of ``[x, y]`` pairs."""
+    arr = numeric_array(name, value)
+    if arr.ndim != 2 or arr.shape[1] != 2 or arr.shape[0] < 1:
+        raise ScenarioError(f"{name} must be a list of [x, y] pairs in metres, got shape {arr.shape}")
+    return arr
+
+
+def broadcast_field(name: str, arr: NDArray[np.float64], shape: tuple[int, ...]) -> NDArray[np.float64]:
+    try:
+        return np.broadcast_to(arr, shape).copy()
+    except ValueError as exc:
+        raise ScenarioError(
+            f"{name} must be a single number or an array of shape {shape}, got shape {arr.shape}"
+        ) from exc
+
+
+def positive_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    arr = broadcast_field(name, numeric_array(name, value), shape)
+    if np.any(arr <= 0):
+        raise ScenarioError(f"{name} must be > 0 everywhere, got {arr.min()}")
+    return arr
+
+
+def nonnegative_array(name: str, value: Any, shape: tuple[int, ...]) -> NDArray[np.float64]:
+    arr = broadcast_field(name, numeric_array(name, value), shape)
+    if np.any(arr < 0):
+        raise ScenarioError(f"{name} must be >= 0 everywhere, got {arr.min()}")
+    return arr
+
+
+def distinct_positions(name: str, stations: NDArray[np.float64]) -> None:
+    """Every station at its own position."""
+    diff = np.linalg.norm(stations[:, None, :] - stations[None, :, :], axis=-1)
+    i, j = np.nonzero(np.triu(diff < 1e-6, k=1))
+    if len(i):
+        raise ScenarioError(
+            f"{name} has duplicate stations {int(i[0])} and {int(j[0])} at "
+            f"{stations[i[0]].tolist()} m; every station needs its own position"
+        )
