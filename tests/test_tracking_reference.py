@@ -264,10 +264,10 @@ def test_predict_only_trials_and_eq24():
 
 @pytest.mark.parametrize("scenario", ["paper-3", "large"])
 def test_compiled_average_fusion_equals_the_numpy_path(scenario):
-    from mimo_radar_env.tracking import _average_kernel
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
     from tests.helpers import large_scenario
 
-    if not _average_kernel.HAVE_NUMBA:
+    if not HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy path exists")
     sc = large_scenario(16, 16, 5, horizon=100) if scenario == "large" else load_scenario(scenario)
     model = RadarModel.from_scenario(sc)

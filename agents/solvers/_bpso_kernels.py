@@ -12,8 +12,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.counter_hash import (
-    HAVE_NUMBA,
     Stream,
     element_bits,
     stream_base,
@@ -21,8 +21,6 @@ from mimo_radar_env.core.counter_hash import (
 )
 
 if HAVE_NUMBA:  # pragma: no branch
-    import numba
-
     from mimo_radar_env.core.counter_hash import element_bits_nb, stream_base_nb, to_unit_nb
 
 # numba reads module globals as compile-time constants

@@ -22,13 +22,7 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
-try:  # pragma: no cover - exercised when numba is installed
-    import numba
-
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    numba = None
-    HAVE_NUMBA = False
+from .compiled import HAVE_NUMBA, numba
 
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 MUL1 = np.uint64(0xBF58476D1CE4E5B9)

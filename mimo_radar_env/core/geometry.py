@@ -31,3 +31,23 @@ def bistatic_measurement(
     range_sum = np.hypot(to_tx[..., 0], to_tx[..., 1]) + np.hypot(to_rx[..., 0], to_rx[..., 1])
     azimuth = np.arctan2(to_rx[..., 1], to_rx[..., 0])
     return np.stack([range_sum, azimuth], axis=-1)
+
+
+def station_geometry(
+    points: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
+) -> tuple[
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]
+]:
+    """eq6 per station: ranges to the transmitters, and ranges, azimuths, sines and cosines
+    of the azimuths to the receivers.
+
+    ``points`` (..., 4) are states ``[x, vx, y, vy]`` (sigma points); they broadcast against
+    the station positions (..., 2). A channel's range sum is ``tx_range + rx_range`` and its
+    azimuth the receiver's: computing per station and broadcasting over channels saves the
+    work of ``Ms * Ns`` channels on ``Ms + Ns`` stations.
+    """
+    tx_dx, tx_dy = points[..., 0] - tx[..., 0], points[..., 2] - tx[..., 1]
+    rx_dx, rx_dy = points[..., 0] - rx[..., 0], points[..., 2] - rx[..., 1]
+    tx_range = np.sqrt(tx_dx * tx_dx + tx_dy * tx_dy)
+    rx_range = np.sqrt(rx_dx * rx_dx + rx_dy * rx_dy)
+    return tx_range, rx_range, np.arctan2(rx_dy, rx_dx), rx_dy / rx_range, rx_dx / rx_range

@@ -1,11 +1,14 @@
-"""Compiled (numba) update of the paper's average fusion, with the numpy path as fallback.
+"""The paper's average fusion (eq22), with a numpy path and a compiled (numba) path.
 
-:func:`average_fusion_update` does for every trial, target, channel and model what
-``unscented_update`` followed by ``average_channels`` do with numpy arrays: the
-unscented update of the common prior with the channel's (range sum, azimuth), the
-model probabilities of each channel, and their eq22 fusion. The arithmetic is the same;
-only the order of floating-point sums differs, so the two agree to round-off (tested at
-1e-10 relative). numba is optional (``pip install numba``); without it the numpy path runs.
+Every selected channel runs one IMM-UKF update from the common fused prior with its own
+measurement; the fused per-model means, covariances and model probabilities are the means
+over the ``Ms * Ns`` channels, and the fused estimate and covariance the means of the
+channels' combined estimates and covariances (eq22).
+
+The numba path does for every trial, target, channel and model what the numpy path does with
+arrays: the same arithmetic, only the order of floating-point sums differs, so the two agree
+to round-off (tested at 1e-10). numba is optional (``pip install numba``); without it the
+numpy path runs.
 """
 
 from __future__ import annotations
@@ -13,22 +16,146 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import NDArray
 
-try:  # pragma: no cover - exercised when numba is installed
-    import numba
-
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    numba = None
-    HAVE_NUMBA = False
+from ...core.compiled import HAVE_NUMBA, numba
+from ...core.geometry import station_geometry
+from ..imm import logsumexp
+from ..unscented import symmetrize, unscented_update
+from .base import Fusion, Posterior, Prior
 
 _TWO_PI = 2.0 * math.pi
 _LOG_2PI = math.log(2.0 * math.pi)
 
+
+class AverageFusion(Fusion):
+    """eq22: the mean over channels of per-channel IMM-UKF updates of one prior."""
+
+    name = "average"
+
+    def update(
+        self,
+        prior: Prior,
+        tx_positions: NDArray[np.float64],
+        rx_positions: NDArray[np.float64],
+        measurement: NDArray[np.float64],
+        noise_variance: NDArray[np.float64],
+    ) -> Posterior:
+        path = _update_numba if self.use_numba else _update_numpy
+        return Posterior(
+            *path(
+                prior.sigmas,
+                prior.means,
+                prior.covs,
+                prior.log_c,
+                prior.wm,
+                prior.wc,
+                tx_positions,
+                rx_positions,
+                measurement,
+                noise_variance,
+            )
+        )
+
+
+def _update_numpy(
+    sigmas: NDArray[np.float64],
+    pred_means: NDArray[np.float64],
+    pred_covs: NDArray[np.float64],
+    log_c: NDArray[np.float64],
+    wm: NDArray[np.float64],
+    wc: NDArray[np.float64],
+    tx_positions: NDArray[np.float64],
+    rx_positions: NDArray[np.float64],
+    measurement: NDArray[np.float64],
+    noise_variance: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], ...]:
+    """The numpy path (the reference of the numba path); same arguments and results."""
+    B, K, R, S = sigmas.shape[:4]
+    num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]
+    C = num_tx * num_rx
+    # (B, K, C, R, S): every channel updates the common prior on its own; geometry is
+    # computed per station, then laid out per channel (contiguous arrays are fastest)
+    tx_range, rx_range, azimuth, sin, cos = station_geometry(
+        sigmas[:, :, None, None],
+        tx_positions[:, None, :, None, None, None],
+        rx_positions[:, None, None, :, None, None],
+    )
+    full = (B, K, num_tx, num_rx, R, S)
+
+    def per_channel(a: NDArray[np.float64]) -> NDArray[np.float64]:
+        return np.broadcast_to(a, full).reshape(B, K, C, R, S)
+
+    h = np.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
+    result = unscented_update(
+        pred_means[:, :, None],
+        pred_covs[:, :, None],
+        sigmas[:, :, None],
+        h,
+        measurement[:, :, :, None],
+        noise_variance[:, :, :, None],
+        wm,
+        wc,
+        (per_channel(sin)[..., None], per_channel(cos)[..., None]),
+        with_covariance=False,
+    )
+    log_post = result.log_likelihood + log_c[:, :, None]
+    log_post -= logsumexp(log_post, axis=-1, keepdims=True)  # (B, K, C, R)
+    post_means, post_covs, estimate, covariance = average_channels(
+        pred_covs, result.mean, np.exp(log_post), result.gain, result.cross_cov
+    )
+    log_post = logsumexp(log_post, axis=2) - np.log(C)
+    return post_means, post_covs, log_post, estimate, covariance
+
+
+def average_channels(
+    prior_covs: NDArray[np.float64],
+    means: NDArray[np.float64],
+    probs: NDArray[np.float64],
+    gain: NDArray[np.float64],
+    cross_cov: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """eq22 fusion of per-channel IMM posteriors that share one prior.
+
+    Parameters
+    ----------
+    prior_covs : (B, K, R, n, n) the common predicted covariances
+    means : (B, K, C, R, n) per-channel, per-model posterior means
+    probs : (B, K, C, R) per-channel model probabilities
+    gain, cross_cov : (B, K, C, R, n, d) per-channel Kalman gains and cross covariances;
+        channel c's posterior covariance is ``prior_covs - gain_c @ cross_cov_c'``.
+
+    Returns
+    -------
+    model_means, model_covs : (B, K, R, n), (B, K, R, n, n) means over channels
+    estimate, covariance : (B, K, n), (B, K, n, n) the mean over channels of each
+        channel's combined estimate and covariance
+
+    The channel axis is folded into the inner dimension of one matrix product, so
+    no per-channel (n, n) covariance is ever formed.
+    """
+    B, K, C, R, n = means.shape
+    d = gain.shape[-1]
+
+    def fold(a: NDArray[np.float64]) -> NDArray[np.float64]:  # (B, K, C, R, n, d) -> (B, K, R, n, C*d)
+        return np.moveaxis(a, 2, -2).reshape(B, K, R, n, C * d)
+
+    folded_cross_t = np.swapaxes(fold(cross_cov), -1, -2)
+    model_covs = symmetrize(prior_covs - (fold(gain) @ folded_cross_t) / C)
+    weights = probs / C  # each channel's combined estimate enters the mean with 1/C
+    channel_mean = np.einsum("bkcr,bkcri->bkci", probs, means)
+    spread = (means - channel_mean[..., None, :]).reshape(B, K, C * R, n)
+    weighted_spread = spread * weights.reshape(B, K, C * R, 1)
+    covariance = np.einsum("bkr,bkrij->bkij", weights.sum(axis=2), prior_covs)
+    covariance -= (fold(gain * weights[..., None, None]) @ folded_cross_t).sum(axis=2)
+    covariance += np.swapaxes(weighted_spread, -1, -2) @ spread
+    return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
+
+
 if HAVE_NUMBA:  # pragma: no branch
 
     @numba.njit(cache=True)  # serial: numba threads contend with OpenBLAS's spinning threads here
-    def average_fusion_update(
+    def _update_numba(
         sigmas,
         pred_means,
         pred_covs,
@@ -40,7 +167,7 @@ if HAVE_NUMBA:  # pragma: no branch
         measurement,
         variance,
     ):
-        """Returns ``(model_means, model_covs, log_probs, estimate, covariance, finite)``.
+        """Returns ``(model_means, model_covs, log_probs, estimate, covariance)``.
 
         Shapes: sigmas (B, K, R, S, 4), pred_means (B, K, R, 4), pred_covs (B, K, R, 4, 4),
         log_c (B, K, R), tx (B, Ms, 2), rx (B, Ns, 2), measurement and variance (B, K, C, 2).
