@@ -8,7 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
-from mimo_radar_env.core.geometry import station_ranges
+from mimo_radar_env.core.geometry import path_gain
 
 from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
@@ -77,10 +77,7 @@ class MGCRBCL(IndexPolicy):
 
     def path_gain(self, states: NDArray[np.float64]) -> NDArray[np.float64]:
         """``L = (R_tx R_rx)^-2`` for states (B, K, 4): (B, K, M, N)."""
-        positions = states[..., [0, 2]]
-        tx_sq = station_ranges(positions, self.tx) ** 2
-        rx_sq = station_ranges(positions, self.rx) ** 2
-        return 1.0 / (tx_sq[..., :, None] * rx_sq[..., None, :])
+        return path_gain(states[..., [0, 2]], self.tx, self.rx)
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
         ratio = self.path_gain(obs["track_pred"]) / self.path_gain(obs["track"])

@@ -6,7 +6,7 @@ Importing the package registers ``MimoRadarSelect-v0`` (idempotently).
 from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
-from .envs import MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
+from .envs import EnvOptions, MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -30,6 +30,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "ENV_ID",
+    "EnvOptions",
     "Maneuver",
     "MimoRadarSelectEnv",
     "MimoRadarSelectVectorEnv",

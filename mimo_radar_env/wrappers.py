@@ -23,7 +23,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from .core.geometry import station_ranges
+from .core.geometry import squared_range_products
 from .core.superarm import top_mask
 from .scenarios import Scenario
 
@@ -157,9 +157,9 @@ class RadarFeatures:
         if "track_pred" in obs:
             pred = np.asarray(obs["track_pred"], dtype=np.float64)
             positions = pred[..., [0, 2]]
-            tx_sq = station_ranges(positions, self.scenario.tx_positions) ** 2
-            rx_sq = station_ranges(positions, self.scenario.rx_positions) ** 2
-            log_gain = -np.log10(tx_sq[..., :, None] * rx_sq[..., None, :])
+            log_gain = -np.log10(
+                squared_range_products(positions, self.scenario.tx_positions, self.scenario.rx_positions)
+            )
             log_gain = np.maximum(log_gain - log_gain.max(axis=(-1, -2), keepdims=True), -6.0)
             track = np.concatenate(
                 [

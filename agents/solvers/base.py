@@ -24,8 +24,6 @@ class SuperArmSolver(ABC):
 
     #: Registry name.
     name: str = ""
-    #: True when the solver always returns the optimum.
-    exact: bool = False
 
     def __init__(self, tx_count: int, rx_count: int) -> None:
         if tx_count < 1 or rx_count < 1:

@@ -1,4 +1,4 @@
-"""The exact solver: enumerate the smaller side, take the top sums of the other (SPEC 7)."""
+"""The exact solver: enumerate the smaller side, take the top sums of the other ."""
 
 from __future__ import annotations
 
@@ -19,7 +19,6 @@ class ExactSolver(SuperArmSolver):
     """
 
     name = "exact"
-    exact = True
 
     def solve(
         self, index: NDArray[np.float64], rng: np.random.Generator

@@ -18,6 +18,25 @@ def station_ranges(positions: NDArray[np.float64], stations: NDArray[np.float64]
     return np.sqrt(np.einsum("...i,...i->...", delta, delta))
 
 
+def squared_range_products(
+    positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``(R_tx[m] R_rx[n])^2`` for positions (..., 2) and stations (M, 2), (N, 2): shape (..., M, N).
+
+    The one home of eq5's range dependence: the mean SINR is ``gain / (R_tx R_rx)^2``.
+    """
+    tx_sq = station_ranges(positions, tx) ** 2
+    rx_sq = station_ranges(positions, rx) ** 2
+    return tx_sq[..., :, None] * rx_sq[..., None, :]
+
+
+def path_gain(
+    positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``L = (R_tx R_rx)^-2`` (eq5, eq16) of every channel, shape (..., M, N)."""
+    return 1.0 / squared_range_products(positions, tx, rx)
+
+
 def bistatic_measurement(
     positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
 ) -> NDArray[np.float64]:

@@ -14,7 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..scenarios import Scenario, turn_rate_schedule
-from .geometry import station_ranges
+from .geometry import squared_range_products
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
 
 #: eq32: the lower end of the measurement-quality factor lambda.
@@ -100,9 +100,11 @@ class RadarModel:
     # ---------------------------------------------------------- physics
     def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Mean SINR ``S[k, m, n]`` (eq5, SPEC 3) for positions (..., K, 2): shape (..., K, M, N)."""
-        tx_sq = station_ranges(positions, self.tx) ** 2
-        rx_sq = station_ranges(positions, self.rx) ** 2
-        return self.gain / (tx_sq[..., :, None] * rx_sq[..., None, :])
+        return self.gain / squared_range_products(positions, self.tx, self.rx)
+
+    def measurement_variance(self, quality: NDArray[np.float64]) -> NDArray[np.float64]:
+        """eq32: the diagonal of ``Sigma0 / lambda`` for qualities ``lambda`` (...): shape (..., 2)."""
+        return np.diagonal(self.scenario.measurement_covariance) / quality[..., None]
 
     def channel_weights(self, mean_sinr: NDArray[np.float64]) -> NDArray[np.float64]:
         """``sum_k Omega_k S[k, m, n]``: the expected reward of each channel, (..., M, N)."""
@@ -140,9 +142,7 @@ def _sinr_extremes(
     lowest = np.full(num_targets, np.inf)
     for start in range(0, num_steps, chunk):
         positions = nominal[:, start : start + chunk][..., [0, 2]]  # (K, c, 2)
-        tx_sq = station_ranges(positions, tx) ** 2
-        rx_sq = station_ranges(positions, rx) ** 2
-        sinr = raw_gain[:, None] / (tx_sq[..., :, None] * rx_sq[..., None, :])
+        sinr = raw_gain[:, None] / squared_range_products(positions, tx, rx)
         highest = np.maximum(highest, sinr.max(axis=(1, 2, 3)))
         lowest = np.minimum(lowest, sinr.min(axis=(1, 2, 3)))
     return highest, lowest

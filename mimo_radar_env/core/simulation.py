@@ -80,9 +80,7 @@ class RadarSimulation:
         self._streams: TrialStreams | None = None
         self._upcoming: NDArray[np.float64] | None = None
         self._mean_sinr: NDArray[np.float64] | None = None
-        sc = model.scenario
-        self._sigma0_diag = np.array([sc.range_variance, sc.azimuth_variance])
-        self._process_std = np.sqrt(sc.process_noise)
+        self._process_std = np.sqrt(model.scenario.process_noise)
 
     # -------------------------------------------------------------- truth
     def reset(self, keys: NDArray[np.uint64]) -> None:
@@ -176,7 +174,7 @@ class RadarSimulation:
             lam = model.quality(mean, target_axis=1)
         else:
             lam = np.full_like(mean, self.measurement_quality)
-        variance = self._sigma0_diag / lam[..., None]  # (B, K, C, 2)
+        variance = model.measurement_variance(lam)  # (B, K, C, 2)
         clean = bistatic_measurement(
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
         )

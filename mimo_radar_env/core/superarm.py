@@ -5,10 +5,10 @@ the env's action is their concatenation. Its value for a channel-weight matrix
 ``W`` (B, M, N) is ``sum_{m in tx, n in rx} W[m, n]`` (eq13, eq19 without the
 penalty).
 
-The exact optimum (SPEC 7): for each subset of the smaller side, the best subset
+The exact optimum (docs/model.md): for each subset of the smaller side, the best subset
 of the other side is the one with the largest row/column sums, so only
 ``C(M, Ms)`` (or ``C(N, Ns)``) subsets are enumerated. For layouts too large to
-enumerate, :func:`local_search_super_arm` runs alternating maximisation from
+enumerate, :func:`alternating_super_arm` runs alternating maximisation from
 deterministic starts.
 """
 
@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 #: Largest number of subsets :func:`exact_super_arm` enumerates before refusing.
 MAX_EXACT_SUBSETS = 200_000
-#: Largest number of subsets :func:`best_super_arm` enumerates; beyond, local search is used
+#: Largest number of subsets :func:`best_super_arm` enumerates; beyond, alternating maximisation is used
 #: (32 x 32 with Ms = 4, 35,960 subsets, already costs about a second per step at B = 20).
 AUTO_EXACT_SUBSETS = 20_000
 
@@ -87,7 +87,7 @@ def exact_super_arm(
     if num_subsets > MAX_EXACT_SUBSETS:
         raise ValueError(
             f"exact super-arm search would enumerate {num_subsets} subsets (> {MAX_EXACT_SUBSETS}) for "
-            f"M={num_tx}, N={num_rx}, Ms={tx_count}, Ns={rx_count}; use the local-search solver instead"
+            f"M={num_tx}, N={num_rx}, Ms={tx_count}, Ns={rx_count}; use the alternating solver instead"
         )
     tx_subsets = subset_masks(num_tx, tx_count)  # (S, M)
     batch_size = weights.shape[0]
@@ -104,27 +104,35 @@ def exact_super_arm(
     return tx, rx, subset_value[batch, best]
 
 
-def local_search_super_arm(
-    weights: NDArray[np.float64], tx_count: int, rx_count: int, max_rounds: int = 50
+def alternating_super_arm(
+    weights: NDArray[np.float64],
+    tx_count: int,
+    rx_count: int,
+    max_rounds: int = 50,
+    extra_starts: NDArray[np.bool_] | None = None,
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64]]:
-    """Alternating maximisation from ``M + 2`` deterministic starts, best kept.
+    """Alternating maximisation from ``N + 2`` deterministic starts (and any extra ones), best kept.
 
-    Starts: the top-``Ms`` rows by row sum, by row maximum, and, for each receiver
-    ``n``, the top-``Ms`` rows of column ``n``. Each round picks the best
-    receivers for the current transmitters, then the best transmitters for those
-    receivers; the value never decreases, and a round that changes nothing ends
-    the search. The result is a local optimum (a lower bound on the optimum).
+    Deterministic starts: the top-``Ms`` rows by row sum, by row maximum, and, for each
+    receiver ``n``, the top-``Ms`` rows of column ``n``. ``extra_starts`` (B, S', M) adds
+    transmitter subsets to start from (the agents' solver adds random ones). Each round picks
+    the best receivers for the current transmitters, then the best transmitters for those
+    receivers; the value never decreases, and a round that changes nothing ends the search.
+    The result is a local optimum (a lower bound on the optimum); on ties the earliest start
+    wins, deterministic ones first.
     """
     weights = np.asarray(weights, dtype=np.float64)
-    starts = np.concatenate(
+    scores = np.concatenate(
         [
             weights.sum(axis=-1)[:, None, :],
             weights.max(axis=-1)[:, None, :],
             np.swapaxes(weights, -1, -2),
         ],
         axis=1,
-    )  # (B, S, M) scores to start from
-    tx = top_mask(starts, tx_count)  # (B, S, M)
+    )  # (B, N + 2, M) scores to start from
+    tx = top_mask(scores, tx_count)  # (B, S, M)
+    if extra_starts is not None:
+        tx = np.concatenate([tx, extra_starts], axis=1)
     for _ in range(max_rounds):
         rx = top_mask(np.einsum("bsm,bmn->bsn", tx.astype(np.float64), weights), rx_count)
         new_tx = top_mask(np.einsum("bmn,bsn->bsm", weights, rx.astype(np.float64)), tx_count)
@@ -137,23 +145,27 @@ def local_search_super_arm(
     return tx[batch, best], rx[batch, best], value[batch, best]
 
 
+#: How the env finds the optimal super arm (its ``oracle_solver`` option): ``"auto"`` is exact
+#: up to ``AUTO_EXACT_SUBSETS`` subsets on the smaller side, alternating maximisation beyond.
+SUPER_ARM_METHODS = ("auto", "exact", "alternating")
+
+
 def best_super_arm(
     weights: NDArray[np.float64], tx_count: int, rx_count: int, method: str = "auto"
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64]]:
-    """The optimal super arm by ``method``: ``"exact"``, ``"local-search"`` or ``"auto"``
-    (exact up to ``AUTO_EXACT_SUBSETS`` subsets on the smaller side, local search beyond)."""
+    """The optimal super arm by ``method``, one of :data:`SUPER_ARM_METHODS`."""
     num_tx, num_rx = weights.shape[-2:]
     if method == "auto":
         method = (
             "exact"
             if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
-            else "local-search"
+            else "alternating"
         )
     if method == "exact":
         return exact_super_arm(weights, tx_count, rx_count)
-    if method == "local-search":
-        return local_search_super_arm(weights, tx_count, rx_count)
-    raise ValueError(f"method must be 'auto', 'exact' or 'local-search', got {method!r}")
+    if method == "alternating":
+        return alternating_super_arm(weights, tx_count, rx_count)
+    raise ValueError(f"method must be one of {SUPER_ARM_METHODS}, got {method!r}")
 
 
 def is_exact_affordable(

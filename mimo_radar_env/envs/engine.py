@@ -8,7 +8,7 @@ the B = 1 case and squeezes that axis; there is no second implementation.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
@@ -18,77 +18,9 @@ from ..core.model import RadarModel
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
-from ..scenarios import Scenario, ScenarioError, load_scenario
-from ..tracking import FUSIONS, IMMUKFTracker
-
-INVALID_ACTION_MODES = ("probe-nothing", "raise")
-FILTER_NOISE_MODES = ("true", "estimated")
-ORACLE_SOLVERS = ("auto", "exact", "local-search")
-
-
-def default_config() -> dict[str, Any]:
-    """Options of ``MimoRadarSelect-v0``; any of them can be given to ``gym.make``.
-
-    * ``scenario``: a shipped scenario name (``paper-1``, ``paper-2``,
-      ``paper-3``), a path to a YAML/TOML file, or a :class:`Scenario`.
-    * ``fusion``: ``"average"`` (the paper's eq22) or ``"centralized"``.
-    * ``filter_noise``: ``"true"`` (the tracker uses each channel's true
-      measurement covariance) or ``"estimated"`` (``Sigma0 / lambda_hat`` from
-      the SINR the channel observed).
-    * ``invalid_action``: ``"probe-nothing"`` (an action that does not select
-      exactly Ms TX and Ns RX probes nothing, reward 0) or ``"raise"``.
-    * ``oracle_solver``: how ``optimal_reward``, ``optimal_action`` and
-      ``oracle_action()`` are found: ``"auto"`` (exact enumeration when the smaller
-      side has at most 20,000 subsets, deterministic local search beyond, a lower
-      bound), ``"exact"`` or ``"local-search"``.
-    * ``tracking``: ``True`` runs the IMM-UKF in the loop; ``False`` drops it
-      (and the track keys of the observation) for pure bandit studies.
-    * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or
-      a constant ``lambda`` for every channel, to decouple measurement accuracy
-      from the selection (ablations).
-
-    Every other keyword is a scenario field override (``horizon=200``...).
-    """
-    return {
-        "scenario": "paper-1",
-        "fusion": "average",
-        "filter_noise": "true",
-        "invalid_action": "probe-nothing",
-        "measurement_quality": None,
-        "tracking": True,
-        "oracle_solver": "auto",
-    }
-
-
-def resolve_config(kwargs: Mapping[str, Any]) -> tuple[dict[str, Any], Scenario]:
-    """Split ``gym.make`` keywords into env options and scenario overrides, validate both."""
-    config = default_config()
-    overrides = {}
-    for key, value in kwargs.items():
-        if key in config:
-            config[key] = value
-        else:
-            overrides[key] = value
-    if config["fusion"] not in FUSIONS:
-        raise ValueError(f"fusion must be one of {FUSIONS}, got {config['fusion']!r}")
-    if config["filter_noise"] not in FILTER_NOISE_MODES:
-        raise ValueError(f"filter_noise must be one of {FILTER_NOISE_MODES}, got {config['filter_noise']!r}")
-    if config["oracle_solver"] not in ORACLE_SOLVERS:
-        raise ValueError(f"oracle_solver must be one of {ORACLE_SOLVERS}, got {config['oracle_solver']!r}")
-    if not isinstance(config["tracking"], bool):
-        raise ValueError(f"tracking must be True or False, got {config['tracking']!r}")
-    if config["invalid_action"] not in INVALID_ACTION_MODES:
-        raise ValueError(
-            f"invalid_action must be one of {INVALID_ACTION_MODES}, got {config['invalid_action']!r}"
-        )
-    try:
-        scenario = load_scenario(config["scenario"], **overrides)
-    except ScenarioError as exc:
-        if "unknown scenario key" in str(exc):
-            raise ScenarioError(f"{exc}; env options are {sorted(default_config())}") from exc
-        raise
-    config["scenario"] = scenario
-    return config, scenario
+from ..scenarios import Scenario
+from ..tracking import IMMUKFTracker
+from .options import EnvOptions
 
 
 def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.int8]:
@@ -122,20 +54,19 @@ class RadarEngine:
 
     Parameters
     ----------
-    config : dict
-        Resolved options (see :func:`default_config`).
+    options : EnvOptions
     scenario : Scenario
     batch_size : int
     """
 
-    def __init__(self, config: dict[str, Any], scenario: Scenario, batch_size: int) -> None:
-        self.config = config
+    def __init__(self, options: EnvOptions, scenario: Scenario, batch_size: int) -> None:
+        self.options = options
         self.scenario = scenario
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
-        self.simulation = RadarSimulation(self.model, batch_size, config["measurement_quality"])
+        self.simulation = RadarSimulation(self.model, batch_size, options.measurement_quality)
         self.tracker = (
-            IMMUKFTracker(self.model, batch_size, fusion=config["fusion"]) if config["tracking"] else None
+            IMMUKFTracker(self.model, batch_size, fusion=options.fusion) if options.tracking else None
         )
         self.num_tx, self.num_rx = scenario.num_tx, scenario.num_rx
         self.action_size = self.num_tx + self.num_rx
@@ -174,7 +105,7 @@ class RadarEngine:
         rx_mask = actions[:, self.num_tx :].astype(bool)
         sc = self.scenario
         valid = (tx_mask.sum(axis=1) == sc.tx_per_step) & (rx_mask.sum(axis=1) == sc.rx_per_step)
-        if self.config["invalid_action"] == "raise" and not valid.all():
+        if self.options.invalid_action == "raise" and not valid.all():
             bad = int(np.flatnonzero(~valid)[0])
             num_tx, num_rx = int(tx_mask[bad].sum()), int(rx_mask[bad].sum())
             raise ValueError(
@@ -205,7 +136,7 @@ class RadarEngine:
         weights = self.model.channel_weights(self.simulation.mean_sinr())
         info["expected_reward"] = super_arm_value(weights, tx_mask, rx_mask) * valid
         best_tx, best_rx, best_value = best_super_arm(
-            weights, sc.tx_per_step, sc.rx_per_step, self.config["oracle_solver"]
+            weights, sc.tx_per_step, sc.rx_per_step, self.options.oracle_solver
         )
         info["optimal_reward"] = best_value
         info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
@@ -220,7 +151,7 @@ class RadarEngine:
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
         tx, rx, _ = best_super_arm(
-            weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.config["oracle_solver"]
+            weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.options.oracle_solver
         )
         return np.concatenate([tx, rx], axis=1).astype(np.int8)
 
@@ -228,12 +159,10 @@ class RadarEngine:
     def _track(self, channels: ChannelObservations) -> None:
         if self.tracker is None:
             return
-        if self.config["filter_noise"] == "true":
+        if self.options.filter_noise == "true":
             variance = channels.noise_variance
         else:
-            lam_hat = self.model.quality(channels.sinr, target_axis=1)
-            sigma0 = np.array([self.scenario.range_variance, self.scenario.azimuth_variance])
-            variance = sigma0 / lam_hat[..., None]
+            variance = self.model.measurement_variance(self.model.quality(channels.sinr, target_axis=1))
         self.tracker.step(
             self.model.tx[channels.tx_stations],
             self.model.rx[channels.rx_stations],

@@ -18,7 +18,8 @@ from numpy.typing import NDArray
 
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
-from .engine import RadarEngine, resolve_config
+from .engine import RadarEngine
+from .options import resolve
 
 
 def observation_space(scenario: Scenario, num_models: int | None = 3) -> spaces.Dict:
@@ -121,14 +122,28 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     ## Arguments
 
-    ``gym.make("MimoRadarSelect-v0", scenario="paper-1", fusion="average",
-    filter_noise="true", invalid_action="probe-nothing", measurement_quality=None,
-    tracking=True, render_mode=None, **scenario_overrides)``; see
-    :func:`~mimo_radar_env.envs.engine.default_config`. ``tracking=False`` drops the
-    in-loop tracker and the ``track*``/``mode_prob`` keys (pure bandit studies, ~7x faster).
-    ``scenario`` is ``paper-1``, ``paper-2``, ``paper-3``, a YAML/TOML file or a
-    :class:`~mimo_radar_env.Scenario`; other keywords override scenario fields
-    (``horizon=200``).
+    ``gym.make("MimoRadarSelect-v0", scenario="paper-1", render_mode=None, **options,
+    **scenario_overrides)``. ``scenario`` is ``paper-1``, ``paper-2``, ``paper-3``, a YAML/TOML
+    file or a :class:`~mimo_radar_env.Scenario`. The options (:class:`~mimo_radar_env.EnvOptions`,
+    defaults first):
+
+    * ``fusion``: ``"average"`` (the paper's eq22 averaging of per-channel IMM-UKF
+      updates) or ``"centralized"`` (one update with the stacked measurements);
+    * ``tracking``: ``True`` runs the IMM-UKF in the loop; ``False`` drops it and the
+      ``track*``/``mode_prob`` keys (pure bandit studies, about 3x faster);
+    * ``filter_noise``: ``"true"`` (the tracker uses each channel's true ``Sigma0 / lambda``)
+      or ``"estimated"`` (``Sigma0 / lambda_hat`` from the SINR the channel observed);
+    * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or a number
+      > 0, that constant ``lambda`` on every channel (ablation);
+    * ``invalid_action``: ``"probe-nothing"`` or ``"raise"``: what an action with the
+      wrong number of TX/RX does;
+    * ``oracle_solver``: ``"auto"``, ``"exact"`` or ``"alternating"``: how
+      ``optimal_reward``, ``optimal_action`` and ``oracle_action()`` are found; ``auto`` is
+      exact up to 20,000 subsets on the smaller side and alternating maximisation (a lower
+      bound of the optimum) beyond.
+
+    Any other keyword that names a scenario field overrides it (``horizon=200``); any other
+    keyword raises ``TypeError``.
 
     ## Seeding
 
@@ -143,8 +158,8 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
-        self.config, self.scenario = resolve_config(kwargs)
-        self.engine = RadarEngine(self.config, self.scenario, batch_size=1)
+        self.options, self.scenario = resolve(kwargs)
+        self.engine = RadarEngine(self.options, self.scenario, batch_size=1)
         self.action_space = spaces.MultiBinary(self.engine.action_size)
         self.observation_space = observation_space(self.scenario, _num_models(self.engine))
         self.render_mode = render_mode
@@ -261,9 +276,9 @@ class MimoRadarSelectVectorEnv(VectorEnv):
             raise ValueError(f"num_envs must be >= 1, got {num_envs}")
         if render_mode is not None:
             raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
-        self.config, self.scenario = resolve_config(kwargs)
+        self.options, self.scenario = resolve(kwargs)
         self.num_envs = num_envs
-        self.engine = RadarEngine(self.config, self.scenario, batch_size=num_envs)
+        self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs)
         self.single_action_space = spaces.MultiBinary(self.engine.action_size)
         self.single_observation_space = observation_space(self.scenario, _num_models(self.engine))
         self.action_space = batch_space(self.single_action_space, num_envs)
