@@ -1,4 +1,4 @@
-"""Selection policies for MimoRadarSelect-v0 and their super-arm solvers.
+"""Selection policies for MimoRadarSelect and their super-arm solvers.
 
 ``make_agent(name, scenario, **params)`` creates an agent by name;
 ``available_agents()`` lists them. Every agent is batch-native: the same object
@@ -6,13 +6,24 @@ acts on the single env and on the vector env.
 """
 
 from .base import Agent, IndexPolicy
-from .baselines import PAPER_FIXED, BestAgent, FixedAgent, RandomAgent
+from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
-from .registry import agent_parameters, agent_summary, available_agents, make_agent, register_agent
+from .oracle import BestAgent
+from .ppo import PPOAgent
+from .registry import (
+    agent_argument,
+    agent_parameters,
+    agent_summary,
+    available_agents,
+    make_agent,
+    register_agent,
+    split_policy,
+)
 from .solvers import SOLVERS, SuperArmSolver, make_solver
 from .thompson import DiscountedThompson
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
+from .uniform import RandomAgent
 
 __all__ = [
     "CUCB",
@@ -27,13 +38,16 @@ __all__ = [
     "EpsilonGreedy",
     "FixedAgent",
     "IndexPolicy",
+    "PPOAgent",
     "RandomAgent",
     "SlidingWindowUCB",
     "SuperArmSolver",
+    "agent_argument",
     "agent_parameters",
     "agent_summary",
     "available_agents",
     "make_agent",
     "make_solver",
     "register_agent",
+    "split_policy",
 ]

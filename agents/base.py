@@ -15,14 +15,14 @@ observation and reward::
 Observations with a leading trial axis (vector env) give actions (B, M + N);
 unbatched observations (single env) give actions (M + N,). An agent sees only the
 observation and the scenario's public geometry (station positions, Ms, Ns, target
-weights, the radar constants); only the oracle reads the truth, through
+weights, the radar constants); only an oracle reads the truth, through
 ``oracle_action()`` of the env it is attached to.
 """
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -38,11 +38,13 @@ Observation = dict[str, NDArray[Any]]
 def check_parameter(
     name: str, value: float, low: float, high: float = np.inf, low_open: bool = False
 ) -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is in [low, high] (or (low, high])."""
+    """Raise ``ValueError`` naming ``name`` unless ``value`` is a number in [low, high] (or (low, high])."""
+    bracket = "(" if low_open else "["
+    upper = "inf)" if high == np.inf else f"{high:g}]"
+    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+        raise ValueError(f"{name} must be a number in {bracket}{low:g}, {upper}, got {value!r}")
     inside = (value > low if low_open else value >= low) and value <= high
     if not inside:
-        bracket = "(" if low_open else "["
-        upper = "inf)" if high == np.inf else f"{high:g}]"
         raise ValueError(f"{name} must be in {bracket}{low:g}, {upper}, got {value}")
 
 
@@ -58,12 +60,18 @@ class Agent(ABC):
     """
 
     #: Registry name.
-    name: str = ""
-    #: True for agents that read the truth through the env (the oracle).
-    needs_oracle: bool = False
+    name: ClassVar[str] = ""
+    #: True for agents that read the truth through the env (oracles).
+    needs_oracle: ClassVar[bool] = False
+    #: True for agents that need the tracker's keys in the observation.
+    needs_tracking: ClassVar[bool] = False
 
     def __init__(self, scenario: Scenario | str, seed: int | None = None) -> None:
         self.scenario = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
+        if seed is not None and (
+            isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
+        ):
+            raise ValueError(f"seed must be None or an integer >= 0, got {seed!r}")
         self.rng = np.random.default_rng(seed)
         self.num_tx = self.scenario.num_tx
         self.num_rx = self.scenario.num_rx
@@ -77,7 +85,12 @@ class Agent(ABC):
     def reset(self, obs: Observation) -> None:
         """Start an episode from the reset observation (every channel probed once)."""
         batch, batched = self._batch(obs)
-        self.batch_size = batch.get("sinr").shape[0]
+        if self.needs_tracking and ("track" not in batch or "track_pred" not in batch):
+            raise ValueError(
+                f"{self.name} reads the tracker's estimates from the observation: "
+                "make the env with tracking=True"
+            )
+        self.batch_size = batch["sinr"].shape[0]
         self._batched = batched
         self.t = 0
         self._reset(batch)
@@ -97,14 +110,16 @@ class Agent(ABC):
         self._update(batch, np.atleast_1d(np.asarray(reward, dtype=np.float64)))
 
     # ------------------------------------------------------- to implement
-    @abstractmethod
-    def _reset(self, obs: Observation) -> None: ...
+    def _reset(self, obs: Observation) -> None:
+        """Start an episode (default: nothing to remember)."""
+        return None
 
     @abstractmethod
     def _act(self, obs: Observation) -> NDArray[np.int8]: ...
 
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:  # noqa: B027
-        """Default: nothing to learn."""
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        """Learn from a step (default: nothing to learn)."""
+        return None
 
     # ------------------------------------------------------------ helpers
     def _batch(self, obs: Observation) -> tuple[Observation, bool]:
@@ -126,8 +141,21 @@ class Agent(ABC):
 class IndexPolicy(Agent):
     """An agent that plays the super arm maximising ``sum_{(m, n) in A} I[m, n]``.
 
-    Subclasses compute the fused index ``I`` (B, M, N); the pluggable solver picks
-    the super arm (SPEC 7).
+    The base owns what every index policy keeps: the play counts ``counts`` ``d[m, n]``
+    (B, M, N) and the SINR estimates ``estimate`` ``Y_hat[k, m, n]`` (B, K, M, N), both
+    initialised by the reset observation (every channel probed once), the step counter
+    ``t``, and the super-arm solver. Each step:
+
+    1. :meth:`predict`: the estimates carried to the coming step, ``Y_bar(t)`` (restless
+       policies such as MG-CRB-CL's eq16 move them; the default keeps them);
+    2. :meth:`index`: the fused index of the coming step (a pure query);
+    3. the solver picks the super arm;
+    4. after the step, played channels blend their new sample in:
+       ``Y_hat = (1 - w) Y_bar + w gamma`` with ``w`` = :meth:`step_size`; the others keep
+       ``Y_bar``; ``counts = discount * counts + played``.
+
+    A policy writes its index (and, where it differs from the default, its prediction,
+    step size and count discount).
 
     Parameters
     ----------
@@ -137,7 +165,9 @@ class IndexPolicy(Agent):
         Parameters of the solver (``{"population": 50}``...).
     """
 
-    default_solver = "exact"
+    default_solver: ClassVar[str] = "exact"
+    #: Multiplies the play counts every step (1: plain counts; < 1: discounted counts).
+    count_discount: float = 1.0
 
     def __init__(
         self,
@@ -147,18 +177,49 @@ class IndexPolicy(Agent):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed)
+        if solver_params is not None and not isinstance(solver_params, dict):
+            raise ValueError(f"solver_params must be a mapping of solver parameters, got {solver_params!r}")
         self.solver = make_solver(
             solver or self.default_solver, self.tx_count, self.rx_count, **(solver_params or {})
         )
 
-    def _act(self, obs: Observation) -> NDArray[np.int8]:
-        tx, rx = self.solver.solve(self.index(obs), self.rng)
-        return self.actions_from_masks(tx, rx)
+    # -------------------------------------------------------------- state
+    def _reset(self, obs: Observation) -> None:
+        self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
+        self.counts = np.array(obs["probed"], dtype=np.float64)  # d(0)
+        self.predicted = self.estimate
+
+    def predict(self, obs: Observation) -> NDArray[np.float64]:
+        """``Y_bar(t)``: the estimates carried to the coming step (default: unchanged)."""
+        return self.estimate
+
+    def step_size(self, counts: NDArray[np.float64]) -> float | NDArray[np.float64]:
+        """Weight of a new sample in the estimate, given the updated counts (default: sample mean)."""
+        return 1.0 / np.maximum(counts, 1.0)[:, None]
 
     @abstractmethod
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        """The fused index (B, M, N) for the coming step ``self.t``."""
+        """The fused index (B, M, N) for the coming step ``self.t``: a query that changes no
+        estimate or count (sampling policies draw from the agent's generator)."""
+
+    # --------------------------------------------------------------- loop
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        self.predicted = self.predict(obs)
+        tx, rx = self.solver.solve(self.index(obs), self.rng)
+        return self.actions_from_masks(tx, rx)
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        played = np.asarray(obs["probed"], dtype=bool)
+        sample = np.asarray(obs["sinr"], dtype=np.float64)
+        self.counts = self.count_discount * self.counts + played  # eq15 (1.0 * d is exact)
+        weight = self.step_size(self.counts)
+        blended = (1.0 - weight) * self.predicted + weight * sample
+        self.estimate = np.where(played[:, None], blended, self.predicted)
 
     def fuse(self, per_target: NDArray[np.float64]) -> NDArray[np.float64]:
         """eq34: ``I[m, n] = sum_k Omega_k I[k, m, n]``."""
         return np.einsum("k,bkmn->bmn", self.weights, per_target)
+
+    def bonus(self, scale: float) -> NDArray[np.float64]:
+        """The UCB bonus ``sqrt(scale ln t / d[m, n])`` (B, M, N) of eq18 / UCB1."""
+        return np.sqrt(scale * np.log(self.t) / self.counts)

@@ -11,7 +11,6 @@ from mimo_radar_env import Scenario
 
 from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
-from .ucb import eq29_update
 
 
 class EpsilonGreedy(IndexPolicy):
@@ -44,9 +43,8 @@ class EpsilonGreedy(IndexPolicy):
         self.epsilon, self.alpha_star = epsilon, alpha_star
         self.explored = np.zeros(0, dtype=bool)
 
-    def _reset(self, obs: Observation) -> None:
-        self.estimate = np.array(obs["sinr"], dtype=np.float64)
-        self.counts = np.array(obs["probed"], dtype=np.float64)
+    def step_size(self, counts: NDArray[np.float64]) -> float:
+        return self.alpha_star  # eq29
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
         return self.fuse(self.estimate)
@@ -55,6 +53,3 @@ class EpsilonGreedy(IndexPolicy):
         greedy = super()._act(obs)
         self.explored = self.rng.random(self.batch_size) < self.epsilon
         return np.where(self.explored[:, None], self.random_super_arms(self.batch_size), greedy)
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        self.estimate, self.counts = eq29_update(self.estimate, self.counts, obs, self.alpha_star)

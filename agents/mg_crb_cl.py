@@ -46,6 +46,7 @@ class MGCRBCL(IndexPolicy):
 
     name = "mg-crb-cl"
     default_solver = "bpso"
+    needs_tracking = True
 
     def __init__(
         self,
@@ -62,32 +63,17 @@ class MGCRBCL(IndexPolicy):
         check_parameter("alpha_bar", alpha_bar, 0.0, 1.0)
         check_parameter("beta", beta, 0.0)
         self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
-        self.tx = self.scenario.tx_positions
-        self.rx = self.scenario.rx_positions
 
-    def _reset(self, obs: Observation) -> None:
-        if "track" not in obs or "track_pred" not in obs:
-            raise ValueError(
-                "mg-crb-cl predicts the SINR from the tracker's estimates (eq16): "
-                "make the env with tracking=True"
-            )
-        self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
-        self.counts = np.array(obs["probed"], dtype=np.float64)  # d(0)
-        self.predicted = self.estimate
+    def predict(self, obs: Observation) -> NDArray[np.float64]:
+        """eq16 from the tracker's estimate and prediction."""
+        sc = self.scenario
+        ratio = path_gain(obs["track_pred"][..., [0, 2]], sc.tx_positions, sc.rx_positions) / path_gain(
+            obs["track"][..., [0, 2]], sc.tx_positions, sc.rx_positions
+        )
+        return self.alpha * ratio * self.estimate + (1.0 - self.alpha) * self.estimate
 
-    def path_gain(self, states: NDArray[np.float64]) -> NDArray[np.float64]:
-        """``L = (R_tx R_rx)^-2`` for states (B, K, 4): (B, K, M, N)."""
-        return path_gain(states[..., [0, 2]], self.tx, self.rx)
+    def step_size(self, counts: NDArray[np.float64]) -> float:
+        return self.alpha_bar  # eq14
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        ratio = self.path_gain(obs["track_pred"]) / self.path_gain(obs["track"])
-        self.predicted = self.alpha * ratio * self.estimate + (1.0 - self.alpha) * self.estimate  # eq16
-        bonus = np.sqrt(self.beta * np.log(self.t) / self.counts)  # eq18
-        return self.fuse(self.predicted + bonus[:, None])  # eq34
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        played = np.asarray(obs["probed"], dtype=bool)
-        sample = np.asarray(obs["sinr"], dtype=np.float64)
-        blended = (1.0 - self.alpha_bar) * self.predicted + self.alpha_bar * sample
-        self.estimate = np.where(played[:, None], blended, self.predicted)  # eq14
-        self.counts = self.counts + played  # eq15
+        return self.fuse(self.predict(obs) + self.bonus(self.beta)[:, None])  # eq18, eq34

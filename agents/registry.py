@@ -1,37 +1,51 @@
-"""Agents by name: ``make_agent("mg-crb-cl", scenario, **params)``."""
+"""Agents by name: ``make_agent("mg-crb-cl", scenario, **params)``.
+
+A policy of a benchmark run is written ``NAME`` or ``NAME:ARGUMENT``; the argument goes to
+the agent's registered ``argument`` parameter (a trained PPO model: ``ppo:runs/ppo/model.zip``).
+"""
 
 from __future__ import annotations
 
 import inspect
-from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from mimo_radar_env import Scenario
 
 from .base import Agent
-from .baselines import PAPER_FIXED, BestAgent, FixedAgent, RandomAgent
+from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
+from .oracle import BestAgent
+from .ppo import PPOAgent
 from .thompson import DiscountedThompson
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
+from .uniform import RandomAgent
 
 
 @dataclass(frozen=True)
 class AgentSpec:
-    """A registered agent: its class and preset parameters."""
+    """A registered agent: its class, preset parameters, summary, and the parameter that
+    ``NAME:ARGUMENT`` sets (``None``: the agent takes no argument)."""
 
     cls: type[Agent]
     preset: dict[str, Any] = field(default_factory=dict)
     summary: str = ""
+    argument: str | None = None
 
 
 _REGISTRY: dict[str, AgentSpec] = {}
 
 
-def register_agent(name: str, cls: type[Agent], summary: str = "", **preset: Any) -> None:
+def register_agent(
+    name: str, cls: type[Agent], summary: str = "", argument: str | None = None, **preset: Any
+) -> None:
     """Register an agent class (with preset parameters) under ``name``."""
-    _REGISTRY[name] = AgentSpec(cls, preset, summary)
+    _REGISTRY[name] = AgentSpec(cls, preset, summary, argument)
+
+
+def _first_line(cls: type) -> str:
+    return (inspect.getdoc(cls) or "").splitlines()[0]
 
 
 for _cls in (
@@ -46,7 +60,8 @@ for _cls in (
     RandomAgent,
     FixedAgent,
 ):
-    register_agent(_cls.name, _cls, (inspect.getdoc(_cls) or "").splitlines()[0])
+    register_agent(_cls.name, _cls, _first_line(_cls))
+register_agent(PPOAgent.name, PPOAgent, _first_line(PPOAgent), argument="path")
 for _name, (_tx, _rx) in PAPER_FIXED.items():
     register_agent(
         _name,
@@ -69,8 +84,24 @@ def agent_parameters(name: str) -> list[str]:
     return [p for p in params if p not in ("self", "scenario") and p not in spec.preset]
 
 
+def required_parameters(name: str) -> list[str]:
+    """The parameters ``make_agent(name, ...)`` needs (no default)."""
+    spec = _spec(name)
+    params = inspect.signature(spec.cls.__init__).parameters
+    return [
+        p
+        for p, value in params.items()
+        if p not in ("self", "scenario") and p not in spec.preset and value.default is inspect.Parameter.empty
+    ]
+
+
 def agent_summary(name: str) -> str:
     return _spec(name).summary
+
+
+def agent_argument(name: str) -> str | None:
+    """The parameter that ``NAME:ARGUMENT`` sets, or ``None``."""
+    return _spec(name).argument
 
 
 def _spec(name: str) -> AgentSpec:
@@ -79,12 +110,30 @@ def _spec(name: str) -> AgentSpec:
     return _REGISTRY[name]
 
 
+def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
+    """``"ppo:runs/a/model.zip"`` -> ``("ppo", {"path": "runs/a/model.zip"})``;
+    ``"ucb1"`` -> ``("ucb1", {})``."""
+    name, sep, argument = policy.partition(":")
+    spec = _spec(name)
+    if not sep:
+        return name, {}
+    if spec.argument is None:
+        raise ValueError(f"agent {name!r} takes no argument, got {policy!r}")
+    if not argument:
+        raise ValueError(
+            f"{policy!r}: give the {spec.argument} after the colon ({name}:{spec.argument.upper()})"
+        )
+    return name, {spec.argument: argument}
+
+
 def make_agent(name: str, scenario: Scenario | str, **params: Any) -> Agent:
-    """Create a registered agent; unknown parameters raise an error listing the allowed ones."""
+    """Create a registered agent; unknown or missing parameters raise an error naming them."""
     spec = _spec(name)
     allowed = agent_parameters(name)
     unknown = sorted(set(params) - set(allowed))
     if unknown:
         raise ValueError(f"unknown parameter(s) {unknown} for agent {name!r}; allowed: {allowed}")
-    factory: Callable[..., Agent] = spec.cls
-    return factory(scenario, **spec.preset, **params)
+    missing = sorted(set(required_parameters(name)) - set(params))
+    if missing:
+        raise ValueError(f"agent {name!r} needs the parameter(s) {missing}")
+    return spec.cls(scenario, **spec.preset, **params)

@@ -19,10 +19,11 @@ class DiscountedThompson(IndexPolicy):
 
     Each target and channel has an exponential SINR with unknown rate ``1/S``; its
     conjugate prior is ``Gamma(prior_shape, prior_rate)``. Discounted statistics
-    ``n = discount * n + played`` and ``s = discount * s + played * gamma`` give the
-    posterior ``Gamma(prior_shape + n, prior_rate + s)``; each step a rate is drawn
-    per target and channel, the sampled mean SINR is its inverse, fused over targets
-    with eq34 and handed to the solver.
+    ``n = discount * n + played`` (the base's counts) and ``s = discount * s + played *
+    gamma`` (``n`` times the base's discounted mean) give the posterior
+    ``Gamma(prior_shape + n, prior_rate + s)``; each step a rate is drawn per target and
+    channel, the sampled mean SINR is its inverse, fused over targets with eq34 and handed
+    to the solver.
 
     Parameters
     ----------
@@ -48,20 +49,15 @@ class DiscountedThompson(IndexPolicy):
         check_parameter("discount", discount, 0.0, 1.0, low_open=True)
         check_parameter("prior_shape", prior_shape, 0.0, low_open=True)
         check_parameter("prior_rate", prior_rate, 0.0, low_open=True)
-        self.discount, self.prior_shape, self.prior_rate = discount, prior_shape, prior_rate
+        self.count_discount, self.prior_shape, self.prior_rate = discount, prior_shape, prior_rate
 
-    def _reset(self, obs: Observation) -> None:
-        played = np.asarray(obs["probed"], dtype=np.float64)
-        self.counts = np.broadcast_to(played[:, None], np.shape(obs["sinr"])).copy()
-        self.sums = np.asarray(obs["sinr"], dtype=np.float64) * played[:, None]
+    def posterior(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Shape and rate (B, K, M, N) of the Gamma posterior of every rate ``1/S``."""
+        counts = self.counts[:, None]
+        return self.prior_shape + counts, self.prior_rate + counts * self.estimate
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        shape = self.prior_shape + self.counts
-        rate = self.prior_rate + self.sums
+        """A posterior sample of the mean SINRs, fused (draws from the agent's generator)."""
+        shape, rate = self.posterior()
         sampled_rate = self.rng.gamma(shape, 1.0 / rate)
         return self.fuse(1.0 / np.maximum(sampled_rate, 1e-300))
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        played = np.asarray(obs["probed"], dtype=np.float64)[:, None]
-        self.counts = self.discount * self.counts + played
-        self.sums = self.discount * self.sums + np.asarray(obs["sinr"]) * played

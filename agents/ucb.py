@@ -47,26 +47,11 @@ class UCB1(IndexPolicy):
         check_parameter("beta", beta, 0.0)
         self.alpha_star, self.beta = alpha_star, beta
 
-    def _reset(self, obs: Observation) -> None:
-        self.estimate = np.array(obs["sinr"], dtype=np.float64)
-        self.counts = np.array(obs["probed"], dtype=np.float64)
+    def step_size(self, counts: NDArray[np.float64]) -> float:
+        return self.alpha_star  # eq29
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        bonus = np.sqrt(self.beta * np.log(self.t) / self.counts)
-        return self.fuse(self.estimate + bonus[:, None])
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        self.estimate, self.counts = eq29_update(self.estimate, self.counts, obs, self.alpha_star)
-
-
-def eq29_update(
-    estimate: NDArray[np.float64], counts: NDArray[np.float64], obs: Observation, alpha_star: float
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """eq29: exponential smoothing of played channels, the others frozen; counts += played."""
-    played = np.asarray(obs["probed"], dtype=bool)
-    sample = np.asarray(obs["sinr"], dtype=np.float64)
-    smoothed = (1.0 - alpha_star) * estimate + alpha_star * sample
-    return np.where(played[:, None], smoothed, estimate), counts + played
+        return self.fuse(self.estimate + self.bonus(self.beta)[:, None])
 
 
 class CUCB(IndexPolicy):
@@ -97,30 +82,19 @@ class CUCB(IndexPolicy):
         check_parameter("scale", scale, 0.0)
         self.scale = scale
 
-    def _reset(self, obs: Observation) -> None:
-        self.sums = np.array(obs["sinr"], dtype=np.float64)
-        self.counts = np.array(obs["probed"], dtype=np.float64)
-
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        mean = self.sums / self.counts[:, None]
-        bonus = self.scale * np.sqrt(3.0 * np.log(self.t) / (2.0 * self.counts))
-        return self.fuse(mean + bonus[:, None])
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        played = np.asarray(obs["probed"], dtype=np.float64)
-        self.sums = self.sums + np.asarray(obs["sinr"]) * played[:, None]
-        self.counts = self.counts + played
+        return self.fuse(self.estimate + self.scale * self.bonus(1.5)[:, None])
 
 
 class DiscountedUCB(IndexPolicy):
     """Discounted UCB (Garivier & Moulines, "On upper-confidence bound policies for
     switching bandit problems", ALT 2011).
 
-    Discounted counts ``N = sum_s discount^(t-s) 1[played]`` and sums of samples
-    give the mean; the index is ``mean + sqrt(beta ln(n) / N)`` with ``n`` the sum of
-    ``N`` over channels (their ``2B sqrt(xi log n / N)`` with the paper's UCB1
-    exploration constant ``beta`` in place of ``4 B^2 xi``, rewards being
-    unbounded SINRs).
+    Discounted counts ``N = sum_s discount^(t-s) 1[played]`` and the discounted mean of
+    the samples (the base's sample mean with discounted counts); the index is
+    ``mean + sqrt(beta ln(n) / N)`` with ``n`` the sum of ``N`` over channels (their
+    ``2B sqrt(xi log n / N)`` with the paper's UCB1 exploration constant ``beta`` in place
+    of ``4 B^2 xi``, rewards being unbounded SINRs).
 
     Parameters
     ----------
@@ -144,22 +118,12 @@ class DiscountedUCB(IndexPolicy):
         super().__init__(scenario, seed, solver, solver_params)
         check_parameter("discount", discount, 0.0, 1.0, low_open=True)
         check_parameter("beta", beta, 0.0)
-        self.discount, self.beta = discount, beta
-
-    def _reset(self, obs: Observation) -> None:
-        self.sums = np.array(obs["sinr"], dtype=np.float64)
-        self.counts = np.array(obs["probed"], dtype=np.float64)
+        self.count_discount, self.beta = discount, beta
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
         total = np.maximum(self.counts.sum(axis=(1, 2), keepdims=True), np.e)
-        mean = self.sums / self.counts[:, None]
         bonus = np.sqrt(self.beta * np.log(total) / self.counts)
-        return self.fuse(mean + bonus[:, None])
-
-    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        played = np.asarray(obs["probed"], dtype=np.float64)
-        self.sums = self.discount * self.sums + np.asarray(obs["sinr"]) * played[:, None]
-        self.counts = self.discount * self.counts + played
+        return self.fuse(self.estimate + bonus[:, None])
 
 
 class SlidingWindowUCB(IndexPolicy):
@@ -192,7 +156,7 @@ class SlidingWindowUCB(IndexPolicy):
         super().__init__(scenario, seed, solver, solver_params)
         check_parameter("window", window, 1)
         check_parameter("beta", beta, 0.0)
-        self.window, self.beta = window, beta
+        self.window, self.beta = int(window), beta
 
     def _reset(self, obs: Observation) -> None:
         sinr = np.asarray(obs["sinr"], dtype=np.float64)
@@ -202,18 +166,20 @@ class SlidingWindowUCB(IndexPolicy):
         self._store(obs)
 
     def _store(self, obs: Observation) -> None:
+        """The step's samples into the ring buffer; counts and means over the window."""
         played = np.asarray(obs["probed"], dtype=np.float64)
         self.samples[:, self.slot] = np.asarray(obs["sinr"]) * played[:, None]
         self.played[:, self.slot] = played
         self.slot = (self.slot + 1) % self.window
+        self.counts = self.played.sum(axis=1)
+        self.estimate = self.samples.sum(axis=1) / np.maximum(self.counts, 1.0)[:, None]
+        self.predicted = self.estimate
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
-        counts = self.played.sum(axis=1)
-        safe = np.maximum(counts, 1.0)
-        mean = self.samples.sum(axis=1) / safe[:, None]
+        safe = np.maximum(self.counts, 1.0)
         bonus = np.sqrt(self.beta * np.log(max(min(self.t, self.window), 1)) / safe)
-        fused = self.fuse(mean + bonus[:, None])
-        return np.where(counts > 0, fused, UNEXPLORED_INDEX)
+        fused = self.fuse(self.estimate + bonus[:, None])
+        return np.where(self.counts > 0, fused, UNEXPLORED_INDEX)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
         self._store(obs)

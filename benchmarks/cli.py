@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
+from typing import Any
 
 EPILOG = """examples:
   mimo-radar-bench paper --scenario 1 --trials 20 --out runs/paper1
@@ -17,30 +19,87 @@ Outputs (docs/benchmark.md): summary.json, curves.csv, table.md and PNG figures 
 An interrupted run started again with the same arguments and --out continues where it stopped."""
 
 
+def _integer(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {low}"
+    return parse
+
+
+def _quality(text: str) -> float | None:
+    if text.lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'none' or a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected 'none' or a finite number > 0, got {text!r}")
+    return value
+
+
+def add_env_options(parser: argparse.ArgumentParser) -> None:
+    """One flag per env option, with the choices, default and help of :class:`EnvOptions`."""
+    from mimo_radar_env import EnvOptions
+    from mimo_radar_env.envs.options import option_choices, option_help
+
+    defaults, choices = EnvOptions().to_dict(), option_choices()
+    group = parser.add_argument_group("env options (MimoRadarSelect keywords)")
+    for name, text in option_help().items():
+        flag = "--" + name.replace("_", "-")
+        help_text = f"{text} (default: {defaults[name]})"
+        if name in choices:
+            group.add_argument(flag, choices=choices[name], default=defaults[name], help=help_text)
+        elif isinstance(defaults[name], bool):
+            group.add_argument(
+                flag, action=argparse.BooleanOptionalAction, default=defaults[name], help=help_text
+            )
+        else:  # measurement_quality, the one numeric option
+            group.add_argument(
+                flag, type=_quality, default=defaults[name], metavar="NONE|LAMBDA", help=help_text
+            )
+
+
+def env_options_from(args: argparse.Namespace) -> Any:
+    """The :class:`EnvOptions` of parsed arguments."""
+    from mimo_radar_env import EnvOptions
+    from mimo_radar_env.envs.options import option_names
+
+    return EnvOptions(**{name: getattr(args, name) for name in option_names()})
+
+
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--trials", type=int, default=500, help="Monte-Carlo trials (default 500)")
+    parser.add_argument("--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default 500)")
     parser.add_argument(
         "--steps",
-        type=int,
+        type=_integer(1),
         default=None,
         help="steps per episode (default: the scenario horizon, 1000 for the paper)",
     )
-    parser.add_argument("--seed", type=int, default=0, help="base seed: trial i uses seed + i (default 0)")
     parser.add_argument(
-        "--fusion",
-        choices=("average", "centralized"),
-        default="average",
-        help="tracker fusion: the paper's 'average' (eq22, default) or 'centralized'",
+        "--seed", type=_integer(0), default=0, help="base seed: trial i uses seed + i (default 0)"
     )
     parser.add_argument("--out", required=True, help="output directory (created; reused to resume)")
     parser.add_argument(
         "--shard-size",
-        type=int,
+        type=_integer(1),
         default=50,
         help="trials per shard; each finished shard is saved at once (default 50)",
     )
     parser.add_argument(
-        "--workers", type=int, default=None, help="local worker processes (default: the number of cores)"
+        "--workers",
+        type=_integer(1),
+        default=None,
+        help="local worker processes (default: the number of cores)",
     )
     parser.add_argument(
         "--backend",
@@ -53,6 +112,7 @@ def _add_run_options(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_env_options(parser)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -78,7 +138,8 @@ def build_parser() -> argparse.ArgumentParser:
     run = sub.add_parser(
         "run",
         help="any scenario, any registered policies",
-        description="Run registered agents (or ppo:PATH) on a scenario and print the table.",
+        description="Run registered agents (ppo:PATH for a trained PPO model) on a scenario and "
+        "print the table.",
     )
     run.add_argument("--scenario", required=True, help="shipped name (paper-1...) or a YAML/TOML file")
     run.add_argument(
@@ -107,16 +168,16 @@ def build_parser() -> argparse.ArgumentParser:
     )
     train.add_argument(
         "--timesteps",
-        type=int,
+        type=_integer(1),
         default=None,
         help="environment steps to train for (default: n_timesteps of the hyperparameters)",
     )
     train.add_argument("--out", required=True, help="output directory for the model")
-    train.add_argument("--seed", type=int, default=0, help="training seed (default 0)")
+    train.add_argument("--seed", type=_integer(0), default=0, help="training seed (default 0)")
     train.add_argument(
         "--hyperparams",
         default=None,
-        help="rl-zoo3-style YAML file (default: benchmarks/hyperparams/ppo.yml)",
+        help="rl-zoo3-style YAML file (default: the shipped benchmarks/hyperparams/ppo.yml)",
     )
     train.add_argument(
         "--hyperparams-key", default="MimoRadarSelect-v0", help="entry of the YAML file to use"
@@ -127,11 +188,9 @@ def build_parser() -> argparse.ArgumentParser:
         default="auto",
         help="one Discrete action per super arm, or per-station scores (default: auto)",
     )
-    train.add_argument(
-        "--fusion", choices=("average", "centralized"), default="average", help="tracker fusion"
-    )
     train.add_argument("--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard")
     train.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_env_options(train)
 
     perf = sub.add_parser(
         "perf",
@@ -142,7 +201,7 @@ def build_parser() -> argparse.ArgumentParser:
     perf.add_argument("--out", required=True, help="output directory for perf.json")
     perf.add_argument("--quick", action="store_true", help="small sizes, under a minute (CI smoke test)")
     perf.add_argument(
-        "--workers", type=int, default=None, help="worker processes for the study (default: cores)"
+        "--workers", type=_integer(1), default=None, help="worker processes for the study (default: cores)"
     )
 
     sub.add_parser("agents", help="list the registered agents and their parameters")
@@ -151,9 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument(
         "--scenario", default="paper-1", help="scenario name or YAML/TOML file (default paper-1)"
     )
-    demo.add_argument("--seed", type=int, default=0, help="episode seed (default 0)")
+    demo.add_argument("--seed", type=_integer(0), default=0, help="episode seed (default 0)")
     demo.add_argument(
-        "--steps", type=int, default=None, help="stop after this many steps (default: the horizon)"
+        "--steps", type=_integer(1), default=None, help="stop after this many steps (default: the horizon)"
     )
     return parser
 
@@ -191,7 +250,7 @@ def _dispatch(args: argparse.Namespace) -> int:
             action=args.action,
             tensorboard=args.tensorboard,
             progress=not args.quiet,
-            fusion=args.fusion,
+            options=env_options_from(args),
         )
         print(
             f"trained PPO for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
@@ -223,7 +282,14 @@ def _dispatch(args: argparse.Namespace) -> int:
         policies = [p.strip() for p in args.policies.split(",") if p.strip()]
         params = parse_agent_params(args.agent_param)
     config = make_config(
-        scenario, policies, args.trials, args.steps, args.seed, args.fusion, args.shard_size, params
+        scenario,
+        policies,
+        args.trials,
+        args.steps,
+        args.seed,
+        args.shard_size,
+        params,
+        options=env_options_from(args),
     )
     workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
     totals = run(

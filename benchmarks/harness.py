@@ -16,8 +16,11 @@ configuration and its shard, so every backend gives the same numbers.
 
 from __future__ import annotations
 
+import functools
+import hashlib
 import json
 import os
+import re
 import time
 from collections.abc import Callable, Iterable, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -30,10 +33,13 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 import agents
-from mimo_radar_env import MimoRadarSelectVectorEnv, Scenario, load_scenario
+from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
 
 CONFIG_FILE = "config.json"
+#: Per-step sums over a shard's trials; the shards of a policy add up to its totals.
 SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
+#: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
+TRUTH_FIELD = "first_trial_positions"
 PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
 
 
@@ -50,11 +56,12 @@ class RunConfig:
     scenario : dict
         The scenario's data (``Scenario.to_dict()``): a changed file changes the run.
     policies : list of str
-        Registered agent names (``mg-crb-cl``...) or ``ppo:PATH``.
+        Registered agent names, ``NAME:ARGUMENT`` for agents that take one (``ppo:PATH``).
+    trials, steps, seed, shard_size : int
+    env_options : dict
+        Every env option (:class:`~mimo_radar_env.EnvOptions`), defaults included.
     agent_params : dict
         ``{policy: {parameter: value}}``.
-    trials, steps, seed, shard_size : int
-    fusion : str
     """
 
     scenario: dict[str, Any]
@@ -62,8 +69,8 @@ class RunConfig:
     trials: int
     steps: int
     seed: int = 0
-    fusion: str = "average"
     shard_size: int = 50
+    env_options: dict[str, Any] = field(default_factory=lambda: EnvOptions().to_dict())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
 
     @property
@@ -73,6 +80,15 @@ class RunConfig:
     def shard_trials(self, shard: int) -> range:
         start = shard * self.shard_size
         return range(start, min(start + self.shard_size, self.trials))
+
+    @functools.cached_property
+    def scenario_object(self) -> Scenario:
+        """The scenario, built and checked once per process."""
+        return Scenario.from_dict(self.scenario)
+
+    @property
+    def options(self) -> EnvOptions:
+        return EnvOptions(**self.env_options)
 
     def to_json(self) -> dict[str, Any]:
         return asdict(self)
@@ -84,54 +100,62 @@ def make_config(
     trials: int,
     steps: int | None = None,
     seed: int = 0,
-    fusion: str = "average",
     shard_size: int = 50,
     agent_params: dict[str, dict[str, Any]] | None = None,
+    options: EnvOptions | None = None,
 ) -> RunConfig:
-    """Validate the pieces of a run and build its configuration."""
-    sc = load_scenario(scenario)
-    if trials < 1:
-        raise HarnessError(f"--trials must be >= 1, got {trials}")
-    if shard_size < 1:
-        raise HarnessError(f"--shard-size must be >= 1, got {shard_size}")
+    """Validate every piece of a run and build its configuration; nothing is written.
+
+    Each policy is built and reset on a one-trial env with the run's options, so a bad
+    parameter, a missing model or an agent that needs the tracker fails here, with a
+    one-line :class:`HarnessError`, before any output exists.
+    """
+    try:
+        sc = load_scenario(scenario)
+    except ScenarioError as exc:
+        raise HarnessError(str(exc)) from exc
+    options = options or EnvOptions()
+    for name, value, low in (("--trials", trials, 1), ("--shard-size", shard_size, 1), ("--seed", seed, 0)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise HarnessError(f"{name} must be an integer >= {low}, got {value!r}")
     steps = sc.horizon if steps is None else steps
-    if not 1 <= steps <= sc.horizon:
-        raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps}")
+    if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
+        raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
     if not policies:
         raise HarnessError("give at least one policy")
     if len(set(policies)) != len(policies):
         raise HarnessError(f"policies are listed twice: {list(policies)}")
-    available = agents.available_agents()
-    for policy in policies:
-        if policy.startswith("ppo:"):
-            if not Path(policy[4:]).exists():
-                raise HarnessError(
-                    f"PPO model {policy[4:]!r} does not exist (expected ppo:PATH/TO/model.zip)"
-                )
-        elif policy not in available:
-            raise HarnessError(f"unknown policy {policy!r}; available policies are {available} and ppo:PATH")
     params = agent_params or {}
-    for policy, values in params.items():
+    for policy in params:
         if policy not in policies:
             raise HarnessError(
                 f"--agent-param names policy {policy!r}, which is not in the run {list(policies)}"
             )
-        if policy.startswith("ppo:"):
-            continue
-        allowed = agents.agent_parameters(policy)
-        unknown = sorted(set(values) - set(allowed))
-        if unknown:
-            raise HarnessError(f"unknown parameter(s) {unknown} for agent {policy!r}; allowed: {allowed}")
-    if fusion not in ("average", "centralized"):
-        raise HarnessError(f"--fusion must be 'average' or 'centralized', got {fusion!r}")
+    available = agents.available_agents()
+    for policy in policies:
+        if policy.partition(":")[0] not in available:
+            raise HarnessError(
+                f"unknown policy {policy!r}; available policies are {available} "
+                "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
+            )
+    probe = MimoRadarSelectVectorEnv(num_envs=1, scenario=sc, **options.to_dict())
+    obs, _ = probe.reset(seed=seed)
+    for policy in policies:
+        try:
+            agent = make_policy(policy, sc, params.get(policy, {}), seed=seed)
+            if agent.needs_oracle:
+                agent.attach(probe)
+            agent.reset(obs)
+        except (ValueError, TypeError, OSError) as exc:
+            raise HarnessError(f"policy {policy!r}: {exc}") from exc
     return RunConfig(
         scenario=sc.to_dict(),
         policies=list(policies),
         trials=trials,
         steps=steps,
         seed=seed,
-        fusion=fusion,
         shard_size=shard_size,
+        env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
 
@@ -158,50 +182,53 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
     """Run ``policy`` on shard ``shard`` of the run; per-step sums over its trials.
 
     Returns arrays: ``expected`` (T,) sum of mu_t, ``optimal`` (T,) sum of mu*_t,
-    ``squared_error`` (T, K) sum of squared position errors, ``matches`` (T,) number
-    of trials whose super arm equals the optimal one, ``selections`` (T, M + N) how
-    often each station was selected, ``valid`` (T,) valid actions, ``wall_s``.
+    ``squared_error`` (T, K) sum of squared position errors (NaN without a tracker),
+    ``matches`` (T,) number of trials whose super arm equals the optimal one,
+    ``selections`` (T, M + N) how often each station was selected, ``valid`` (T,) valid
+    actions, ``wall_s``, and ``first_trial_positions`` (T + 1, K, 2) the truth of the
+    shard's first trial.
     """
     cfg = RunConfig(**config)
-    scenario = Scenario.from_dict(cfg.scenario)
+    scenario = cfg.scenario_object
     trials = cfg.shard_trials(shard)
     start = time.perf_counter()
-    env = MimoRadarSelectVectorEnv(num_envs=len(trials), scenario=scenario, fusion=cfg.fusion)
+    env = MimoRadarSelectVectorEnv(num_envs=len(trials), scenario=scenario, **cfg.env_options)
     agent = make_policy(policy, scenario, cfg.agent_params.get(policy, {}), seed=cfg.seed + trials.start)
-    if getattr(agent, "needs_oracle", False):
+    if agent.needs_oracle:
         agent.attach(env)
-    obs, _ = env.reset(seed=cfg.seed + trials.start)
+    obs, info = env.reset(seed=cfg.seed + trials.start)
     agent.reset(obs)
     T, K = cfg.steps, scenario.num_targets
     out = {
         "expected": np.zeros(T),
         "optimal": np.zeros(T),
-        "squared_error": np.zeros((T, K)),
+        "squared_error": np.full((T, K), np.nan),
         "matches": np.zeros(T),
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
         "valid": np.zeros(T),
+        TRUTH_FIELD: np.empty((T + 1, K, 2)),
     }
+    out[TRUTH_FIELD][0] = info["true_state"][0][:, [0, 2]]
     for t in range(T):
         action = agent.act(obs)
         obs, reward, _, _, info = env.step(action)
         agent.update(obs, reward)
         out["expected"][t] = info["expected_reward"].sum()
         out["optimal"][t] = info["optimal_reward"].sum()
-        out["squared_error"][t] = (info["position_error"] ** 2).sum(axis=0)
+        if "position_error" in info:
+            out["squared_error"][t] = (info["position_error"] ** 2).sum(axis=0)
         out["matches"][t] = np.all(np.asarray(action) == info["optimal_action"], axis=1).sum()
         out["selections"][t] = np.asarray(action).sum(axis=0)
         out["valid"][t] = info["action_valid"].sum()
+        out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
 
 
 def make_policy(policy: str, scenario: Scenario, params: dict[str, Any], seed: int) -> agents.Agent:
-    """A registered agent, or a trained PPO policy for ``ppo:PATH``."""
-    if policy.startswith("ppo:"):
-        from .ppo import PPOAgent
-
-        return PPOAgent(scenario, policy[4:], seed=seed, **params)
-    return agents.make_agent(policy, scenario, seed=seed, **params)
+    """The agent of a policy entry ``NAME`` or ``NAME:ARGUMENT`` with its parameters."""
+    name, argument = agents.split_policy(policy)
+    return agents.make_agent(name, scenario, seed=seed, **argument, **params)
 
 
 def _worker_init() -> None:
@@ -215,9 +242,17 @@ def _worker_init() -> None:
 
 
 # ------------------------------------------------------------------ storage
+def policy_folder(policy: str) -> str:
+    """A folder name for a policy: the name itself when it is plain, else a readable part and a hash
+    (so that ``ppo:a/b_c.zip`` and ``ppo:a_b/c.zip`` never share a folder)."""
+    if re.fullmatch(r"[A-Za-z0-9._-]+", policy):
+        return policy
+    readable = re.sub(r"[^A-Za-z0-9._-]+", "_", policy)[-40:]
+    return f"{readable}-{hashlib.sha256(policy.encode()).hexdigest()[:12]}"
+
+
 def shard_path(out: Path, policy: str, shard: int) -> Path:
-    safe = policy.replace("/", "_").replace(":", "_")
-    return out / "shards" / safe / f"shard_{shard:05d}.npz"
+    return out / "shards" / policy_folder(policy) / f"shard_{shard:05d}.npz"
 
 
 def _write_shard(path: Path, result: dict[str, NDArray]) -> None:
@@ -338,6 +373,13 @@ def _run_ray(
     finally:
         if started_here:
             ray.shutdown()
+
+
+def load_first_trial_truth(out: Path, config: RunConfig) -> NDArray[np.float64]:
+    """True positions (steps + 1, K, 2) of trial 0, as recorded by the run (the truth does not
+    depend on the policy)."""
+    with np.load(shard_path(Path(out), config.policies[0], 0)) as data:
+        return data[TRUTH_FIELD]
 
 
 def load_totals(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env import MimoRadarSelectVectorEnv, Scenario, metrics
+from mimo_radar_env import metrics
 from mimo_radar_env.rendering import draw_scenario
 
-from .harness import RunConfig
+from .harness import RunConfig, load_first_trial_truth, policy_folder
 
 
 def _figure(width: float = 7.0, height: float = 4.0):
@@ -24,7 +24,7 @@ def _figure(width: float = 7.0, height: float = 4.0):
 
 def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path) -> list[Path]:
     """Write sinr.png, regret.png, rmse.png, selection_<policy>.png and geometry.png."""
-    scenario = Scenario.from_dict(config.scenario)
+    scenario = config.scenario_object
     t = np.arange(1, config.steps + 1)
     written = []
 
@@ -50,8 +50,8 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     written.append(_save(fig, out / "regret.png"))
 
     K = scenario.num_targets
-    fig = _figure(7.0, 3.0 * K)
-    for k in range(K):
+    fig = _figure(7.0, 3.0 * K) if config.options.tracking else None
+    for k in range(K if fig is not None else 0):
         ax = fig.add_subplot(K, 1, k + 1)
         for policy, total in totals.items():
             ax.plot(t, metrics.rmse_curve(total["squared_error"], config.trials)[:, k], label=policy, lw=1)
@@ -59,8 +59,9 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
         ax.set_yscale("log")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    fig.tight_layout()
-    written.append(_save(fig, out / "rmse.png"))
+    if fig is not None:
+        fig.tight_layout()
+        written.append(_save(fig, out / "rmse.png"))
 
     labels = [f"TX{m + 1}" for m in range(scenario.num_tx)] + [f"RX{n + 1}" for n in range(scenario.num_rx)]
     for policy, total in totals.items():
@@ -80,36 +81,17 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
             xlabel="time (s)", title=f"{scenario.name}: {policy}, fraction of trials selecting each station"
         )
         fig.colorbar(image, ax=ax)
-        written.append(_save(fig, out / f"selection_{_safe(policy)}.png"))
+        written.append(_save(fig, out / f"selection_{policy_folder(policy)}.png"))
 
     fig = _figure(6.0, 6.0)
     draw_scenario(
         fig.add_subplot(),
         scenario,
-        true_tracks=true_tracks(config),
+        true_tracks=load_first_trial_truth(out, config),
         title=f"{scenario.name}: stations and the true tracks of trial 0",
     )
     written.append(_save(fig, out / "geometry.png"))
     return written
-
-
-def true_tracks(config: RunConfig) -> NDArray[np.float64]:
-    """True positions (steps + 1, K, 2) of trial 0 (the truth does not depend on the policy)."""
-    scenario = Scenario.from_dict(config.scenario)
-    env = MimoRadarSelectVectorEnv(num_envs=1, scenario=scenario, tracking=False)
-    _, info = env.reset(seed=config.seed)
-    action = np.zeros((1, scenario.num_tx + scenario.num_rx), dtype=np.int8)
-    action[0, : scenario.tx_per_step] = 1
-    action[0, scenario.num_tx : scenario.num_tx + scenario.rx_per_step] = 1
-    positions = [info["true_state"][0][:, [0, 2]]]
-    for _ in range(config.steps):
-        _, _, _, _, info = env.step(action)
-        positions.append(info["true_state"][0][:, [0, 2]])
-    return np.array(positions)
-
-
-def _safe(policy: str) -> str:
-    return policy.replace("/", "_").replace(":", "_")
 
 
 def _save(fig, path: Path) -> Path:

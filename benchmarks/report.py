@@ -10,11 +10,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env import Scenario, metrics
+from mimo_radar_env import EnvOptions, metrics
 
 from .harness import RunConfig
 
-#: SPEC 9: the paper's ARMSE (m) per scenario and target, and ASR (%); its layout is unknown.
+#: The paper's ARMSE (m) per scenario and target, and ASR (%); its layout is unknown.
 PAPER_ARMSE = {
     "paper-1": {
         "best": [0.9863],
@@ -50,11 +50,14 @@ PAPER_ASR = {
 
 def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[str, Any]:
     """The summary.json document (schema in docs/benchmark.md)."""
-    scenario = Scenario.from_dict(config.scenario)
+    scenario = config.scenario_object
     channels = scenario.num_channels_per_step
+    tracked = config.options.tracking
     policies = {}
     for policy, total in totals.items():
-        armse_all, per_target = metrics.armse(total["squared_error"], config.trials)
+        armse_all, per_target = (
+            metrics.armse(total["squared_error"], config.trials) if tracked else (None, None)
+        )
         policies[policy] = {
             "armse": armse_all,
             "armse_per_target": per_target,
@@ -70,14 +73,14 @@ def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[
         "trials": config.trials,
         "steps": config.steps,
         "seed": config.seed,
-        "fusion": config.fusion,
+        "env_options": config.env_options,
         "policies": policies,
     }
 
 
 def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dict[str, Any]]:
     """Per-step rows: t, policy, mean SINR (dB), cumulative regret, ASR, RMSE over and per target."""
-    scenario = Scenario.from_dict(config.scenario)
+    scenario = config.scenario_object
     rows = []
     for policy, total in totals.items():
         sinr = metrics.mean_sinr_db_curve(total["expected"], config.trials, scenario.num_channels_per_step)
@@ -109,15 +112,16 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
     lines = [
         f"Scenario `{name}`, {summary['trials']} trials, {summary['steps']} steps, seed {summary['seed']}, "
-        f"fusion `{summary['fusion']}`",
+        f"fusion `{summary['env_options']['fusion']}`" + _changed_options(summary["env_options"]),
         "",
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]
     for policy, row in summary["policies"].items():
-        cells = [policy, f"{row['armse']:.4f}"]
+        tracked = row["armse"] is not None
+        cells = [policy, f"{row['armse']:.4f}" if tracked else "—"]
         if num_targets > 1:
-            cells += [f"{v:.4f}" for v in row["armse_per_target"]]
+            cells += [f"{v:.4f}" for v in row["armse_per_target"]] if tracked else ["—"] * num_targets
         cells += [
             f"{100 * row['asr']:.2f}",
             f"{row['final_regret']:.1f}",
@@ -132,6 +136,13 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _changed_options(options: dict[str, Any]) -> str:
+    """``, filter_noise `estimated`...`` for the options (besides fusion) that differ from the defaults."""
+    changed = EnvOptions(**options).changed()
+    changed.pop("fusion", None)
+    return "".join(f", {key} `{value}`" for key, value in changed.items())
+
+
 def write_outputs(
     config: RunConfig, totals: dict[str, dict[str, NDArray]], out: str | Path, figures: bool = True
 ) -> dict[str, Any]:
@@ -144,7 +155,7 @@ def write_outputs(
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
         writer.writerows(rows)
-    scenario = Scenario.from_dict(config.scenario)
+    scenario = config.scenario_object
     (out / "table.md").write_text(table_markdown(summary, scenario.num_targets))
     if figures:
         from .plots import plot_all

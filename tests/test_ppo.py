@@ -91,8 +91,9 @@ def test_sb3_check_env_on_the_env_and_the_training_wrapper():
 def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
     import agents
+    from agents import PPOAgent
     from benchmarks.cli import main
-    from benchmarks.ppo import PPOAgent, train_ppo
+    from benchmarks.ppo import train_ppo
 
     meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
     assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
@@ -150,22 +151,23 @@ def test_core_imports_and_runs_without_the_rl_extra():
         "import sys; sys.modules['stable_baselines3'] = None; sys.modules['torch'] = None\n"
         "import gymnasium as gym, mimo_radar_env, agents, benchmarks.harness, mimo_radar_env.wrappers\n"
         "env = gym.make('MimoRadarSelect-v0'); env.reset(seed=0); env.step(env.action_space.sample())\n"
-        "from benchmarks.ppo import PPOAgent\n"
-        "try:\n    PPOAgent('paper-1', 'x.zip')\nexcept ImportError as e:\n    print('ERR', e)\n"
+        "from agents import PPOAgent\n"
+        "from gymnasium.error import DependencyNotInstalled\n"
+        "try:\n    PPOAgent('paper-1', 'x.zip')\nexcept DependencyNotInstalled as e:\n    print('ERR', e)\n"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
-    assert "ERR PPO needs the rl extra" in result.stdout
+    assert "ERR PPO needs Stable-Baselines3, in the rl extra" in result.stdout
 
 
 def test_native_training_vec_env_matches_the_checked_gym_wrapper():
     """PPO trains on a VecEnv over the native batch env: same features and rewards as make_ppo_env."""
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
-    from benchmarks.ppo import make_native_vec_env
     from mimo_radar_env import load_scenario
+    from mimo_radar_env.sb3 import NativeVecEnv
 
     scenario = load_scenario("paper-3")
-    venv = make_native_vec_env(scenario, n_envs=2, seed=5)
+    venv = NativeVecEnv(scenario, num_envs=2, seed=5)
     singles = [make_ppo_env(scenario) for _ in range(2)]
     batch = venv.reset()
     for i, env in enumerate(singles):

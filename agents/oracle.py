@@ -1,0 +1,45 @@
+"""The Best oracle: the optimal super arm for the true mean SINR of each step."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mimo_radar_env import Scenario
+
+from .base import Agent, Observation
+
+
+class BestAgent(Agent):
+    """The Best oracle: the optimal super arm for the true mean SINR of each step.
+
+    It reads the truth, through the ``oracle_action()`` of the env it is attached to
+    (:meth:`attach`); it has zero regret by construction.
+    """
+
+    name = "best"
+    needs_oracle = True
+
+    def __init__(self, scenario: Scenario | str, seed: int | None = None, env: Any = None) -> None:
+        super().__init__(scenario, seed)
+        self._oracle: Callable[[], NDArray[np.int8]] | None = None
+        if env is not None:
+            self.attach(env)
+
+    def attach(self, env: Any) -> None:
+        """Read the optimal super arm from ``env.oracle_action()`` (single or vector env)."""
+        target = env if hasattr(env, "oracle_action") else getattr(env, "unwrapped", env)
+        if not hasattr(target, "oracle_action"):
+            raise TypeError(f"{type(env).__name__} has no oracle_action(); attach a MimoRadarSelect env")
+        self._oracle = target.oracle_action
+
+    def _reset(self, obs: Observation) -> None:
+        if self._oracle is None:
+            raise RuntimeError("the best oracle needs the env: call agent.attach(env) first")
+
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        assert self._oracle is not None
+        return np.asarray(self._oracle(), dtype=np.int8).reshape(self.batch_size, -1)

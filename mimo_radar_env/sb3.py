@@ -1,0 +1,125 @@
+"""Stable-Baselines3 view of the native vector env: one numpy step for all training envs.
+
+Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-env[rl]'``)::
+
+    from stable_baselines3 import PPO
+    from mimo_radar_env.sb3 import NativeVecEnv
+
+    venv = NativeVecEnv("paper-1", num_envs=8, seed=0)
+    PPO("MlpPolicy", venv).learn(10_000)
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from gymnasium.error import DependencyNotInstalled
+from numpy.typing import NDArray
+
+try:
+    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
+except ImportError as exc:  # pragma: no cover - depends on the install
+    raise DependencyNotInstalled(
+        "mimo_radar_env.sb3 needs Stable-Baselines3, in the rl extra: "
+        "pip install torch==2.13.0 && pip install 'mimo-radar-env[rl]'"
+    ) from exc
+
+from .envs import MimoRadarSelectVectorEnv
+from .scenarios import Scenario
+from .wrappers import RadarFeatures, SuperArmDiscreteAction, SuperArmIndex, make_ppo_env, scores_to_action
+
+
+class NativeVecEnv(VecEnv):
+    """An SB3 ``VecEnv`` over :class:`~mimo_radar_env.MimoRadarSelectVectorEnv` with the PPO
+    features (:class:`~mimo_radar_env.wrappers.RadarFeatures`) and valid-by-construction
+    actions (one ``Discrete`` action per super arm, or station scores).
+
+    All envs end together after ``T`` steps; they are then reset at once and the last
+    features are returned as ``terminal_observation`` (SB3's convention). Episode ``e``
+    seeds trial ``i`` with ``seed + e * num_envs + i``.
+
+    Parameters
+    ----------
+    scenario : str or Scenario
+    num_envs : int
+    seed : int
+    action : {"auto", "discrete", "scores"}
+        As :func:`~mimo_radar_env.wrappers.make_ppo_env`.
+    **options
+        Env options (``fusion=...``) and scenario overrides, as for ``gym.make``.
+    """
+
+    render_mode = None
+
+    def __init__(
+        self, scenario: str | Scenario, num_envs: int, seed: int = 0, action: str = "auto", **options: Any
+    ) -> None:
+        probe = make_ppo_env(scenario, action=action, **options)
+        self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, scenario=probe.unwrapped.scenario, **options)
+        self.scenario = self.env.scenario
+        self.discrete = isinstance(probe.env, SuperArmDiscreteAction)
+        self.index = SuperArmIndex(self.scenario) if self.discrete else None
+        self.features = RadarFeatures(self.scenario)
+        self.seed_value = seed
+        self.episode = 0
+        self._actions: NDArray | None = None
+        super().__init__(num_envs, probe.observation_space, probe.action_space)
+
+    def reset(self) -> NDArray[np.float32]:
+        obs, _ = self.env.reset(seed=self.seed_value + self.episode * self.num_envs)
+        self.episode += 1
+        self.returns = np.zeros(self.num_envs)
+        self.lengths = 0
+        return self.features.reset(obs)
+
+    def step_async(self, actions: NDArray) -> None:
+        self._actions = actions
+
+    def step_wait(self) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.bool_], list[dict]]:
+        assert self._actions is not None, "step_async() first"
+        sc = self.scenario
+        if self.discrete:
+            env_actions = self.index.to_action(np.asarray(self._actions).reshape(-1))
+        else:
+            env_actions = scores_to_action(self._actions, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
+        obs, reward, terminated, truncated, _ = self.env.step(env_actions)
+        features = self.features.step(obs)
+        self.returns += reward
+        self.lengths += 1
+        dones = terminated | truncated
+        infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
+        if dones.all():
+            for i in range(self.num_envs):
+                infos[i] = {
+                    "terminal_observation": features[i],
+                    "TimeLimit.truncated": bool(truncated[i]),
+                    "episode": {"r": float(self.returns[i]), "l": self.lengths, "t": 0.0},
+                }
+            features = self.reset()
+        return features, reward.astype(np.float32), dones, infos
+
+    def close(self) -> None:
+        return None
+
+    def get_attr(self, attr_name: str, indices: Any = None) -> list[Any]:
+        return [getattr(self, attr_name)] * len(self._indices(indices))
+
+    def set_attr(self, attr_name: str, value: Any, indices: Any = None) -> None:
+        setattr(self, attr_name, value)
+
+    def env_method(self, method_name: str, *args: Any, indices: Any = None, **kwargs: Any) -> list[Any]:
+        raise NotImplementedError("NativeVecEnv runs all envs as one batch: it has no per-env methods")
+
+    def env_is_wrapped(self, wrapper_class: Any, indices: Any = None) -> list[bool]:
+        return [False] * len(self._indices(indices))
+
+    def _indices(self, indices: Any) -> list[int]:
+        if indices is None:
+            return list(range(self.num_envs))
+        return [indices] if isinstance(indices, int) else list(indices)
+
+    def seed(self, seed: int | None = None) -> list[int | None]:
+        if seed is not None:
+            self.seed_value = seed
+        return [seed] * self.num_envs
