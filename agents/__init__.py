@@ -25,6 +25,9 @@ from .thompson import DiscountedThompson
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
 from .uniform import RandomAgent
 
+#: Marks this package as mimo-radar-env's (another distribution may install an ``agents``).
+DISTRIBUTION = "mimo-radar-env"
+
 __all__ = [
     "CUCB",
     "MGCRBCL",

@@ -1,1 +1,4 @@
-"""Monte-Carlo harness, the paper's reproduction, plots, performance measurements."""
+"""Monte-Carlo harness, the paper's reproduction, reports, plots and PPO training."""
+
+#: Marks this package as mimo-radar-env's (another distribution may install a ``benchmarks``).
+DISTRIBUTION = "mimo-radar-env"

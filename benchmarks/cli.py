@@ -217,8 +217,37 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def foreign_packages() -> list[str]:
+    """The top-level packages of mimo-radar-env that resolve to another distribution's package.
+
+    ``agents`` and ``benchmarks`` are common names (openai-agents installs an ``agents``
+    package; torchrl a top-level ``benchmarks`` folder); in one environment they collide.
+    """
+    import importlib
+
+    foreign = []
+    for name in ("agents", "benchmarks"):
+        try:
+            module = importlib.import_module(name)
+        except ImportError:
+            foreign.append(f"{name} (cannot be imported)")
+            continue
+        if getattr(module, "DISTRIBUTION", None) != "mimo-radar-env":
+            where = getattr(module, "__file__", None) or list(getattr(module, "__path__", []))
+            foreign.append(f"{name} (resolves to {where})")
+    return foreign
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
+    foreign = foreign_packages()
+    if foreign:
+        parser.exit(
+            2,
+            f"mimo-radar-bench: error: another installed distribution provides {', '.join(foreign)}; "
+            "mimo-radar-env needs its own 'agents' and 'benchmarks' packages: install it in a "
+            "dedicated virtual environment\n",
+        )
     args = parser.parse_args(argv)
     from mimo_radar_env import ScenarioError
 
@@ -258,7 +287,15 @@ def _dispatch(args: argparse.Namespace) -> int:
         )
         return 0
     if args.command == "perf":
-        from .perf import main as perf_main
+        from .harness import HarnessError
+
+        try:
+            from .speed.perf import main as perf_main
+        except ImportError as exc:
+            raise HarnessError(
+                "perf is a developer tool that needs a source checkout (benchmarks/speed is not "
+                "installed with the package): clone the repository and pip install -e ."
+            ) from exc
 
         perf_main(args.out, quick=args.quick, workers=args.workers)
         return 0

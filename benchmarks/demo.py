@@ -33,7 +33,7 @@ def run_demo(
         results[policy] = {
             "steps": horizon,
             "total_reward": reward_sum,
-            "final_regret": regret,
+            "final_regret": regret + 0.0,  # no "-0.0" for the oracle
             "mean_position_error_m": float(np.mean(errors)),
         }
     return results

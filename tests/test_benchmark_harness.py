@@ -167,7 +167,10 @@ def test_agents_and_demo_subcommands(capsys):
             ["run", "--scenario", "paper-1", "--policies", "ucb1", "--steps", "5000"],
             "--steps must be between 1 and",
         ),
-        (["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "0"], "--trials: must be an integer >= 1, got 0"),
+        (
+            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "0"],
+            "--trials: must be an integer >= 1, got 0",
+        ),
         (["run", "--scenario", "paper-1", "--policies", "ppo:/nonexistent.zip"], "does not exist"),
     ],
 )

@@ -1,6 +1,6 @@
 """Super-arm solvers at the paper's size: time per batched selection and optimality.
 
-Run: ``python benchmarks/solver_speed.py [--trials 500] [--repeats 5]``.
+Run: ``python -m benchmarks.speed.solver_speed [--trials 500] [--repeats 5]``.
 Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
@@ -15,7 +15,7 @@ import time
 import numpy as np
 
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
-from agents.solvers._bpso_kernels import HAVE_NUMBA
+from mimo_radar_env.core.compiled import HAVE_NUMBA
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:

@@ -1,6 +1,6 @@
 """Vector env throughput: trial-steps per second with random valid actions.
 
-Run: ``python benchmarks/env_throughput.py [--trials 500] [--steps 200] [--scenario paper-1]``.
+Run: ``python -m benchmarks.speed.env_throughput [--trials 500] [--steps 200] [--scenario paper-1]``.
 Prints trial-steps/s with and without the in-loop IMM-UKF tracker; the issue's
 target (200,000 trial-steps/s at 500 trials on 2 cores) applies to the
 simulation itself.

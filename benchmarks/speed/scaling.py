@@ -1,6 +1,6 @@
 """Cost per step against array size (M*N), targets (K) and trials (B), with memory peaks.
 
-Run: ``python benchmarks/scaling.py [--steps 10]``. Each row runs the vector env with its
+Run: ``python -m benchmarks.speed.scaling [--steps 10]``. Each row runs the vector env with its
 in-loop tracker and a UCB1 agent on a random layout in 100 km x 100 km (the exact solver
 where ``min(C(M,Ms), C(N,Ns)) <= 20,000``, alternating maximisation beyond, as the env's
 oracle does), and reports

@@ -1,6 +1,6 @@
 """Batched IMM-UKF vs filterpy filters looped in Python, on the same inputs.
 
-Run: ``python benchmarks/tracker_speed.py [--trials 500] [--steps 20] [--reference-trials 10]``.
+Run: ``python -m benchmarks.speed.tracker_speed [--trials 500] [--steps 20] [--reference-trials 10]``.
 
 Both sides run the paper's average fusion on ``paper-1`` with 6 channels and 3 models:
 every (trial, channel) pair is one IMM-UKF cycle (interaction, 3 UKF predictions and

@@ -3,11 +3,11 @@
 Figures (``perf.json``):
 
 * ``tracker_speedup_vs_filterpy``: batched IMM-UKF vs filterpy filters looped in Python,
-  same inputs, 500 trials, 6 channels, 3 models (``benchmarks/tracker_speed.py``);
+  same inputs, 500 trials, 6 channels, 3 models (``benchmarks/speed/tracker_speed.py``);
 * ``exact_vs_bpso_speedup``, ``bpso_optimality_rate``: the solvers at the paper's size, 500
-  trials (``benchmarks/solver_speed.py``);
+  trials (``benchmarks/speed/solver_speed.py``);
 * ``env_trial_steps_per_s``: vector env with tracker, 500 trials, ``paper-1``, random valid
-  actions (``benchmarks/env_throughput.py``);
+  actions (``benchmarks/speed/env_throughput.py``);
 * ``repro_wall_s_exact``: all three paper scenarios, six policies, 500 trials, T = 1000,
   every index policy with the exact solver, through the harness;
 * ``repro_wall_s_paper``: the same with MG-CRB-CL using BPSO, as in the paper.
@@ -25,8 +25,8 @@ import time
 from pathlib import Path
 from typing import Any
 
+from ..harness import PAPER_POLICIES, make_config, run
 from . import env_throughput, solver_speed, tracker_speed
-from .harness import PAPER_POLICIES, make_config, run
 
 FULL = {
     "trials": 500,

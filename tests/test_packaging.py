@@ -1,0 +1,42 @@
+"""Packaging: the wheel carries every file its commands need."""
+
+import subprocess
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+@pytest.mark.slow
+def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
+    """Builds the wheel, installs it with the rl extra into a new venv, runs the commands (~1 min)."""
+    result = subprocess.run(
+        ["bash", str(ROOT / ".ci" / "wheel-check")], capture_output=True, text=True, timeout=1200
+    )
+    assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-4000:]
+    assert "oracle" in result.stdout and "trained PPO for 300 steps" in result.stdout
+
+
+def test_the_hyperparameters_are_package_data():
+    import tomllib
+
+    config = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    assert "hyperparams/*.yml" in config["package-data"]["benchmarks"]
+    assert "benchmarks.speed*" in config["packages"]["find"]["exclude"]
+    from benchmarks.ppo import load_hyperparams
+
+    assert load_hyperparams()["policy"] == "MlpPolicy"  # read through importlib.resources
+
+
+def test_the_cli_names_a_foreign_agents_package(tmp_path):
+    """Another distribution's 'agents' first on the path: a one-line error, exit 2."""
+    (tmp_path / "agents").mkdir()
+    (tmp_path / "agents" / "__init__.py").write_text("")
+    code = "import sys; sys.path.insert(0, sys.argv[1]); from benchmarks.cli import main; main(['agents'])"
+    result = subprocess.run(
+        ["python", "-c", code, str(tmp_path)], capture_output=True, text=True, timeout=120, cwd=tmp_path
+    )
+    assert result.returncode == 2
+    assert "another installed distribution provides agents" in result.stderr
+    assert "dedicated virtual environment" in result.stderr
