@@ -33,7 +33,9 @@ class BestAgent(Agent):
         """Read the optimal super arm from ``env.oracle_action()`` (single or vector env)."""
         target = env if hasattr(env, "oracle_action") else getattr(env, "unwrapped", env)
         if not hasattr(target, "oracle_action"):
-            raise TypeError(f"{type(env).__name__} has no oracle_action(); attach a MimoRadarSelect env")
+            raise ValueError(
+                f"env must be a MimoRadarSelect env (it has oracle_action()), got {type(env).__name__}"
+            )
         self._oracle = target.oracle_action
 
     def _reset(self, obs: Observation) -> None:

@@ -155,6 +155,8 @@ class SlidingWindowUCB(IndexPolicy):
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
         check_parameter("window", window, 1)
+        if not float(window).is_integer():
+            raise ValueError(f"window must be a whole number of steps, got {window}")
         check_parameter("beta", beta, 0.0)
         self.window, self.beta = int(window), beta
 

@@ -126,7 +126,11 @@ def make_config(
     if len(set(policies)) != len(policies):
         raise HarnessError(f"policies are listed twice: {list(policies)}")
     params = agent_params or {}
-    for policy in params:
+    for policy, values in params.items():
+        if "seed" in values:
+            raise HarnessError(
+                f"--agent-param {policy}.seed: agents' seeds are set by the run (--seed), not per agent"
+            )
         if policy not in policies:
             raise HarnessError(
                 f"--agent-param names policy {policy!r}, which is not in the run {list(policies)}"

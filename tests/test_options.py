@@ -1,0 +1,155 @@
+"""Env options: one typed set, settable everywhere, checked before anything is written."""
+
+import dataclasses
+import json
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import agents
+import benchmarks.harness as harness
+from benchmarks.cli import main
+from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv
+from mimo_radar_env.envs.options import option_choices, option_names
+from mimo_radar_env.tracking import FUSIONS
+
+#: A value other than the default for every option, with its CLI flag(s).
+NON_DEFAULT = {
+    "fusion": ("centralized", ["--fusion", "centralized"]),
+    "tracking": (False, ["--no-tracking"]),
+    "filter_noise": ("estimated", ["--filter-noise", "estimated"]),
+    "measurement_quality": (0.5, ["--measurement-quality", "0.5"]),
+    "invalid_action": ("raise", ["--invalid-action", "raise"]),
+    "oracle_solver": ("alternating", ["--oracle-solver", "alternating"]),
+}
+#: A bad value of every option, as a CLI argument and as a Python value.
+BAD = {
+    "fusion": ("--fusion", "median", "median"),
+    "tracking": (None, None, "yes"),  # a switch (--tracking/--no-tracking): no bad CLI value
+    "filter_noise": ("--filter-noise", "guess", "guess"),
+    "measurement_quality": ("--measurement-quality", "-1", -1.0),
+    "invalid_action": ("--invalid-action", "ignore", "ignore"),
+    "oracle_solver": ("--oracle-solver", "local-search", "local-search"),
+}
+
+
+def test_the_tables_above_cover_every_option_and_choices_come_from_their_registries():
+    assert set(NON_DEFAULT) == set(BAD) == set(option_names())
+    assert option_choices()["fusion"] == tuple(FUSIONS)
+    assert option_choices()["oracle_solver"] == ("auto", "exact", "alternating")
+
+
+def test_the_env_docstring_lists_every_option():
+    doc = gym.make("MimoRadarSelect-v0").unwrapped.__class__.__doc__
+    arguments = doc[doc.index("## Arguments") : doc.index("## Seeding")]
+    for name in option_names():
+        assert f"``{name}``" in arguments, name
+    for name, choices in option_choices().items():
+        for choice in choices:
+            assert f'"{choice}"' in arguments, (name, choice)
+
+
+@pytest.mark.parametrize("name", list(NON_DEFAULT))
+def test_every_option_round_trips_from_the_cli_to_the_env(name, tmp_path, monkeypatch):
+    value, flags = NON_DEFAULT[name]
+    built = []
+
+    class Spy(MimoRadarSelectVectorEnv):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            built.append(self.options)
+
+    monkeypatch.setattr(harness, "MimoRadarSelectVectorEnv", Spy)
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "2", "--steps", "3"]
+    argv += ["--workers", "1", "--no-figures", "--quiet", "--out", str(out), *flags]
+    assert main(argv) == 0
+    recorded = json.loads((out / "config.json").read_text())["env_options"]
+    assert recorded == {**EnvOptions().to_dict(), name: value}
+    assert json.loads((out / "summary.json").read_text())["env_options"][name] == value
+    # every env of the run (the check before writing, then the worker's) got the option
+    assert built and all(getattr(options, name) == value for options in built)
+
+
+def test_a_worker_process_builds_the_env_with_the_recorded_options(tmp_path):
+    """Same numbers in a spawned worker as in process; different from the default fusion."""
+    base = ["run", "--scenario", "paper-3", "--policies", "ucb1", "--trials", "2", "--steps", "30"]
+    base += ["--no-figures", "--quiet", "--shard-size", "1"]
+    summaries = {}
+    for label, extra in (
+        ("process", ["--workers", "2", "--fusion", "centralized"]),
+        ("inline", ["--workers", "1", "--fusion", "centralized"]),
+        ("default", ["--workers", "1"]),
+    ):
+        assert main([*base, *extra, "--out", str(tmp_path / label)]) == 0
+        summaries[label] = json.loads((tmp_path / label / "summary.json").read_text())["policies"]["ucb1"]
+    assert summaries["process"]["armse"] == summaries["inline"]["armse"]
+    assert summaries["process"]["armse"] != summaries["default"]["armse"]
+
+
+@pytest.mark.parametrize("name", list(BAD))
+def test_a_bad_option_is_refused_before_anything_is_written(name, tmp_path, capsys):
+    flag, text, value = BAD[name]
+    out = tmp_path / "run"
+    if flag is not None:
+        argv = ["run", "--scenario", "paper-1", "--policies", "ucb1", "--out", str(out), flag, text]
+        with pytest.raises(SystemExit) as exit_info:
+            main(argv)
+        assert exit_info.value.code == 2
+        last = capsys.readouterr().err.strip().splitlines()[-1]  # after argparse's usage
+        assert last.startswith("mimo-radar-bench run: error: argument " + flag) and repr(text) in last
+        assert not out.exists()
+    with pytest.raises(ValueError, match=name):
+        EnvOptions(**{name: value})
+    with pytest.raises(ValueError, match=name):
+        gym.make("MimoRadarSelect-v0", **{name: value})
+
+
+def _bad_parameter_values():
+    """(agent, parameter, bad value) for every parameter of every registered agent."""
+    cases = []
+    for name in agents.available_agents():
+        for parameter in agents.agent_parameters(name):
+            if name == "ppo" and parameter != "path":  # needs a trained model: tests/test_ppo.py
+                continue
+            bad = {"solver": "nosuch", "path": "/nonexistent/model.zip", "tx": "a", "rx": "a"}
+            cases.append((name, parameter, bad.get(parameter, -1 if parameter == "seed" else "x")))
+    return cases
+
+
+@pytest.mark.parametrize(("agent", "parameter", "value"), _bad_parameter_values())
+def test_a_bad_agent_parameter_is_refused_before_anything_is_written(
+    agent, parameter, value, tmp_path, capsys
+):
+    out = tmp_path / "run"
+    params = {"fixed": ["fixed.tx=[0, 1]", "fixed.rx=[0, 1, 2]"]}.get(agent, [])
+    params = [p for p in params if not p.startswith(f"{agent}.{parameter}=")]
+    policy = "ppo:/nonexistent/model.zip" if agent == "ppo" else agent
+    argv = ["run", "--scenario", "paper-1", "--policies", policy, "--out", str(out), "--quiet"]
+    if agent != "ppo":
+        params.append(f"{agent}.{parameter}={json.dumps(value)}")
+    for item in params:
+        argv += ["--agent-param", item]
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and err.startswith("mimo-radar-bench: error: policy")
+    named = {"solver": "solver", "solver_params": "solver_params", "path": "PPO model"}.get(
+        parameter, parameter
+    )
+    assert named in err
+    assert not out.exists()
+
+
+def test_options_are_typed_and_frozen():
+    options = EnvOptions(measurement_quality=2)
+    assert options.measurement_quality == 2.0 and isinstance(options.measurement_quality, float)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        options.fusion = "centralized"
+    assert EnvOptions(fusion="centralized").changed() == {"fusion": "centralized"}
+    with pytest.raises(ValueError, match="measurement_quality"):
+        EnvOptions(measurement_quality=True)
+    with pytest.raises(ValueError, match="measurement_quality"):
+        EnvOptions(measurement_quality=np.inf)
