@@ -1,4 +1,4 @@
-"""The evaluation metrics of SPEC 6, from per-step sums over Monte-Carlo trials.
+"""The evaluation metrics (docs/model.md, section 11), from per-step sums over Monte-Carlo trials.
 
 Every function takes sums over trials at each step (what a harness accumulates
 shard by shard) and the number of trials.

@@ -1,4 +1,4 @@
-"""The simulation core against SPEC formulas computed independently here."""
+"""The simulation core against the model's formulas (docs/model.md) computed independently here."""
 
 import gymnasium as gym
 import numpy as np
@@ -11,7 +11,8 @@ from mimo_radar_env.core.superarm import exact_super_arm
 
 
 def spec_mean_sinr(scenario, constant, positions):
-    """SPEC 3 written out: C psi P / ((R_tx R_rx)^2 (noise + interference)), positions (K, 2)."""
+    """eq5 with the scenario constant written out, positions (K, 2):
+    C psi P / ((R_tx R_rx)^2 (noise + interference))."""
     out = np.zeros((scenario.num_targets, scenario.num_tx, scenario.num_rx))
     for k, (x, y) in enumerate(positions):
         for m, (xt, yt) in enumerate(scenario.tx_positions):

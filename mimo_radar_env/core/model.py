@@ -2,7 +2,7 @@
 
 :class:`RadarModel` turns a :class:`~mimo_radar_env.scenario.Scenario` into
 arrays: station positions, the per-channel SINR gain including the scenario
-constant ``C`` (SPEC 3), the per-target minimum SINR of eq32, the maneuver
+constant ``C`` (docs/model.md, section 4), the per-target minimum SINR of eq32, the maneuver
 transition matrices and the noise-free nominal trajectories.
 """
 
@@ -30,9 +30,9 @@ class RadarModel:
     tx, rx : arrays (M, 2), (N, 2)
     gain : array (K, M, N)
         ``C * psi * P_m / (sigma_noise^2 + sigma_int_n^2)``: the mean SINR is
-        ``gain / (R_tx R_rx)^2`` (eq5 with SPEC 3's constant).
+        ``gain / (R_tx R_rx)^2`` (eq5 with the scenario constant ``C``).
     sinr_constant : float
-        ``C`` of SPEC 3.
+        the scenario constant ``C``: the largest noise-free mean SINR is ``S_max``.
     min_sinr : array (K,)
         ``S_min_k`` of eq32, from the nominal trajectory of target k.
     transitions : array (K, T, 4, 4)
@@ -99,7 +99,7 @@ class RadarModel:
 
     # ---------------------------------------------------------- physics
     def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:
-        """Mean SINR ``S[k, m, n]`` (eq5, SPEC 3) for positions (..., K, 2): shape (..., K, M, N)."""
+        """Mean SINR ``S[k, m, n]`` (eq5) for positions (..., K, 2): shape (..., K, M, N)."""
         return self.gain / squared_range_products(positions, self.tx, self.rx)
 
     def measurement_variance(self, quality: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -111,7 +111,7 @@ class RadarModel:
         return np.einsum("k,...kmn->...mn", self.weights, mean_sinr)
 
     def quality(self, sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
-        """``lambda`` of eq32 from linear SINR, clipped into [0.2, 1.2] (SPEC 4).
+        """``lambda`` of eq32 from linear SINR, clipped into [0.2, 1.2] (docs/model.md, section 5).
 
         ``target_axis`` is the axis of ``sinr`` that indexes targets.
         """

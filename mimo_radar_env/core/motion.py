@@ -12,7 +12,7 @@ from numpy.typing import ArrayLike, NDArray
 def transition_matrix(turn_rate: ArrayLike, sample_time: float) -> NDArray[np.float64]:
     """NCT transition matrix for turn rate(s) ``w`` (rad/s); ``w = 0`` gives NCV.
 
-    Positive ``w`` turns counter-clockwise (SPEC 2). Vectorised: the result has
+    Positive ``w`` turns counter-clockwise. Vectorised: the result has
     shape ``np.shape(turn_rate) + (4, 4)``.
     """
     w = np.asarray(turn_rate, dtype=np.float64)

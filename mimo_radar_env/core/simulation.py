@@ -6,7 +6,7 @@ B = 1 case of this class.
 
 Time: reset puts the targets at step 0 (``X_0 ~ N(X1_hat, P1_hat)``); each
 :meth:`advance` moves them from ``t`` to ``t + 1`` with the transition of step
-``t`` (SPEC 2). Observations at step ``t`` use the state at ``t``.
+``t`` (docs/model.md, section 3). Observations at step ``t`` use the state at ``t``.
 """
 
 from __future__ import annotations
