@@ -148,14 +148,15 @@ class IndexPolicy(Agent):
 
     1. :meth:`predict`: the estimates carried to the coming step, ``Y_bar(t)`` (restless
        policies such as MG-CRB-CL's eq16 move them; the default keeps them);
-    2. :meth:`index`: the fused index of the coming step (a pure query);
+    2. :meth:`compute_index`: the fused index of the coming step from ``Y_bar(t)``
+       (:meth:`index` is the same as a pure query);
     3. the solver picks the super arm;
     4. after the step, played channels blend their new sample in:
        ``Y_hat = (1 - w) Y_bar + w gamma`` with ``w`` = :meth:`step_size`; the others keep
        ``Y_bar``; ``counts = discount * counts + played``.
 
-    A policy writes its index (and, where it differs from the default, its prediction,
-    step size and count discount).
+    A policy writes its index (``compute_index``) and, where it differs from the default,
+    its prediction, step size and count discount.
 
     Parameters
     ----------
@@ -197,15 +198,19 @@ class IndexPolicy(Agent):
         """Weight of a new sample in the estimate, given the updated counts (default: sample mean)."""
         return 1.0 / np.maximum(counts, 1.0)[:, None]
 
-    @abstractmethod
     def index(self, obs: Observation) -> NDArray[np.float64]:
         """The fused index (B, M, N) for the coming step ``self.t``: a query that changes no
         estimate or count (sampling policies draw from the agent's generator)."""
+        return self.compute_index(self.predict(obs), obs)
+
+    @abstractmethod
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
+        """The fused index (B, M, N) from the predicted estimates ``Y_bar(t)`` (B, K, M, N)."""
 
     # --------------------------------------------------------------- loop
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         self.predicted = self.predict(obs)
-        tx, rx = self.solver.solve(self.index(obs), self.rng)
+        tx, rx = self.solver.solve(self.compute_index(self.predicted, obs), self.rng)
         return self.actions_from_masks(tx, rx)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:

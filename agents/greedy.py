@@ -46,8 +46,8 @@ class EpsilonGreedy(IndexPolicy):
     def step_size(self, counts: NDArray[np.float64]) -> float:
         return self.alpha_star  # eq29
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
-        return self.fuse(self.estimate)
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
+        return self.fuse(predicted)
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         greedy = super()._act(obs)

@@ -75,5 +75,5 @@ class MGCRBCL(IndexPolicy):
     def step_size(self, counts: NDArray[np.float64]) -> float:
         return self.alpha_bar  # eq14
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
-        return self.fuse(self.predict(obs) + self.bonus(self.beta)[:, None])  # eq18, eq34
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
+        return self.fuse(predicted + self.bonus(self.beta)[:, None])  # eq18, eq34

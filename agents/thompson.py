@@ -56,7 +56,7 @@ class DiscountedThompson(IndexPolicy):
         counts = self.counts[:, None]
         return self.prior_shape + counts, self.prior_rate + counts * self.estimate
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
         """A posterior sample of the mean SINRs, fused (draws from the agent's generator)."""
         shape, rate = self.posterior()
         sampled_rate = self.rng.gamma(shape, 1.0 / rate)

@@ -50,8 +50,8 @@ class UCB1(IndexPolicy):
     def step_size(self, counts: NDArray[np.float64]) -> float:
         return self.alpha_star  # eq29
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
-        return self.fuse(self.estimate + self.bonus(self.beta)[:, None])
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
+        return self.fuse(predicted + self.bonus(self.beta)[:, None])
 
 
 class CUCB(IndexPolicy):
@@ -82,8 +82,8 @@ class CUCB(IndexPolicy):
         check_parameter("scale", scale, 0.0)
         self.scale = scale
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
-        return self.fuse(self.estimate + self.scale * self.bonus(1.5)[:, None])
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
+        return self.fuse(predicted + self.scale * self.bonus(1.5)[:, None])
 
 
 class DiscountedUCB(IndexPolicy):
@@ -120,10 +120,10 @@ class DiscountedUCB(IndexPolicy):
         check_parameter("beta", beta, 0.0)
         self.count_discount, self.beta = discount, beta
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
         total = np.maximum(self.counts.sum(axis=(1, 2), keepdims=True), np.e)
         bonus = np.sqrt(self.beta * np.log(total) / self.counts)
-        return self.fuse(self.estimate + bonus[:, None])
+        return self.fuse(predicted + bonus[:, None])
 
 
 class SlidingWindowUCB(IndexPolicy):
@@ -177,10 +177,10 @@ class SlidingWindowUCB(IndexPolicy):
         self.estimate = self.samples.sum(axis=1) / np.maximum(self.counts, 1.0)[:, None]
         self.predicted = self.estimate
 
-    def index(self, obs: Observation) -> NDArray[np.float64]:
+    def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
         safe = np.maximum(self.counts, 1.0)
         bonus = np.sqrt(self.beta * np.log(max(min(self.t, self.window), 1)) / safe)
-        fused = self.fuse(self.estimate + bonus[:, None])
+        fused = self.fuse(predicted + bonus[:, None])
         return np.where(self.counts > 0, fused, UNEXPLORED_INDEX)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
