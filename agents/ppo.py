@@ -6,10 +6,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from gymnasium.error import DependencyNotInstalled
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers import RadarFeatures, SuperArmIndex, make_ppo_env, scores_to_action
 
 from .base import Agent, Observation
@@ -21,14 +21,7 @@ NORMALIZATION_FILE = "vecnormalize.pkl"
 
 def require_sb3() -> Any:
     """The ``stable_baselines3`` module, or ``DependencyNotInstalled`` naming the ``rl`` extra."""
-    try:
-        import stable_baselines3
-    except ImportError as exc:  # pragma: no cover - depends on the install
-        raise DependencyNotInstalled(
-            "PPO needs Stable-Baselines3, in the rl extra: "
-            "pip install torch==2.13.0 && pip install 'mimo-radar-env[rl]'"
-        ) from exc
-    return stable_baselines3
+    return require("stable_baselines3", "rl", "PPO")
 
 
 def model_file(path: str | Path) -> Path:

@@ -14,20 +14,14 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from gymnasium.error import DependencyNotInstalled
 from numpy.typing import NDArray
 
-try:
-    from stable_baselines3.common.vec_env.base_vec_env import VecEnv
-except ImportError as exc:  # pragma: no cover - depends on the install
-    raise DependencyNotInstalled(
-        "mimo_radar_env.sb3 needs Stable-Baselines3, in the rl extra: "
-        "pip install torch==2.13.0 && pip install 'mimo-radar-env[rl]'"
-    ) from exc
-
 from .envs import MimoRadarSelectVectorEnv
+from .extras import require
 from .scenarios import Scenario
 from .wrappers import RadarFeatures, SuperArmDiscreteAction, SuperArmIndex, make_ppo_env, scores_to_action
+
+VecEnv = require("stable_baselines3.common.vec_env.base_vec_env", "rl", "mimo_radar_env.sb3").VecEnv
 
 
 class NativeVecEnv(VecEnv):

@@ -157,7 +157,7 @@ def test_core_imports_and_runs_without_the_rl_extra():
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert result.returncode == 0, result.stderr
-    assert "ERR PPO needs Stable-Baselines3, in the rl extra" in result.stdout
+    assert "ERR PPO needs stable_baselines3, in the rl extra" in result.stdout
 
 
 def test_native_training_vec_env_matches_the_checked_gym_wrapper():
