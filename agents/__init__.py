@@ -11,6 +11,7 @@ from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent
 from .ppo import PPOAgent
+from .recency import RecencyBasedExploration
 from .registry import (
     agent_argument,
     agent_parameters,
@@ -21,7 +22,7 @@ from .registry import (
     split_policy,
 )
 from .solvers import SOLVERS, SuperArmSolver, make_solver
-from .thompson import DiscountedThompson
+from .thompson import CombinatorialThompson, DiscountedThompson
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
 from .uniform import RandomAgent
 
@@ -36,6 +37,7 @@ __all__ = [
     "UCB1",
     "Agent",
     "BestAgent",
+    "CombinatorialThompson",
     "DiscountedThompson",
     "DiscountedUCB",
     "EpsilonGreedy",
@@ -43,6 +45,7 @@ __all__ = [
     "IndexPolicy",
     "PPOAgent",
     "RandomAgent",
+    "RecencyBasedExploration",
     "SlidingWindowUCB",
     "SuperArmSolver",
     "agent_argument",

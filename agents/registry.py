@@ -18,7 +18,8 @@ from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent
 from .ppo import PPOAgent
-from .thompson import DiscountedThompson
+from .recency import RecencyBasedExploration
+from .thompson import CombinatorialThompson, DiscountedThompson
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
 from .uniform import RandomAgent
 
@@ -56,6 +57,8 @@ for _cls in (
     DiscountedUCB,
     SlidingWindowUCB,
     DiscountedThompson,
+    CombinatorialThompson,
+    RecencyBasedExploration,
     BestAgent,
     RandomAgent,
     FixedAgent,
