@@ -88,7 +88,7 @@ def _paper(**changes):
         ({"range_variance": float("nan")}, r"range_variance must be finite"),
         ({"rx_positions": [[1.0, float("inf")]]}, r"rx_positions must be finite"),
         ({"colour": "red"}, r"unknown scenario key\(s\) \['colour'\]"),
-        ({"horizon": 0}, r"horizon must be >= 1"),
+        ({"horizon": 0}, r"horizon must be between 1 and 1000000"),
         ({"horizon": 2.5}, r"horizon must be an integer"),
         (
             {"targets": [{"initial_state": [0, 1, 35_000, 0]}]},

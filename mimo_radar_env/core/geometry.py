@@ -18,6 +18,11 @@ def station_ranges(positions: NDArray[np.float64], stations: NDArray[np.float64]
     return np.sqrt(np.einsum("...i,...i->...", delta, delta))
 
 
+#: Ranges below this (m) count as this in the SINR model, which stays finite by construction
+#: (scenarios keep their tracks 10 m or more from every station; a trial may stray closer).
+MIN_RANGE = 1.0
+
+
 def squared_range_products(
     positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
 ) -> NDArray[np.float64]:
@@ -25,8 +30,8 @@ def squared_range_products(
 
     The one home of eq5's range dependence: the mean SINR is ``gain / (R_tx R_rx)^2``.
     """
-    tx_sq = station_ranges(positions, tx) ** 2
-    rx_sq = station_ranges(positions, rx) ** 2
+    tx_sq = np.maximum(station_ranges(positions, tx), MIN_RANGE) ** 2
+    rx_sq = np.maximum(station_ranges(positions, rx), MIN_RANGE) ** 2
     return tx_sq[..., :, None] * rx_sq[..., None, :]
 
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..scenarios import Scenario, turn_rate_schedule
+from ..scenarios import Scenario, ScenarioError, turn_rate_schedule
 from .geometry import squared_range_products
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
 
@@ -65,6 +65,11 @@ class RadarModel:
         )
         raw_max, raw_min = _sinr_extremes(raw_gain, sc.tx_positions, sc.rx_positions, nominal)
         constant = sc.peak_sinr / raw_max.max()
+        if not (np.isfinite(constant) and constant > 0 and np.all(np.isfinite(constant * raw_gain))):
+            raise ScenarioError(
+                f"the SINR constant C = {constant:g} of scenario {sc.name!r} is not a finite positive "
+                "number: tx_power, rcs, noise_power, interference_power or the ranges are too extreme"
+            )
         return cls(
             scenario=sc,
             tx=sc.tx_positions,
@@ -146,3 +151,35 @@ def _sinr_extremes(
         highest = np.maximum(highest, sinr.max(axis=(1, 2, 3)))
         lowest = np.minimum(lowest, sinr.min(axis=(1, 2, 3)))
     return highest, lowest
+
+
+def memory_estimate(scenario: Scenario, batch_size: int) -> int:
+    """Bytes an env of ``batch_size`` trials of ``scenario`` needs, roughly (an upper estimate).
+
+    The model keeps per-step matrices (K, T, 4, 4) and trajectories; each trial keeps channel
+    arrays (K, M, N) and the tracker's per-target, per-model sigma points and covariances.
+    """
+    sc = scenario
+    K, M, N, T = sc.num_targets, sc.num_tx, sc.num_rx, sc.horizon
+    channels = sc.tx_per_step * sc.rx_per_step
+    model = 8 * K * (T + 1) * (16 + 4)
+    per_trial = 8 * K * (12 * M * N + 3 * (9 * 4 + 4 * 4) * (channels + 2) * 4)
+    return model + batch_size * per_trial
+
+
+def check_memory(scenario: Scenario, batch_size: int, fraction: float = 0.5) -> None:
+    """Refuse, before allocating, an env that needs more than ``fraction`` of this machine's memory."""
+    import os
+
+    try:
+        available = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return
+    need = memory_estimate(scenario, batch_size)
+    if need > fraction * available:
+        raise ValueError(
+            f"{batch_size} trials of scenario {scenario.name!r} (horizon {scenario.horizon}, "
+            f"{scenario.num_tx} x {scenario.num_rx} stations, {scenario.num_targets} targets) need about "
+            f"{need / 2**30:.1f} GiB; this machine has {available / 2**30:.1f} GiB: use fewer trials, "
+            "a shorter horizon or a smaller layout"
+        )

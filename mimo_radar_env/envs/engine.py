@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.model import RadarModel
+from ..core.model import RadarModel, check_memory
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
@@ -62,6 +62,7 @@ class RadarEngine:
     def __init__(self, options: EnvOptions, scenario: Scenario, batch_size: int) -> None:
         self.options = options
         self.scenario = scenario
+        check_memory(scenario, batch_size)
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
         self.simulation = RadarSimulation(self.model, batch_size, options.measurement_quality)

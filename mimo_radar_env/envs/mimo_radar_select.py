@@ -272,8 +272,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
     def __init__(self, num_envs: int = 1, render_mode: str | None = None, **kwargs: Any) -> None:
-        if num_envs < 1:
-            raise ValueError(f"num_envs must be >= 1, got {num_envs}")
+        if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
+            raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if render_mode is not None:
             raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
         self.options, self.scenario = resolve(kwargs)
@@ -297,6 +297,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
             seed = base
         if seed is not None:
             seeds = [seed + i for i in range(self.num_envs)] if np.ndim(seed) == 0 else list(seed)
+            if not all(isinstance(s, int | np.integer) and not isinstance(s, bool) and s >= 0 for s in seeds):
+                raise ValueError(f"seed must be an integer >= 0 or a list of them, got {seed!r}")
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed must be an int or a list of {self.num_envs} ints, got {len(seeds)}")
             self._trial_generators = [seeding.np_random(int(s))[0] for s in seeds]

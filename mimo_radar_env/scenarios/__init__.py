@@ -5,10 +5,12 @@ draw a random layout with :func:`random_scenario`."""
 
 from .files import available_scenarios, load_scenario
 from .random_layouts import random_scenario
-from .scenario import Maneuver, Scenario, Target, turn_rate_schedule
+from .scenario import MAX_HORIZON, MIN_STATION_DISTANCE, Maneuver, Scenario, Target, turn_rate_schedule
 from .validation import ScenarioError
 
 __all__ = [
+    "MAX_HORIZON",
+    "MIN_STATION_DISTANCE",
     "Maneuver",
     "Scenario",
     "ScenarioError",

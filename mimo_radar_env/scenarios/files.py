@@ -13,6 +13,41 @@ import yaml
 from .scenario import Scenario
 from .validation import ScenarioError
 
+#: Bounds that protect the machine from hostile scenario files.
+MAX_FILE_BYTES = 1 << 20
+MAX_YAML_ALIASES = 100
+MAX_YAML_DEPTH = 32
+
+
+class _StrictLoader(yaml.SafeLoader):
+    """``yaml.SafeLoader`` that refuses duplicate keys instead of keeping the last one."""
+
+    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
+        seen = set()
+        for key_node, _ in node.value:
+            key = self.construct_object(key_node, deep=deep)
+            if key in seen:
+                line = key_node.start_mark.line + 1
+                raise ScenarioError(f"duplicate key {key!r} at line {line} (each key once)")
+            seen.add(key)
+        return super().construct_mapping(node, deep=deep)
+
+
+def _check_yaml_structure(text: str, path: Path) -> None:
+    """Refuse alias bombs and deep nesting from the event stream, before anything is built."""
+    aliases = depth = 0
+    for event in yaml.parse(text, Loader=yaml.SafeLoader):
+        if isinstance(event, yaml.AliasEvent):
+            aliases += 1
+            if aliases > MAX_YAML_ALIASES:
+                raise ScenarioError(f"scenario file {path} uses more than {MAX_YAML_ALIASES} YAML aliases")
+        elif isinstance(event, yaml.CollectionStartEvent):
+            depth += 1
+            if depth > MAX_YAML_DEPTH:
+                raise ScenarioError(f"scenario file {path} nests deeper than {MAX_YAML_DEPTH} levels")
+        elif isinstance(event, yaml.CollectionEndEvent):
+            depth -= 1
+
 
 def available_scenarios() -> list[str]:
     """Names of the scenarios shipped with the package."""
@@ -21,15 +56,24 @@ def available_scenarios() -> list[str]:
 
 
 def _read_file(path: Path) -> dict[str, Any]:
-    text = path.read_text()
     suffix = path.suffix.lower()
+    if suffix not in (".toml", ".yaml", ".yml"):
+        raise ScenarioError(f"scenario file {path} must end in .toml, .yaml or .yml")
+    size = path.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise ScenarioError(f"scenario file {path} has {size} bytes; the limit is {MAX_FILE_BYTES}")
+    try:
+        text = path.read_bytes().decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(
+            f"scenario file {path} is not UTF-8 text ({exc.reason} at byte {exc.start})"
+        ) from exc
     try:
         if suffix == ".toml":
             data = tomllib.loads(text)
-        elif suffix in (".yaml", ".yml"):
-            data = yaml.safe_load(text)
         else:
-            raise ScenarioError(f"scenario file {path} must end in .toml, .yaml or .yml")
+            _check_yaml_structure(text, path)
+            data = yaml.load(text, Loader=_StrictLoader)  # a SafeLoader: no Python objects
     except (tomllib.TOMLDecodeError, yaml.YAMLError) as exc:
         raise ScenarioError(f"cannot parse scenario file {path}: {exc}") from exc
     if not isinstance(data, Mapping):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .scenario import Scenario
+from .validation import ScenarioError
 
 
 def random_scenario(
@@ -22,9 +23,31 @@ def random_scenario(
     Stations uniform in an ``extent`` x ``extent`` square (metres), targets starting in its
     central 60 % with random headings and speeds of 50-150 m/s; every other target (the
     1st, 3rd...) turns at -3 deg/s for 30 steps from ``horizon // 3`` when the horizon
-    allows. Every other field keeps the paper's value.
+    allows. Every other field keeps the paper's value. A draw whose track passes too close to
+    a station (``MIN_STATION_DISTANCE``) is replaced by the generator's next draw.
     """
     rng = np.random.default_rng(seed)
+    for _ in range(100):
+        try:
+            return _draw(rng, num_tx, num_rx, num_targets, tx_per_step, rx_per_step, horizon, extent)
+        except ScenarioError as exc:
+            if "from every station" not in str(exc):
+                raise
+    raise ScenarioError(
+        f"no random layout in 100 draws keeps every track away from the stations (seed {seed})"
+    )
+
+
+def _draw(
+    rng: np.random.Generator,
+    num_tx: int,
+    num_rx: int,
+    num_targets: int,
+    tx_per_step: int,
+    rx_per_step: int,
+    horizon: int,
+    extent: float,
+) -> Scenario:
     start = horizon // 3
     targets = []
     for k in range(num_targets):

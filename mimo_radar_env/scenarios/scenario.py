@@ -18,6 +18,11 @@ from numpy.typing import NDArray
 from . import validation as check
 from .validation import ScenarioError
 
+#: Longest episode a scenario may ask for (steps): the model keeps per-step arrays.
+MAX_HORIZON = 1_000_000
+#: Every noise-free track must stay this far (m) from every station.
+MIN_STATION_DISTANCE = 10.0
+
 
 @dataclass(frozen=True)
 class Maneuver:
@@ -176,7 +181,9 @@ class Scenario:
             f = defaults[name]
             return f.default_factory() if f.default_factory is not dataclasses.MISSING else f.default
 
-        out["horizon"] = check.integer_in("horizon", get("horizon"), 1, None, "a positive number of steps")
+        out["horizon"] = check.integer_in(
+            "horizon", get("horizon"), 1, MAX_HORIZON, "a number of steps; longer episodes are refused"
+        )
         for name in ("sample_time", "noise_power", "range_variance", "azimuth_variance", "peak_sinr"):
             out[name] = check.positive_number(name, get(name))
         out["process_noise"] = check.number(name := "process_noise", get(name))
@@ -217,7 +224,36 @@ class Scenario:
                     raise ScenarioError(
                         f"targets[{k}].maneuvers overlap: [{a0}, {a1}) and one starting at {b0}"
                     )
-        return cls(**out)
+        scenario = cls(**out)
+        scenario._check_tracks()
+        return scenario
+
+    def _check_tracks(self) -> None:
+        """The noise-free tracks stay finite and at least ``MIN_STATION_DISTANCE`` from every station."""
+        from ..core.motion import nominal_trajectories, transition_matrix
+
+        rates = turn_rate_schedule(self)
+        with np.errstate(over="ignore", invalid="ignore"):
+            nominal = nominal_trajectories(
+                np.stack([t.initial_state for t in self.targets]), transition_matrix(rates, self.sample_time)
+            )
+        bad = ~np.isfinite(nominal).all(axis=(1, 2))
+        if bad.any():
+            k = int(np.flatnonzero(bad)[0])
+            raise ScenarioError(
+                f"targets[{k}]'s noise-free track leaves the finite numbers within the horizon: "
+                "check its initial_state, sample_time and horizon"
+            )
+        stations = np.concatenate([self.tx_positions, self.rx_positions])
+        names = [f"TX{m + 1}" for m in range(self.num_tx)] + [f"RX{n + 1}" for n in range(self.num_rx)]
+        for k in range(self.num_targets):
+            distance, step, station = closest_approach(nominal[k][:, [0, 2]], stations)
+            if distance < MIN_STATION_DISTANCE:
+                raise ScenarioError(
+                    f"targets[{k}]'s noise-free track passes {distance:.3g} m from {names[station]} "
+                    f"(between steps {step} and {step + 1}); every track must stay at least "
+                    f"{MIN_STATION_DISTANCE:g} m from every station (the SINR grows as range^-4)"
+                )
 
     def replace(self, **overrides: Any) -> Scenario:
         """A copy with some fields replaced, validated again."""
@@ -278,8 +314,11 @@ def parse_target(index: int, raw: Any) -> Target:
         )
     if not np.allclose(cov, cov.T) or np.any(np.linalg.eigvalsh((cov + cov.T) / 2) <= 0):
         raise ScenarioError(f"{where}.initial_covariance must be symmetric positive definite")
+    raw_maneuvers = raw.get("maneuvers", []) or []
+    if not isinstance(raw_maneuvers, list | tuple):
+        raise ScenarioError(f"{where}.maneuvers must be a list of maneuver tables, got {raw_maneuvers!r}")
     maneuvers = []
-    for j, man in enumerate(raw.get("maneuvers", []) or []):
+    for j, man in enumerate(raw_maneuvers):
         mwhere = f"{where}.maneuvers[{j}]"
         if isinstance(man, Maneuver):
             maneuvers.append(man)
@@ -297,6 +336,31 @@ def parse_target(index: int, raw: Any) -> Target:
             )
         )
     return Target(state, cov, tuple(maneuvers))
+
+
+def closest_approach(
+    track: NDArray[np.float64], stations: NDArray[np.float64], chunk: int = 100_000
+) -> tuple[float, int, int]:
+    """Smallest distance from the segments of ``track`` (T+1, 2) to ``stations`` (S, 2).
+
+    Returns the distance, the step at the start of the closest segment and the station's index.
+    """
+    best = (np.inf, 0, 0)
+    if len(track) == 1:
+        track = np.concatenate([track, track])
+    for start in range(0, len(track) - 1, chunk):
+        a = track[start : start + chunk][:, None, :]  # (c, 1, 2)
+        b = track[start + 1 : start + chunk + 1][:, None, :]
+        a = a[: len(b)]
+        ab = b - a
+        length2 = np.einsum("tsi,tsi->ts", ab, ab)
+        along = np.einsum("tsi,tsi->ts", stations[None] - a, ab) / np.where(length2 > 0, length2, 1.0)
+        closest = a + np.clip(along, 0.0, 1.0)[..., None] * ab
+        distance = np.linalg.norm(closest - stations[None], axis=-1)  # (c, S)
+        step, station = np.unravel_index(np.argmin(distance), distance.shape)
+        if distance[step, station] < best[0]:
+            best = (float(distance[step, station]), int(start + step), int(station))
+    return best
 
 
 def turn_rate_schedule(scenario: Scenario) -> NDArray[np.float64]:

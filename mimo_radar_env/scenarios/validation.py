@@ -13,11 +13,15 @@ class ScenarioError(ValueError):
 
 
 def numeric_array(name: str, value: Any) -> NDArray[np.float64]:
-    """``value`` as a float array of finite numbers."""
+    """``value`` as a float array of finite numbers (booleans and strings are not numbers)."""
     try:
-        arr = np.asarray(value, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
+        raw = np.asarray(value)
+    except (TypeError, ValueError) as exc:  # ragged nesting
         raise ScenarioError(f"{name} must be numeric, got {value!r}") from exc
+    if raw.dtype.kind not in "iuf":
+        kind = {"b": "booleans", "U": "strings", "S": "strings"}.get(raw.dtype.kind, "non-numbers")
+        raise ScenarioError(f"{name} must be numbers, got {kind}: {value!r}")
+    arr = raw.astype(np.float64)
     if not np.all(np.isfinite(arr)):
         raise ScenarioError(f"{name} must be finite numbers, got {arr.tolist()}")
     return arr
