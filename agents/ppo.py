@@ -16,12 +16,84 @@ from .base import Agent, Observation
 
 #: Files written by ``mimo-radar-bench train-ppo`` into its output folder.
 MODEL_FILE = "model.zip"
-NORMALIZATION_FILE = "vecnormalize.pkl"
+#: Observation normalisation statistics, as plain arrays (``np.load`` without pickles).
+NORMALIZATION_FILE = "vecnormalize.npz"
+LEGACY_NORMALIZATION_FILE = "vecnormalize.pkl"
 
 
 def require_sb3() -> Any:
     """The ``stable_baselines3`` module, or ``DependencyNotInstalled`` naming the ``rl`` extra."""
     return require("stable_baselines3", "rl", "PPO")
+
+
+def save_normalization(path: Path, venv: Any) -> None:
+    """The observation statistics of an SB3 ``VecNormalize`` as plain arrays."""
+    rms = venv.obs_rms
+    np.savez(
+        path,
+        mean=rms.mean,
+        var=rms.var,
+        count=np.array(rms.count),
+        clip_obs=np.array(venv.clip_obs),
+        epsilon=np.array(venv.epsilon),
+    )
+
+
+def load_normalization(path: Path, probe: Any) -> Any:
+    """SB3's ``VecNormalize`` over ``probe`` with the statistics of ``path`` (no unpickling)."""
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    with np.load(path, allow_pickle=False) as stats:
+        normalization = VecNormalize(
+            probe,
+            training=False,
+            norm_obs=True,
+            norm_reward=False,
+            clip_obs=float(stats["clip_obs"]),
+            epsilon=float(stats["epsilon"]),
+        )
+        normalization.obs_rms.mean = stats["mean"]
+        normalization.obs_rms.var = stats["var"]
+        normalization.obs_rms.count = float(stats["count"])
+    return normalization
+
+
+def load_model(file: Path, observation_space: Any, num_stations: int) -> Any:
+    """``PPO.load`` without unpickling anything: every cloudpickled entry of the model's data is
+    supplied here (policy class, spaces, schedules), and SB3 reads the weights with
+    ``torch.load(weights_only=True)``."""
+    import json
+    import zipfile
+
+    from gymnasium import spaces
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.policies import ActorCriticPolicy
+
+    try:
+        with zipfile.ZipFile(file) as archive:
+            data = json.loads(archive.read("data"))
+    except (OSError, KeyError, ValueError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{file} is not a Stable-Baselines3 model file ({exc})") from exc
+    action = data.get("action_space", {})
+    kind = str(action.get(":type:", ""))
+    if "Discrete" in kind:
+        action_space = spaces.Discrete(int(action["n"]))
+    elif "Box" in kind:
+        action_space = spaces.Box(-1.0, 1.0, (num_stations,), np.float32)  # StationScoreAction
+    else:
+        raise ValueError(f"{file}: unsupported action space {kind or 'missing'}")
+    supplied = {
+        "policy_class": ActorCriticPolicy,
+        "observation_space": observation_space,
+        "action_space": action_space,
+        "lr_schedule": lambda _: 0.0,
+        "learning_rate": 0.0,
+        "clip_range": lambda _: 0.2,
+        "clip_range_vf": None,
+    }
+    pickled = {key for key, value in data.items() if isinstance(value, dict) and ":serialized:" in value}
+    custom = {key: supplied.get(key) for key in pickled} | {k: v for k, v in supplied.items() if k in data}
+    return PPO.load(file, device="cpu", custom_objects=custom)
 
 
 def model_file(path: str | Path) -> Path:
@@ -33,12 +105,15 @@ def model_file(path: str | Path) -> Path:
 class PPOAgent(Agent):
     """A trained PPO policy (Stable-Baselines3), acting deterministically on B trials at once.
 
-    Loads ``model.zip`` and, when present beside it, the ``vecnormalize.pkl`` observation
-    statistics (through SB3's ``VecNormalize.load``); computes the same
+    Loads ``model.zip`` and, when present beside it, the ``vecnormalize.npz`` observation
+    statistics (applied by SB3's ``VecNormalize``); computes the same
     :class:`~mimo_radar_env.wrappers.RadarFeatures` as the training wrapper for all trials
     and runs one forward pass per step for the whole batch.
 
-    Loading a model unpickles what SB3 stored in it: load only models you trust.
+    Nothing in the files is unpickled: the model's pickled entries (policy class, spaces,
+    schedules) are supplied by this class, the weights are read with
+    ``torch.load(weights_only=True)`` and the statistics with ``np.load(allow_pickle=False)``.
+    A file can still hold weights that act badly; it cannot run code.
 
     Parameters
     ----------
@@ -59,25 +134,34 @@ class PPOAgent(Agent):
         file = model_file(path)
         if not file.is_file():
             raise ValueError(f"PPO model {file} does not exist (expected ppo:PATH/TO/model.zip)")
-        self.model = sb3.PPO.load(file, device="cpu")
-        self.deterministic = deterministic
         self.features = RadarFeatures(self.scenario)
-        if self.model.observation_space.shape != (self.features.size,):
+        from gymnasium import spaces
+
+        observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
+        try:
+            self.model = load_model(file, observation_space, self.num_tx + self.num_rx)
+        except RuntimeError as exc:  # weights of another shape
             raise ValueError(
-                f"the model at {file} was trained on {self.model.observation_space.shape[0]} features; "
-                f"this scenario has {self.features.size}: train it on this layout"
-            )
+                f"the model at {file} does not fit this scenario's {self.features.size} features: "
+                "train it on this layout"
+            ) from exc
+        del sb3
+        self.deterministic = deterministic
         self.discrete = self.model.action_space.__class__.__name__ == "Discrete"
         self.index = SuperArmIndex(self.scenario) if self.discrete else None
         self.normalization = None
         norm_file = file.parent / NORMALIZATION_FILE
+        if (file.parent / LEGACY_NORMALIZATION_FILE).exists() and not norm_file.exists():
+            raise ValueError(
+                f"{file.parent} holds {LEGACY_NORMALIZATION_FILE}, a pickle, which is not loaded (unpickling "
+                f"runs code); retrain with this version, which writes {NORMALIZATION_FILE}"
+            )
         if norm_file.exists():
-            from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+            from stable_baselines3.common.vec_env import DummyVecEnv
 
             action = "discrete" if self.discrete else "scores"
             probe = DummyVecEnv([lambda: make_ppo_env(self.scenario, action=action)])
-            self.normalization = VecNormalize.load(str(norm_file), probe)
-            self.normalization.training = False
+            self.normalization = load_normalization(norm_file, probe)
         self._features: NDArray[np.float32] | None = None
 
     def _reset(self, obs: Observation) -> None:

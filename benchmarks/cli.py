@@ -251,10 +251,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     from mimo_radar_env import ScenarioError
 
-    from .harness import HarnessError
+    from .harness import HarnessError, RunInterrupted
 
     try:
         return _dispatch(args)
+    except RunInterrupted as exc:
+        parser.exit(130, f"mimo-radar-bench: {exc}\n")
+    except KeyboardInterrupt:
+        parser.exit(130, "mimo-radar-bench: interrupted\n")
     except (HarnessError, ScenarioError) as exc:
         parser.exit(2, f"mimo-radar-bench: error: {exc}\n")
     return 0
@@ -267,20 +271,24 @@ def _dispatch(args: argparse.Namespace) -> int:
         print_demo(run_demo(args.scenario, args.seed, args.steps), args.scenario)
         return 0
     if args.command == "train-ppo":
+        from .harness import HarnessError
         from .ppo import train_ppo
 
-        meta = train_ppo(
-            args.scenario,
-            args.timesteps,
-            args.out,
-            seed=args.seed,
-            hyperparams=args.hyperparams,
-            hyperparams_key=args.hyperparams_key,
-            action=args.action,
-            tensorboard=args.tensorboard,
-            progress=not args.quiet,
-            options=env_options_from(args),
-        )
+        try:
+            meta = train_ppo(
+                args.scenario,
+                args.timesteps,
+                args.out,
+                seed=args.seed,
+                hyperparams=args.hyperparams,
+                hyperparams_key=args.hyperparams_key,
+                action=args.action,
+                tensorboard=args.tensorboard,
+                progress=not args.quiet,
+                options=env_options_from(args),
+            )
+        except (ValueError, OSError) as exc:
+            raise HarnessError(str(exc)) from exc
         print(
             f"trained PPO for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
             f"saved {Path(args.out, 'model.zip')}"

@@ -16,14 +16,13 @@ configuration and its shard, so every backend gives the same numbers.
 
 from __future__ import annotations
 
+import contextlib
+import fcntl
 import functools
 import hashlib
 import json
-import os
-import re
 import time
-from collections.abc import Callable, Iterable, Sequence
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -33,13 +32,14 @@ from numpy.typing import NDArray
 from tqdm.auto import tqdm
 
 import agents
+from agents.ppo import model_file
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
 
+from . import backends
+from .shards import SHARD_FIELDS, TRUTH_FIELD, config_hash, read_shard, set_aside, shard_path, write_shard
+
 CONFIG_FILE = "config.json"
-#: Per-step sums over a shard's trials; the shards of a policy add up to its totals.
-SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
-#: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
-TRUTH_FIELD = "first_trial_positions"
+LOCK_FILE = ".lock"
 PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
 
 
@@ -62,6 +62,9 @@ class RunConfig:
         Every env option (:class:`~mimo_radar_env.EnvOptions`), defaults included.
     agent_params : dict
         ``{policy: {parameter: value}}``.
+    policy_files : dict
+        ``{policy: {file: sha256}}`` for policies read from files (a trained model and its
+        normalisation statistics): a changed file is a different run.
     """
 
     scenario: dict[str, Any]
@@ -72,6 +75,7 @@ class RunConfig:
     shard_size: int = 50
     env_options: dict[str, Any] = field(default_factory=lambda: EnvOptions().to_dict())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    policy_files: dict[str, dict[str, str]] = field(default_factory=dict)
 
     @property
     def num_shards(self) -> int:
@@ -153,6 +157,7 @@ def make_config(
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     return RunConfig(
+        policy_files={p: files for p in policies if (files := _policy_files(p))},
         scenario=sc.to_dict(),
         policies=list(policies),
         trials=trials,
@@ -162,6 +167,16 @@ def make_config(
         env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
+
+
+def _policy_files(policy: str) -> dict[str, str]:
+    """``{path: sha256}`` of the files a ``NAME:PATH`` policy reads (model and statistics)."""
+    name, argument = agents.split_policy(policy)
+    if agents.agent_argument(name) != "path" or not argument:
+        return {}
+    model = model_file(argument["path"])
+    files = [model, *sorted(model.parent.glob("vecnormalize.*"))]
+    return {str(f): hashlib.sha256(f.read_bytes()).hexdigest() for f in files if f.is_file()}
 
 
 def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
@@ -177,7 +192,11 @@ def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
             raise HarnessError(f"--agent-param must look like agent.key=value, got {item!r}")
         target, raw = item.split("=", 1)
         policy, key = target.rsplit(".", 1)
-        params.setdefault(policy, {})[key] = yaml.safe_load(raw)
+        try:
+            params.setdefault(policy, {})[key] = yaml.safe_load(raw)
+        except yaml.YAMLError as exc:
+            problem = getattr(exc, "problem", None) or "not valid YAML"
+            raise HarnessError(f"--agent-param {item!r}: the value is {problem}") from None
     return params
 
 
@@ -235,55 +254,69 @@ def make_policy(policy: str, scenario: Scenario, params: dict[str, Any], seed: i
     return agents.make_agent(name, scenario, seed=seed, **argument, **params)
 
 
-def _worker_init() -> None:
-    """One compute thread per worker process: the processes are the parallelism."""
-    try:
-        import numba
-
-        numba.set_num_threads(1)
-    except ImportError:  # pragma: no cover
-        pass
-
-
 # ------------------------------------------------------------------ storage
-def policy_folder(policy: str) -> str:
-    """A folder name for a policy: the name itself when it is plain, else a readable part and a hash
-    (so that ``ppo:a/b_c.zip`` and ``ppo:a_b/c.zip`` never share a folder)."""
-    if re.fullmatch(r"[A-Za-z0-9._-]+", policy):
-        return policy
-    readable = re.sub(r"[^A-Za-z0-9._-]+", "_", policy)[-40:]
-    return f"{readable}-{hashlib.sha256(policy.encode()).hexdigest()[:12]}"
-
-
-def shard_path(out: Path, policy: str, shard: int) -> Path:
-    return out / "shards" / policy_folder(policy) / f"shard_{shard:05d}.npz"
-
-
-def _write_shard(path: Path, result: dict[str, NDArray]) -> None:
-    path.parent.mkdir(parents=True, exist_ok=True)
-    tmp = path.with_suffix(".tmp.npz")
-    np.savez(tmp, **result)
-    os.replace(tmp, path)  # atomic: a shard file is complete or absent
-
-
 def prepare_output(out: Path, config: RunConfig) -> None:
     """Create DIR, or check that the run already in it has the same configuration."""
-    out.mkdir(parents=True, exist_ok=True)
     path = out / CONFIG_FILE
-    wanted = json.loads(json.dumps(config.to_json()))
-    if path.exists():
-        existing = json.loads(path.read_text())
-        if existing != wanted:
-            changed = sorted(k for k in set(existing) | set(wanted) if existing.get(k) != wanted.get(k))
+    wanted = json.loads(json.dumps(config.to_json(), allow_nan=False))
+    try:
+        if path.exists():
+            existing = json.loads(path.read_text())
+            if existing != wanted:
+                changed = sorted(k for k in set(existing) | set(wanted) if existing.get(k) != wanted.get(k))
+                raise HarnessError(
+                    f"{out} holds a run with a different configuration (differs in {changed}); "
+                    "resume it with the same arguments or choose another --out"
+                )
+        else:
+            path.write_text(json.dumps(wanted, indent=2, allow_nan=False))
+    except (OSError, json.JSONDecodeError) as exc:
+        raise HarnessError(f"cannot use --out {out}: {getattr(exc, 'strerror', None) or exc}") from exc
+
+
+@contextlib.contextmanager
+def output_lock(out: Path) -> Iterator[None]:
+    """Hold DIR/.lock for the run: a second run into the same DIR is refused, not interleaved."""
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        handle = open(out / LOCK_FILE, "a+")  # held (and locked) for the whole run
+    except OSError as exc:
+        raise HarnessError(f"cannot write into --out {out}: {exc.strerror or exc}") from exc
+    try:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
             raise HarnessError(
-                f"{out} holds a run with a different configuration (differs in {changed}); "
-                "resume it with the same arguments or choose another --out"
-            )
-    else:
-        path.write_text(json.dumps(wanted, indent=2))
+                f"another run is writing into {out}; wait for it to finish or choose another --out"
+            ) from None
+        yield
+    finally:
+        handle.close()  # releases the lock
+
+
+def _tasks_to_run(out: Path, config: RunConfig, warn: Callable[[str], None]) -> list[tuple[str, int]]:
+    """Tasks without a valid shard; damaged or foreign shards are named and set aside."""
+    payload = config.to_json()
+    todo = []
+    for shard in range(config.num_shards):
+        for policy in config.policies:
+            path = shard_path(out, policy, shard)
+            if path.exists():
+                try:
+                    read_shard(path, config.shard_trials(shard), config_hash(payload, policy))
+                    continue
+                except ValueError as exc:
+                    moved = set_aside(path)
+                    warn(f"shard {path} is not valid ({exc}); set aside as {moved.name}, computing it again")
+            todo.append((policy, shard))
+    return todo
 
 
 # ------------------------------------------------------------------ running
+class RunInterrupted(HarnessError):
+    """Ctrl-C stopped the run; every finished task is saved and the run can be resumed."""
+
+
 def run(
     config: RunConfig,
     out: str | Path,
@@ -296,109 +329,86 @@ def run(
     """Run every (policy, shard) task not yet in ``out``; return the per-policy totals.
 
     ``max_tasks`` stops after that many new tasks (to test resumption); the run is
-    then incomplete and ``None`` is returned.
+    then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
+    the finished tasks are saved.
     """
     out = Path(out)
-    prepare_output(out, config)
-    todo = [
-        (policy, shard)
-        for shard in range(config.num_shards)
-        for policy in config.policies
-        if not shard_path(out, policy, shard).exists()
-    ]
-    if max_tasks is not None:
-        todo = todo[:max_tasks]
-    total = config.trials * config.steps * len(config.policies)
-    done_units = total - sum(len(config.shard_trials(s)) * config.steps for _, s in todo)
-    bar = tqdm(
-        total=total,
-        initial=done_units,
-        unit="trial-step",
-        disable=not progress,
-        smoothing=0.1,
-        desc=f"{config.scenario['name']}",
-    )
-    payload = config.to_json()
+    if backend not in ("local", "ray"):
+        raise HarnessError(f"--backend must be 'local' or 'ray', got {backend!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise HarnessError(f"--workers must be an integer >= 1, got {workers!r}")
+    if backend == "ray":
+        try:
+            backends.check_ray_address(address)
+        except ValueError as exc:
+            raise HarnessError(str(exc)) from exc
+    with output_lock(out):
+        prepare_output(out, config)
+        todo = _tasks_to_run(out, config, tqdm.write)
+        if max_tasks is not None:
+            todo = todo[:max_tasks]
+        total = config.trials * config.steps * len(config.policies)
+        done_units = total - sum(len(config.shard_trials(s)) * config.steps for _, s in todo)
+        bar = tqdm(
+            total=total,
+            initial=done_units,
+            unit="trial-step",
+            disable=not progress,
+            smoothing=0.1,
+            desc=f"{config.scenario['name']}",
+        )
+        payload = config.to_json()
+        saved = []
 
-    def finished(policy: str, shard: int, result: dict[str, NDArray]) -> None:
-        _write_shard(shard_path(out, policy, shard), result)
-        bar.update(len(config.shard_trials(shard)) * config.steps)
-        bar.set_postfix_str(policy)
+        def finished(policy: str, shard: int, result: dict[str, NDArray]) -> None:
+            write_shard(
+                shard_path(out, policy, shard),
+                result,
+                config.shard_trials(shard),
+                config_hash(payload, policy),
+            )
+            saved.append((policy, shard))
+            bar.update(len(config.shard_trials(shard)) * config.steps)
+            bar.set_postfix_str(policy)
 
-    try:
-        if backend == "ray":
-            _run_ray(payload, todo, finished, address)
-        elif backend != "local":
-            raise HarnessError(f"--backend must be 'local' or 'ray', got {backend!r}")
-        elif workers <= 1:
-            for policy, shard in todo:
-                finished(policy, shard, run_task(payload, policy, shard))
-        else:
-            _run_processes(payload, todo, finished, workers)
-    finally:
-        bar.close()
-    complete = all(shard_path(out, p, s).exists() for p in config.policies for s in range(config.num_shards))
-    return load_totals(out, config) if complete else None
-
-
-def _run_processes(
-    payload: dict[str, Any], todo: list[tuple[str, int]], finished: Callable[..., None], workers: int
-) -> None:
-    import multiprocessing
-
-    context = multiprocessing.get_context("spawn")  # no inherited threads or state
-    with ProcessPoolExecutor(max_workers=workers, mp_context=context, initializer=_worker_init) as pool:
-        pending = {pool.submit(run_task, payload, policy, shard): (policy, shard) for policy, shard in todo}
-        while pending:
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                policy, shard = pending.pop(future)
-                finished(policy, shard, future.result())
-
-
-def _run_ray(
-    payload: dict[str, Any], todo: list[tuple[str, int]], finished: Callable[..., None], address: str | None
-) -> None:
-    try:
-        import ray
-    except ImportError as exc:
-        raise HarnessError("--backend ray needs Ray: pip install -e '.[ray]'") from exc
-    started_here = not ray.is_initialized()
-    if started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
-    try:
-        remote_task = ray.remote(run_task)
-        pending = {remote_task.remote(payload, policy, shard): (policy, shard) for policy, shard in todo}
-        while pending:
-            done, _ = ray.wait(list(pending), num_returns=1)
-            for ref in done:
-                policy, shard = pending.pop(ref)
-                finished(policy, shard, ray.get(ref))
-    finally:
-        if started_here:
-            ray.shutdown()
+        try:
+            if backend == "ray":
+                backends.run_ray(run_task, payload, todo, finished, address)
+            elif workers == 1:
+                backends.run_inline(run_task, payload, todo, finished)
+            else:
+                backends.run_processes(run_task, payload, todo, finished, workers)
+        except KeyboardInterrupt:
+            raise RunInterrupted(
+                f"interrupted: {len(saved)} of {len(todo)} tasks finished and saved in {out}; "
+                "run the same command again to resume"
+            ) from None
+        finally:
+            bar.close()
+        return None if _tasks_to_run(out, config, tqdm.write) else load_totals(out, config)
 
 
 def load_first_trial_truth(out: Path, config: RunConfig) -> NDArray[np.float64]:
     """True positions (steps + 1, K, 2) of trial 0, as recorded by the run (the truth does not
     depend on the policy)."""
-    with np.load(shard_path(Path(out), config.policies[0], 0)) as data:
-        return data[TRUTH_FIELD]
+    return _read(Path(out), config, config.policies[0], 0)[TRUTH_FIELD]
+
+
+def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, NDArray]:
+    path = shard_path(out, policy, shard)
+    if not path.exists():
+        raise HarnessError(f"shard {shard} of {policy!r} is missing in {out}; run again to complete it")
+    try:
+        return read_shard(path, config.shard_trials(shard), config_hash(config.to_json(), policy))
+    except ValueError as exc:
+        raise HarnessError(f"shard {path} is not valid ({exc}); run again to recompute it") from exc
 
 
 def load_totals(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
     """Sum the shards of every policy, in shard order (the same sums whatever the backend)."""
     totals: dict[str, dict[str, NDArray]] = {}
     for policy in config.policies:
-        parts = []
-        for shard in range(config.num_shards):
-            path = shard_path(out, policy, shard)
-            if not path.exists():
-                raise HarnessError(
-                    f"shard {shard} of {policy!r} is missing in {out}; run again to complete it"
-                )
-            with np.load(path) as data:
-                parts.append({key: data[key] for key in SHARD_FIELDS})
+        parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
         summed = {}
         for key in SHARD_FIELDS:
             total = parts[0][key].copy()

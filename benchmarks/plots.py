@@ -10,7 +10,8 @@ from numpy.typing import NDArray
 from mimo_radar_env import metrics
 from mimo_radar_env.rendering import draw_scenario
 
-from .harness import RunConfig, load_first_trial_truth, policy_folder
+from .harness import RunConfig, load_first_trial_truth
+from .shards import policy_folder
 
 
 def _figure(width: float = 7.0, height: float = 4.0):

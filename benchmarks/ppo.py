@@ -13,7 +13,7 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from agents.ppo import MODEL_FILE, NORMALIZATION_FILE, require_sb3
+from agents.ppo import MODEL_FILE, NORMALIZATION_FILE, require_sb3, save_normalization
 from mimo_radar_env import EnvOptions, Scenario, load_scenario
 
 #: The hyperparameter file shipped with the package (rl-zoo3 style).
@@ -94,7 +94,7 @@ def train_ppo(
     wall = time.perf_counter() - start
     model.save(out / MODEL_FILE)
     if normalize:
-        venv.save(str(out / NORMALIZATION_FILE))
+        save_normalization(out / NORMALIZATION_FILE, venv)
     meta = {
         "scenario": sc.to_dict(),
         "env_options": options.to_dict(),

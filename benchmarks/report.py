@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import EnvOptions, metrics
 
-from .harness import RunConfig
+from .harness import HarnessError, RunConfig
 
 #: The paper's ARMSE (m) per scenario and target, and ASR (%); its layout is unknown.
 PAPER_ARMSE = {
@@ -68,6 +68,14 @@ def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[
             "mean_sinr_db": metrics.mean_sinr_db(total["expected"], config.trials, channels),
             "wall_s": float(total["wall_s"]),
         }
+    for policy, row in policies.items():
+        for key, value in row.items():
+            values = value if isinstance(value, list) else [value]
+            if any(v is not None and not np.isfinite(v) for v in values):
+                raise HarnessError(
+                    f"policy {policy!r}: {key} is not a finite number ({value}); a non-finite mean SINR "
+                    "or error means the scenario's SINR or tracks overflowed: check its field values"
+                )
     return {
         "scenario": scenario.name,
         "trials": config.trials,
@@ -149,7 +157,7 @@ def write_outputs(
     """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``."""
     out = Path(out)
     summary = summarize(config, totals)
-    (out / "summary.json").write_text(json.dumps(summary, indent=2))
+    (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False))
     rows = curves(config, totals)
     with open(out / "curves.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))

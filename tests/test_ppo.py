@@ -97,7 +97,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
 
     meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
     assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
-    assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.pkl").exists()
+    assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.npz").exists()
     assert json.loads((tmp_path / "ppo" / "ppo.json").read_text())["timesteps"] == 2048 == meta["timesteps"]
     agent = PPOAgent("paper-1", tmp_path / "ppo" / "model.zip")
     assert isinstance(agent, agents.Agent)

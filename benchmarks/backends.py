@@ -1,0 +1,116 @@
+"""Where a run's tasks execute: in the calling process, in local worker processes, or on Ray.
+
+Every backend hands each finished task to ``finished`` as soon as it is done, so the harness
+saves it at once. Ctrl-C (``KeyboardInterrupt``) stops a run within seconds: queued tasks are
+cancelled, worker processes are terminated, and the interruption propagates to the caller
+after every finished task has been saved. Workers ignore SIGINT (the parent decides) and
+exit by themselves when their parent dies.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import socket
+import threading
+import time
+from collections.abc import Callable
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from typing import Any
+
+Task = tuple[str, int]
+Finished = Callable[[str, int, dict], None]
+Runner = Callable[[dict[str, Any], str, int], dict]
+
+
+def worker_init(parent: int) -> None:
+    """Worker set-up: one compute thread, SIGINT left to the parent, exit when the parent dies."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        import numba
+
+        numba.set_num_threads(1)
+    except ImportError:  # pragma: no cover
+        pass
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)  # the parent is gone: nobody will read our results
+
+    threading.Thread(target=watch, daemon=True, name="parent-watch").start()
+
+
+def run_inline(runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished) -> None:
+    for policy, shard in todo:
+        finished(policy, shard, runner(payload, policy, shard))
+
+
+def run_processes(
+    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, workers: int
+) -> None:
+    import multiprocessing
+
+    context = multiprocessing.get_context("spawn")  # no inherited threads or state
+    pool = ProcessPoolExecutor(
+        max_workers=workers, mp_context=context, initializer=worker_init, initargs=(os.getpid(),)
+    )
+    pending: dict[Any, Task] = {}
+    try:
+        pending = {pool.submit(runner, payload, policy, shard): (policy, shard) for policy, shard in todo}
+        while pending:
+            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            for future in done:
+                policy, shard = pending.pop(future)
+                finished(policy, shard, future.result())
+    except BaseException:
+        for future in pending:
+            future.cancel()
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()  # do not wait for running tasks: their results are not wanted
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+
+
+def check_ray_address(address: str | None, timeout: float = 3.0) -> None:
+    """Fail within ``timeout`` seconds, naming the address, when a Ray head cannot be reached."""
+    if address in (None, "auto", "local"):
+        return
+    target = address.split("://", 1)[-1]
+    host, _, port = target.rpartition(":")
+    if not host or not port.isdigit():
+        raise ValueError(f"--address must look like HOST:PORT (or ray://HOST:PORT), got {address!r}")
+    try:
+        with socket.create_connection((host, int(port)), timeout=timeout):
+            pass
+    except OSError as exc:
+        raise ValueError(f"cannot reach the Ray cluster at {address!r}: {exc.strerror or exc}") from None
+
+
+def run_ray(
+    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, address: str | None
+) -> None:
+    from mimo_radar_env.extras import require
+
+    ray = require("ray", "ray", "--backend ray")
+    check_ray_address(address)
+    started_here = not ray.is_initialized()
+    if started_here:
+        ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+    pending: dict[Any, Task] = {}
+    try:
+        remote_task = ray.remote(runner)
+        pending = {remote_task.remote(payload, policy, shard): (policy, shard) for policy, shard in todo}
+        while pending:
+            done, _ = ray.wait(list(pending), num_returns=1)
+            for ref in done:
+                policy, shard = pending.pop(ref)
+                finished(policy, shard, ray.get(ref))
+    except BaseException:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+        raise
+    finally:
+        if started_here:
+            ray.shutdown()

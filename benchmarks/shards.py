@@ -1,0 +1,107 @@
+"""Shard files of a run: where they live, how they are written, checked and read.
+
+A shard holds one policy's per-step sums over a block of trials (``SHARD_FIELDS``), the
+truth of its first trial, and three fields that make it self-describing: its trial range,
+the hash of the run configuration and policy it belongs to, and a checksum of its data. A
+shard that fails any check (unreadable, truncated, another run's, another block's, altered)
+is named, set aside and computed again; it never enters a result.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import re
+import tempfile
+import zipfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: Per-step sums over a shard's trials; the shards of a policy add up to its totals.
+SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
+#: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
+TRUTH_FIELD = "first_trial_positions"
+DATA_FIELDS = (*SHARD_FIELDS, TRUTH_FIELD)
+META_FIELDS = ("shard_trials", "config_hash", "checksum")
+
+
+def policy_folder(policy: str) -> str:
+    """A folder name for a policy: the name itself when it is plain, else a readable part and a hash
+    (so that ``ppo:a/b_c.zip`` and ``ppo:a_b/c.zip`` never share a folder)."""
+    if re.fullmatch(r"[A-Za-z0-9._-]+", policy):
+        return policy
+    readable = re.sub(r"[^A-Za-z0-9._-]+", "_", policy)[-40:]
+    return f"{readable}-{hashlib.sha256(policy.encode()).hexdigest()[:12]}"
+
+
+def shard_path(out: Path, policy: str, shard: int) -> Path:
+    return Path(out) / "shards" / policy_folder(policy) / f"shard_{shard:05d}.npz"
+
+
+def config_hash(config: dict[str, Any], policy: str) -> str:
+    """The identity of a (run configuration, policy) pair, written into each of its shards."""
+    text = json.dumps(config, sort_keys=True, allow_nan=False) + "\n" + policy
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def checksum(data: dict[str, NDArray]) -> str:
+    digest = hashlib.sha256()
+    for key in DATA_FIELDS:
+        array = np.ascontiguousarray(data[key])
+        digest.update(f"{key}:{array.dtype.str}:{array.shape}".encode())
+        digest.update(array.tobytes())
+    return digest.hexdigest()
+
+
+def write_shard(path: Path, result: dict[str, NDArray], trials: range, identity: str) -> None:
+    """Write atomically under a unique temporary name: a shard file is complete or absent."""
+    path.parent.mkdir(parents=True, exist_ok=True)
+    payload = dict(result)
+    payload["shard_trials"] = np.array([trials.start, trials.stop])
+    payload["config_hash"] = np.array(identity)
+    payload["checksum"] = np.array(checksum(result))
+    handle, tmp = tempfile.mkstemp(prefix=path.stem + ".", suffix=".tmp.npz", dir=path.parent)
+    try:
+        with os.fdopen(handle, "wb") as file:
+            np.savez(file, **payload)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def read_shard(path: Path, trials: range, identity: str) -> dict[str, NDArray]:
+    """The shard's data, or ``ValueError`` saying what is wrong with it."""
+    try:
+        with np.load(path, allow_pickle=False) as archive:
+            missing = sorted(set(DATA_FIELDS + META_FIELDS) - set(archive.files))
+            if missing:
+                raise ValueError(f"fields {missing} are missing")
+            data = {key: archive[key] for key in DATA_FIELDS}
+            meta = {key: archive[key] for key in META_FIELDS}
+    except (OSError, EOFError, ValueError, zipfile.BadZipFile, KeyError) as exc:
+        raise ValueError(f"unreadable ({type(exc).__name__}: {exc})") from exc
+    if str(meta["config_hash"]) != identity:
+        raise ValueError("it belongs to another run or policy")
+    if meta["shard_trials"].tolist() != [trials.start, trials.stop]:
+        raise ValueError(
+            f"it holds trials {meta['shard_trials'].tolist()}, not [{trials.start}, {trials.stop}]"
+        )
+    if str(meta["checksum"]) != checksum(data):
+        raise ValueError("its checksum does not match its data")
+    return data
+
+
+def set_aside(path: Path) -> Path:
+    """Move a damaged shard out of the way (kept for inspection): ``shard_k.npz.damaged[-n]``."""
+    target = path.with_name(path.name + ".damaged")
+    count = 1
+    while target.exists():
+        count += 1
+        target = path.with_name(f"{path.name}.damaged-{count}")
+    os.replace(path, target)
+    return target
