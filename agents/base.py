@@ -28,8 +28,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario, load_scenario
-from mimo_radar_env.core.superarm import random_super_arms
+from mimo_radar_env.core.counter_hash import Stream
+from mimo_radar_env.core.superarm import top_mask
 
+from .random_streams import TrialRandom
 from .solvers import SuperArmSolver, make_solver
 
 Observation = dict[str, NDArray[Any]]
@@ -56,7 +58,8 @@ class Agent(ABC):
     scenario : Scenario or str
         The scenario (its public geometry is all an agent may use).
     seed : int, optional
-        Seed of the agent's own random generator (exploration, BPSO).
+        Seed of the agent's random streams: trial ``i`` of a batch draws from ``seed + i``
+        (:class:`~agents.random_streams.TrialRandom`), as trial ``i`` of the vector env does.
     """
 
     #: Registry name.
@@ -72,7 +75,7 @@ class Agent(ABC):
             isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
         ):
             raise ValueError(f"seed must be None or an integer >= 0, got {seed!r}")
-        self.rng = np.random.default_rng(seed)
+        self.random = TrialRandom(seed)
         self.num_tx = self.scenario.num_tx
         self.num_rx = self.scenario.num_rx
         self.tx_count = self.scenario.tx_per_step
@@ -91,6 +94,7 @@ class Agent(ABC):
                 "make the env with tracking=True"
             )
         self.batch_size = batch["sinr"].shape[0]
+        self.random.reset(self.batch_size)
         self._batched = batched
         self.t = 0
         self._reset(batch)
@@ -135,7 +139,11 @@ class Agent(ABC):
 
     def random_super_arms(self, count: int) -> NDArray[np.int8]:
         """``count`` uniformly random valid super arms, (count, M + N)."""
-        return random_super_arms(self.rng, count, self.num_tx, self.num_rx, self.tx_count, self.rx_count)
+        if count != self.random.batch_size:
+            raise ValueError(f"random super arms are drawn per trial: {self.random.batch_size}, got {count}")
+        tx = top_mask(self.random.uniform(Stream.AGENT_RANDOM_TX, (self.num_tx,)), self.tx_count)
+        rx = top_mask(self.random.uniform(Stream.AGENT_RANDOM_RX, (self.num_rx,)), self.rx_count)
+        return self.actions_from_masks(tx, rx)
 
 
 class IndexPolicy(Agent):
@@ -210,7 +218,7 @@ class IndexPolicy(Agent):
     # --------------------------------------------------------------- loop
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         self.predicted = self.predict(obs)
-        tx, rx = self.solver.solve(self.compute_index(self.predicted, obs), self.rng)
+        tx, rx = self.solver.solve(self.compute_index(self.predicted, obs), self.random)
         return self.actions_from_masks(tx, rx)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:

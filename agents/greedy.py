@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.core.counter_hash import Stream
 
 from .base import IndexPolicy, Observation, check_parameter
 from .solvers import SuperArmSolver
@@ -51,5 +52,5 @@ class EpsilonGreedy(IndexPolicy):
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         greedy = super()._act(obs)
-        self.explored = self.rng.random(self.batch_size) < self.epsilon
+        self.explored = self.random.uniform(Stream.AGENT_EXPLORE) < self.epsilon
         return np.where(self.explored[:, None], self.random_super_arms(self.batch_size), greedy)

@@ -72,7 +72,7 @@ class CombinatorialThompson(IndexPolicy):
     def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
         """A posterior sample of the mean SINRs, fused (draws from the agent's generator)."""
         shape, rate = self.posterior()
-        sampled_rate = self.rng.gamma(shape, 1.0 / rate)
+        sampled_rate = self.random.gamma(shape) / rate
         return self.fuse(1.0 / np.maximum(sampled_rate, 1e-300))
 
 

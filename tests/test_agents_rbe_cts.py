@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 import agents
+from agents.random_streams import TrialRandom
 from mimo_radar_env import load_scenario
 
 PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4], 4 TX x 6 RX
@@ -104,9 +105,9 @@ def test_cts_samples_the_posterior_and_hands_the_fused_sample_to_the_solver():
     agent = agents.make_agent("cts", PAPER, seed=5)
     y0 = np.random.default_rng(3).exponential(size=(1, 2, 4, 6))
     agent.reset(_obs(y0, np.ones((1, 4, 6))))
-    twin = np.random.default_rng(5)  # the agent's generator, replayed
+    twin = TrialRandom.for_batch(5, 1)  # the agent's streams, replayed
     shape, rate = agent.posterior()
-    expected = np.einsum("k,bkmn->bmn", WEIGHTS, 1.0 / twin.gamma(shape, 1.0 / rate))
+    expected = np.einsum("k,bkmn->bmn", WEIGHTS, 1.0 / (twin.gamma(shape) / rate))
     np.testing.assert_allclose(agent.index(None), expected, rtol=1e-12)
 
 

@@ -7,6 +7,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver, _bpso_kernels, make_solver
 
 
@@ -40,13 +41,17 @@ def problems(draw):
     return M, N, ms, ns, seed
 
 
+def streams(index, seed=0):
+    return TrialRandom.for_batch(seed, index.shape[0])
+
+
 @settings(max_examples=60, deadline=None)
 @given(problems())
 def test_exact_equals_brute_force(problem):
     M, N, ms, ns, seed = problem
     rng = np.random.default_rng(seed)
     index = rng.exponential(size=(3, M, N))
-    tx, rx = ExactSolver(ms, ns).solve(index, rng)
+    tx, rx = ExactSolver(ms, ns).solve(index, streams(index))
     assert_valid(tx, rx, ms, ns)
     for b in range(3):
         expected, _, _ = brute_force(index[b], ms, ns)
@@ -58,16 +63,16 @@ def test_every_solver_is_valid_on_ties_and_zeros(solver):
     rng = np.random.default_rng(0)
     s = make_solver(solver, 2, 3, **({"iterations": 10} if solver == "bpso" else {}))
     for index in (np.zeros((4, 4, 6)), np.ones((4, 4, 6)), np.round(rng.random((4, 4, 6)))):
-        tx, rx = s.solve(index, rng)
+        tx, rx = s.solve(index, streams(index))
         assert_valid(tx, rx, 2, 3)
 
 
 def test_bpso_returns_valid_selections_and_its_optimality_rate():
     rng = np.random.default_rng(1)
     index = rng.exponential(size=(300, 4, 6))
-    tx, rx = BPSOSolver(2, 3).solve(index, rng)
+    tx, rx = BPSOSolver(2, 3).solve(index, streams(index))
     assert_valid(tx, rx, 2, 3)
-    etx, erx = ExactSolver(2, 3).solve(index, rng)
+    etx, erx = ExactSolver(2, 3).solve(index, streams(index))
     optimal = (tx == etx).all(axis=1) & (rx == erx).all(axis=1)
     values = np.array([value_of(index[b], tx[b], rx[b]) for b in range(300)])
     best = np.array([value_of(index[b], etx[b], erx[b]) for b in range(300)])
@@ -80,8 +85,8 @@ def test_bpso_numba_and_numpy_kernels_give_the_same_numbers():
     if not _bpso_kernels.HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy kernel exists")
     index = np.random.default_rng(2).exponential(size=(40, 5, 7))
-    fast = BPSOSolver(2, 3, iterations=30).solve(index, np.random.default_rng(9))
-    slow = BPSOSolver(2, 3, iterations=30, use_numba=False).solve(index, np.random.default_rng(9))
+    fast = BPSOSolver(2, 3, iterations=30).solve(index, streams(index, 9))
+    slow = BPSOSolver(2, 3, iterations=30, use_numba=False).solve(index, streams(index, 9))
     np.testing.assert_array_equal(fast[0], slow[0])
     np.testing.assert_array_equal(fast[1], slow[1])
 
@@ -94,9 +99,9 @@ def test_bpso_exp_polynomial_is_accurate():
 def test_alternating_gap_against_exact():
     rng = np.random.default_rng(3)
     index = rng.exponential(size=(400, 10, 12))
-    tx, rx = AlternatingSolver(3, 4).solve(index, rng)
+    tx, rx = AlternatingSolver(3, 4).solve(index, streams(index))
     assert_valid(tx, rx, 3, 4)
-    etx, erx = ExactSolver(3, 4).solve(index, rng)
+    etx, erx = ExactSolver(3, 4).solve(index, streams(index))
     values = np.array([value_of(index[b], tx[b], rx[b]) for b in range(400)])
     best = np.array([value_of(index[b], etx[b], erx[b]) for b in range(400)])
     assert (values <= best + 1e-9).all()
@@ -109,8 +114,8 @@ def test_alternating_scales_beyond_enumeration():
     rng = np.random.default_rng(4)
     index = rng.exponential(size=(2, 64, 64))
     with pytest.raises(ValueError, match="alternating"):
-        ExactSolver(8, 8).solve(index, rng)
-    tx, rx = AlternatingSolver(8, 8).solve(index, rng)
+        ExactSolver(8, 8).solve(index, streams(index))
+    tx, rx = AlternatingSolver(8, 8).solve(index, streams(index))
     assert_valid(tx, rx, 8, 8)
 
 
@@ -120,4 +125,4 @@ def test_solver_errors():
     with pytest.raises(ValueError, match="bad parameters for solver 'bpso'"):
         make_solver("bpso", 2, 3, swarm=3)
     with pytest.raises(ValueError, match="NaN"):
-        ExactSolver(2, 3).solve(np.full((1, 4, 6), np.nan), np.random.default_rng())
+        ExactSolver(2, 3).solve(np.full((1, 4, 6), np.nan), TrialRandom.for_batch(0, 1))

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.superarm import alternating_super_arm, top_mask
 
+from ..random_streams import TrialRandom
 from .base import SuperArmSolver
 
 
@@ -40,12 +42,14 @@ class AlternatingSolver(SuperArmSolver):
         self.max_rounds = max_rounds
 
     def solve(
-        self, index: NDArray[np.float64], rng: np.random.Generator
+        self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         index = self.check(index)
         batch, num_tx, _ = index.shape
         starts = (
-            top_mask(rng.random((batch, self.restarts, num_tx)), self.tx_count) if self.restarts else None
+            top_mask(random.uniform(Stream.ALTERNATING_STARTS, (self.restarts, num_tx)), self.tx_count)
+            if self.restarts
+            else None
         )
         tx, rx, _ = alternating_super_arm(index, self.tx_count, self.rx_count, self.max_rounds, starts)
         return tx, rx

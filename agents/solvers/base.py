@@ -12,6 +12,8 @@ from abc import ABC, abstractmethod
 import numpy as np
 from numpy.typing import NDArray
 
+from ..random_streams import TrialRandom
+
 
 class SuperArmSolver(ABC):
     """Base class of super-arm solvers.
@@ -45,6 +47,6 @@ class SuperArmSolver(ABC):
 
     @abstractmethod
     def solve(
-        self, index: NDArray[np.float64], rng: np.random.Generator
+        self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """Best super arm per trial: boolean masks (B, M) and (B, N)."""

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.superarm import top_mask
 
+from ..random_streams import TrialRandom
 from . import _bpso_kernels as _kernels
 from .base import SuperArmSolver
 
@@ -47,8 +49,8 @@ class BPSOSolver(SuperArmSolver):
         Run the compiled kernel when numba is installed (default). The pure-numpy
         kernel gives the same numbers, about 10x slower.
 
-    Random numbers come from a counter-based hash keyed per trial and call (drawn
-    from the agent's generator), ``r1``, ``r2`` once per particle and iteration,
+    Random numbers come from the agent's per-trial streams (initial particles, and one key per
+    trial and call for the iteration streams), ``r1``, ``r2`` once per particle and iteration,
     one 16-bit flip draw per bit; the sigmoid uses an exp built from + and *
     (relative error < 1e-7). Both kernels share these, so they agree number for number.
     """
@@ -81,19 +83,20 @@ class BPSOSolver(SuperArmSolver):
         self.use_numba = use_numba
 
     def solve(
-        self, index: NDArray[np.float64], rng: np.random.Generator
+        self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         index = self.check(index)
         batch, num_tx, num_rx = index.shape
-        shape = (batch, self.population)
+        if random.batch_size != batch:
+            raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
         positions = np.concatenate(
             [
-                top_mask(rng.random(shape + (num_tx,)), self.tx_count),
-                top_mask(rng.random(shape + (num_rx,)), self.rx_count),
+                top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count),
+                top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count),
             ],
             axis=-1,
         ).astype(np.int8)
-        keys = rng.integers(0, 2**64, size=batch, dtype=np.uint64, endpoint=False)
+        keys = random.keys_for(Stream.BPSO_KEYS)
         kernel = _kernels.run_numba if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
         best = kernel(
             index,

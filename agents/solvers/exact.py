@@ -7,6 +7,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env.core.superarm import exact_super_arm
 
+from ..random_streams import TrialRandom
 from .base import SuperArmSolver
 
 
@@ -21,7 +22,7 @@ class ExactSolver(SuperArmSolver):
     name = "exact"
 
     def solve(
-        self, index: NDArray[np.float64], rng: np.random.Generator
+        self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         tx, rx, _ = exact_super_arm(self.check(index), self.tx_count, self.rx_count)
         return tx, rx

@@ -14,16 +14,17 @@ import time
 
 import numpy as np
 
+from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
 from mimo_radar_env.core.compiled import HAVE_NUMBA
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:
-    solver.solve(index, np.random.default_rng(0))  # warm-up (numba compilation)
+    solver.solve(index, TrialRandom.for_batch(0, len(index)))  # warm-up (numba compilation)
     best, result = np.inf, None
     for r in range(repeats):
         start = time.perf_counter()
-        result = solver.solve(index, np.random.default_rng(r))
+        result = solver.solve(index, TrialRandom.for_batch(r, len(index)))
         best = min(best, time.perf_counter() - start)
     return best, result
 

@@ -42,6 +42,16 @@ class Stream(IntEnum):
     PROCESS_NOISE = 0x200  #: the truth: process noise
     SINR = 0x300  #: observations: Swerling-I SINR samples
     MEASUREMENT = 0x400  #: observations: measurement noise
+    AGENT_KEY = 0x1000  #: an agent's per-trial keys, from its seed + trial index
+    AGENT_EXPLORE = 0x1001  #: epsilon-greedy's exploration coin
+    AGENT_RANDOM_TX = 0x1002  #: uniformly random super arms: transmitters
+    AGENT_RANDOM_RX = 0x1003  #: uniformly random super arms: receivers
+    BPSO_INIT_TX = 0x1004  #: BPSO's initial particles: transmitters
+    BPSO_INIT_RX = 0x1005  #: BPSO's initial particles: receivers
+    BPSO_KEYS = 0x1006  #: the per-trial keys of BPSO's iteration streams (1, 2, 3)
+    ALTERNATING_STARTS = 0x1007  #: random starts of alternating maximisation
+    GAMMA_NORMAL = 0x1008  #: Thompson sampling's Gamma draws: normals
+    GAMMA_UNIFORM = 0x1009  #: Thompson sampling's Gamma draws: uniforms
 
 
 #: Streams drawn from a trial's observation key; the others use its truth key.
