@@ -60,12 +60,14 @@ class RadarModel:
         transitions = transition_matrix(turn_rate_schedule(sc), sc.sample_time)
         initial_states = np.stack([t.initial_state for t in sc.targets])
         nominal = nominal_trajectories(initial_states, transitions)
-        raw_gain = (
-            sc.rcs * sc.tx_power[None, :, None] / (sc.noise_power + sc.interference_power[None, None, :])
-        )
-        raw_max, raw_min = _sinr_extremes(raw_gain, sc.tx_positions, sc.rx_positions, nominal)
-        constant = sc.peak_sinr / raw_max.max()
-        if not (np.isfinite(constant) and constant > 0 and np.all(np.isfinite(constant * raw_gain))):
+        with np.errstate(over="ignore", invalid="ignore", divide="ignore", under="ignore"):
+            raw_gain = (
+                sc.rcs * sc.tx_power[None, :, None] / (sc.noise_power + sc.interference_power[None, None, :])
+            )
+            raw_max, raw_min = _sinr_extremes(raw_gain, sc.tx_positions, sc.rx_positions, nominal)
+            constant = sc.peak_sinr / raw_max.max()
+            scaled_gain = constant * raw_gain
+        if not (np.isfinite(constant) and constant > 0 and np.all(np.isfinite(scaled_gain))):
             raise ScenarioError(
                 f"the SINR constant C = {constant:g} of scenario {sc.name!r} is not a finite positive "
                 "number: tx_power, rcs, noise_power, interference_power or the ranges are too extreme"

@@ -17,6 +17,7 @@ from .validation import ScenarioError
 MAX_FILE_BYTES = 1 << 20
 MAX_YAML_ALIASES = 100
 MAX_YAML_DEPTH = 32
+MAX_YAML_NODES = 100_000
 
 
 class _StrictLoader(yaml.SafeLoader):
@@ -34,19 +35,36 @@ class _StrictLoader(yaml.SafeLoader):
 
 
 def _check_yaml_structure(text: str, path: Path) -> None:
-    """Refuse alias bombs and deep nesting from the event stream, before anything is built."""
-    aliases = depth = 0
+    """Refuse alias bombs and deep nesting from the event stream, before anything is built:
+    the size of the document once every alias is expanded is counted, not built."""
+    aliases = 0
+    sizes: dict[str, int] = {}
+    stack: list[list[Any]] = [[None, 0]]  # [anchor, expanded node count] of open collections
+
+    def add(count: int) -> None:
+        stack[-1][1] += count
+        if stack[-1][1] > MAX_YAML_NODES:
+            raise ScenarioError(f"scenario file {path} expands to more than {MAX_YAML_NODES} YAML nodes")
+
     for event in yaml.parse(text, Loader=yaml.SafeLoader):
         if isinstance(event, yaml.AliasEvent):
             aliases += 1
             if aliases > MAX_YAML_ALIASES:
                 raise ScenarioError(f"scenario file {path} uses more than {MAX_YAML_ALIASES} YAML aliases")
+            add(sizes.get(event.anchor, 1))
+        elif isinstance(event, yaml.ScalarEvent):
+            if event.anchor:
+                sizes[event.anchor] = 1
+            add(1)
         elif isinstance(event, yaml.CollectionStartEvent):
-            depth += 1
-            if depth > MAX_YAML_DEPTH:
+            if len(stack) > MAX_YAML_DEPTH:
                 raise ScenarioError(f"scenario file {path} nests deeper than {MAX_YAML_DEPTH} levels")
+            stack.append([event.anchor, 1])
         elif isinstance(event, yaml.CollectionEndEvent):
-            depth -= 1
+            anchor, count = stack.pop()
+            if anchor:
+                sizes[anchor] = count
+            add(count)
 
 
 def available_scenarios() -> list[str]:

@@ -22,6 +22,8 @@ from .validation import ScenarioError
 MAX_HORIZON = 1_000_000
 #: Every noise-free track must stay this far (m) from every station.
 MIN_STATION_DISTANCE = 10.0
+#: Positions and velocities of a noise-free track stay below this (m, m/s): squares stay finite.
+MAX_COORDINATE = 1e12
 
 
 @dataclass(frozen=True)
@@ -237,12 +239,13 @@ class Scenario:
             nominal = nominal_trajectories(
                 np.stack([t.initial_state for t in self.targets]), transition_matrix(rates, self.sample_time)
             )
-        bad = ~np.isfinite(nominal).all(axis=(1, 2))
+        with np.errstate(invalid="ignore"):
+            bad = ~(np.abs(nominal) < MAX_COORDINATE).all(axis=(1, 2))
         if bad.any():
             k = int(np.flatnonzero(bad)[0])
             raise ScenarioError(
-                f"targets[{k}]'s noise-free track leaves the finite numbers within the horizon: "
-                "check its initial_state, sample_time and horizon"
+                f"targets[{k}]'s noise-free track leaves the finite numbers (|x| < {MAX_COORDINATE:g} m and "
+                "m/s) within the horizon: check its initial_state, sample_time and horizon"
             )
         stations = np.concatenate([self.tx_positions, self.rx_positions])
         names = [f"TX{m + 1}" for m in range(self.num_tx)] + [f"RX{n + 1}" for n in range(self.num_rx)]
