@@ -1,0 +1,211 @@
+"""Issue 15's harness findings as regression tests: locks, damaged shards, Ctrl-C, orphans,
+strict JSON, PPO files, and results independent of the shard size."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from benchmarks.harness import HarnessError, make_config, output_lock, run
+from benchmarks.report import summarize
+from benchmarks.shards import policy_folder, shard_path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _cli(*args, **kwargs):
+    return subprocess.Popen(
+        [sys.executable, "-m", "benchmarks", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        cwd=ROOT,
+        **kwargs,
+    )
+
+
+def test_2_a_second_run_into_the_same_out_is_refused_while_the_first_writes(tmp_path):
+    config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
+    with output_lock(tmp_path), pytest.raises(HarnessError, match="another run is writing into"):
+        run(config, tmp_path, progress=False)
+    assert run(config, tmp_path, progress=False) is not None  # the lock is released with its holder
+    assert not list(tmp_path.rglob("*.tmp.npz"))
+
+
+@pytest.mark.parametrize("damage", ["truncate", "garbage", "empty", "copy", "edit"])
+def test_3_damaged_shards_are_named_set_aside_and_recomputed(damage, tmp_path, capsys):
+    config = make_config("paper-3", ["ucb1", "epsilon-greedy"], trials=4, steps=10, shard_size=2)
+    clean = run(config, tmp_path / "clean", progress=False)
+    out = tmp_path / "run"
+    run(config, out, progress=False)
+    target = shard_path(out, "ucb1", 1)
+    if damage == "truncate":
+        target.write_bytes(target.read_bytes()[:200])
+    elif damage == "garbage":
+        target.write_bytes(os.urandom(2000))
+    elif damage == "empty":
+        target.write_bytes(b"")
+    elif damage == "copy":  # another shard copied over this one
+        target.write_bytes(shard_path(out, "ucb1", 0).read_bytes())
+    else:  # valid archive, altered numbers
+        with np.load(target) as data:
+            fields = {k: data[k] for k in data.files}
+        fields["expected"] = fields["expected"] * 2
+        np.savez(target, **fields)
+    again = run(config, out, progress=False)
+    err = capsys.readouterr()
+    assert f"shard {target} is not valid" in err.out + err.err
+    assert target.with_name(target.name + ".damaged").exists()
+    for policy in config.policies:
+        for key in ("expected", "optimal", "squared_error", "matches"):
+            np.testing.assert_array_equal(again[policy][key], clean[policy][key])
+
+
+def test_8_policy_folders_never_collide_and_model_files_are_part_of_the_configuration():
+    assert policy_folder("ppo:R/a_b/model.zip") != policy_folder("ppo:R/a/b_model.zip")
+    assert policy_folder("mg-crb-cl") == "mg-crb-cl"
+
+
+def test_9_non_finite_metrics_are_errors_and_json_is_strict(tmp_path):
+    config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
+    totals = run(config, tmp_path, progress=False)
+    totals["fix1"]["expected"][2] = np.nan
+    with pytest.raises(HarnessError, match=r"policy 'fix1': \w+ is not a finite number"):
+        summarize(config, totals)
+    summary = (tmp_path / "config.json").read_text()
+    assert "NaN" not in summary and "Infinity" not in summary
+
+
+def test_14_results_do_not_depend_on_the_shard_size(tmp_path):
+    """Randomised policies (BPSO, exploration, Thompson, random) on the same 12 trials."""
+    policies = ["mg-crb-cl", "epsilon-greedy", "cts", "random"]
+    results = []
+    for size in (3, 4, 12):
+        config = make_config("paper-3", policies, trials=12, steps=15, shard_size=size)
+        results.append(run(config, tmp_path / f"size{size}", progress=False))
+    for other in results[1:]:
+        for policy in policies:
+            for key in ("expected", "matches", "selections", "squared_error"):
+                np.testing.assert_allclose(other[policy][key], results[0][policy][key], rtol=1e-12)
+
+
+def _children(pid):
+    try:
+        text = Path(f"/proc/{pid}/task/{pid}/children").read_text()
+    except OSError:
+        return []
+    return [int(p) for p in text.split()]
+
+
+def _alive(pid):
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    stat = Path(f"/proc/{pid}/stat").read_text() if Path(f"/proc/{pid}/stat").exists() else ""
+    return " Z " not in stat  # a zombie has exited
+
+
+BIG_RUN = ["paper", "--scenario", "3", "--trials", "40", "--steps", "300", "--shard-size", "5"]
+
+
+@pytest.mark.slow
+def test_4_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_path):
+    out = tmp_path / "run"
+    process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out), start_new_session=True)
+    deadline = time.time() + 120
+    while not list(out.rglob("shard_*.npz")) and time.time() < deadline:
+        time.sleep(0.2)
+    assert list(out.rglob("shard_*.npz")), "no shard was finished"
+    os.killpg(process.pid, signal.SIGINT)  # Ctrl-C reaches the whole process group
+    start = time.time()
+    _, err = process.communicate(timeout=60)
+    assert time.time() - start < 10
+    assert process.returncode == 130
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and "interrupted:" in lines[0] and "resume" in lines[0], err
+    kept = len(list(out.rglob("shard_*.npz")))
+    resumed = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--no-figures", "--out", str(out))
+    out_text, err = resumed.communicate(timeout=600)
+    assert resumed.returncode == 0, err
+    assert "not valid" not in out_text + err and kept >= 1
+
+
+@pytest.mark.slow
+def test_7_workers_exit_when_their_parent_is_killed(tmp_path):
+    out = tmp_path / "run"
+    process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out))
+    deadline = time.time() + 120
+    workers = []
+    while len(workers) < 2 and time.time() < deadline:
+        workers = [p for p in _children(process.pid) if "spawn" in Path(f"/proc/{p}/cmdline").read_text()]
+        time.sleep(0.2)
+    assert workers, "no worker process started"
+    process.kill()
+    process.wait()
+    deadline = time.time() + 10
+    while any(_alive(p) for p in workers) and time.time() < deadline:
+        time.sleep(0.2)
+    assert not any(_alive(p) for p in workers)
+
+
+def test_5_ppo_files_run_no_code(tmp_path):
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
+    import base64
+    import pickle
+    import zipfile
+
+    from agents import PPOAgent
+    from benchmarks.ppo import train_ppo
+
+    folder = tmp_path / "ppo"
+    train_ppo("paper-1", 256, folder, seed=0, progress=False)
+    marker = tmp_path / "pwned"
+
+    class Payload:
+        def __reduce__(self):
+            return (Path.touch, (marker,))
+
+    # a pickled payload in the model's data, where SB3 keeps cloudpickled entries
+    model = folder / "model.zip"
+    with zipfile.ZipFile(model) as archive:
+        members = {name: archive.read(name) for name in archive.namelist()}
+    data = json.loads(members["data"])
+    data["lr_schedule"] = {
+        ":type:": "<class 'function'>",
+        ":serialized:": base64.b64encode(pickle.dumps(Payload())).decode(),
+    }
+    members["data"] = json.dumps(data).encode()
+    with zipfile.ZipFile(model, "w") as archive:
+        for name, content in members.items():
+            archive.writestr(name, content)
+    agent = PPOAgent("paper-1", model)
+    assert agent.normalization is not None and not marker.exists()
+    # a pickle beside the model is never loaded; without the npz the agent refuses clearly
+    (folder / "vecnormalize.npz").unlink()
+    (folder / "vecnormalize.pkl").write_bytes(pickle.dumps(Payload()))
+    with pytest.raises(ValueError, match="vecnormalize.pkl, a pickle, which is not loaded"):
+        PPOAgent("paper-1", model)
+    assert not marker.exists()
+
+
+def test_8_a_changed_model_file_is_a_different_run(tmp_path):
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
+    from benchmarks.ppo import train_ppo
+
+    folder = tmp_path / "ppo"
+    train_ppo("paper-1", 256, folder, seed=0, progress=False)
+    policy = f"ppo:{folder / 'model.zip'}"
+    config = make_config("paper-1", [policy], trials=1, steps=3)
+    assert set(config.policy_files[policy]) == {str(folder / "model.zip"), str(folder / "vecnormalize.npz")}
+    run(config, tmp_path / "out", progress=False)
+    train_ppo("paper-1", 256, folder, seed=1, progress=False)  # another model at the same path
+    changed = make_config("paper-1", [policy], trials=1, steps=3)
+    with pytest.raises(HarnessError, match=r"differs in \['policy_files'\]"):
+        run(changed, tmp_path / "out", progress=False)
