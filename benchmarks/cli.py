@@ -160,7 +160,7 @@ def build_parser() -> argparse.ArgumentParser:
         "train-ppo",
         help="train a Stable-Baselines3 PPO policy (needs the rl extra)",
         description="Train PPO on vectorised training envs; saves DIR/model.zip, the "
-        "observation normalisation DIR/vecnormalize.pkl and DIR/ppo.json. Evaluate it with "
+        "observation normalisation DIR/vecnormalize.npz and DIR/ppo.json. Evaluate it with "
         "'mimo-radar-bench run --policies ppo:DIR/model.zip,...'.",
     )
     train.add_argument(
