@@ -36,7 +36,16 @@ from agents.ppo import model_file
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
 
 from . import backends
-from .shards import SHARD_FIELDS, TRUTH_FIELD, config_hash, read_shard, set_aside, shard_path, write_shard
+from .shards import (
+    SHARD_FIELDS,
+    TRIAL_FIELDS,
+    TRUTH_FIELD,
+    config_hash,
+    read_shard,
+    set_aside,
+    shard_path,
+    write_shard,
+)
 
 CONFIG_FILE = "config.json"
 LOCK_FILE = ".lock"
@@ -208,8 +217,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
     ``squared_error`` (T, K) sum of squared position errors (NaN without a tracker),
     ``matches`` (T,) number of trials whose super arm equals the optimal one,
     ``selections`` (T, M + N) how often each station was selected, ``valid`` (T,) valid
-    actions, ``wall_s``, and ``first_trial_positions`` (T + 1, K, 2) the truth of the
-    shard's first trial.
+    actions, ``wall_s``, ``first_trial_positions`` (T + 1, K, 2) the truth of the
+    shard's first trial, and per trial (float32, for the intervals): ``trial_expected`` and
+    ``trial_optimal`` (n, T), ``trial_squared_error`` (n, T, K), ``trial_matches`` (n, T).
     """
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
@@ -230,17 +240,27 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
         "valid": np.zeros(T),
         TRUTH_FIELD: np.empty((T + 1, K, 2)),
+        "trial_expected": np.zeros((len(trials), T), np.float32),
+        "trial_optimal": np.zeros((len(trials), T), np.float32),
+        "trial_squared_error": np.full((len(trials), T, K), np.nan, np.float32),
+        "trial_matches": np.zeros((len(trials), T), np.uint8),
     }
     out[TRUTH_FIELD][0] = info["true_state"][0][:, [0, 2]]
     for t in range(T):
         action = agent.act(obs)
         obs, reward, _, _, info = env.step(action)
         agent.update(obs, reward)
+        matches = np.all(np.asarray(action) == info["optimal_action"], axis=1)
+        out["trial_expected"][:, t] = info["expected_reward"]
+        out["trial_optimal"][:, t] = info["optimal_reward"]
+        out["trial_matches"][:, t] = matches
         out["expected"][t] = info["expected_reward"].sum()
         out["optimal"][t] = info["optimal_reward"].sum()
         if "position_error" in info:
-            out["squared_error"][t] = (info["position_error"] ** 2).sum(axis=0)
-        out["matches"][t] = np.all(np.asarray(action) == info["optimal_action"], axis=1).sum()
+            squared = info["position_error"] ** 2
+            out["squared_error"][t] = squared.sum(axis=0)
+            out["trial_squared_error"][:, t] = squared
+        out["matches"][t] = matches.sum()
         out["selections"][t] = np.asarray(action).sum(axis=0)
         out["valid"][t] = info["action_valid"].sum()
         out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
@@ -402,6 +422,15 @@ def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, ND
         return read_shard(path, config.shard_trials(shard), config_hash(config.to_json(), policy))
     except ValueError as exc:
         raise HarnessError(f"shard {path} is not valid ({exc}); run again to recompute it") from exc
+
+
+def load_per_trial(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
+    """Every policy's per-trial arrays (``TRIAL_FIELDS``), trials in order: (trials, T, ...)."""
+    per_trial: dict[str, dict[str, NDArray]] = {}
+    for policy in config.policies:
+        parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
+        per_trial[policy] = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
+    return per_trial
 
 
 def load_totals(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -10,7 +11,8 @@ from numpy.typing import NDArray
 from mimo_radar_env import metrics
 from mimo_radar_env.rendering import draw_scenario
 
-from .harness import RunConfig, load_first_trial_truth
+from . import uncertainty
+from .harness import RunConfig, load_first_trial_truth, load_per_trial
 from .shards import policy_folder
 
 
@@ -24,17 +26,34 @@ def _figure(width: float = 7.0, height: float = 4.0):
 
 
 def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path) -> list[Path]:
-    """Write sinr.png, regret.png, rmse.png, selection_<policy>.png and geometry.png."""
+    """Write sinr.png, regret.png, rmse.png (each curve with its 95 % band over trials),
+    selection_<policy>.png and geometry.png."""
     scenario = config.scenario_object
     t = np.arange(1, config.steps + 1)
     written = []
+    per_trial = load_per_trial(out, config)
+    trial_metrics = {
+        p: uncertainty.TrialMetrics(per_trial[p], scenario.num_channels_per_step) for p in totals
+    }
+    n = config.trials
+
+    def draw(ax: Any, curve: NDArray, band_curve: Any) -> Any:
+        line = ax.plot(t, curve, lw=1)[0]
+        low, high = uncertainty.band(band_curve, n, config.seed)
+        ax.fill_between(t, low, high, color=line.get_color(), alpha=0.2, lw=0)
+        return line
 
     fig = _figure()
     ax = fig.add_subplot()
     for policy, total in totals.items():
-        curve = metrics.mean_sinr_db_curve(total["expected"], config.trials, scenario.num_channels_per_step)
-        ax.plot(t, curve, label=policy, lw=1)
-    ax.set(xlabel="time (s)", ylabel="average SINR (dB)", title=f"{scenario.name}: average SINR")
+        m = trial_metrics[policy]
+        line = draw(
+            ax,
+            metrics.mean_sinr_db_curve(total["expected"], n, scenario.num_channels_per_step),
+            lambda w, m=m: 10.0 * np.log10(w @ m.reward_curve_per_trial / m.channels),
+        )
+        line.set_label(policy)
+    ax.set(xlabel="time (s)", ylabel="average SINR (dB)", title=f"{scenario.name}: average SINR, 95 % bands")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     written.append(_save(fig, out / "sinr.png"))
@@ -42,10 +61,18 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     fig = _figure()
     ax = fig.add_subplot()
     for policy, total in totals.items():
-        ax.plot(
-            t, metrics.regret_curve(total["optimal"], total["expected"], config.trials), label=policy, lw=1
+        m = trial_metrics[policy]
+        line = draw(
+            ax,
+            metrics.regret_curve(total["optimal"], total["expected"], n),
+            lambda w, m=m: w @ m.regret_curve_per_trial,
         )
-    ax.set(xlabel="time (s)", ylabel="cumulative SINR regret", title=f"{scenario.name}: regret (eq13)")
+        line.set_label(policy)
+    ax.set(
+        xlabel="time (s)",
+        ylabel="cumulative SINR regret",
+        title=f"{scenario.name}: regret (eq13), 95 % bands",
+    )
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     written.append(_save(fig, out / "regret.png"))
@@ -55,8 +82,18 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     for k in range(K if fig is not None else 0):
         ax = fig.add_subplot(K, 1, k + 1)
         for policy, total in totals.items():
-            ax.plot(t, metrics.rmse_curve(total["squared_error"], config.trials)[:, k], label=policy, lw=1)
-        ax.set(xlabel="time (s)", ylabel="RMSE (m)", title=f"{scenario.name}: position RMSE, target {k + 1}")
+            m = trial_metrics[policy]
+            line = draw(
+                ax,
+                metrics.rmse_curve(total["squared_error"], n)[:, k],
+                lambda w, m=m, k=k: m.rmse_curve(w, k),
+            )
+            line.set_label(policy)
+        ax.set(
+            xlabel="time (s)",
+            ylabel="RMSE (m)",
+            title=f"{scenario.name}: position RMSE, target {k + 1}, 95 % bands",
+        )
         ax.set_yscale("log")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)

@@ -12,7 +12,8 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import EnvOptions, metrics
 
-from .harness import HarnessError, RunConfig
+from . import uncertainty
+from .harness import HarnessError, RunConfig, load_per_trial
 
 #: The paper's ARMSE (m) per scenario and target, and ASR (%); its layout is unknown.
 PAPER_ARMSE = {
@@ -48,8 +49,14 @@ PAPER_ASR = {
 }
 
 
-def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[str, Any]:
-    """The summary.json document (schema in docs/benchmark.md)."""
+def summarize(
+    config: RunConfig,
+    totals: dict[str, dict[str, NDArray]],
+    per_trial: dict[str, dict[str, NDArray]] | None = None,
+) -> dict[str, Any]:
+    """The summary.json document (schema in docs/benchmark.md); with ``per_trial`` (the run's
+    per-trial arrays) every metric gets its 95 % interval and every pair of policies its paired
+    differences."""
     scenario = config.scenario_object
     channels = scenario.num_channels_per_step
     tracked = config.options.tracking
@@ -76,7 +83,7 @@ def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[
                     f"policy {policy!r}: {key} is not a finite number ({value}); a non-finite mean SINR "
                     "or error means the scenario's SINR or tracks overflowed: check its field values"
                 )
-    return {
+    summary = {
         "scenario": scenario.name,
         "trials": config.trials,
         "steps": config.steps,
@@ -84,6 +91,13 @@ def summarize(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> dict[
         "env_options": config.env_options,
         "policies": policies,
     }
+    if per_trial is not None:
+        trial_metrics = {p: uncertainty.TrialMetrics(per_trial[p], channels) for p in totals}
+        for policy, row in policies.items():
+            row["ci"] = uncertainty.policy_intervals(trial_metrics[policy], config.seed)
+        summary["uncertainty"] = uncertainty.METHOD
+        summary["paired_differences"] = uncertainty.paired_differences(trial_metrics, config.seed)
+    return summary
 
 
 def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dict[str, Any]]:
@@ -122,18 +136,29 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
         f"Scenario `{name}`, {summary['trials']} trials, {summary['steps']} steps, seed {summary['seed']}, "
         f"fusion `{summary['env_options']['fusion']}`" + _changed_options(summary["env_options"]),
         "",
+        *(
+            [f"Each cell: the value [its 95 % interval] ({summary['uncertainty']}).", ""]
+            if "uncertainty" in summary
+            else []
+        ),
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]
     for policy, row in summary["policies"].items():
         tracked = row["armse"] is not None
-        cells = [policy, f"{row['armse']:.4f}" if tracked else "—"]
+        ci = row.get("ci", {})
+        cells = [policy, _with_ci(row["armse"], ci.get("armse"), "{:.3f}") if tracked else "—"]
         if num_targets > 1:
-            cells += [f"{v:.4f}" for v in row["armse_per_target"]] if tracked else ["—"] * num_targets
+            per_target = ci.get("armse_per_target", [None] * num_targets)
+            cells += (
+                [_with_ci(v, c, "{:.3f}") for v, c in zip(row["armse_per_target"], per_target, strict=True)]
+                if tracked
+                else ["—"] * num_targets
+            )
         cells += [
-            f"{100 * row['asr']:.2f}",
-            f"{row['final_regret']:.1f}",
-            f"{row['mean_sinr_db']:.2f}",
+            _with_ci(row["asr"], ci.get("asr"), "{:.2f}", scale=100),
+            _with_ci(row["final_regret"], ci.get("final_regret"), "{:.1f}"),
+            _with_ci(row["mean_sinr_db"], ci.get("mean_sinr_db"), "{:.2f}"),
             f"{row['wall_s']:.1f}",
         ]
         if paper_armse:
@@ -141,6 +166,41 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
             cells.append(f"{np.mean(ref):.4f}" if ref else "—")
             cells.append(f"{paper_asr[policy]:.2f}" if policy in paper_asr else "—")
         lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def _with_ci(value: float, ci: list[float] | None, fmt: str, scale: float = 1.0) -> str:
+    text = fmt.format(scale * value + 0.0)  # no "-0.0"
+    if ci is None:
+        return text
+    return f"{text} [{fmt.format(scale * ci[0])}, {fmt.format(scale * ci[1])}]"
+
+
+def paired_markdown(summary: dict[str, Any]) -> str:
+    """Paired differences ``A - B`` on the same trials, with their 95 % intervals."""
+    pairs = summary.get("paired_differences")
+    if not pairs:
+        return ""
+    names = [("armse", "Δ ARMSE (m)", "{:.3f}", 1), ("asr", "Δ ASR (pp)", "{:.2f}", 100)]
+    names += [
+        ("final_regret", "Δ final regret", "{:.1f}", 1),
+        ("mean_sinr_db", "Δ mean SINR (dB)", "{:.2f}", 1),
+    ]
+    present = [n for n in names if any(n[0] in d for d in pairs.values())]
+    lines = [
+        "",
+        "Paired differences `A - B` on the same trials, with their 95 % intervals "
+        f"({summary['uncertainty']}); an interval that excludes 0 is a significant difference.",
+        "",
+        "| A - B | " + " | ".join(label for _, label, _, _ in present) + " |",
+        "|" + "---|" * (len(present) + 1),
+    ]
+    for pair, values in pairs.items():
+        cells = [
+            _with_ci(values[key]["estimate"], values[key]["ci"], fmt, scale) if key in values else "—"
+            for key, _, fmt, scale in present
+        ]
+        lines.append(f"| {pair} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
 
@@ -156,7 +216,7 @@ def write_outputs(
 ) -> dict[str, Any]:
     """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``."""
     out = Path(out)
-    summary = summarize(config, totals)
+    summary = summarize(config, totals, load_per_trial(out, config))
     (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False))
     rows = curves(config, totals)
     with open(out / "curves.csv", "w", newline="") as handle:
@@ -164,7 +224,7 @@ def write_outputs(
         writer.writeheader()
         writer.writerows(rows)
     scenario = config.scenario_object
-    (out / "table.md").write_text(table_markdown(summary, scenario.num_targets))
+    (out / "table.md").write_text(table_markdown(summary, scenario.num_targets) + paired_markdown(summary))
     if figures:
         from .plots import plot_all
 

@@ -25,7 +25,9 @@ from numpy.typing import NDArray
 SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
 #: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
 TRUTH_FIELD = "first_trial_positions"
-DATA_FIELDS = (*SHARD_FIELDS, TRUTH_FIELD)
+#: Per-trial values (float32; trials first), from which the intervals are computed.
+TRIAL_FIELDS = ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches")
+DATA_FIELDS = (*SHARD_FIELDS, TRUTH_FIELD, *TRIAL_FIELDS)
 META_FIELDS = ("shard_trials", "config_hash", "checksum")
 
 

@@ -17,7 +17,7 @@ from benchmarks.harness import HarnessError, load_totals, make_config, parse_age
 from benchmarks.report import write_outputs
 from mimo_radar_env import metrics
 
-SUMMARY_KEYS = {"armse", "armse_per_target", "asr", "final_regret", "mean_sinr_db", "wall_s"}
+SUMMARY_KEYS = {"ci", "armse", "armse_per_target", "asr", "final_regret", "mean_sinr_db", "wall_s"}
 
 
 def _read_curves(path):
