@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 from collections.abc import Callable, Sequence
@@ -49,24 +50,31 @@ def _quality(text: str) -> float | None:
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
     """One flag per env option, with the choices, default and help of :class:`EnvOptions`."""
-    from mimo_radar_env import EnvOptions
+    from mimo_radar_env import VERSION_DEFAULTS, EnvOptions
     from mimo_radar_env.envs.options import option_choices, option_help
 
     defaults, choices = EnvOptions().to_dict(), option_choices()
     group = parser.add_argument_group("env options (MimoRadarSelect keywords)")
+    group.add_argument(
+        "--env-version",
+        choices=sorted(VERSION_DEFAULTS),
+        default="v1",
+        help="MimoRadarSelect version whose defaults the options start from: v1 (reading 1 of the "
+        "paper's ambiguous points, default) or v0 (the first reading, unchanged since release)",
+    )
     for name, text in option_help().items():
         flag = "--" + name.replace("_", "-")
-        help_text = f"{text} (default: {defaults[name]})"
+        versions = ", ".join(
+            f"{v}: {VERSION_DEFAULTS[v].get(name, defaults[name])}" for v in sorted(VERSION_DEFAULTS)
+        )
+        help_text = f"{text} (default {versions})"
+        given = argparse.SUPPRESS  # absent unless given: the version's default applies
         if name in choices:
-            group.add_argument(flag, choices=choices[name], default=defaults[name], help=help_text)
+            group.add_argument(flag, choices=choices[name], default=given, help=help_text)
         elif isinstance(defaults[name], bool):
-            group.add_argument(
-                flag, action=argparse.BooleanOptionalAction, default=defaults[name], help=help_text
-            )
+            group.add_argument(flag, action=argparse.BooleanOptionalAction, default=given, help=help_text)
         else:  # measurement_quality, the one numeric option
-            group.add_argument(
-                flag, type=_quality, default=defaults[name], metavar="NONE|LAMBDA", help=help_text
-            )
+            group.add_argument(flag, type=_quality, default=given, metavar="NONE|LAMBDA", help=help_text)
 
 
 def env_options_from(args: argparse.Namespace) -> Any:
@@ -74,7 +82,8 @@ def env_options_from(args: argparse.Namespace) -> Any:
     from mimo_radar_env import EnvOptions
     from mimo_radar_env.envs.options import option_names
 
-    return EnvOptions(**{name: getattr(args, name) for name in option_names()})
+    given = {name: getattr(args, name) for name in option_names() if hasattr(args, name)}
+    return EnvOptions.for_version(args.env_version, **given)
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
@@ -315,13 +324,13 @@ def _dispatch(args: argparse.Namespace) -> int:
             print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
         return 0
 
-    from .harness import PAPER_POLICIES, make_config, parse_agent_params, run
+    from .harness import PAPER_POLICIES, READING_AGENT_PARAMS, make_config, parse_agent_params, run
     from .report import write_outputs
 
     if args.command == "paper":
         scenario = f"paper-{args.scenario}"
         policies = list(PAPER_POLICIES)
-        params: dict = {}
+        params: dict = json.loads(json.dumps(READING_AGENT_PARAMS[args.env_version]))
     else:
         scenario = args.scenario
         policies = [p.strip() for p in args.policies.split(",") if p.strip()]

@@ -5,7 +5,7 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-import mimo_radar_env  # noqa: F401  (registers the env)
+from mimo_radar_env import ENV_IDS
 from mimo_radar_env.core.superarm import random_super_arms
 
 
@@ -15,7 +15,7 @@ def run_demo(
     """Run one episode per policy (same seed, so the same target trajectory) and summarise it."""
     results: dict[str, dict[str, float]] = {}
     for policy in ("random-valid", "oracle"):
-        env = gym.make("MimoRadarSelect-v0", scenario=scenario)
+        env = gym.make(ENV_IDS["v1"], scenario=scenario)
         env.reset(seed=seed)
         sc = env.unwrapped.scenario
         rng = np.random.default_rng(seed)
@@ -40,7 +40,7 @@ def run_demo(
 
 
 def print_demo(results: dict[str, dict[str, float]], scenario: str) -> None:
-    print(f"MimoRadarSelect-v0, scenario {scenario}: one episode per policy, same target trajectory")
+    print(f"MimoRadarSelect-v1, scenario {scenario}: one episode per policy, same target trajectory")
     print(f"{'policy':<14}{'steps':>7}{'total reward':>15}{'regret':>12}{'mean pos. error (m)':>22}")
     for name, row in results.items():
         print(

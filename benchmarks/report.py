@@ -91,7 +91,7 @@ def summarize(
         "env_options": config.env_options,
         "policies": policies,
     }
-    if per_trial is not None:
+    if per_trial is not None and config.trials >= 2:  # an interval needs two trials or more
         trial_metrics = {p: uncertainty.TrialMetrics(per_trial[p], channels) for p in totals}
         for policy, row in policies.items():
             row["ci"] = uncertainty.policy_intervals(trial_metrics[policy], config.seed)

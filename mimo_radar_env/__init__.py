@@ -1,12 +1,14 @@
 """mimo-radar-env: a Gymnasium testbed for transmitter/receiver selection in distributed MIMO radar.
 
-Importing the package registers ``MimoRadarSelect-v0`` (idempotently).
+Importing the package registers ``MimoRadarSelect-v0`` (reading 0 of the paper's ambiguous
+points, unchanged since its release) and ``MimoRadarSelect-v1`` (reading 1), idempotently.
 """
 
 from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
 from .envs import EnvOptions, MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
+from .envs.options import ENV_IDS, VERSION_DEFAULTS
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -17,19 +19,23 @@ from .scenarios import (
     random_scenario,
 )
 
-ENV_ID = "MimoRadarSelect-v0"
+ENV_ID = ENV_IDS["v0"]
 
-if ENV_ID not in registry:
-    register(
-        id=ENV_ID,
-        entry_point="mimo_radar_env.envs:MimoRadarSelectEnv",
-        vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
-    )
+for _version, _env_id in ENV_IDS.items():
+    if _env_id not in registry:
+        register(
+            id=_env_id,
+            entry_point="mimo_radar_env.envs:MimoRadarSelectEnv",
+            vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
+            kwargs=dict(VERSION_DEFAULTS[_version]),
+        )
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ENV_ID",
+    "ENV_IDS",
+    "VERSION_DEFAULTS",
     "EnvOptions",
     "Maneuver",
     "MimoRadarSelectEnv",

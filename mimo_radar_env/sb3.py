@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .envs import MimoRadarSelectVectorEnv
+from .envs.options import ENV_IDS
 from .extras import require
 from .scenarios import Scenario
 from .wrappers import RadarFeatures, SuperArmDiscreteAction, SuperArmIndex, make_ppo_env, scores_to_action
@@ -40,6 +41,8 @@ class NativeVecEnv(VecEnv):
     seed : int
     action : {"auto", "discrete", "scores"}
         As :func:`~mimo_radar_env.wrappers.make_ppo_env`.
+    version : {"v1", "v0"}
+        The env version whose defaults the options start from (default v1).
     **options
         Env options (``fusion=...``) and scenario overrides, as for ``gym.make``.
     """
@@ -47,9 +50,16 @@ class NativeVecEnv(VecEnv):
     render_mode = None
 
     def __init__(
-        self, scenario: str | Scenario, num_envs: int, seed: int = 0, action: str = "auto", **options: Any
+        self,
+        scenario: str | Scenario,
+        num_envs: int,
+        seed: int = 0,
+        action: str = "auto",
+        version: str = "v1",
+        **options: Any,
     ) -> None:
-        probe = make_ppo_env(scenario, action=action, **options)
+        probe = make_ppo_env(scenario, action=action, env_id=ENV_IDS[version], **options)
+        options = {**probe.unwrapped.options.to_dict(), **options}  # the version's defaults, resolved
         self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, scenario=probe.unwrapped.scenario, **options)
         self.scenario = self.env.scenario
         self.discrete = isinstance(probe.env, SuperArmDiscreteAction)

@@ -204,13 +204,15 @@ def _batch(obs: dict[str, NDArray]) -> dict[str, NDArray]:
     return {key: np.asarray(value)[None] for key, value in obs.items()}
 
 
-def make_ppo_env(scenario: Any = "paper-1", action: str = "auto", **kwargs: Any) -> gym.Env:
-    """``MimoRadarSelect-v0`` wrapped for PPO: flat features and valid actions.
+def make_ppo_env(
+    scenario: Any = "paper-1", action: str = "auto", env_id: str = "MimoRadarSelect-v1", **kwargs: Any
+) -> gym.Env:
+    """``MimoRadarSelect`` (``env_id``, default v1) wrapped for PPO: flat features and valid actions.
 
     ``action``: ``"discrete"`` (one action per super arm), ``"scores"`` (station
     scores) or ``"auto"`` (discrete when there are at most 1,000 super arms).
     """
-    env = gym.make("MimoRadarSelect-v0", scenario=scenario, **kwargs)
+    env = gym.make(env_id, scenario=scenario, **kwargs)
     sc = env.unwrapped.scenario
     count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
     if action == "auto":

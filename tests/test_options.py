@@ -22,6 +22,8 @@ NON_DEFAULT = {
     "measurement_quality": (0.5, ["--measurement-quality", "0.5"]),
     "invalid_action": ("raise", ["--invalid-action", "raise"]),
     "oracle_solver": ("alternating", ["--oracle-solver", "alternating"]),
+    "lambda_scale": ("db", ["--lambda-scale", "db"]),
+    "truth": ("shared", ["--truth", "shared"]),
 }
 #: A bad value of every option, as a CLI argument and as a Python value.
 BAD = {
@@ -31,6 +33,8 @@ BAD = {
     "measurement_quality": ("--measurement-quality", "-1", -1.0),
     "invalid_action": ("--invalid-action", "ignore", "ignore"),
     "oracle_solver": ("--oracle-solver", "local-search", "local-search"),
+    "lambda_scale": ("--lambda-scale", "log", "log"),
+    "truth": ("--truth", "per-run", "per-run"),
 }
 
 
@@ -63,7 +67,7 @@ def test_every_option_round_trips_from_the_cli_to_the_env(name, tmp_path, monkey
     monkeypatch.setattr(harness, "MimoRadarSelectVectorEnv", Spy)
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "2", "--steps", "3"]
-    argv += ["--workers", "1", "--no-figures", "--quiet", "--out", str(out), *flags]
+    argv += ["--workers", "1", "--no-figures", "--quiet", "--out", str(out), "--env-version", "v0", *flags]
     assert main(argv) == 0
     recorded = json.loads((out / "config.json").read_text())["env_options"]
     assert recorded == {**EnvOptions().to_dict(), name: value}
@@ -153,3 +157,17 @@ def test_options_are_typed_and_frozen():
         EnvOptions(measurement_quality=True)
     with pytest.raises(ValueError, match="measurement_quality"):
         EnvOptions(measurement_quality=np.inf)
+
+
+def test_the_cli_starts_from_the_chosen_versions_defaults(tmp_path):
+    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    argv += ["--workers", "1", "--no-figures", "--quiet"]
+    assert main([*argv, "--out", str(tmp_path / "v1")]) == 0  # v1 is the default
+    v1 = json.loads((tmp_path / "v1" / "config.json").read_text())["env_options"]
+    assert v1 == EnvOptions.for_version("v1").to_dict() and v1["truth"] == "shared"
+    assert main([*argv, "--env-version", "v1", "--truth", "per-trial", "--out", str(tmp_path / "mix")]) == 0
+    mixed = json.loads((tmp_path / "mix" / "config.json").read_text())["env_options"]
+    assert mixed == {**v1, "truth": "per-trial"}
+    assert main([*argv, "--env-version", "v0", "--out", str(tmp_path / "v0")]) == 0
+    v0 = json.loads((tmp_path / "v0" / "config.json").read_text())["env_options"]
+    assert v0 == EnvOptions().to_dict()

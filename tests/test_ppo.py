@@ -77,7 +77,7 @@ def test_sb3_check_env_on_the_env_and_the_training_wrapper():
     # arrays for images), which the training wrapper flattens
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        check_env(gym.make("MimoRadarSelect-v0", scenario="paper-3").unwrapped)
+        check_env(gym.make("MimoRadarSelect-v1", scenario="paper-3").unwrapped)
     shape_advice = ("unconventional shape", "is an image", "minimal resolution for an image")
     for w in caught:
         assert any(text in str(w.message) for text in shape_advice), str(w.message)

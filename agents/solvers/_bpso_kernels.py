@@ -59,6 +59,7 @@ def run_numpy(
     inertia_start: float,
     inertia_end: float,
     velocity_clamp: float,
+    set_rule: bool = False,
 ) -> NDArray[np.int8]:
     """All iterations, vectorised over trials and particles. Returns the global bests (B, L)."""
     batch, population, length = positions.shape
@@ -89,8 +90,11 @@ def run_numpy(
             + (c2 * r2)[..., None] * (global_best[:, None, :] - positions)
         )  # eq20
         velocities = np.minimum(np.maximum(velocities, -velocity_clamp), velocity_clamp)
-        flip = u * (1.0 + exp_negative(velocities)) < 1.0  # eq21: u < sigmoid(V)
-        positions = np.where(flip, 1 - positions, positions).astype(np.int8)
+        draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
+        if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
+            positions = draw.astype(np.int8)
+        else:  # eq21 as written: the bit flips with probability sigmoid(V)
+            positions = np.where(draw, 1 - positions, positions).astype(np.int8)
         fitness, valid = _fitness_np(index, positions, num_tx, tx_count, rx_count)
         improved = valid & (fitness > personal_fit)
         personal_best = np.where(improved[..., None], positions, personal_best)
@@ -132,6 +136,7 @@ if HAVE_NUMBA:  # pragma: no branch
         inertia_start,
         inertia_end,
         velocity_clamp,
+        set_rule,
     ):
         """Same numbers as :func:`run_numpy`. Per trial, arrays are laid out (bit, particle)
         so that every inner loop runs over particles and vectorises."""
@@ -186,7 +191,8 @@ if HAVE_NUMBA:  # pragma: no branch
                             e = e * e
                             e = e * e
                             e = e * e
-                            position[j, p] = d ^ np.int8(u * (1.0 + e) < 1.0)
+                            hit = np.int8(u * (1.0 + e) < 1.0)
+                            position[j, p] = hit if set_rule else d ^ hit
                 # eq19 for every particle, summed in the order of _fitness_np
                 for p in range(population):
                     fitness[p] = 0.0

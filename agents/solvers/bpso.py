@@ -12,6 +12,9 @@ from ..random_streams import TrialRandom
 from . import _bpso_kernels as _kernels
 from .base import SuperArmSolver
 
+#: BPSO position-update rules (docs/agents.md).
+BPSO_RULES = ("xor", "set")
+
 
 class BPSOSolver(SuperArmSolver):
     """BPSO as written in the paper, vectorised over trials and particles.
@@ -45,6 +48,10 @@ class BPSOSolver(SuperArmSolver):
         Inertia weight ``omega`` at the first and last iteration (0.9, 0.4).
     velocity_clamp : float
         ``|V| <= velocity_clamp`` (default 6).
+    rule : {"xor", "set"}
+        The position update: ``"xor"``, eq21 as written, flips a bit with probability
+        ``sigmoid(V)`` (reading 0, default); ``"set"`` sets it to 1 with that probability
+        (Kennedy & Eberhart's binary PSO, the one the paper cites; reading 1).
     use_numba : bool
         Run the compiled kernel when numba is installed (default). The pure-numpy
         kernel gives the same numbers, about 10x slower.
@@ -68,6 +75,7 @@ class BPSOSolver(SuperArmSolver):
         inertia_start: float = 0.9,
         inertia_end: float = 0.4,
         velocity_clamp: float = 6.0,
+        rule: str = "xor",
         use_numba: bool = True,
     ) -> None:
         super().__init__(tx_count, rx_count)
@@ -80,6 +88,9 @@ class BPSOSolver(SuperArmSolver):
         self.c1, self.c2 = c1, c2
         self.inertia_start, self.inertia_end = inertia_start, inertia_end
         self.velocity_clamp = velocity_clamp
+        if rule not in BPSO_RULES:
+            raise ValueError(f"rule must be one of {list(BPSO_RULES)}, got {rule!r}")
+        self.rule = rule
         self.use_numba = use_numba
 
     def solve(
@@ -110,5 +121,6 @@ class BPSOSolver(SuperArmSolver):
             float(self.inertia_start),
             float(self.inertia_end),
             float(self.velocity_clamp),
+            self.rule == "set",
         ).astype(bool)
         return best[:, :num_tx], best[:, num_tx:]

@@ -42,6 +42,8 @@ class Stream(IntEnum):
     PROCESS_NOISE = 0x200  #: the truth: process noise
     SINR = 0x300  #: observations: Swerling-I SINR samples
     MEASUREMENT = 0x400  #: observations: measurement noise
+    INITIAL_ESTIMATE = 0x500  #: a trial's initial estimate error (shared truth, reading 1)
+    SHARED_TRUTH_KEY = 0x600  #: the truth key of a scenario's ``truth_seed`` (shared truth)
     AGENT_KEY = 0x1000  #: an agent's per-trial keys, from its seed + trial index
     AGENT_EXPLORE = 0x1001  #: epsilon-greedy's exploration coin
     AGENT_RANDOM_TX = 0x1002  #: uniformly random super arms: transmitters
@@ -55,7 +57,7 @@ class Stream(IntEnum):
 
 
 #: Streams drawn from a trial's observation key; the others use its truth key.
-OBSERVATION_STREAMS = frozenset({Stream.SINR, Stream.MEASUREMENT})
+OBSERVATION_STREAMS = frozenset({Stream.SINR, Stream.MEASUREMENT, Stream.INITIAL_ESTIMATE})
 
 
 def mix(z: NDArray[np.uint64]) -> NDArray[np.uint64]:

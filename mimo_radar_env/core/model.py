@@ -117,15 +117,24 @@ class RadarModel:
         """``sum_k Omega_k S[k, m, n]``: the expected reward of each channel, (..., M, N)."""
         return np.einsum("k,...kmn->...mn", self.weights, mean_sinr)
 
-    def quality(self, sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
-        """``lambda`` of eq32 from linear SINR, clipped into [0.2, 1.2] (docs/model.md, section 5).
+    def quality(
+        self, sinr: NDArray[np.float64], target_axis: int = -3, scale: str = "linear"
+    ) -> NDArray[np.float64]:
+        """``lambda`` of eq32 from the SINR, clipped into [0.2, 1.2] (docs/model.md, section 5).
 
-        ``target_axis`` is the axis of ``sinr`` that indexes targets.
+        ``target_axis`` is the axis of ``sinr`` that indexes targets. ``scale="linear"`` applies
+        eq32 to linear SINRs (reading 0); ``"db"`` to SINRs in dB,
+        ``(S_dB - S_min,dB) / (S_max,dB - S_min,dB) + 0.2`` (reading 1).
         """
         shape = [1] * sinr.ndim
         shape[target_axis] = self.num_targets
         s_min = self.min_sinr.reshape(shape)
         peak = self.scenario.peak_sinr
+        if scale == "db":
+            with np.errstate(divide="ignore"):
+                sinr, s_min, peak = 10 * np.log10(sinr), 10 * np.log10(s_min), 10 * np.log10(peak)
+        elif scale != "linear":
+            raise ValueError(f"scale must be 'linear' or 'db', got {scale!r}")
         lam = (sinr - s_min) / (peak - s_min) + LAMBDA_FLOOR
         return np.clip(lam, LAMBDA_FLOOR, 1.0 + LAMBDA_FLOOR)
 

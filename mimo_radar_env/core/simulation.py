@@ -20,7 +20,7 @@ from .counter_hash import Stream
 from .geometry import bistatic_measurement, wrap_angle
 from .model import RadarModel
 from .motion import transition_matrix
-from .streams import TrialStreams, full_index
+from .streams import TrialStreams, full_index, shared_truth_key
 
 
 @dataclass
@@ -65,9 +65,21 @@ class RadarSimulation:
     measurement_quality : float, optional
         Replace eq32's SINR-driven ``lambda`` by this constant on every channel
         (an ablation that decouples measurement accuracy from the selection).
+    lambda_scale : {"linear", "db"}
+        The scale eq32 is applied on (:meth:`RadarModel.quality`).
+    truth : {"per-trial", "shared"}
+        A true trajectory per trial drawn from ``N(X1_hat, P1_hat)``, or one shared by every
+        trial (see :meth:`reset`).
     """
 
-    def __init__(self, model: RadarModel, batch_size: int, measurement_quality: float | None = None) -> None:
+    def __init__(
+        self,
+        model: RadarModel,
+        batch_size: int,
+        measurement_quality: float | None = None,
+        lambda_scale: str = "linear",
+        truth: str = "per-trial",
+    ) -> None:
         if batch_size < 1:
             raise ValueError(f"batch_size must be >= 1, got {batch_size}")
         if measurement_quality is not None and not measurement_quality > 0:
@@ -75,6 +87,13 @@ class RadarSimulation:
         self.model = model
         self.batch_size = batch_size
         self.measurement_quality = measurement_quality
+        self.lambda_scale = lambda_scale
+        if truth not in ("per-trial", "shared"):
+            raise ValueError(f"truth must be 'per-trial' or 'shared', got {truth!r}")
+        self.truth = truth
+        self.initial_estimates = np.broadcast_to(
+            model.initial_states, (batch_size, model.num_targets, 4)
+        ).copy()
         self.step_index = 0
         self.state = np.zeros((batch_size, model.num_targets, 4))
         self._streams: TrialStreams | None = None
@@ -84,7 +103,15 @@ class RadarSimulation:
 
     # -------------------------------------------------------------- truth
     def reset(self, keys: NDArray[np.uint64]) -> None:
-        """Start B new trials; ``keys`` (B, 2) from :func:`keys_from_generator`."""
+        """Start B new trials; ``keys`` (B, 2) from :func:`keys_from_generator`.
+
+        With ``truth="shared"`` every trial's truth key is the scenario's ``truth_seed`` key:
+        one true trajectory, started at ``X1_hat``, the same in every trial; each trial's
+        initial *estimate* is then ``X1_hat + N(0, P1_hat)``, drawn from the trial's own key.
+        """
+        keys = np.array(keys, dtype=np.uint64)
+        if self.truth == "shared":
+            keys[:, 0] = shared_truth_key(self.model.scenario.truth_seed)
         self._streams = TrialStreams(keys)
         if self._streams.batch_size != self.batch_size:
             raise ValueError(f"expected keys for {self.batch_size} trials, got {self._streams.batch_size}")
@@ -92,7 +119,18 @@ class RadarSimulation:
         draws = self._streams.normal(
             Stream.INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4))
         )
-        self.state = model.initial_states + np.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
+        offset = np.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
+        if self.truth == "shared":
+            estimate_draws = self._streams.normal(
+                Stream.INITIAL_ESTIMATE, 0, full_index(self.batch_size, (model.num_targets, 4))
+            )
+            self.state = np.broadcast_to(model.initial_states, offset.shape).copy()
+            self.initial_estimates = model.initial_states + np.einsum(
+                "kij,bkj->bki", model.initial_cov_sqrt, estimate_draws
+            )
+        else:
+            self.state = model.initial_states + offset
+            self.initial_estimates = np.broadcast_to(model.initial_states, offset.shape).copy()
         self.step_index = 0
         self._upcoming = None
         self._mean_sinr = None
@@ -171,7 +209,7 @@ class RadarSimulation:
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
         sinr = mean * self.streams.exponential(Stream.SINR, self.step_index, flat)
         if self.measurement_quality is None:
-            lam = model.quality(mean, target_axis=1)
+            lam = model.quality(mean, target_axis=1, scale=self.lambda_scale)
         else:
             lam = np.full_like(mean, self.measurement_quality)
         variance = model.measurement_variance(lam)  # (B, K, C, 2)

@@ -21,7 +21,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from .counter_hash import OBSERVATION_STREAMS, Stream, element_bits, stream_base, to_unit
+from .counter_hash import GOLDEN, OBSERVATION_STREAMS, Stream, element_bits, mix, stream_base, to_unit
+
+
+def shared_truth_key(truth_seed: int) -> np.uint64:
+    """The truth key of every trial when the truth is shared (a scenario's ``truth_seed``)."""
+    return mix(np.array([truth_seed], dtype=np.uint64) * GOLDEN ^ np.uint64(Stream.SHARED_TRUTH_KEY))[0]
 
 
 def keys_from_generator(generator: np.random.Generator) -> NDArray[np.uint64]:

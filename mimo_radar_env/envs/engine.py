@@ -65,7 +65,9 @@ class RadarEngine:
         check_memory(scenario, batch_size)
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
-        self.simulation = RadarSimulation(self.model, batch_size, options.measurement_quality)
+        self.simulation = RadarSimulation(
+            self.model, batch_size, options.measurement_quality, options.lambda_scale, options.truth
+        )
         self.tracker = (
             IMMUKFTracker(self.model, batch_size, fusion=options.fusion) if options.tracking else None
         )
@@ -87,7 +89,7 @@ class RadarEngine:
         keys = np.stack([keys_from_generator(g) for g in generators])
         self.simulation.reset(keys)
         if self.tracker is not None:
-            self.tracker.reset()
+            self.tracker.reset(self.simulation.initial_estimates)
         self.step_index = 0
         self.last_action[:] = 0
         self.last_valid[:] = False
@@ -163,7 +165,8 @@ class RadarEngine:
         if self.options.filter_noise == "true":
             variance = channels.noise_variance
         else:
-            variance = self.model.measurement_variance(self.model.quality(channels.sinr, target_axis=1))
+            lam_hat = self.model.quality(channels.sinr, target_axis=1, scale=self.options.lambda_scale)
+            variance = self.model.measurement_variance(lam_hat)
         self.tracker.step(
             self.model.tx[channels.tx_stations],
             self.model.rx[channels.rx_stations],

@@ -1,4 +1,4 @@
-"""``MimoRadarSelect-v0``: transmitter/receiver selection for a distributed MIMO radar.
+"""``MimoRadarSelect``: transmitter/receiver selection for a distributed MIMO radar (v0 and v1).
 
 The single env and the native vector env stand side by side, as in Gymnasium's
 ``cartpole.py``; both drive the same :class:`~mimo_radar_env.envs.engine.RadarEngine`.
@@ -140,7 +140,19 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     * ``oracle_solver``: ``"auto"``, ``"exact"`` or ``"alternating"``: how
       ``optimal_reward``, ``optimal_action`` and ``oracle_action()`` are found; ``auto`` is
       exact up to 20,000 subsets on the smaller side and alternating maximisation (a lower
-      bound of the optimum) beyond.
+      bound of the optimum) beyond;
+    * ``lambda_scale``: ``"linear"`` or ``"db"``: the scale on which eq32 maps the mean SINR
+      to measurement quality;
+    * ``truth``: ``"per-trial"`` (each trial's truth starts at a draw from
+      ``N(X1_hat, P1_hat)``) or ``"shared"`` (one true trajectory per target, from ``X1_hat``
+      and the scenario's ``truth_seed``, the same in every trial; each trial's tracker starts
+      at ``X1_hat + N(0, P1_hat)``).
+
+    ``MimoRadarSelect-v0`` defaults to ``lambda_scale="linear"``, ``truth="per-trial"``
+    (reading 0 of the paper's ambiguous points, unchanged since release);
+    ``MimoRadarSelect-v1`` to ``lambda_scale="db"``, ``truth="shared"`` (reading 1; its
+    paper study also runs MG-CRB-CL's BPSO with the standard position rule). Every other
+    default is the same.
 
     Any other keyword that names a scenario field overrides it (``horizon=200``); any other
     keyword raises ``TypeError``.

@@ -20,10 +20,19 @@ from ..tracking import FUSIONS
 
 #: The scenario of ``gym.make("MimoRadarSelect-v0")`` without a ``scenario`` keyword.
 DEFAULT_SCENARIO = "paper-1"
+#: The defaults that differ from :class:`EnvOptions`' (v0's) in each registered env version:
+#: v1 is reading 1 of the paper's ambiguous points (docs/model.md, section 13).
+VERSION_DEFAULTS: dict[str, dict[str, Any]] = {
+    "v0": {},
+    "v1": {"lambda_scale": "db", "truth": "shared"},
+}
+ENV_IDS = {version: f"MimoRadarSelect-{version}" for version in VERSION_DEFAULTS}
 
 FusionName = Literal[tuple(FUSIONS)]  # type: ignore[valid-type]
 FilterNoise = Literal["true", "estimated"]
 InvalidAction = Literal["probe-nothing", "raise"]
+LambdaScale = Literal["linear", "db"]
+Truth = Literal["per-trial", "shared"]
 OracleSolver = Literal[SUPER_ARM_METHODS]  # type: ignore[valid-type]
 
 
@@ -56,6 +65,14 @@ class EnvOptions:
         How ``optimal_reward``, ``optimal_action`` and ``oracle_action()`` are found: exact
         enumeration, alternating maximisation (a lower bound of the optimum), or ``"auto"``:
         exact up to 20,000 subsets on the smaller side, alternating beyond.
+    lambda_scale : {"linear", "db"}
+        The scale eq32 maps SINR to measurement quality on: linear SINR (reading 0, v0's
+        default) or dB (reading 1, v1's default).
+    truth : {"per-trial", "shared"}
+        A true trajectory per trial, drawn from ``N(X1_hat, P1_hat)`` (reading 0), or one
+        trajectory shared by every trial, started at ``X1_hat`` and drawn from the scenario's
+        ``truth_seed``, with each trial's tracker started at ``X1_hat + N(0, P1_hat)``
+        (reading 1).
     """
 
     fusion: FusionName = _option("average", "tracker fusion: the paper's eq22 'average' or 'centralized'")
@@ -72,6 +89,15 @@ class EnvOptions:
     oracle_solver: OracleSolver = _option(
         "auto", "how the optimal super arm is found: exact, alternating, or auto by size"
     )
+    lambda_scale: LambdaScale = _option("linear", "the scale eq32 maps SINR to measurement quality on")
+    truth: Truth = _option("per-trial", "a true trajectory per trial, or one shared by all trials")
+
+    @classmethod
+    def for_version(cls, version: str, **options: Any) -> EnvOptions:
+        """The options of env version ``version`` (``"v0"``, ``"v1"``) with some overridden."""
+        if version not in VERSION_DEFAULTS:
+            raise ValueError(f"env version must be one of {sorted(VERSION_DEFAULTS)}, got {version!r}")
+        return cls(**{**VERSION_DEFAULTS[version], **options})
 
     def __post_init__(self) -> None:
         for name, choices in option_choices().items():

@@ -91,6 +91,9 @@ class Scenario:
     peak_sinr : float
         ``S_max`` of eq32: the per-scenario constant ``C`` puts the largest
         noise-free mean SINR at this value (linear; 10 = 10 dB).
+    truth_seed : int
+        Seed of the one true trajectory every trial shares when the env runs with
+        ``truth="shared"`` (reading 1).
     """
 
     name: str
@@ -110,6 +113,7 @@ class Scenario:
     range_variance: float = 5.0
     azimuth_variance: float = 0.002
     peak_sinr: float = 10.0
+    truth_seed: int = 0
 
     # ------------------------------------------------------------------ sizes
     @property
@@ -188,6 +192,7 @@ class Scenario:
         )
         for name in ("sample_time", "noise_power", "range_variance", "azimuth_variance", "peak_sinr"):
             out[name] = check.positive_number(name, get(name))
+        out["truth_seed"] = check.integer_in("truth_seed", get("truth_seed"), 0, 2**63 - 1, "a seed")
         out["process_noise"] = check.number(name := "process_noise", get(name))
         if out["process_noise"] < 0:
             raise ScenarioError(f"process_noise must be >= 0, got {out['process_noise']}")
@@ -291,6 +296,7 @@ class Scenario:
             "range_variance": self.range_variance,
             "azimuth_variance": self.azimuth_variance,
             "peak_sinr": self.peak_sinr,
+            "truth_seed": self.truth_seed,
         }
 
 

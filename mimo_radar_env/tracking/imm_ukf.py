@@ -86,14 +86,16 @@ class IMMUKFTracker:
         self.reset()
 
     # ------------------------------------------------------------ state
-    def reset(self) -> None:
-        """Every trial back to the initial estimate ``X1_hat, P1_hat`` of each target."""
+    def reset(self, initial_estimates: NDArray[np.float64] | None = None) -> None:
+        """Every trial back to its initial estimate (default ``X1_hat``; (B, K, 4)) with ``P1_hat``."""
         B, K, R = self.batch_size, self.model.num_targets, self.num_models
         initial_cov = np.stack([t.initial_covariance for t in self.model.scenario.targets])
-        self.means = np.broadcast_to(self.model.initial_states[None, :, None, :], (B, K, R, 4)).copy()
+        start = self.model.initial_states if initial_estimates is None else np.asarray(initial_estimates)
+        start = np.broadcast_to(start, (B, K, 4))
+        self.means = np.broadcast_to(start[:, :, None, :], (B, K, R, 4)).copy()
         self.covs = np.broadcast_to(initial_cov[None, :, None], (B, K, R, 4, 4)).copy()
         self.log_probs = np.broadcast_to(self.log_initial, (B, K, R)).copy()
-        self.estimate = np.broadcast_to(self.model.initial_states, (B, K, 4)).copy()
+        self.estimate = start.copy()
         self.covariance = np.broadcast_to(initial_cov, (B, K, 4, 4)).copy()
         self.repairs[:] = 0
 

@@ -1,0 +1,87 @@
+"""The readings of the paper's ambiguous points: each option changes exactly what it says."""
+
+import gymnasium as gym
+import numpy as np
+from scipy import stats
+
+from agents.random_streams import TrialRandom
+from agents.solvers import BPSOSolver, ExactSolver
+from mimo_radar_env import EnvOptions, RadarModel, load_scenario
+from mimo_radar_env.core.simulation import RadarSimulation
+from mimo_radar_env.core.streams import keys_from_generator
+
+
+def _simulation(scenario, batch, **options):
+    model = RadarModel.from_scenario(load_scenario(scenario))
+    sim = RadarSimulation(model, batch, **options)
+    rng = np.random.default_rng(0)
+    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    return model, sim
+
+
+def test_lambda_scale_db_is_eq32_on_decibels():
+    model, sim = _simulation("paper-3", 5, lambda_scale="db")
+    for _ in range(30):
+        sim.advance()
+    tx, rx = np.tile([0, 3], (5, 1)), np.tile([1, 2, 5], (5, 1))
+    obs = sim.observe(tx, rx, np.ones(5, bool))
+    s_db = 10 * np.log10(obs.mean_sinr)  # (B, K, C)
+    s_min_db = 10 * np.log10(model.min_sinr)[None, :, None]
+    lam = np.clip((s_db - s_min_db) / (10.0 - s_min_db) + 0.2, 0.2, 1.2)  # S_max = 10 is 10 dB
+    expected = np.stack([5.0 / lam, 0.002 / lam], axis=-1)
+    np.testing.assert_allclose(obs.noise_variance, expected, rtol=1e-12)
+    linear = _simulation("paper-3", 5)[1]
+    for _ in range(30):
+        linear.advance()
+    assert not np.allclose(linear.observe(tx, rx, np.ones(5, bool)).noise_variance, expected)
+
+
+def test_shared_truth_is_one_trajectory_and_estimates_start_at_p1_hat_spread():
+    batch = 3000
+    venv = gym.make_vec("MimoRadarSelect-v1", num_envs=batch, vectorization_mode="vector_entry_point")
+    obs, info = venv.reset(seed=0)
+    scenario = venv.scenario
+    x1, p1 = scenario.targets[0].initial_state, scenario.targets[0].initial_covariance
+    np.testing.assert_array_equal(info["true_state"], np.broadcast_to(x1, info["true_state"].shape))
+    error = obs["track"][:, 0] - x1  # each trial's initial estimate error
+    for i in range(4):  # variance 20 in every component: a chi-square test of each
+        statistic = (batch - 1) * error[:, i].var(ddof=1) / p1[i, i]
+        assert 0.001 < stats.chi2.cdf(statistic, batch - 1) < 0.999
+    assert abs(np.corrcoef(error[:, 0], error[:, 2])[0, 1]) < 4 / np.sqrt(batch)
+    action = np.tile(venv.oracle_action()[0], (batch, 1))
+    for _ in range(20):
+        _, _, _, _, info = venv.step(action)
+    truth = info["true_state"]
+    assert np.all(truth == truth[0]) and not np.allclose(truth[0], x1)  # one noisy trajectory
+    other = gym.make_vec(
+        "MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point", truth_seed=1
+    )
+    other.reset(seed=0)
+    for _ in range(20):
+        _, _, _, _, info_other = other.step(action[:2])
+    assert not np.allclose(info_other["true_state"][0], truth[0])  # truth_seed picks the trajectory
+
+
+def test_per_trial_truth_is_v0s():
+    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=200, vectorization_mode="vector_entry_point")
+    obs, info = venv.reset(seed=0)
+    x1 = venv.scenario.targets[0].initial_state
+    np.testing.assert_array_equal(obs["track"][:, 0], np.broadcast_to(x1, (200, 4)))
+    assert info["true_state"][:, 0].std(axis=0).min() > 3  # spread sqrt(20) ~ 4.5
+
+
+def test_bpso_set_rule_finds_the_optimum_in_at_least_95_percent():
+    index = np.random.default_rng(11).exponential(size=(1000, 4, 6))
+    streams = TrialRandom.for_batch(0, 1000)
+    tx, rx = BPSOSolver(2, 3, rule="set").solve(index, streams)  # the paper's swarm: 50 x 100
+    etx, erx = ExactSolver(2, 3).solve(index, streams)
+    optimal = ((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()
+    assert optimal >= 0.95, optimal
+    xor_tx, xor_rx = BPSOSolver(2, 3).solve(index, TrialRandom.for_batch(0, 1000))
+    assert ((xor_tx == etx).all(axis=1) & (xor_rx == erx).all(axis=1)).mean() < 0.7  # eq21 as written
+
+
+def test_versions_register_their_defaults():
+    assert gym.make("MimoRadarSelect-v0").unwrapped.options == EnvOptions()
+    assert gym.make("MimoRadarSelect-v1").unwrapped.options == EnvOptions(lambda_scale="db", truth="shared")
+    assert gym.make("MimoRadarSelect-v1", truth="per-trial").unwrapped.options.truth == "per-trial"
