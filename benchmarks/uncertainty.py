@@ -98,31 +98,37 @@ def _weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
     return (weights / rows.shape[1]).reshape((*index.shape[:-1], num_trials))
 
 
-def interval(metric: Metric, num_trials: int, seed: int = 0, method: str = "BCa") -> tuple[float, float]:
-    """The 95 % bootstrap interval of ``metric`` over ``num_trials`` trials."""
-    if num_trials < 2:
-        return float("nan"), float("nan")
+def _bootstrap(
+    metric: Callable[[NDArray], NDArray], num_trials: int, resamples: int, method: str, seed: int
+) -> tuple[NDArray, NDArray]:
+    """``scipy.stats.bootstrap`` over resampled trials of ``metric(weights) -> (...,) or (..., T)``."""
 
     def statistic(index: NDArray, axis: int = -1) -> NDArray:
-        return metric(_weights(index, num_trials))
+        value = metric(_weights(index, num_trials))
+        return np.moveaxis(value, -1, 0) if value.ndim > np.ndim(index) - 1 else value
 
-    def run(kind: str) -> tuple[float, float]:
-        with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
-            warnings.simplefilter("ignore", stats.DegenerateDataWarning)
-            result = stats.bootstrap(
-                (np.arange(num_trials),),
-                statistic,
-                vectorized=True,
-                n_resamples=RESAMPLES,
-                confidence_level=CONFIDENCE,
-                method=kind,
-                random_state=np.random.default_rng(seed),
-            )
-        return result.confidence_interval
+    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        result = stats.bootstrap(
+            (np.arange(num_trials),),
+            statistic,
+            vectorized=True,
+            n_resamples=resamples,
+            confidence_level=CONFIDENCE,
+            method=method,
+            random_state=np.random.default_rng(seed),
+        )
+    return result.confidence_interval.low, result.confidence_interval.high
 
-    low, high = run(method)
+
+def interval(metric: Metric, num_trials: int, seed: int = 0, method: str = "BCa") -> tuple[float, float]:
+    """The 95 % bootstrap interval of ``metric`` over ``num_trials`` trials (BCa; percentile where
+    BCa is undefined)."""
+    if num_trials < 2:
+        return float("nan"), float("nan")
+    low, high = _bootstrap(metric, num_trials, RESAMPLES, method, seed)
     if not (np.isfinite(low) and np.isfinite(high)):  # BCa is undefined for a constant statistic
-        low, high = run("percentile")
+        low, high = _bootstrap(metric, num_trials, RESAMPLES, "percentile", seed)
     return float(low), float(high)
 
 
@@ -131,20 +137,7 @@ def band(curve: Callable[[NDArray], NDArray], num_trials: int, seed: int = 0) ->
     if num_trials < 2:
         nan = np.full(curve(np.full(num_trials, 1.0 / num_trials)).shape[-1], np.nan)
         return nan, nan
-
-    def statistic(index: NDArray, axis: int = -1) -> NDArray:
-        return np.moveaxis(curve(_weights(index, num_trials)), -1, 0)
-
-    result = stats.bootstrap(
-        (np.arange(num_trials),),
-        statistic,
-        vectorized=True,
-        n_resamples=BAND_RESAMPLES,
-        confidence_level=CONFIDENCE,
-        method="percentile",
-        random_state=np.random.default_rng(seed),
-    )
-    return result.confidence_interval.low, result.confidence_interval.high
+    return _bootstrap(curve, num_trials, BAND_RESAMPLES, "percentile", seed)
 
 
 def policy_intervals(metrics: TrialMetrics, seed: int = 0) -> dict[str, list[float]]:

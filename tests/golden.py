@@ -1,4 +1,4 @@
-"""Reference numbers recorded before the performance work (docs/performance.md).
+"""Reference numbers of MimoRadarSelect-v0 (docs/performance.md, "No result changes").
 
 ``python -m tests.golden`` rewrites tests/data/golden.npz; only do that for an intended
 change of results, never to make a fast path pass.

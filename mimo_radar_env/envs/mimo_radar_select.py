@@ -112,8 +112,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     ## Starting State
 
-    The true state of each target is drawn from ``N(X1_hat, P1_hat)`` of the
-    scenario; the tracker starts at ``X1_hat, P1_hat``.
+    With ``truth="per-trial"`` (v0) the true state of each target is drawn from
+    ``N(X1_hat, P1_hat)`` of the scenario and the tracker starts at ``X1_hat, P1_hat``; with
+    ``truth="shared"`` (v1) the truth starts at ``X1_hat`` (one trajectory for all trials,
+    from the scenario's ``truth_seed``) and the tracker at ``X1_hat + N(0, P1_hat)``.
 
     ## Episode End
 
