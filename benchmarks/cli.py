@@ -213,6 +213,16 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers", type=_integer(1), default=None, help="worker processes for the study (default: cores)"
     )
 
+    claims = sub.add_parser(
+        "claims",
+        help="judge the paper's claims on paper studies (holds / consistent / contradicted)",
+        description="Evaluate the paper's claims (docs/results.md) on finished 'paper' runs, or run the "
+        "paper studies first (into OUT/paper-N, resumable). Writes OUT/claims.md and OUT/claims.json.",
+    )
+    claims.add_argument("runs", nargs="*", help="finished paper-study folders (default: run them into --out)")
+    claims.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
+    _add_run_options(claims)
+
     sub.add_parser("agents", help="list the registered agents and their parameters")
 
     demo = sub.add_parser("demo", help="one episode of a scenario with a random policy and the oracle")
@@ -273,6 +283,62 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def _claims(args: argparse.Namespace) -> int:
+    from . import claims
+    from .harness import PAPER_POLICIES, READING_AGENT_PARAMS, HarnessError, make_config, run
+    from .report import write_outputs
+
+    out = Path(args.out)
+    runs = [Path(r) for r in args.runs]
+    if not runs:
+        try:
+            numbers = [int(s) for s in args.scenarios.split(",")]
+        except ValueError:
+            raise HarnessError(
+                f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}"
+            ) from None
+        if not numbers or not set(numbers) <= {1, 2, 3}:
+            raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}")
+        options = env_options_from(args)
+        params = json.loads(json.dumps(READING_AGENT_PARAMS[args.env_version]))
+        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+        for number in numbers:
+            config = make_config(
+                f"paper-{number}",
+                list(PAPER_POLICIES),
+                args.trials,
+                args.steps,
+                args.seed,
+                args.shard_size,
+                params,
+                options=options,
+            )
+            folder = out / f"paper-{number}"
+            totals = run(
+                config,
+                folder,
+                workers=workers,
+                backend=args.backend,
+                address=args.address,
+                progress=not args.quiet,
+            )
+            write_outputs(config, totals, folder, figures=not args.no_figures)
+            runs.append(folder)
+    studies = {}
+    for folder in runs:
+        if not (folder / "config.json").exists():
+            raise HarnessError(f"{folder} holds no finished run (no config.json)")
+        name, policies = claims.load_study(folder)
+        studies[name] = policies
+    results = claims.evaluate(studies, args.seed)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "claims.json").write_text(json.dumps(results, indent=2, allow_nan=False))
+    title = f"The paper's claims ({', '.join(sorted(studies))})"
+    (out / "claims.md").write_text(claims.scorecard_markdown(results, title))
+    print((out / "claims.md").read_text())
+    return 0
+
+
 def _dispatch(args: argparse.Namespace) -> int:
     if args.command == "demo":
         from .demo import print_demo, run_demo
@@ -316,6 +382,8 @@ def _dispatch(args: argparse.Namespace) -> int:
 
         perf_main(args.out, quick=args.quick, workers=args.workers)
         return 0
+    if args.command == "claims":
+        return _claims(args)
     if args.command == "agents":
         import agents
 

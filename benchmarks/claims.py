@@ -1,0 +1,466 @@
+"""The paper's claims as testable statements, judged on a finished paper study.
+
+Every claim is a list of comparisons; a comparison is a statistic of the policies' per-trial
+values, evaluated on the same resampled trials for every policy it involves (paired), with a
+claimed sign. From its 95 % bootstrap interval a comparison **holds** (significant in the
+claimed direction), is **consistent** (not significant either way) or is **contradicted**
+(significant against). A claim holds when all its comparisons hold, is contradicted when any
+is contradicted, and is consistent otherwise. Windows are steps ``[start, stop)`` of the
+paper's 1000-step horizon (time in seconds, ``Ts = 1 s``); a window the run did not reach is
+"not evaluated".
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from . import uncertainty
+from .harness import RunConfig, load_per_trial
+from .report import PAPER_ARMSE, PAPER_ASR
+
+LEARNING = ("mg-crb-cl", "ucb1", "epsilon-greedy")
+FIXED = ("fix1", "fix2")
+Window = tuple[int, int] | None
+
+
+class Policies:
+    """The study's policies as :class:`~benchmarks.uncertainty.TrialMetrics`, with windowed metrics."""
+
+    def __init__(self, metrics: dict[str, uncertainty.TrialMetrics], scenario: Any = None) -> None:
+        self.metrics = metrics
+        self.scenario = scenario
+        self.steps = next(iter(metrics.values())).steps
+
+    def sinr_db(self, policy: str, w: NDArray, window: Window = None) -> NDArray:
+        m = self.metrics[policy]
+        a, b = window or (0, self.steps)
+        return 10.0 * np.log10(w @ m.reward_curve_per_trial[:, a:b].mean(axis=1) / m.channels)
+
+    def regret(self, policy: str, w: NDArray, at: int | None = None) -> NDArray:
+        m = self.metrics[policy]
+        return w @ m.regret_curve_per_trial[:, (at or self.steps) - 1]
+
+    def armse(self, policy: str, w: NDArray, window: Window = None, target: int | None = None) -> NDArray:
+        m = self.metrics[policy]
+        a, b = window or (0, self.steps)
+        targets = range(m.squared.shape[2]) if target is None else [target]
+        return np.mean([np.sqrt(w @ m.squared[:, a:b, k]).mean(axis=-1) for k in targets], axis=0)
+
+    def asr(self, policy: str, w: NDArray) -> NDArray:
+        return self.metrics[policy].asr(w)
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """``statistic(policies, w)`` claimed ``> 0`` (``sign=+1``) or ``< 0`` (``sign=-1``)."""
+
+    text: str
+    statistic: Callable[[Policies, NDArray], NDArray]
+    sign: int
+    policies: tuple[str, ...]
+    reaches: int = 0  # the last step the statistic reads (0: any run)
+
+
+@dataclass(frozen=True)
+class Claim:
+    id: str
+    scenario: str
+    text: str
+    comparisons: tuple[Comparison, ...]
+    paper: dict[str, Any] = field(default_factory=dict)
+
+
+def _diff(metric: str, a: str, b: str, sign: int, window: Window = None, **kw: Any) -> Comparison:
+    """``metric(a) - metric(b)`` claimed of sign ``sign``."""
+    where = f" over {window[0]}-{window[1]} s" if window else ""
+    target = f" of target {kw['target'] + 1}" if "target" in kw else ""
+    op = ">" if sign > 0 else "<"
+
+    def statistic(p: Policies, w: NDArray) -> NDArray:
+        f = getattr(p, metric)
+        extra = {"window": window} if window and metric in ("sinr_db", "armse") else {}
+        return f(a, w, **extra, **kw) - f(b, w, **extra, **kw)
+
+    return Comparison(
+        f"{metric}{target}{where}: {a} {op} {b}", statistic, sign, (a, b), window[1] if window else 0
+    )
+
+
+def _ordering(metric: str, order: tuple[str, ...], **kw: Any) -> tuple[Comparison, ...]:
+    """``order[0] < order[1] < ...`` as consecutive paired comparisons."""
+    return tuple(_diff(metric, a, b, -1, **kw) for a, b in zip(order, order[1:], strict=False))
+
+
+def _regret_at(a: str, b: str, sign: int, at: int) -> Comparison:
+    op = ">" if sign > 0 else "<"
+    return Comparison(
+        f"regret at {at} s: {a} {op} {b}",
+        lambda p, w: p.regret(a, w, at) - p.regret(b, w, at),
+        sign,
+        (a, b),
+        at,
+    )
+
+
+def _change(policy: str, before: Window, after: Window, sign: int) -> Comparison:
+    op = ">" if sign > 0 else "<"
+    return Comparison(
+        f"sinr_db of {policy}: {after[0]}-{after[1]} s {op} {before[0]}-{before[1]} s",
+        lambda p, w: p.sinr_db(policy, w, after) - p.sinr_db(policy, w, before),
+        sign,
+        (policy,),
+        after[1],
+    )
+
+
+def _versus_best_of(
+    metric: str, policy: str, others: tuple[str, ...], sign: int, window: Window = None
+) -> Comparison:
+    """``metric(policy) - max(metric(others))`` (sign +1) or ``- min(...)`` (sign -1)."""
+    extreme = np.max if sign > 0 else np.min
+    word = "above all of" if sign > 0 else "below all of"
+
+    def statistic(p: Policies, w: NDArray) -> NDArray:
+        f = getattr(p, metric)
+        extra = {"window": window} if window else {}
+        return f(policy, w, **extra) - extreme([f(o, w, **extra) for o in others], axis=0)
+
+    where = f" over {window[0]}-{window[1]} s" if window else ""
+    return Comparison(
+        f"{metric}{where}: {policy} {word} {list(others)}",
+        statistic,
+        sign,
+        (policy, *others),
+        window[1] if window else 0,
+    )
+
+
+def paper_claims() -> tuple[Claim, ...]:
+    """The claims of the paper's Section IV (scenarios ``paper-1``, ``-2``, ``-3``)."""
+    s1, s2, s3 = "paper-1", "paper-2", "paper-3"
+    armse_order = ("best", "mg-crb-cl", "fix1", "epsilon-greedy", "ucb1", "fix2")
+    claims = [
+        Claim(
+            "S1.2",
+            s1,
+            "fix1 has the higher average SINR in the first half of the horizon, fix2 in the second",
+            (
+                _diff("sinr_db", "fix1", "fix2", +1, (0, 500)),
+                _diff("sinr_db", "fix2", "fix1", +1, (500, 1000)),
+            ),
+        ),
+        Claim(
+            "S1.3",
+            s1,
+            "epsilon-greedy's average SINR is above both fixed policies' over the horizon",
+            (_diff("sinr_db", "epsilon-greedy", "fix1", +1), _diff("sinr_db", "epsilon-greedy", "fix2", +1)),
+        ),
+        Claim(
+            "S1.4",
+            s1,
+            "UCB1's average SINR is above the fixed policies' only early (0-400 s), not later",
+            (
+                _versus_best_of("sinr_db", "ucb1", FIXED, +1, (0, 400)),
+                Comparison(
+                    "sinr_db over 400-1000 s: ucb1 not above the better fixed policy",
+                    lambda p, w: (
+                        p.sinr_db("ucb1", w, (400, 1000))
+                        - np.max([p.sinr_db(f, w, (400, 1000)) for f in FIXED], axis=0)
+                    ),
+                    -1,
+                    ("ucb1", *FIXED),
+                    1000,
+                ),
+            ),
+        ),
+        Claim(
+            "S1.5",
+            s1,
+            "MG-CRB-CL has the highest average SINR of the learning policies",
+            (_diff("sinr_db", "mg-crb-cl", "ucb1", +1), _diff("sinr_db", "mg-crb-cl", "epsilon-greedy", +1)),
+        ),
+        Claim(
+            "S1.6",
+            s1,
+            "MG-CRB-CL has the lowest final regret of the learning policies; the fixed policies the highest",
+            (
+                _diff("regret", "mg-crb-cl", "ucb1", -1),
+                _diff("regret", "mg-crb-cl", "epsilon-greedy", -1),
+                _versus_best_of("regret", "fix1", LEARNING, +1),
+                _versus_best_of("regret", "fix2", LEARNING, +1),
+            ),
+        ),
+        Claim(
+            "S1.7",
+            s1,
+            "UCB1's regret is below epsilon-greedy's early and above it late (they cross, near 455 s)",
+            (_regret_at("ucb1", "epsilon-greedy", -1, 300), _regret_at("ucb1", "epsilon-greedy", +1, 1000)),
+        ),
+        Claim(
+            "S1.8",
+            s1,
+            "fix1 has the lowest RMSE only around 268-360 s; fix2 the highest most of the time, "
+            "except around 500-590 s",
+            (
+                _versus_best_of(
+                    "armse", "fix1", tuple(p for p in armse_order if p != "fix1"), -1, (268, 360)
+                ),
+                _versus_best_of("armse", "fix2", tuple(p for p in armse_order if p != "fix2"), +1, (0, 500)),
+                _versus_best_of(
+                    "armse", "fix2", tuple(p for p in armse_order if p != "fix2"), +1, (590, 1000)
+                ),
+            ),
+        ),
+        Claim(
+            "S1.9",
+            s1,
+            "ARMSE: Best < MG-CRB-CL < fix1 < epsilon-greedy < UCB1 < fix2",
+            _ordering("armse", armse_order),
+            {"armse": PAPER_ARMSE[s1]},
+        ),
+        Claim(
+            "S1.10",
+            s1,
+            "ASR: MG-CRB-CL > epsilon-greedy > UCB1, MG-CRB-CL at least 3x each",
+            (
+                _diff("asr", "mg-crb-cl", "epsilon-greedy", +1),
+                _diff("asr", "epsilon-greedy", "ucb1", +1),
+                Comparison(
+                    "asr: mg-crb-cl > 3 x epsilon-greedy",
+                    lambda p, w: p.asr("mg-crb-cl", w) - 3 * p.asr("epsilon-greedy", w),
+                    +1,
+                    ("mg-crb-cl", "epsilon-greedy"),
+                ),
+                Comparison(
+                    "asr: mg-crb-cl > 3 x ucb1",
+                    lambda p, w: p.asr("mg-crb-cl", w) - 3 * p.asr("ucb1", w),
+                    +1,
+                    ("mg-crb-cl", "ucb1"),
+                ),
+            ),
+            {"asr": PAPER_ASR[s1]},
+        ),
+        Claim(
+            "S2.1",
+            s2,
+            "epsilon-greedy's average SINR is above both fixed policies'; UCB1's SINR deteriorates "
+            "after 420 s",
+            (
+                _diff("sinr_db", "epsilon-greedy", "fix1", +1),
+                _diff("sinr_db", "epsilon-greedy", "fix2", +1),
+                _change("ucb1", (0, 420), (420, 1000), -1),
+            ),
+        ),
+        Claim(
+            "S2.2",
+            s2,
+            "after the maneuver at 400 s every policy's SINR degrades except MG-CRB-CL's "
+            "(100 s after against 100 s before)",
+            tuple(_change(p, (300, 400), (400, 500), -1) for p in ("best", "ucb1", "epsilon-greedy", *FIXED))
+            + (_change("mg-crb-cl", (300, 400), (400, 500), +1),),
+        ),
+        Claim(
+            "S2.3",
+            s2,
+            "MG-CRB-CL has the lowest final regret of the learning policies",
+            (_diff("regret", "mg-crb-cl", "ucb1", -1), _diff("regret", "mg-crb-cl", "epsilon-greedy", -1)),
+        ),
+        Claim(
+            "S2.4",
+            s2,
+            "ARMSE: Best < MG-CRB-CL < fix1 < epsilon-greedy < UCB1 < fix2",
+            _ordering("armse", armse_order),
+            {"armse": PAPER_ARMSE[s2]},
+        ),
+        Claim(
+            "S2.5",
+            s2,
+            "ASR: MG-CRB-CL > epsilon-greedy > UCB1",
+            (_diff("asr", "mg-crb-cl", "epsilon-greedy", +1), _diff("asr", "epsilon-greedy", "ucb1", +1)),
+            {"asr": PAPER_ASR[s2]},
+        ),
+        Claim(
+            "S3.1",
+            s3,
+            "MG-CRB-CL has the highest weighted average SINR and the lowest final regret of the "
+            "learning policies",
+            (
+                _diff("sinr_db", "mg-crb-cl", "ucb1", +1),
+                _diff("sinr_db", "mg-crb-cl", "epsilon-greedy", +1),
+                _diff("regret", "mg-crb-cl", "ucb1", -1),
+                _diff("regret", "mg-crb-cl", "epsilon-greedy", -1),
+            ),
+        ),
+        Claim(
+            "S3.2",
+            s3,
+            "ARMSE over targets: Best < MG-CRB-CL < epsilon-greedy < UCB1 < fix1 < fix2",
+            _ordering("armse", ("best", "mg-crb-cl", "epsilon-greedy", "ucb1", "fix1", "fix2")),
+            {"armse": PAPER_ARMSE[s3]},
+        ),
+        Claim(
+            "S3.3",
+            s3,
+            "ARMSE of target 1: MG-CRB-CL < epsilon-greedy < UCB1; UCB1 tracks target 2 better "
+            "than MG-CRB-CL",
+            (
+                _diff("armse", "mg-crb-cl", "epsilon-greedy", -1, target=0),
+                _diff("armse", "epsilon-greedy", "ucb1", -1, target=0),
+                _diff("armse", "ucb1", "mg-crb-cl", -1, target=1),
+            ),
+            {"armse": PAPER_ARMSE[s3]},
+        ),
+        Claim(
+            "S3.4",
+            s3,
+            "ASR: MG-CRB-CL > epsilon-greedy > UCB1",
+            (_diff("asr", "mg-crb-cl", "epsilon-greedy", +1), _diff("asr", "epsilon-greedy", "ucb1", +1)),
+            {"asr": PAPER_ASR[s3]},
+        ),
+    ]
+    for scenario in (s1, s2, s3):
+        claims.append(
+            Claim(
+                f"A.{scenario[-1]}",
+                scenario,
+                "MG-CRB-CL beats UCB1 on regret, average SINR and ARMSE",
+                (
+                    _diff("regret", "mg-crb-cl", "ucb1", -1),
+                    _diff("sinr_db", "mg-crb-cl", "ucb1", +1),
+                    _diff("armse", "mg-crb-cl", "ucb1", -1),
+                ),
+            )
+        )
+    return tuple(claims)
+
+
+def judge(comparison: Comparison, policies: Policies, seed: int = 0) -> dict[str, Any]:
+    """The comparison's estimate, 95 % interval and verdict."""
+    n = next(iter(policies.metrics.values())).num_trials
+    if comparison.reaches > policies.steps or any(p not in policies.metrics for p in comparison.policies):
+        return {"comparison": comparison.text, "verdict": "not evaluated"}
+    estimate = float(comparison.statistic(policies, np.full(n, 1.0 / n)))
+    low, high = uncertainty.interval(lambda w: comparison.statistic(policies, w), n, seed)
+    if comparison.sign * low > 0 and comparison.sign * high > 0:
+        verdict = "holds"
+    elif comparison.sign * low < 0 and comparison.sign * high < 0:
+        verdict = "contradicted"
+    else:
+        verdict = "consistent"
+    return {"comparison": comparison.text, "estimate": estimate, "ci": [low, high], "verdict": verdict}
+
+
+def claim_verdict(verdicts: list[str]) -> str:
+    evaluated = [v for v in verdicts if v != "not evaluated"]
+    if not evaluated:
+        return "not evaluated"
+    if "contradicted" in evaluated:
+        return "contradicted"
+    return (
+        "holds" if all(v == "holds" for v in evaluated) and len(evaluated) == len(verdicts) else "consistent"
+    )
+
+
+def evaluate(policies_by_scenario: dict[str, Policies], seed: int = 0) -> list[dict[str, Any]]:
+    """Every claim whose scenario was run, judged."""
+    results = []
+    paper1 = policies_by_scenario.get("paper-1")
+    if paper1 is not None and paper1.scenario is not None:
+        fractions = best_selection_windows(paper1.scenario)
+        results.append(
+            {
+                "id": "S1.1",
+                "scenario": "paper-1",
+                "claim": "Best selects {TX1,TX2; RX1,RX2,RX3} over 0-380 s and {TX3,TX4; RX2,RX4,RX5} over "
+                "590-1000 s (checked exactly on the noise-free track: the fraction of steps)",
+                "verdict": "holds" if min(fractions.values()) >= 0.95 else "contradicted",
+                "comparisons": [
+                    {
+                        "comparison": f"fraction of {k} with the paper's selection",
+                        "estimate": v,
+                        "ci": [v, v],
+                        "verdict": "holds" if v >= 0.95 else "contradicted",
+                    }
+                    for k, v in fractions.items()
+                ],
+                "paper": {},
+            }
+        )
+    for claim in paper_claims():
+        if claim.scenario not in policies_by_scenario:
+            continue
+        judged = [judge(c, policies_by_scenario[claim.scenario], seed) for c in claim.comparisons]
+        results.append(
+            {
+                "id": claim.id,
+                "scenario": claim.scenario,
+                "claim": claim.text,
+                "verdict": claim_verdict([j["verdict"] for j in judged]),
+                "comparisons": judged,
+                "paper": claim.paper,
+            }
+        )
+    return results
+
+
+def load_study(run_dir: str | Path) -> tuple[str, Policies]:
+    """The scenario name and the policies of a finished run (``mimo-radar-bench paper``)."""
+    run_dir = Path(run_dir)
+    config = RunConfig(**json.loads((run_dir / "config.json").read_text()))
+    per_trial = load_per_trial(run_dir, config)
+    channels = config.scenario_object.num_channels_per_step
+    metrics = {p: uncertainty.TrialMetrics(per_trial[p], channels) for p in config.policies}
+    return config.scenario["name"], Policies(metrics, config.scenario_object)
+
+
+def best_selection_windows(scenario: Any) -> dict[str, Any]:
+    """S1.1, exactly: the fraction of steps of each window whose optimal super arm on the
+    noise-free track is the one the paper describes."""
+    from mimo_radar_env import RadarModel
+    from mimo_radar_env.core.superarm import best_super_arm
+
+    model = RadarModel.from_scenario(scenario)
+    positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)  # (T+1, K, 2)
+    weights = model.channel_weights(model.mean_sinr(positions))
+    tx, rx, _ = best_super_arm(weights, scenario.tx_per_step, scenario.rx_per_step)
+    out = {}
+    for (a, b), (want_tx, want_rx) in (((0, 380), ((0, 1), (0, 1, 2))), ((590, 1000), ((2, 3), (1, 3, 4)))):
+        b = min(b, len(tx) - 1)
+        hit = [
+            tuple(np.flatnonzero(tx[t])) == want_tx and tuple(np.flatnonzero(rx[t])) == want_rx
+            for t in range(a, b)
+        ]
+        out[f"{a}-{b} s"] = float(np.mean(hit)) if hit else float("nan")
+    return out
+
+
+def scorecard_markdown(results: list[dict[str, Any]], title: str) -> str:
+    lines = [f"# {title}", "", f"Verdicts from paired 95 % intervals ({uncertainty.METHOD}).", ""]
+    counts = {v: sum(r["verdict"] == v for r in results) for v in ("holds", "consistent", "contradicted")}
+    lines += [", ".join(f"{k}: {v}" for k, v in counts.items()), ""]
+    lines += [
+        "| claim | scenario | verdict | the paper says | measured (A - B, 95 % interval) "
+        "| the paper's numbers |",
+        "|---|---|---|---|---|---|",
+    ]
+    for r in results:
+        measured = "; ".join(
+            f"{c['comparison']}: {c['estimate']:.3g} [{c['ci'][0]:.3g}, {c['ci'][1]:.3g}] {c['verdict']}"
+            if "estimate" in c
+            else f"{c['comparison']}: not evaluated"
+            for c in r["comparisons"]
+        )
+        paper = "; ".join(
+            f"{metric} " + ", ".join(f"{p} {np.mean(v):.4g}" for p, v in values.items())
+            for metric, values in r["paper"].items()
+        )
+        cells = [r["id"], r["scenario"], f"**{r['verdict']}**", r["claim"], measured, paper or "—"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

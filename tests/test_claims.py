@@ -1,0 +1,77 @@
+"""The scorecard judges claims right on synthetic studies whose answers are known."""
+
+import numpy as np
+import pytest
+
+from benchmarks import claims, uncertainty
+from benchmarks.cli import main
+
+
+SHARED = np.random.default_rng(9).normal(0, 0.5, size=(60, 1))  # per-trial, common to all policies
+
+
+def _metrics(rng, regret_per_step, n=60, t=1000):
+    """A policy whose per-trial regret per step is ``regret_per_step`` plus trial noise shared
+    across policies (the paired part) and a little of its own."""
+    optimal = np.full((n, t), 5.0, np.float32)
+    shared = SHARED
+    expected = (optimal - regret_per_step - shared - rng.normal(0, 0.01, size=(n, t))).astype(np.float32)
+    return uncertainty.TrialMetrics(
+        {
+            "trial_expected": expected,
+            "trial_optimal": optimal,
+            "trial_squared_error": np.full((n, t, 1), 4.0, np.float32),
+            "trial_matches": np.zeros((n, t), np.uint8),
+        },
+        channels=6,
+    )
+
+
+@pytest.mark.parametrize(
+    ("mg_regret", "verdict"),
+    [(0.5, "holds"), (1.0, "consistent"), (1.5, "contradicted")],
+)
+def test_s2_3_is_judged_right(mg_regret, verdict):
+    """S2.3: MG-CRB-CL's final regret below UCB1's and epsilon-greedy's (both at 1.0 per step)."""
+    rng = np.random.default_rng(0)
+    study = claims.Policies(
+        {
+            "mg-crb-cl": _metrics(rng, mg_regret),
+            "ucb1": _metrics(rng, 1.0),
+            "epsilon-greedy": _metrics(rng, 1.0),
+        }
+    )
+    results = {r["id"]: r for r in claims.evaluate({"paper-2": study})}
+    assert results["S2.3"]["verdict"] == verdict
+    for comparison in results["S2.3"]["comparisons"]:
+        assert comparison["estimate"] == pytest.approx(1000 * (mg_regret - 1.0), rel=0.02, abs=15)
+    assert "S1.2" not in results  # a scenario that was not run
+    first = results["S2.1"]["comparisons"][0]  # epsilon-greedy vs fix1: fix1 was not run
+    assert first["verdict"] == "not evaluated" and results["S2.1"]["verdict"] != "holds"
+
+
+def test_claim_verdicts_combine_their_comparisons():
+    assert claims.claim_verdict(["holds", "holds"]) == "holds"
+    assert claims.claim_verdict(["holds", "consistent"]) == "consistent"
+    assert claims.claim_verdict(["holds", "contradicted", "consistent"]) == "contradicted"
+    assert claims.claim_verdict(["holds", "not evaluated"]) == "consistent"
+    assert claims.claim_verdict(["not evaluated"]) == "not evaluated"
+
+
+def test_every_claim_names_policies_the_paper_study_runs():
+    from benchmarks.harness import PAPER_POLICIES
+
+    for claim in claims.paper_claims():
+        for comparison in claim.comparisons:
+            assert set(comparison.policies) <= set(PAPER_POLICIES), (claim.id, comparison.text)
+
+
+def test_claims_subcommand_runs_and_writes_the_scorecard(tmp_path, capsys):
+    argv = ["claims", "--scenarios", "1", "--trials", "6", "--steps", "60", "--workers", "1"]
+    assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
+    card = (tmp_path / "claims.md").read_text()
+    assert "| S1.1 | paper-1 | **holds** |" in card  # the noise-free Best selections
+    assert "not evaluated" in card  # windows past 60 s
+    assert (tmp_path / "claims.json").exists() and (tmp_path / "paper-1" / "summary.json").exists()
+    with pytest.raises(SystemExit):
+        main(["claims", "--scenarios", "4", "--out", str(tmp_path / "x"), "--quiet"])
