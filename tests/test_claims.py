@@ -6,7 +6,6 @@ import pytest
 from benchmarks import claims, uncertainty
 from benchmarks.cli import main
 
-
 SHARED = np.random.default_rng(9).normal(0, 0.5, size=(60, 1))  # per-trial, common to all policies
 
 
