@@ -169,11 +169,16 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _number(value: float, fmt: str) -> str:
+    text = fmt.format(value)
+    return text[1:] if text.startswith("-") and float(text) == 0 else text  # no "-0.0"
+
+
 def _with_ci(value: float, ci: list[float] | None, fmt: str, scale: float = 1.0) -> str:
-    text = fmt.format(scale * value + 0.0)  # no "-0.0"
+    text = _number(scale * value, fmt)
     if ci is None:
         return text
-    return f"{text} [{fmt.format(scale * ci[0])}, {fmt.format(scale * ci[1])}]"
+    return f"{text} [{_number(scale * ci[0], fmt)}, {_number(scale * ci[1], fmt)}]"
 
 
 def paired_markdown(summary: dict[str, Any]) -> str:
