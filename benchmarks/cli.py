@@ -86,6 +86,27 @@ def env_options_from(args: argparse.Namespace) -> Any:
     return EnvOptions.for_version(args.env_version, **given)
 
 
+def _add_agent_param(parser: argparse.ArgumentParser, over: str = "") -> None:
+    parser.add_argument(
+        "--agent-param",
+        action="append",
+        default=[],
+        metavar="AGENT.KEY=VALUE",
+        help="agent parameter, repeatable, e.g. mg-crb-cl.solver=exact (values read as YAML)" + over,
+    )
+
+
+def study_agent_params(env_version: str, items: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The paper study's agent parameters: the version's reading, then ``--agent-param`` over it
+    (key by key, so ``mg-crb-cl.solver_params={rule: xor}`` replaces the reading's solver_params)."""
+    from .harness import READING_AGENT_PARAMS, parse_agent_params
+
+    params = json.loads(json.dumps(READING_AGENT_PARAMS[env_version]))
+    for policy, values in parse_agent_params(items).items():
+        params.setdefault(policy, {}).update(values)
+    return params
+
+
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default 500)")
     parser.add_argument(
@@ -142,6 +163,7 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument(
         "--scenario", type=int, choices=(1, 2, 3), required=True, help="paper scenario 1, 2 or 3"
     )
+    _add_agent_param(paper, over="; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})")
     _add_run_options(paper)
 
     run = sub.add_parser(
@@ -156,13 +178,7 @@ def build_parser() -> argparse.ArgumentParser:
         required=True,
         help="comma-separated agents (see 'mimo-radar-bench agents') or ppo:PATH/model.zip",
     )
-    run.add_argument(
-        "--agent-param",
-        action="append",
-        default=[],
-        metavar="AGENT.KEY=VALUE",
-        help="agent parameter, repeatable, e.g. mg-crb-cl.solver=exact (values read as YAML)",
-    )
+    _add_agent_param(run)
     _add_run_options(run)
 
     train = sub.add_parser(
@@ -221,7 +237,32 @@ def build_parser() -> argparse.ArgumentParser:
     )
     claims.add_argument("runs", nargs="*", help="finished paper-study folders (default: run them into --out)")
     claims.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
+    _add_agent_param(claims, over="; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})")
     _add_run_options(claims)
+
+    calibrate = sub.add_parser(
+        "calibrate-layout",
+        help="search station layouts under which the most of the paper's claims hold",
+        description="Jitter the reference layout into candidates (seeded), reject those that break "
+        "the paper's text (region, 2 km from every nominal track, Best's selections in Scenario 1), "
+        "rank the rest by noise-free checks, judge the best by short scorecards, then the best of "
+        "those and the reference by full scorecards (--trials). Writes OUT/calibration.md and "
+        "OUT/calibration.json with every candidate's score; resumable (docs/results.md).",
+    )
+    calibrate.add_argument(
+        "--candidates", type=_integer(1), default=400, help="jittered layouts to draw (default 400)"
+    )
+    calibrate.add_argument(
+        "--screen", type=_integer(1), default=10, help="layouts judged by short scorecards (default 10)"
+    )
+    calibrate.add_argument(
+        "--screen-trials", type=_integer(1), default=40, help="trials of the short scorecards (default 40)"
+    )
+    calibrate.add_argument(
+        "--final", type=_integer(1), default=2, help="layouts judged by full scorecards (default 2)"
+    )
+    _add_agent_param(calibrate, over="; over the version's reading")
+    _add_run_options(calibrate)
 
     sub.add_parser("agents", help="list the registered agents and their parameters")
 
@@ -283,10 +324,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     return 0
 
 
+def _study_runner(args: argparse.Namespace) -> Callable[..., list[Path]]:
+    """Run the paper studies of the given scenarios into a folder with the command's options."""
+    from .claims import run_studies
+
+    options = env_options_from(args)
+    params = study_agent_params(args.env_version, args.agent_param)
+    workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
+
+    def run(scenarios: Sequence[Any], out: Path, trials: int) -> list[Path]:
+        return run_studies(
+            scenarios,
+            out,
+            trials=trials,
+            steps=args.steps,
+            seed=args.seed,
+            shard_size=args.shard_size,
+            agent_params=params,
+            options=options,
+            workers=workers,
+            backend=args.backend,
+            address=args.address,
+            progress=not args.quiet,
+            figures=not args.no_figures,
+        )
+
+    return run
+
+
 def _claims(args: argparse.Namespace) -> int:
     from . import claims
-    from .harness import PAPER_POLICIES, READING_AGENT_PARAMS, HarnessError, make_config, run
-    from .report import write_outputs
+    from .harness import HarnessError
 
     out = Path(args.out)
     runs = [Path(r) for r in args.runs]
@@ -299,43 +367,37 @@ def _claims(args: argparse.Namespace) -> int:
             ) from None
         if not numbers or not set(numbers) <= {1, 2, 3}:
             raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}")
-        options = env_options_from(args)
-        params = json.loads(json.dumps(READING_AGENT_PARAMS[args.env_version]))
-        workers = args.workers if args.workers is not None else (os.cpu_count() or 1)
-        for number in numbers:
-            config = make_config(
-                f"paper-{number}",
-                list(PAPER_POLICIES),
-                args.trials,
-                args.steps,
-                args.seed,
-                args.shard_size,
-                params,
-                options=options,
-            )
-            folder = out / f"paper-{number}"
-            totals = run(
-                config,
-                folder,
-                workers=workers,
-                backend=args.backend,
-                address=args.address,
-                progress=not args.quiet,
-            )
-            write_outputs(config, totals, folder, figures=not args.no_figures)
-            runs.append(folder)
-    studies = {}
-    for folder in runs:
-        if not (folder / "config.json").exists():
-            raise HarnessError(f"{folder} holds no finished run (no config.json)")
-        name, policies = claims.load_study(folder)
-        studies[name] = policies
-    results = claims.evaluate(studies, args.seed)
-    out.mkdir(parents=True, exist_ok=True)
-    (out / "claims.json").write_text(json.dumps(results, indent=2, allow_nan=False))
-    title = f"The paper's claims ({', '.join(sorted(studies))})"
-    (out / "claims.md").write_text(claims.scorecard_markdown(results, title))
+        runs = _study_runner(args)([f"paper-{n}" for n in numbers], out, args.trials)
+    results = claims.judge_studies(runs, args.seed)
+    claims.write_scorecard(results, out)
     print((out / "claims.md").read_text())
+    return 0
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from . import calibration, claims
+
+    run = _study_runner(args)
+
+    def scorecard(scenarios: Sequence[Any], out: Path, trials: int) -> list[dict[str, Any]]:
+        results = claims.judge_studies(run(scenarios, out, trials), args.seed)
+        claims.write_scorecard(results, out)
+        return results
+
+    report = calibration.calibrate(
+        Path(args.out),
+        scorecard,
+        count=args.candidates,
+        seed=args.seed,
+        screen=args.screen,
+        screen_trials=args.screen_trials,
+        final=args.final,
+        final_trials=args.trials,
+        scale=env_options_from(args).lambda_scale,
+    )
+    print(Path(args.out, "calibration.md").read_text().split("\n\n| layout")[0])
+    print(f"best layout {report['best']}: {'adopted' if report['adopted'] else 'not adopted'}; "
+          f"every candidate in {Path(args.out, 'calibration.md')}")
     return 0
 
 
@@ -384,6 +446,8 @@ def _dispatch(args: argparse.Namespace) -> int:
         return 0
     if args.command == "claims":
         return _claims(args)
+    if args.command == "calibrate-layout":
+        return _calibrate(args)
     if args.command == "agents":
         import agents
 
@@ -392,13 +456,13 @@ def _dispatch(args: argparse.Namespace) -> int:
             print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
         return 0
 
-    from .harness import PAPER_POLICIES, READING_AGENT_PARAMS, make_config, parse_agent_params, run
+    from .harness import PAPER_POLICIES, make_config, parse_agent_params, run
     from .report import write_outputs
 
     if args.command == "paper":
         scenario = f"paper-{args.scenario}"
         policies = list(PAPER_POLICIES)
-        params: dict = json.loads(json.dumps(READING_AGENT_PARAMS[args.env_version]))
+        params: dict = study_agent_params(args.env_version, args.agent_param)
     else:
         scenario = args.scenario
         policies = [p.strip() for p in args.policies.split(",") if p.strip()]

@@ -1,0 +1,278 @@
+"""Layout calibration: station positions under which the most of the paper's claims hold.
+
+The paper's layout figure is missing. This search looks for a layout, inside the paper's
+100 km x 100 km region, that satisfies the hard constraints of the paper's text and under which
+the most claims of :mod:`benchmarks.claims` hold. It is a calibration against the paper's
+text, not the paper's layout. Three stages, each cheaper per candidate than the next:
+
+1. **Constraints and noise-free screen** (every candidate, milliseconds each): inside the
+   region; no station within :data:`MIN_TRACK_DISTANCE` of a nominal track of any paper
+   scenario; on the noise-free Scenario 1 track Best selects the paper's super arms over
+   0-380 s and 590-1000 s (claim S1.1, at least 95 % of the steps of each window). Passing
+   candidates are scored by :func:`noise_free_checks`, comparisons of the paper's claims that
+   need no Monte-Carlo: the fixed policies' SINR (S1.2) and the ARMSE orderings of Best, fix1
+   and fix2 with the measurement-only Cramer-Rao bound of the position standing in for the
+   RMSE.
+2. **Short scorecards**: the best ``screen`` candidates (and the reference layout) run the
+   three paper studies with ``screen_trials`` trials and are judged by the full scorecard.
+3. **Full scorecards**: the best ``final`` of stage 2 and the reference run ``final_trials``
+   trials. A candidate is adopted only if its scorecard beats the reference's: more claims
+   hold, or as many and fewer are contradicted.
+
+Candidates are the reference layout jittered station by station with a Gaussian of a scale
+cycling through :data:`JITTER_KM`, from one seeded generator: the same arguments give the same
+candidates, and every study folder resumes, so a stopped calibration continues.
+"""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from agents.fixed import PAPER_FIXED
+from mimo_radar_env import RadarModel, Scenario, load_scenario
+from mimo_radar_env.core.geometry import measurement_jacobian
+from mimo_radar_env.scenarios.scenario import closest_approach
+
+from . import claims
+
+REGION_M = 100_000.0
+#: The text's hard constraint: no station this close (m) to a nominal track.
+MIN_TRACK_DISTANCE = 2_000.0
+#: Station-wise jitter scales (km) the candidates cycle through.
+JITTER_KM = (2.0, 5.0, 10.0, 20.0)
+PAPER_SCENARIOS = ("paper-1", "paper-2", "paper-3")
+
+
+@dataclass
+class Candidate:
+    index: int
+    tx_km: list[list[float]]
+    rx_km: list[list[float]]
+    jitter_km: float | None = None  # None: the reference layout
+    rejected: str | None = None
+    noise_free: dict[str, bool] = field(default_factory=dict)
+    scorecards: dict[str, dict[str, int]] = field(default_factory=dict)  # trials -> counts
+
+    @property
+    def noise_free_score(self) -> int:
+        return sum(self.noise_free.values())
+
+    def scenarios(self) -> list[Scenario]:
+        if self.jitter_km is None:
+            return [load_scenario(name) for name in PAPER_SCENARIOS]
+        tx, rx = np.array(self.tx_km) * 1e3, np.array(self.rx_km) * 1e3
+        return [load_scenario(name, tx_positions=tx, rx_positions=rx) for name in PAPER_SCENARIOS]
+
+
+def candidates(count: int, seed: int) -> list[Candidate]:
+    """The reference layout (index 0) and ``count`` jittered layouts, reproducibly."""
+    reference = load_scenario("paper-1")
+    tx0, rx0 = reference.tx_positions / 1e3, reference.rx_positions / 1e3
+    rng = np.random.default_rng(seed)
+    out = [Candidate(0, tx0.tolist(), rx0.tolist())]
+    for i in range(1, count + 1):
+        scale = JITTER_KM[(i - 1) % len(JITTER_KM)]
+        tx = _reflect(tx0 + scale * rng.standard_normal(tx0.shape))
+        rx = _reflect(rx0 + scale * rng.standard_normal(rx0.shape))
+        out.append(Candidate(i, np.round(tx, 3).tolist(), np.round(rx, 3).tolist(), scale))
+    return out
+
+
+def _reflect(km: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Fold jittered coordinates back into [0, 100] km at the edges (stations on the edge stay
+    near it)."""
+    size = REGION_M / 1e3
+    return size - np.abs(size - np.abs(km))
+
+
+def constraint_failure(candidate: Candidate) -> str | None:
+    """Why the candidate breaks a hard constraint of the text, or None."""
+    tx, rx = np.array(candidate.tx_km) * 1e3, np.array(candidate.rx_km) * 1e3
+    stations = np.concatenate([tx, rx])
+    if np.any(stations < 0) or np.any(stations > REGION_M):
+        return "a station outside the 100 km x 100 km region"
+    try:
+        scenarios = candidate.scenarios()
+    except ValueError as exc:  # ScenarioError: e.g. two stations at one place
+        return f"not a valid scenario: {exc}"
+    for sc in scenarios:
+        model = RadarModel.from_scenario(sc)
+        for k in range(sc.num_targets):
+            distance, _, _ = closest_approach(model.nominal[k][:, [0, 2]], stations)
+            if distance < MIN_TRACK_DISTANCE:
+                return f"a station {distance / 1e3:.2f} km from a nominal track of {sc.name}"
+    fractions = claims.best_selection_windows(scenarios[0])
+    if min(fractions.values()) < claims.BEST_WINDOW_FRACTION:
+        return "noise-free Scenario 1: Best selects the paper's super arm in " + ", ".join(
+            f"{f:.0%} of {window}" for window, f in fractions.items()
+        )
+    return None
+
+
+def position_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], scale: str) -> NDArray:
+    """Per target and step, ``sqrt(trace J^-1)`` of the position from one scan of the selected
+    channels on the noise-free track, ``J = sum lambda_mn H_mn' Sigma0^-1 H_mn`` (eq6, eq32):
+    the measurement-only Cramer-Rao bound (m), shape (T+1, K). ``tx``/``rx`` masks (T+1, M/N)."""
+    positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)  # (T+1, K, 2)
+    quality = model.quality(model.mean_sinr(positions), scale=scale)  # (T+1, K, M, N)
+    jac = measurement_jacobian(positions, model.tx, model.rx)  # (T+1, K, M, N, 2, 2)
+    inv_sigma0 = np.linalg.inv(model.scenario.measurement_covariance)
+    info = np.einsum("...ji,jk,...kl->...il", jac, inv_sigma0, jac)  # (T+1, K, M, N, 2, 2)
+    selected = (tx[:, :, None] & rx[:, None, :]).astype(float)  # (T+1, M, N)
+    total = np.einsum("tmn,tkmn,tkmnij->tkij", selected, quality, info)
+    return np.sqrt(np.trace(np.linalg.inv(total), axis1=-2, axis2=-1))
+
+
+def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
+    """Comparisons of the paper's claims that need no Monte-Carlo, on the noise-free tracks."""
+    checks: dict[str, bool] = {}
+    for sc in candidate.scenarios():
+        model = RadarModel.from_scenario(sc)
+        steps = model.nominal.shape[1]
+        masks = {"best": claims.noise_free_best(model)}
+        for name, (tx_idx, rx_idx) in PAPER_FIXED.items():
+            tx, rx = np.zeros((steps, model.num_tx), bool), np.zeros((steps, model.num_rx), bool)
+            tx[:, list(tx_idx)], rx[:, list(rx_idx)] = True, True
+            masks[name] = (tx, rx)
+        bound = {p: position_bound(model, *m, scale) for p, m in masks.items()}
+
+        def armse(policy: str, a: int = 0, b: int = steps, bound: dict = bound) -> float:
+            return float(bound[policy][a:b].mean(axis=0).mean())
+
+        def sinr(policy: str, a: int, b: int, model: RadarModel = model, masks: dict = masks) -> float:
+            positions = model.nominal[:, a:b, [0, 2]].transpose(1, 0, 2)
+            weights = model.channel_weights(model.mean_sinr(positions))
+            tx, rx = masks[policy]
+            return float(np.einsum("tm,tn,tmn->", tx[a:b], rx[a:b], weights))
+
+        n = sc.name[-1]
+        if sc.name == "paper-1":
+            checks["S1.2 fix1 > fix2 SINR 0-500 s"] = sinr("fix1", 0, 500) > sinr("fix2", 0, 500)
+            checks["S1.2 fix2 > fix1 SINR 500-1000 s"] = sinr("fix2", 500, 1000) > sinr("fix1", 500, 1000)
+            checks["S1.8 fix1 lowest bound 268-360 s"] = armse("fix1", 268, 360) < min(
+                armse("best", 268, 360), armse("fix2", 268, 360)
+            )
+            checks["S1.8 fix2 highest bound 0-500 s"] = armse("fix2", 0, 500) > max(
+                armse("best", 0, 500), armse("fix1", 0, 500)
+            )
+        checks[f"S{n} bound best < fix1"] = armse("best") < armse("fix1")
+        checks[f"S{n} bound fix1 < fix2"] = armse("fix1") < armse("fix2")
+    return checks
+
+
+def scorecard_counts(results: list[dict[str, Any]]) -> dict[str, int]:
+    return {v: sum(r["verdict"] == v for r in results) for v in ("holds", "consistent", "contradicted")}
+
+
+def rank_key(counts: dict[str, int]) -> tuple[int, int]:
+    """Higher is better: more claims hold, then fewer contradicted."""
+    return counts["holds"], -counts["contradicted"]
+
+
+StudyRunner = Callable[[list[Scenario], Path, int], list[dict[str, Any]]]
+
+
+def calibrate(
+    out: Path,
+    run_scorecard: StudyRunner,
+    count: int = 400,
+    seed: int = 0,
+    screen: int = 12,
+    screen_trials: int = 40,
+    final: int = 2,
+    final_trials: int = 500,
+    scale: str = "db",
+    log: Callable[[str], None] = print,
+) -> dict[str, Any]:
+    """Run the three stages into ``out``; write and return ``calibration.json``.
+
+    ``run_scorecard(scenarios, folder, trials)`` runs the three paper studies of a layout into
+    ``folder`` (resumably) and returns the judged claims.
+    """
+    out.mkdir(parents=True, exist_ok=True)
+    pool = candidates(count, seed)
+    for c in pool:
+        c.rejected = constraint_failure(c)
+        if c.rejected is None:
+            c.noise_free = noise_free_checks(c, scale)
+    passing = [c for c in pool if c.rejected is None]
+    log(f"stage 1: {len(passing)} of {len(pool)} layouts meet the constraints")
+    reference = pool[0]
+    ranked = sorted((c for c in passing if c.index != 0), key=lambda c: -c.noise_free_score)
+    shortlist = [reference, *ranked[:screen]]
+    for c in shortlist:
+        results = run_scorecard(c.scenarios(), out / "screen" / f"layout-{c.index:04d}", screen_trials)
+        c.scorecards[str(screen_trials)] = scorecard_counts(results)
+        log(f"stage 2: layout {c.index}: {c.scorecards[str(screen_trials)]}")
+    finalists = sorted(shortlist[1:], key=lambda c: rank_key(c.scorecards[str(screen_trials)]), reverse=True)
+    for c in [reference, *finalists[:final]]:
+        results = run_scorecard(c.scenarios(), out / "final" / f"layout-{c.index:04d}", final_trials)
+        c.scorecards[str(final_trials)] = scorecard_counts(results)
+        log(f"stage 3: layout {c.index}: {c.scorecards[str(final_trials)]}")
+    judged = [c for c in pool if str(final_trials) in c.scorecards]
+    best = max(judged, key=lambda c: (rank_key(c.scorecards[str(final_trials)]), c.index == 0))
+    adopted = best.index != 0 and rank_key(best.scorecards[str(final_trials)]) > rank_key(
+        reference.scorecards[str(final_trials)]
+    )
+    report = {
+        "seed": seed,
+        "count": count,
+        "scale": scale,
+        "stages": {
+            "screen": screen,
+            "screen_trials": screen_trials,
+            "final": final,
+            "final_trials": final_trials,
+        },
+        "best": best.index,
+        "adopted": adopted,
+        "candidates": [{**asdict(c), "noise_free_score": c.noise_free_score} for c in pool],
+    }
+    (out / "calibration.json").write_text(json.dumps(report, indent=1, allow_nan=False))
+    (out / "calibration.md").write_text(calibration_markdown(report))
+    return report
+
+
+def calibration_markdown(report: dict[str, Any]) -> str:
+    stages = report["stages"]
+    screen, final = str(stages["screen_trials"]), str(stages["final_trials"])
+    lines = [
+        "# Layout calibration",
+        "",
+        "A calibration against the paper's text, not the paper's layout (its figure is missing).",
+        "",
+        f"{report['count']} jittered layouts (seed {report['seed']}) and the reference (layout 0). "
+        f"Stage 1: hard constraints and {len(report['candidates'][0]['noise_free'])} noise-free checks; "
+        f"stage 2: scorecards at {screen} trials; stage 3: at {final} trials. Best layout: {report['best']}; "
+        + (
+            "adopted (its scorecard beats the reference's)."
+            if report["adopted"]
+            else "not adopted: no layout beats the reference's scorecard."
+        ),
+        "",
+        f"| layout | jitter (km) | constraints | noise-free checks | holds / consistent / contradicted at "
+        f"{screen} trials | at {final} trials |",
+        "|---|---|---|---|---|---|",
+    ]
+
+    def counts(c: dict[str, Any], trials: str) -> str:
+        s = c["scorecards"].get(trials)
+        return f"{s['holds']} / {s['consistent']} / {s['contradicted']}" if s else "—"
+
+    order = sorted(
+        report["candidates"], key=lambda c: (c["rejected"] is not None, -c["noise_free_score"], c["index"])
+    )
+    for c in order:
+        jitter = "reference" if c["jitter_km"] is None else f"{c['jitter_km']:g}"
+        constraint = "met" if c["rejected"] is None else c["rejected"]
+        checks = f"{c['noise_free_score']} / {len(c['noise_free'])}" if c["rejected"] is None else "—"
+        cells = [str(c["index"]), jitter, constraint, checks, counts(c, screen), counts(c, final)]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
