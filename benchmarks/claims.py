@@ -466,13 +466,15 @@ def write_scorecard(results: list[dict[str, Any]], out: str | Path) -> None:
 
 
 def load_study(run_dir: str | Path) -> tuple[str, Policies]:
-    """The scenario name and the policies of a finished run (``mimo-radar-bench paper``)."""
+    """The paper scenario (``paper-N`` of any version) and the policies of a finished run."""
     run_dir = Path(run_dir)
+    from mimo_radar_env.envs.options import paper_key
+
     config = RunConfig(**json.loads((run_dir / "config.json").read_text()))
     per_trial = load_per_trial(run_dir, config)
     channels = config.scenario_object.num_channels_per_step
     metrics = {p: uncertainty.TrialMetrics(per_trial[p], channels) for p in config.policies}
-    return config.scenario["name"], Policies(metrics, config.scenario_object)
+    return paper_key(config.scenario["name"]), Policies(metrics, config.scenario_object)
 
 
 #: S1.1: the paper's Best selections (0-based) and their windows (steps).

@@ -189,7 +189,9 @@ def build_parser() -> argparse.ArgumentParser:
         "'mimo-radar-bench run --policies ppo:DIR/model.zip,...'.",
     )
     train.add_argument(
-        "--scenario", default="paper-1", help="shipped name or YAML/TOML file (default paper-1)"
+        "--scenario",
+        default=None,
+        help="shipped name or YAML/TOML file (default: paper scenario 1 of --env-version, paper-1-v1)",
     )
     train.add_argument(
         "--timesteps",
@@ -268,7 +270,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     demo = sub.add_parser("demo", help="one episode of a scenario with a random policy and the oracle")
     demo.add_argument(
-        "--scenario", default="paper-1", help="scenario name or YAML/TOML file (default paper-1)"
+        "--scenario", default="paper-1-v1", help="scenario name or YAML/TOML file (default paper-1-v1)"
     )
     demo.add_argument("--seed", type=_integer(0), default=0, help="episode seed (default 0)")
     demo.add_argument(
@@ -353,6 +355,8 @@ def _study_runner(args: argparse.Namespace) -> Callable[..., list[Path]]:
 
 
 def _claims(args: argparse.Namespace) -> int:
+    from mimo_radar_env import paper_scenario
+
     from . import claims
     from .harness import HarnessError
 
@@ -367,7 +371,8 @@ def _claims(args: argparse.Namespace) -> int:
             ) from None
         if not numbers or not set(numbers) <= {1, 2, 3}:
             raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}")
-        runs = _study_runner(args)([f"paper-{n}" for n in numbers], out, args.trials)
+        names = [paper_scenario(n, args.env_version) for n in numbers]
+        runs = _study_runner(args)(names, out, args.trials)
     results = claims.judge_studies(runs, args.seed)
     claims.write_scorecard(results, out)
     print((out / "claims.md").read_text())
@@ -408,12 +413,14 @@ def _dispatch(args: argparse.Namespace) -> int:
         print_demo(run_demo(args.scenario, args.seed, args.steps), args.scenario)
         return 0
     if args.command == "train-ppo":
+        from mimo_radar_env import paper_scenario
+
         from .harness import HarnessError
         from .ppo import train_ppo
 
         try:
             meta = train_ppo(
-                args.scenario,
+                args.scenario or paper_scenario(1, args.env_version),
                 args.timesteps,
                 args.out,
                 seed=args.seed,
@@ -456,11 +463,13 @@ def _dispatch(args: argparse.Namespace) -> int:
             print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
         return 0
 
+    from mimo_radar_env import paper_scenario
+
     from .harness import PAPER_POLICIES, make_config, parse_agent_params, run
     from .report import write_outputs
 
     if args.command == "paper":
-        scenario = f"paper-{args.scenario}"
+        scenario = paper_scenario(args.scenario, args.env_version)
         policies = list(PAPER_POLICIES)
         params: dict = study_agent_params(args.env_version, args.agent_param)
     else:

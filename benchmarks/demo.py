@@ -5,12 +5,12 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from mimo_radar_env import ENV_IDS
+from mimo_radar_env import ENV_IDS, PAPER_SCENARIOS
 from mimo_radar_env.core.superarm import random_super_arms
 
 
 def run_demo(
-    scenario: str = "paper-1", seed: int = 0, steps: int | None = None
+    scenario: str = PAPER_SCENARIOS["v1"][0], seed: int = 0, steps: int | None = None
 ) -> dict[str, dict[str, float]]:
     """Run one episode per policy (same seed, so the same target trajectory) and summarise it."""
     results: dict[str, dict[str, float]] = {}

@@ -11,6 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import EnvOptions, metrics
+from mimo_radar_env.envs.options import paper_key
 
 from . import uncertainty
 from .harness import HarnessError, RunConfig, load_per_trial
@@ -126,8 +127,8 @@ def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dic
 def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
     """The paper's Table 2/3/4 layout (ARMSE) plus ASR, final regret and mean SINR."""
     name = summary["scenario"]
-    paper_armse = PAPER_ARMSE.get(name, {})
-    paper_asr = PAPER_ASR.get(name, {})
+    paper_armse = PAPER_ARMSE.get(paper_key(name), {})
+    paper_asr = PAPER_ASR.get(paper_key(name), {})
     targets = [f"ARMSE T{k + 1} (m)" for k in range(num_targets)] if num_targets > 1 else []
     head = ["policy", "ARMSE (m)", *targets, "ASR (%)", "final regret", "mean SINR (dB)", "wall (s)"]
     if paper_armse:

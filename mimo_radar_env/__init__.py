@@ -8,7 +8,7 @@ from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
 from .envs import EnvOptions, MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
-from .envs.options import ENV_IDS, VERSION_DEFAULTS
+from .envs.options import ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -27,7 +27,7 @@ for _version, _env_id in ENV_IDS.items():
             id=_env_id,
             entry_point="mimo_radar_env.envs:MimoRadarSelectEnv",
             vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
-            kwargs=dict(VERSION_DEFAULTS[_version]),
+            kwargs={**VERSION_DEFAULTS[_version], "scenario": PAPER_SCENARIOS[_version][0]},
         )
 
 __version__ = "0.1.0"
@@ -35,6 +35,7 @@ __version__ = "0.1.0"
 __all__ = [
     "ENV_ID",
     "ENV_IDS",
+    "PAPER_SCENARIOS",
     "VERSION_DEFAULTS",
     "EnvOptions",
     "Maneuver",
@@ -47,5 +48,6 @@ __all__ = [
     "available_scenarios",
     "default_config",
     "load_scenario",
+    "paper_scenario",
     "random_scenario",
 ]

@@ -5,7 +5,7 @@ Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-e
     from stable_baselines3 import PPO
     from mimo_radar_env.sb3 import NativeVecEnv
 
-    venv = NativeVecEnv("paper-1", num_envs=8, seed=0)
+    venv = NativeVecEnv("paper-1-v1", num_envs=8, seed=0)
     PPO("MlpPolicy", venv).learn(10_000)
 """
 

@@ -205,14 +205,16 @@ def _batch(obs: dict[str, NDArray]) -> dict[str, NDArray]:
 
 
 def make_ppo_env(
-    scenario: Any = "paper-1", action: str = "auto", env_id: str = "MimoRadarSelect-v1", **kwargs: Any
+    scenario: Any = None, action: str = "auto", env_id: str = "MimoRadarSelect-v1", **kwargs: Any
 ) -> gym.Env:
     """``MimoRadarSelect`` (``env_id``, default v1) wrapped for PPO: flat features and valid actions.
 
+    ``scenario``: a name, file or :class:`~mimo_radar_env.Scenario` (default: the env id's
+    paper scenario 1, ``paper-1-v1`` for v1).
     ``action``: ``"discrete"`` (one action per super arm), ``"scores"`` (station
     scores) or ``"auto"`` (discrete when there are at most 1,000 super arms).
     """
-    env = gym.make(env_id, scenario=scenario, **kwargs)
+    env = gym.make(env_id, **kwargs) if scenario is None else gym.make(env_id, scenario=scenario, **kwargs)
     sc = env.unwrapped.scenario
     count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
     if action == "auto":

@@ -75,7 +75,7 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
         assert (out / name).exists(), name
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary) >= {"scenario", "trials", "steps", "seed", "policies"}
-    assert summary["scenario"] == "paper-3" and summary["trials"] == 4 and summary["steps"] == 25
+    assert summary["scenario"] == "paper-3-v1" and summary["trials"] == 4 and summary["steps"] == 25
     assert list(summary["policies"]) == ["best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"]
     rows = _read_curves(out / "curves.csv")
     for policy, row in summary["policies"].items():

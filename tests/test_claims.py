@@ -71,6 +71,6 @@ def test_claims_subcommand_runs_and_writes_the_scorecard(tmp_path, capsys):
     card = (tmp_path / "claims.md").read_text()
     assert "| S1.1 | paper-1 | **holds** |" in card  # the noise-free Best selections
     assert "not evaluated" in card  # windows past 60 s
-    assert (tmp_path / "claims.json").exists() and (tmp_path / "paper-1" / "summary.json").exists()
+    assert (tmp_path / "claims.json").exists() and (tmp_path / "paper-1-v1" / "summary.json").exists()
     with pytest.raises(SystemExit):
         main(["claims", "--scenarios", "4", "--out", str(tmp_path / "x"), "--quiet"])

@@ -2,6 +2,7 @@
 
 import gymnasium as gym
 import numpy as np
+import pytest
 from scipy import stats
 
 from agents.random_streams import TrialRandom
@@ -85,3 +86,19 @@ def test_versions_register_their_defaults():
     assert gym.make("MimoRadarSelect-v0").unwrapped.options == EnvOptions()
     assert gym.make("MimoRadarSelect-v1").unwrapped.options == EnvOptions(lambda_scale="db", truth="shared")
     assert gym.make("MimoRadarSelect-v1", truth="per-trial").unwrapped.options.truth == "per-trial"
+
+
+def test_each_version_names_its_paper_scenarios():
+    from mimo_radar_env import PAPER_SCENARIOS, paper_scenario
+    from mimo_radar_env.envs.options import paper_key
+
+    assert PAPER_SCENARIOS["v0"] == ("paper-1", "paper-2", "paper-3")
+    assert [paper_scenario(n, "v1") for n in (1, 2, 3)] == ["paper-1-v1", "paper-2-v1", "paper-3-v1"]
+    assert paper_key("paper-2-v1") == paper_key("paper-2") == "paper-2" and paper_key("mine") == "mine"
+    for version, names in PAPER_SCENARIOS.items():
+        env = gym.make(f"MimoRadarSelect-{version}")
+        assert env.unwrapped.scenario.name == names[0]
+        for name in names:
+            assert load_scenario(name).name == name
+    with pytest.raises(ValueError, match="paper scenarios are 1, 2 and 3"):
+        paper_scenario(4, "v1")

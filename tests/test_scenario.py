@@ -134,7 +134,7 @@ def test_each_bad_field_has_its_error(changes, message):
 
 
 def test_unknown_scenario_name_lists_the_shipped_ones():
-    with pytest.raises(ScenarioError, match="paper-1, paper-2, paper-3"):
+    with pytest.raises(ScenarioError, match="paper-1, paper-1-v1, paper-2, paper-2-v1, paper-3, paper-3-v1"):
         load_scenario("paper-9")
 
 

@@ -27,6 +27,29 @@ VERSION_DEFAULTS: dict[str, dict[str, Any]] = {
     "v1": {"lambda_scale": "db", "truth": "shared"},
 }
 ENV_IDS = {version: f"MimoRadarSelect-{version}" for version in VERSION_DEFAULTS}
+#: The paper's three scenarios as each version ships them (docs/model.md, section 13); the
+#: first is the version's default scenario.
+PAPER_SCENARIOS: dict[str, tuple[str, ...]] = {
+    "v0": ("paper-1", "paper-2", "paper-3"),
+    "v1": ("paper-1-v1", "paper-2-v1", "paper-3-v1"),
+}
+
+
+def paper_scenario(number: int, version: str) -> str:
+    """The name of paper scenario ``number`` (1, 2, 3) of env ``version``."""
+    if version not in PAPER_SCENARIOS:
+        raise ValueError(f"env version must be one of {sorted(PAPER_SCENARIOS)}, got {version!r}")
+    if number not in (1, 2, 3):
+        raise ValueError(f"paper scenarios are 1, 2 and 3, got {number!r}")
+    return PAPER_SCENARIOS[version][number - 1]
+
+
+def paper_key(name: str) -> str:
+    """``"paper-N"`` for paper scenario N of any version; other names unchanged."""
+    for names in PAPER_SCENARIOS.values():
+        if name in names:
+            return f"paper-{names.index(name) + 1}"
+    return name
 
 FusionName = Literal[tuple(FUSIONS)]  # type: ignore[valid-type]
 FilterNoise = Literal["true", "estimated"]
