@@ -509,6 +509,25 @@ def best_selection_windows(scenario: Any) -> dict[str, float]:
     return out
 
 
+def comparison_markdown(scorecards: dict[str, list[dict[str, Any]]]) -> str:
+    """One row per claim, one verdict column per scorecard (``{label: results}``), then the counts."""
+    labels = list(scorecards)
+    by_id: dict[str, dict[str, Any]] = {}
+    for label, results in scorecards.items():
+        for r in results:
+            row = by_id.setdefault(r["id"], {"scenario": r["scenario"], "claim": r["claim"]})
+            row[label] = r["verdict"]
+    lines = ["| claim | scenario | the paper says | " + " | ".join(labels) + " |"]
+    lines.append("|---|---|---|" + "---|" * len(labels))
+    for claim_id, row in by_id.items():
+        cells = [claim_id, row["scenario"], row["claim"], *(row.get(label, "—") for label in labels)]
+        lines.append("| " + " | ".join(cells) + " |")
+    for verdict in ("holds", "consistent", "contradicted"):
+        counts = [str(sum(r["verdict"] == verdict for r in scorecards[label])) for label in labels]
+        lines.append(f"| **{verdict}** | | | " + " | ".join(counts) + " |")
+    return "\n".join(lines) + "\n"
+
+
 def scorecard_markdown(results: list[dict[str, Any]], title: str) -> str:
     lines = [f"# {title}", "", f"Verdicts from paired 95 % intervals ({uncertainty.METHOD}).", ""]
     counts = {v: sum(r["verdict"] == v for r in results) for v in ("holds", "consistent", "contradicted")}

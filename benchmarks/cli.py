@@ -266,6 +266,16 @@ def build_parser() -> argparse.ArgumentParser:
     _add_agent_param(calibrate, over="; over the version's reading")
     _add_run_options(calibrate)
 
+    compare = sub.add_parser(
+        "compare-claims",
+        help="the verdicts of several scorecards side by side",
+        description="Print one row per claim and one verdict column per scorecard "
+        "(LABEL=PATH, PATH a claims.json written by 'claims' or 'calibrate-layout', or its folder).",
+    )
+    compare.add_argument(
+        "scorecards", nargs="+", metavar="LABEL=PATH", help="a label and a claims.json (or its folder)"
+    )
+
     sub.add_parser("agents", help="list the registered agents and their parameters")
 
     demo = sub.add_parser("demo", help="one episode of a scenario with a random policy and the oracle")
@@ -379,6 +389,23 @@ def _claims(args: argparse.Namespace) -> int:
     return 0
 
 
+def _compare_claims(args: argparse.Namespace) -> int:
+    from . import claims
+    from .harness import HarnessError
+
+    scorecards = {}
+    for item in args.scorecards:
+        label, sep, where = item.partition("=")
+        path = Path(where) / "claims.json" if Path(where).is_dir() else Path(where)
+        if not sep or not label:
+            raise HarnessError(f"scorecards are given as LABEL=PATH, got {item!r}")
+        if not path.is_file():
+            raise HarnessError(f"{where} is neither a scorecard (.json) nor a folder holding claims.json")
+        scorecards[label] = json.loads(path.read_text())
+    print(claims.comparison_markdown(scorecards), end="")
+    return 0
+
+
 def _calibrate(args: argparse.Namespace) -> int:
     from . import calibration, claims
 
@@ -455,6 +482,8 @@ def _dispatch(args: argparse.Namespace) -> int:
         return _claims(args)
     if args.command == "calibrate-layout":
         return _calibrate(args)
+    if args.command == "compare-claims":
+        return _compare_claims(args)
     if args.command == "agents":
         import agents
 

@@ -74,3 +74,19 @@ def test_claims_subcommand_runs_and_writes_the_scorecard(tmp_path, capsys):
     assert (tmp_path / "claims.json").exists() and (tmp_path / "paper-1-v1" / "summary.json").exists()
     with pytest.raises(SystemExit):
         main(["claims", "--scenarios", "4", "--out", str(tmp_path / "x"), "--quiet"])
+
+
+def test_compare_claims_puts_scorecards_side_by_side(tmp_path, capsys):
+    import json
+
+    first = [{"id": "S1.2", "scenario": "paper-1", "claim": "c", "verdict": "holds"}]
+    second = [{"id": "S1.2", "scenario": "paper-1", "claim": "c", "verdict": "contradicted"}]
+    (tmp_path / "a").mkdir()
+    (tmp_path / "a" / "claims.json").write_text(json.dumps(first))
+    (tmp_path / "b.json").write_text(json.dumps(second))
+    assert main(["compare-claims", f"v0={tmp_path / 'a'}", f"v1={tmp_path / 'b.json'}"]) == 0
+    table = capsys.readouterr().out
+    assert "| S1.2 | paper-1 | c | holds | contradicted |" in table
+    assert "| **holds** | | | 1 | 0 |" in table and "| **contradicted** | | | 0 | 1 |" in table
+    with pytest.raises(SystemExit):
+        main(["compare-claims", f"x={tmp_path / 'missing'}"])
