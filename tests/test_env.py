@@ -222,3 +222,27 @@ def test_env_class_docstring_documents_the_sections():
         "## Arguments",
     ):
         assert section in MimoRadarSelectEnv.__doc__
+
+
+def test_spec_max_episode_steps_is_the_horizon_and_the_repr_names_the_setup():
+    env = gym.make("MimoRadarSelect-v1", horizon=37, fusion="centralized")
+    assert env.spec.max_episode_steps == 37 and env.spec.kwargs["horizon"] == 37
+    assert not any(w.name == "TimeLimit" for w in env.spec.additional_wrappers)
+    env.reset(seed=0)
+    steps, truncated = 0, False
+    while not truncated:
+        _, _, _, truncated, _ = env.step(env.unwrapped.oracle_action())
+        steps += 1
+    assert steps == 37
+    text = repr(env.unwrapped)
+    assert text.startswith("<MimoRadarSelectEnv<MimoRadarSelect-v1> scenario='paper-1-v1'")
+    for option in ("fusion='centralized'", "lambda_scale='db'", "truth='shared'"):
+        assert option in text
+    assert "tracking" not in text  # options at their default are left out
+    v0 = "<MimoRadarSelectEnv<MimoRadarSelect-v0> scenario='paper-1'>"
+    assert str(gym.make("MimoRadarSelect-v0").unwrapped) == v0
+    assert gym.make("MimoRadarSelect-v0").spec.max_episode_steps == 1000
+    remade = gym.make(env.spec)  # a spec recreates the env; its TimeLimit agrees with the horizon
+    assert remade.spec.max_episode_steps == 37
+    vec = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point")
+    assert repr(vec).endswith("truth='shared', num_envs=2>")

@@ -6,11 +6,13 @@ The single env and the native vector env stand side by side, as in Gymnasium's
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.utils import seeding
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
@@ -19,7 +21,7 @@ from numpy.typing import NDArray
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
 from .engine import RadarEngine
-from .options import resolve
+from .options import EnvOptions, resolve
 
 
 def observation_space(scenario: Scenario, num_models: int | None = 3) -> spaces.Dict:
@@ -120,13 +122,15 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     ## Episode End
 
     Truncation after the scenario's horizon ``T`` steps (1000 in the paper's
-    scenarios). There is no termination.
+    scenarios), which ``env.spec.max_episode_steps`` reports. There is no termination.
 
     ## Arguments
 
-    ``gym.make("MimoRadarSelect-v0", scenario="paper-1", render_mode=None, **options,
-    **scenario_overrides)``. ``scenario`` is ``paper-1``, ``paper-2``, ``paper-3``, a YAML/TOML
-    file or a :class:`~mimo_radar_env.Scenario`. The options (:class:`~mimo_radar_env.EnvOptions`,
+    ``gym.make("MimoRadarSelect-v1", scenario="paper-1-v1", render_mode=None, **options,
+    **scenario_overrides)``. ``scenario`` is a shipped paper scenario (``paper-1-v1``,
+    ``paper-2-v1``, ``paper-3-v1``: v1's, the default of v1; ``paper-1``, ``paper-2``,
+    ``paper-3``: v0's, the default of v0), a YAML/TOML file or a
+    :class:`~mimo_radar_env.Scenario`. The options (:class:`~mimo_radar_env.EnvOptions`,
     defaults first):
 
     * ``fusion``: ``"average"`` (the paper's eq22 averaging of per-channel IMM-UKF
@@ -168,6 +172,24 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     """
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
+    _spec: EnvSpec | None = None
+
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
+        """The registration spec; its ``max_episode_steps`` is the scenario's horizon, where the
+        env truncates (so Gymnasium adds no ``TimeLimit`` of its own)."""
+        return self._spec
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        if value is not None and value.max_episode_steps is None:
+            value = dataclasses.replace(value, max_episode_steps=self.scenario.horizon)
+        self._spec = value
+
+    def __str__(self) -> str:
+        return describe(type(self).__name__, self.spec, self.scenario, self.options)
+
+    __repr__ = __str__
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
@@ -257,6 +279,14 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
             self._figure = None
 
 
+def describe(kind: str, spec: EnvSpec | None, scenario: Scenario, options: EnvOptions) -> str:
+    """``<Kind<Id> scenario='...', option=value, ...>`` with the options that differ from
+    :class:`EnvOptions`' defaults (v0's)."""
+    ident = f"<{spec.id}>" if spec is not None else ""
+    parts = [f"scenario={scenario.name!r}", *(f"{k}={v!r}" for k, v in options.changed().items())]
+    return f"<{kind}{ident} {', '.join(parts)}>"
+
+
 def _num_models(engine: RadarEngine) -> int | None:
     return None if engine.tracker is None else engine.tracker.num_models
 
@@ -284,6 +314,12 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __str__(self) -> str:
+        text = describe(type(self).__name__, self.spec, self.scenario, self.options)
+        return f"{text[:-1]}, num_envs={self.num_envs}>"
+
+    __repr__ = __str__
 
     def __init__(self, num_envs: int = 1, render_mode: str | None = None, **kwargs: Any) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
