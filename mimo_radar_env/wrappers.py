@@ -81,6 +81,15 @@ class SuperArmDiscreteAction(gym.ActionWrapper):
     def action(self, action: Any) -> NDArray[np.int8]:
         return self.index.to_action(action)
 
+    def action_masks(self) -> NDArray[np.bool_]:
+        """Which Discrete actions are allowed: all of them, since each is a valid super arm.
+
+        Mask-aware learners call it (sb3-contrib's ``MaskablePPO`` through
+        ``get_wrapper_attr("action_masks")``); a subclass may narrow it, e.g. to exclude
+        failed stations.
+        """
+        return np.ones(self.index.size, dtype=bool)
+
 
 def scores_to_action(
     scores: NDArray[np.float64], num_tx: int, tx_count: int, rx_count: int

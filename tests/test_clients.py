@@ -1,0 +1,41 @@
+"""Third-party clients on the env as they are used (each skipped with its reason when absent)."""
+
+import numpy as np
+import pytest
+
+from mimo_radar_env.wrappers import SuperArmDiscreteAction, make_ppo_env
+
+
+def test_maskable_ppo_trains_on_the_discrete_wrapper_and_every_action_is_valid():
+    sb3_contrib = pytest.importorskip(
+        "sb3_contrib", reason="MaskablePPO needs sb3-contrib (in the test extra: pip install -e '.[rl,test]')"
+    )
+    from sb3_contrib.common.maskable.utils import get_action_masks
+    from stable_baselines3.common.env_util import make_vec_env
+
+    venv = make_vec_env(lambda: make_ppo_env(horizon=40, action="discrete"), n_envs=2, seed=0)
+    masks = get_action_masks(venv)
+    assert masks.shape == (2, 120) and masks.all()
+    model = sb3_contrib.MaskablePPO(
+        "MlpPolicy", venv, n_steps=64, batch_size=32, n_epochs=1, seed=0, verbose=0
+    )
+    model.learn(total_timesteps=256)
+
+    env = make_ppo_env(horizon=40, action="discrete")
+    obs, _ = env.reset(seed=1)
+    valid = []
+    for _ in range(40):
+        mask = env.get_wrapper_attr("action_masks")()
+        action, _ = model.predict(obs, action_masks=mask, deterministic=False)
+        assert mask[int(action)]
+        obs, _, _, truncated, info = env.step(action)
+        valid.append(bool(info["action_valid"]))
+        if truncated:
+            break
+    assert len(valid) == 40 and all(valid)
+
+
+def test_action_masks_allow_exactly_the_discrete_actions():
+    env = SuperArmDiscreteAction(make_ppo_env(horizon=5).unwrapped)
+    mask = env.action_masks()
+    assert mask.dtype == np.bool_ and mask.shape == (env.action_space.n,) and mask.all()
