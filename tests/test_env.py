@@ -246,3 +246,38 @@ def test_spec_max_episode_steps_is_the_horizon_and_the_repr_names_the_setup():
     assert remade.spec.max_episode_steps == 37
     vec = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point")
     assert repr(vec).endswith("truth='shared', num_envs=2>")
+
+
+def test_measurements_in_info_are_eq6_plus_noise_of_the_stated_covariance():
+    from mimo_radar_env.core.geometry import bistatic_measurement
+
+    env = gym.make("MimoRadarSelect-v1", measurements=True, horizon=301)
+    _, info = env.reset(seed=3)
+    assert "measurement" not in info  # nothing is measured at reset
+    sc = env.unwrapped.scenario
+    rng = np.random.default_rng(0)
+    normalised = []
+    for action in random_valid_actions(rng, 300, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step):
+        _, _, _, _, info = env.step(action)
+        tx, rx = sc.tx_positions[info["measurement_tx"]], sc.rx_positions[info["measurement_rx"]]
+        assert set(zip(info["measurement_tx"], info["measurement_rx"], strict=True)) == {
+            (m, n) for m in np.flatnonzero(action[: sc.num_tx]) for n in np.flatnonzero(action[sc.num_tx :])
+        }
+        truth = info["true_state"][:, None, [0, 2]]  # (K, 1, 2)
+        clean = bistatic_measurement(truth, tx[None], rx[None])  # (K, C, 2)
+        cov = info["measurement_covariance"]
+        assert np.all(cov[..., 0, 1] == 0) and np.all(cov[..., 1, 0] == 0)
+        # filter_noise="true": Sigma0 / lambda, lambda from eq32 on dB of the true mean SINR
+        mean = info["mean_sinr"][:, info["measurement_tx"], info["measurement_rx"]]  # (K, C)
+        s_min = env.unwrapped.engine.model.min_sinr[:, None]
+        lam = np.clip(np.log10(mean / s_min) / np.log10(sc.peak_sinr / s_min) + 0.2, 0.2, 1.2)
+        np.testing.assert_allclose(cov[..., 0, 0], sc.range_variance / lam, rtol=1e-12)
+        np.testing.assert_allclose(cov[..., 1, 1], sc.azimuth_variance / lam, rtol=1e-12)
+        error = info["measurement"] - clean
+        error[..., 1] = np.angle(np.exp(1j * error[..., 1]))
+        normalised.append(error / np.sqrt(np.diagonal(cov, axis1=-2, axis2=-1)))
+    z = np.concatenate([n.reshape(-1, 2) for n in normalised])
+    assert z.shape == (300 * 6, 2)
+    assert abs(z.mean()) < 0.06 and abs(z.std() - 1) < 0.04  # standard normal, 3600 draws
+    _, _, _, _, info = env.step(np.zeros(sc.num_tx + sc.num_rx, np.int8))
+    assert np.isnan(info["measurement"]).all() and np.isnan(info["measurement_covariance"]).all()

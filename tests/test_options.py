@@ -24,6 +24,7 @@ NON_DEFAULT = {
     "oracle_solver": ("alternating", ["--oracle-solver", "alternating"]),
     "lambda_scale": ("db", ["--lambda-scale", "db"]),
     "truth": ("shared", ["--truth", "shared"]),
+    "measurements": (True, ["--measurements"]),
 }
 #: A bad value of every option, as a CLI argument and as a Python value.
 BAD = {
@@ -35,6 +36,7 @@ BAD = {
     "oracle_solver": ("--oracle-solver", "local-search", "local-search"),
     "lambda_scale": ("--lambda-scale", "log", "log"),
     "truth": ("--truth", "per-run", "per-run"),
+    "measurements": (None, None, 1),  # a switch: no bad CLI value
 }
 
 

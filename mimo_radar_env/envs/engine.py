@@ -144,6 +144,8 @@ class RadarEngine:
         info["optimal_reward"] = best_value
         info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
         info["action_valid"] = valid
+        if self.options.measurements:
+            info |= self._measurement_info(channels)
         obs = self._observation(sinr, probed)
         terminated = np.zeros(self.batch_size, dtype=bool)
         truncated = np.full(self.batch_size, self.step_index >= self.horizon)
@@ -159,21 +161,34 @@ class RadarEngine:
         return np.concatenate([tx, rx], axis=1).astype(np.int8)
 
     # ----------------------------------------------------------- helpers
+    def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
+        """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""
+        if self.options.filter_noise == "true":
+            return channels.noise_variance
+        lam_hat = self.model.quality(channels.sinr, target_axis=1, scale=self.options.lambda_scale)
+        return self.model.measurement_variance(lam_hat)
+
     def _track(self, channels: ChannelObservations) -> None:
         if self.tracker is None:
             return
-        if self.options.filter_noise == "true":
-            variance = channels.noise_variance
-        else:
-            lam_hat = self.model.quality(channels.sinr, target_axis=1, scale=self.options.lambda_scale)
-            variance = self.model.measurement_variance(lam_hat)
         self.tracker.step(
             self.model.tx[channels.tx_stations],
             self.model.rx[channels.rx_stations],
             channels.measurement,
-            variance,
+            self._tracker_variance(channels),
             channels.valid,
         )
+
+    def _measurement_info(self, channels: ChannelObservations) -> dict[str, NDArray]:
+        invalid = ~channels.valid[:, None, None, None]
+        variance = self._tracker_variance(channels)
+        covariance = variance[..., :, None] * np.eye(2)  # (B, K, C, 2, 2), diagonal
+        return {
+            "measurement": np.where(invalid, np.nan, channels.measurement),
+            "measurement_covariance": np.where(invalid[..., None], np.nan, covariance),
+            "measurement_tx": channels.tx_index.copy(),
+            "measurement_rx": channels.rx_index.copy(),
+        }
 
     def _observation(self, sinr: NDArray, probed: NDArray) -> dict[str, NDArray]:
         obs = {"sinr": sinr, "probed": probed}

@@ -152,7 +152,14 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     * ``truth``: ``"per-trial"`` (each trial's truth starts at a draw from
       ``N(X1_hat, P1_hat)``) or ``"shared"`` (one true trajectory per target, from ``X1_hat``
       and the scenario's ``truth_seed``, the same in every trial; each trial's tracker starts
-      at ``X1_hat + N(0, P1_hat)``).
+      at ``X1_hat + N(0, P1_hat)``);
+    * ``measurements``: ``False`` or ``True``: after each step, ``info`` also carries the raw
+      measurements for external trackers: ``measurement`` (K, Ms*Ns, 2), the range sum (m)
+      and azimuth (rad, from the receiver) of each target on each selected channel;
+      ``measurement_covariance`` (K, Ms*Ns, 2, 2), the diagonal covariance the env's tracker
+      uses (``Sigma0 / lambda``, per ``filter_noise``); ``measurement_tx`` and
+      ``measurement_rx`` (Ms*Ns,), the stations of each channel (TX-major order). After an
+      action that probes nothing the measurements and covariances are NaN.
 
     ``MimoRadarSelect-v0`` defaults to ``lambda_scale="linear"``, ``truth="per-trial"``
     (reading 0 of the paper's ambiguous points, unchanged since release);

@@ -96,6 +96,12 @@ class EnvOptions:
         trajectory shared by every trial, started at ``X1_hat`` and drawn from the scenario's
         ``truth_seed``, with each trial's tracker started at ``X1_hat + N(0, P1_hat)``
         (reading 1).
+    measurements : bool
+        ``True`` puts each step's raw measurements in ``info`` for external trackers:
+        ``measurement`` (K, Ms*Ns, 2), range sum (m) and azimuth (rad) per target and selected
+        channel; ``measurement_covariance`` (K, Ms*Ns, 2, 2), the covariance the env's tracker
+        uses (per ``filter_noise``); ``measurement_tx``/``measurement_rx`` (Ms*Ns,), each
+        channel's stations. NaN after an action that probes nothing.
     """
 
     fusion: FusionName = _option("average", "tracker fusion: the paper's eq22 'average' or 'centralized'")
@@ -114,6 +120,7 @@ class EnvOptions:
     )
     lambda_scale: LambdaScale = _option("linear", "the scale eq32 maps SINR to measurement quality on")
     truth: Truth = _option("per-trial", "a true trajectory per trial, or one shared by all trials")
+    measurements: bool = _option(False, "put each step's raw measurements and their covariances in info")
 
     @classmethod
     def for_version(cls, version: str, **options: Any) -> EnvOptions:
@@ -127,8 +134,9 @@ class EnvOptions:
             value = getattr(self, name)
             if not isinstance(value, str) or value not in choices:
                 raise ValueError(f"{name} must be one of {list(choices)}, got {value!r}")
-        if not isinstance(self.tracking, bool):
-            raise ValueError(f"tracking must be True or False, got {self.tracking!r}")
+        for name in ("tracking", "measurements"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
         quality = self.measurement_quality
         if quality is not None:
             if isinstance(quality, bool) or not isinstance(quality, int | float):
