@@ -39,3 +39,20 @@ def test_action_masks_allow_exactly_the_discrete_actions():
     env = SuperArmDiscreteAction(make_ppo_env(horizon=5).unwrapped)
     mask = env.action_masks()
     assert mask.dtype == np.bool_ and mask.shape == (env.action_space.n,) and mask.all()
+
+
+def test_stone_soup_recipe_tracks_from_the_info_measurements():
+    pytest.importorskip(
+        "stonesoup", reason="the recipe needs Stone Soup (in the test extra: pip install -e '.[test]')"
+    )
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "docs" / "examples" / "stone_soup_tracker.py"
+    spec = importlib.util.spec_from_file_location("stone_soup_tracker", path)
+    recipe = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(recipe)
+    result = recipe.run(steps=150, seed=2)
+    # a UKF with the true NCV model and the env's IMM-UKF, both centralised, on the same data
+    assert 0.2 < result["stone_soup_ukf"] < 5.0
+    assert 0.75 < result["stone_soup_ukf"] / result["env_imm_ukf"] < 1.25
