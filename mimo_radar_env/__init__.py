@@ -8,7 +8,7 @@ from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
 from .envs import EnvOptions, MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
-from .envs.options import ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
+from .envs.options import ENV_IDS, FLAT_ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -29,12 +29,19 @@ for _version, _env_id in ENV_IDS.items():
             vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
             kwargs={**VERSION_DEFAULTS[_version], "scenario": PAPER_SCENARIOS[_version][0]},
         )
+    if FLAT_ENV_IDS[_version] not in registry:
+        register(
+            id=FLAT_ENV_IDS[_version],
+            entry_point="mimo_radar_env.wrappers:make_flat_env",
+            kwargs={**VERSION_DEFAULTS[_version], "scenario": PAPER_SCENARIOS[_version][0]},
+        )
 
 __version__ = "0.1.0"
 
 __all__ = [
     "ENV_ID",
     "ENV_IDS",
+    "FLAT_ENV_IDS",
     "PAPER_SCENARIOS",
     "VERSION_DEFAULTS",
     "EnvOptions",

@@ -9,7 +9,9 @@
   harness computes the same features for B trials at once.
 
 All three keep every action valid by construction: a policy never has to learn the
-``Ms``/``Ns`` constraint.
+``Ms``/``Ns`` constraint. :func:`make_flat_env` is the entry point of the registered
+``MimoRadarSelectFlat-v0``/``-v1``: the env with a valid action and the feature observation,
+for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``).
 """
 
 from __future__ import annotations
@@ -70,11 +72,12 @@ class SuperArmIndex:
         return self.actions[index]
 
 
-class SuperArmDiscreteAction(gym.ActionWrapper):
+class SuperArmDiscreteAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     """``Discrete(C(M, Ms) * C(N, Ns))``: every action is one valid super arm (a bijection)."""
 
     def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.ActionWrapper.__init__(self, env)
         self.index = SuperArmIndex(_scenario_of(env))
         self.action_space = spaces.Discrete(self.index.size)
 
@@ -103,11 +106,12 @@ def scores_to_action(
     return np.concatenate([tx, rx], axis=-1).astype(np.int8)
 
 
-class StationScoreAction(gym.ActionWrapper):
+class StationScoreAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     """``Box(-1, 1, (M + N,))``: a score per station; the top-``Ms`` TX and top-``Ns`` RX are used."""
 
     def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.ActionWrapper.__init__(self, env)
         sc = _scenario_of(env)
         self._sizes = (sc.num_tx, sc.tx_per_step, sc.rx_per_step)
         self.action_space = spaces.Box(-1.0, 1.0, (sc.num_tx + sc.num_rx,), np.float32)
@@ -193,11 +197,12 @@ class RadarFeatures:
         return np.concatenate(parts, axis=1).astype(np.float32)
 
 
-class RadarFeatureObservation(gym.ObservationWrapper):
+class RadarFeatureObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):
     """A flat ``Box`` of :class:`RadarFeatures` (float32) for MLP policies."""
 
     def __init__(self, env: gym.Env) -> None:
-        super().__init__(env)
+        gym.utils.RecordConstructorArgs.__init__(self)
+        gym.ObservationWrapper.__init__(self, env)
         self.features = RadarFeatures(_scenario_of(env))
         self.observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
 
@@ -224,6 +229,20 @@ def make_ppo_env(
     scores) or ``"auto"`` (discrete when there are at most 1,000 super arms).
     """
     env = gym.make(env_id, **kwargs) if scenario is None else gym.make(env_id, scenario=scenario, **kwargs)
+    return wrap_for_learning(env, action)
+
+
+def make_flat_env(action: str = "auto", render_mode: str | None = None, **kwargs: Any) -> gym.Env:
+    """Entry point of ``MimoRadarSelectFlat-v0``/``-v1``: the env (``kwargs`` as for
+    ``MimoRadarSelect``) with a valid action (``action`` as in :func:`make_ppo_env`) and the
+    float32 feature observation of :class:`RadarFeatures`."""
+    from .envs import MimoRadarSelectEnv
+
+    return wrap_for_learning(MimoRadarSelectEnv(render_mode=render_mode, **kwargs), action)
+
+
+def wrap_for_learning(env: gym.Env, action: str = "auto") -> gym.Env:
+    """``env`` with a valid action wrapper and the feature observation."""
     sc = env.unwrapped.scenario
     count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
     if action == "auto":

@@ -56,3 +56,36 @@ def test_stone_soup_recipe_tracks_from_the_info_measurements():
     # a UKF with the true NCV model and the env's IMM-UKF, both centralised, on the same data
     assert 0.2 < result["stone_soup_ukf"] < 5.0
     assert 0.75 < result["stone_soup_ukf"] / result["env_imm_ukf"] < 1.25
+
+
+def test_flat_variant_works_by_id_with_gymnasium_and_sb3():
+    import gymnasium as gym
+
+    sb3 = pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
+    from stable_baselines3.common.env_checker import check_env
+    from stable_baselines3.common.env_util import make_vec_env
+
+    env = gym.make("MimoRadarSelectFlat-v1", horizon=30)
+    assert env.action_space == gym.spaces.Discrete(120)
+    assert env.observation_space.dtype == np.float32 and env.observation_space.shape == (80,)
+    assert env.spec.max_episode_steps == 30
+    check_env(env)
+    obs, _ = env.reset(seed=0)
+    assert np.abs(obs).max() < 10  # features on a normalised scale
+    remade = gym.make(env.spec)  # the spec records the wrappers and recreates the same env
+    np.testing.assert_array_equal(remade.reset(seed=4)[0], env.reset(seed=4)[0])
+    venv = make_vec_env("MimoRadarSelectFlat-v1", n_envs=2, seed=0, env_kwargs={"horizon": 30})
+    sb3.PPO("MlpPolicy", venv, n_steps=32, batch_size=32, n_epochs=1, seed=0).learn(64)
+    v0 = gym.make("MimoRadarSelectFlat-v0", horizon=5)
+    assert v0.unwrapped.scenario.name == "paper-1" and v0.unwrapped.options.lambda_scale == "linear"
+
+
+def test_torchrl_runs_the_flat_variant_by_id():
+    pytest.importorskip("torchrl", reason="needs torchrl (in the test extra: pip install -e '.[rl,test]')")
+    from torchrl.envs import GymEnv
+    from torchrl.envs.utils import check_env_specs
+
+    env = GymEnv("MimoRadarSelectFlat-v1", horizon=20)
+    check_env_specs(env)
+    rollout = env.rollout(50)
+    assert rollout.batch_size[0] == 20 and bool(rollout["next", "truncated"][-1])

@@ -27,6 +27,9 @@ VERSION_DEFAULTS: dict[str, dict[str, Any]] = {
     "v1": {"lambda_scale": "db", "truth": "shared"},
 }
 ENV_IDS = {version: f"MimoRadarSelect-{version}" for version in VERSION_DEFAULTS}
+#: The same envs with a valid Discrete (or station-score) action and a flat float32 feature
+#: observation, for tools that take an env id (``mimo_radar_env.wrappers.make_flat_env``).
+FLAT_ENV_IDS = {version: f"MimoRadarSelectFlat-{version}" for version in VERSION_DEFAULTS}
 #: The paper's three scenarios as each version ships them (docs/model.md, section 13); the
 #: first is the version's default scenario.
 PAPER_SCENARIOS: dict[str, tuple[str, ...]] = {
