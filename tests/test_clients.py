@@ -81,7 +81,10 @@ def test_flat_variant_works_by_id_with_gymnasium_and_sb3():
 
 
 def test_torchrl_runs_the_flat_variant_by_id():
-    pytest.importorskip("torchrl", reason="needs torchrl (in the test extra: pip install -e '.[rl,test]')")
+    pytest.importorskip(
+        "torchrl",
+        reason="torchrl shadows this project's 'benchmarks' package; .ci/wheel-check runs it in its own venv",
+    )
     from torchrl.envs import GymEnv
     from torchrl.envs.utils import check_env_specs
 
