@@ -207,7 +207,10 @@ def build_parser() -> argparse.ArgumentParser:
         help="rl-zoo3-style YAML file (default: the shipped benchmarks/hyperparams/ppo.yml)",
     )
     train.add_argument(
-        "--hyperparams-key", default="MimoRadarSelect-v0", help="entry of the YAML file to use"
+        "--hyperparams-key",
+        default=None,
+        help="entry of the YAML file to use (default: the flat env id of --env-version, "
+        "MimoRadarSelectFlat-v1)",
     )
     train.add_argument(
         "--action",
@@ -440,7 +443,7 @@ def _dispatch(args: argparse.Namespace) -> int:
         print_demo(run_demo(args.scenario, args.seed, args.steps), args.scenario)
         return 0
     if args.command == "train-ppo":
-        from mimo_radar_env import paper_scenario
+        from mimo_radar_env import FLAT_ENV_IDS, paper_scenario
 
         from .harness import HarnessError
         from .ppo import train_ppo
@@ -452,7 +455,7 @@ def _dispatch(args: argparse.Namespace) -> int:
                 args.out,
                 seed=args.seed,
                 hyperparams=args.hyperparams,
-                hyperparams_key=args.hyperparams_key,
+                hyperparams_key=args.hyperparams_key or FLAT_ENV_IDS[args.env_version],
                 action=args.action,
                 tensorboard=args.tensorboard,
                 progress=not args.quiet,

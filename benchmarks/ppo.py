@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.ppo import MODEL_FILE, NORMALIZATION_FILE, require_sb3, save_normalization
-from mimo_radar_env import EnvOptions, Scenario, load_scenario
+from mimo_radar_env import FLAT_ENV_IDS, EnvOptions, Scenario, load_scenario
 
 #: The hyperparameter file shipped with the package (rl-zoo3 style).
 DEFAULT_HYPERPARAMS = "hyperparams/ppo.yml"
@@ -22,8 +22,12 @@ META_FILE = "ppo.json"
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
-def load_hyperparams(path: str | Path | None = None, key: str = "MimoRadarSelect-v0") -> dict[str, Any]:
-    """The rl-zoo3-style entry ``key`` of a YAML file (default: the shipped ``hyperparams/ppo.yml``)."""
+def load_hyperparams(path: str | Path | None = None, key: str = "MimoRadarSelectFlat-v1") -> dict[str, Any]:
+    """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped ``hyperparams/ppo.yml``).
+
+    ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads
+    them (without eval); ``normalize: true`` means observations and rewards, as in rl-zoo3.
+    """
     import yaml
 
     if path is None:
@@ -35,16 +39,28 @@ def load_hyperparams(path: str | Path | None = None, key: str = "MimoRadarSelect
     if key not in data:
         raise ValueError(f"{path} has no entry {key!r}; entries: {sorted(data)}")
     params = dict(data[key])
-    if isinstance(params.get("policy_kwargs"), str):
-        params["policy_kwargs"] = _parse_dict_call(params["policy_kwargs"])
+    for name in ("policy_kwargs", "normalize"):
+        if isinstance(params.get(name), str):
+            params[name] = _parse_dict_call(params[name], name)
     return params
 
 
-def _parse_dict_call(text: str) -> dict[str, Any]:
+def normalize_kwargs(params: dict[str, Any]) -> dict[str, Any] | None:
+    """VecNormalize's keywords for an entry's ``normalize`` (None: no normalisation), as rl-zoo3."""
+    normalize = params.get("normalize", False)
+    if normalize is False:
+        return None
+    kwargs = dict(normalize) if isinstance(normalize, dict) else {}
+    if "gamma" in params:
+        kwargs["gamma"] = params["gamma"]
+    return kwargs
+
+
+def _parse_dict_call(text: str, name: str) -> dict[str, Any]:
     """rl-zoo3 writes ``"dict(net_arch=[64, 64])"``; parse it without eval."""
     node = ast.parse(text, mode="eval").body
     if not (isinstance(node, ast.Call) and getattr(node.func, "id", "") == "dict" and not node.args):
-        raise ValueError(f"policy_kwargs must look like dict(key=value, ...), got {text!r}")
+        raise ValueError(f"{name} must look like dict(key=value, ...), got {text!r}")
     return {kw.arg: ast.literal_eval(kw.value) for kw in node.keywords}
 
 
@@ -54,7 +70,7 @@ def train_ppo(
     out: str | Path,
     seed: int = 0,
     hyperparams: str | Path | None = None,
-    hyperparams_key: str = "MimoRadarSelect-v0",
+    hyperparams_key: str | None = None,
     action: str = "auto",
     tensorboard: bool = False,
     progress: bool = True,
@@ -68,19 +84,19 @@ def train_ppo(
 
     options = options or EnvOptions()
     sc = load_scenario(scenario)
-    params = load_hyperparams(hyperparams, hyperparams_key)
+    params = load_hyperparams(hyperparams, hyperparams_key or FLAT_ENV_IDS["v1"])
     n_envs = int(params.get("n_envs", 8))
     if timesteps is not None and timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
-    normalize = bool(params.get("normalize", True))
+    normalization = normalize_kwargs(params)
     ppo_kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
     policy = ppo_kwargs.pop("policy", "MlpPolicy")
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     venv = NativeVecEnv(sc, n_envs, seed, action=action, **options.to_dict())
-    if normalize:
-        venv = VecNormalize(venv, norm_obs=True, norm_reward=False)
+    if normalization is not None:
+        venv = VecNormalize(venv, **normalization)
     model = sb3.PPO(
         policy,
         venv,
@@ -93,7 +109,7 @@ def train_ppo(
     model.learn(total_timesteps=timesteps, progress_bar=progress)
     wall = time.perf_counter() - start
     model.save(out / MODEL_FILE)
-    if normalize:
+    if normalization is not None:
         save_normalization(out / NORMALIZATION_FILE, venv)
     meta = {
         "scenario": sc.to_dict(),
@@ -102,7 +118,7 @@ def train_ppo(
         "seed": seed,
         "n_envs": n_envs,
         "action": "discrete" if model.action_space.__class__.__name__ == "Discrete" else "scores",
-        "normalize": normalize,
+        "normalize": normalization,
         "hyperparams": dict(params),
         "train_wall_s": wall,
     }

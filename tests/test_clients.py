@@ -92,3 +92,33 @@ def test_torchrl_runs_the_flat_variant_by_id():
     check_env_specs(env)
     rollout = env.rollout(50)
     assert rollout.batch_size[0] == 20 and bool(rollout["next", "truncated"][-1])
+
+
+@pytest.mark.slow
+def test_rl_zoo3_trains_with_the_shipped_hyperparameter_file(tmp_path):
+    pytest.importorskip("rl_zoo3", reason="needs rl-zoo3 (in the test extra: pip install -e '.[rl,test]')")
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    conf = Path(__file__).parents[1] / "benchmarks" / "hyperparams" / "ppo.yml"
+    command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", "MimoRadarSelectFlat-v1"]
+    command += ["--gym-packages", "mimo_radar_env", "-conf", str(conf), "-n", "256", "--seed", "0"]
+    command += ["--env-kwargs", "horizon:40", "-f", str(tmp_path), "--eval-freq", "-1"]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=600, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "'norm_obs': True, 'norm_reward': False" in done.stdout  # the file's normalisation, as meant
+    assert list(tmp_path.glob("ppo/MimoRadarSelectFlat-v1_*/MimoRadarSelectFlat-v1.zip"))
+
+
+def test_train_ppo_reads_the_rl_zoo3_entries():
+    from benchmarks.ppo import load_hyperparams, normalize_kwargs
+
+    for key in ("MimoRadarSelectFlat-v1", "MimoRadarSelectFlat-v0"):
+        params = load_hyperparams(key=key)
+        assert params["policy_kwargs"] == {"net_arch": [128, 128]}
+        assert normalize_kwargs(params) == {"norm_obs": True, "norm_reward": False, "gamma": 0.9}
+    assert normalize_kwargs({"normalize": True}) == {}  # rl-zoo3: observations and rewards
+    assert normalize_kwargs({}) is None
+    with pytest.raises(ValueError, match="has no entry 'MimoRadarSelect-v9'"):
+        load_hyperparams(key="MimoRadarSelect-v9")
