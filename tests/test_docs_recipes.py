@@ -7,7 +7,12 @@ import pytest
 
 DOC = Path(__file__).parents[1] / "docs" / "clients.md"
 BLOCKS = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
-NEEDS = {"stable_baselines3": "rl extra", "sb3_contrib": "test extra", "torchrl": "test extra"}
+NEEDS = {
+    "stable_baselines3": "rl extra",
+    "sb3_contrib": "test extra",
+    "torchrl": "its own environment, .ci/wheel-check",
+    "SMPyBandits": "test extra",
+}
 
 
 def test_the_page_has_recipes():
