@@ -16,6 +16,7 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-4000:]
     assert "oracle" in result.stdout and "trained PPO for 300 steps" in result.stdout
+    assert "torchrl: GymEnv('MimoRadarSelectFlat-v1') checked and rolled out" in result.stdout
 
 
 def test_the_hyperparameters_are_package_data():
@@ -40,3 +41,17 @@ def test_the_cli_names_a_foreign_agents_package(tmp_path):
     assert result.returncode == 2
     assert "another installed distribution provides agents" in result.stderr
     assert "dedicated virtual environment" in result.stderr
+
+
+def test_citation_file_cites_the_project_and_the_paper():
+    import tomllib
+
+    import yaml
+
+    cff = yaml.safe_load((ROOT / "CITATION.cff").read_text())
+    assert cff["cff-version"] == "1.2.0" and cff["type"] == "software" and cff["license"] == "MIT"
+    paper = cff["preferred-citation"]
+    assert paper["type"] == "article" and paper["title"].startswith("Combinatorial-restless-bandit-based")
+    assert [a["family-names"] for a in paper["authors"]] == ["Hao", "Wang", "Fu", "Bai", "Li", "Pan"]
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert cff["version"] == project["version"]

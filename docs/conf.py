@@ -1,0 +1,66 @@
+"""Sphinx configuration: the Markdown pages of docs/ (MyST) and an API reference from the
+docstrings. Build: ``sphinx-build -W -b html docs docs/_build/html`` (the ``docs`` extra)."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+project = "mimo-radar-env"
+author = "the mimo-radar-env developers"
+copyright = "2026, the mimo-radar-env developers"
+
+extensions = [
+    "myst_parser",
+    "sphinx.ext.autodoc",
+    "sphinx.ext.napoleon",
+    "sphinx.ext.viewcode",
+]
+source_suffix = {".md": "markdown", ".rst": "restructuredtext"}
+root_doc = "index"
+exclude_patterns = ["_build"]
+myst_heading_anchors = 3
+myst_enable_extensions = ["colon_fence"]
+html_theme = "furo"
+html_title = "mimo-radar-env"
+
+autodoc_default_options = {"members": True, "show-inheritance": True}
+autodoc_typehints = "description"
+autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are not ours to render
+autodoc_member_order = "bysource"
+napoleon_google_docstring = False
+napoleon_numpy_docstring = True
+nitpicky = False
+
+
+ENV_PAGE = Path(__file__).parent / "_generated" / "environment.md"
+
+
+def _write_env_page() -> None:
+    """The env's docstring is its documentation (Markdown sections, as in Gymnasium's envs):
+    render it as a page of its own, through MyST."""
+    import inspect
+
+    from mimo_radar_env import MimoRadarSelectEnv
+
+    text = inspect.cleandoc(MimoRadarSelectEnv.__doc__ or "")
+    ENV_PAGE.parent.mkdir(exist_ok=True)
+    page = "# The environment: `MimoRadarSelect`\n\n"
+    page += "(The docstring of `mimo_radar_env.MimoRadarSelectEnv`.)\n\n"
+    page += text + "\n"
+    if not ENV_PAGE.exists() or ENV_PAGE.read_text() != page:
+        ENV_PAGE.write_text(page)
+
+
+def _env_docstring(app, what, name, obj, options, lines) -> None:
+    if what == "class" and name.endswith("MimoRadarSelectEnv"):
+        lines[:] = ["Its docstring is its documentation, rendered on :doc:`_generated/environment`."]
+
+
+_write_env_page()
+
+
+def setup(app):
+    app.connect("autodoc-process-docstring", _env_docstring)
