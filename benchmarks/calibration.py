@@ -266,6 +266,20 @@ def calibration_markdown(report: dict[str, Any]) -> str:
         s = c["scorecards"].get(trials)
         return f"{s['holds']} / {s['consistent']} / {s['contradicted']}" if s else "—"
 
+    best = next(c for c in report["candidates"] if c["index"] == report["best"])
+    reference = report["candidates"][0]
+    lines[-3:-3] = [
+        "",
+        f"Station positions (km) of the best layout ({best['index']}) and of the reference:",
+        "",
+        "| station | best layout | reference |",
+        "|---|---|---|",
+        *(
+            f"| {kind}{i + 1} | ({p[0]:.3f}, {p[1]:.3f}) | ({q[0]:g}, {q[1]:g}) |"
+            for kind, key in (("TX", "tx_km"), ("RX", "rx_km"))
+            for i, (p, q) in enumerate(zip(best[key], reference[key], strict=True))
+        ),
+    ]
     order = sorted(
         report["candidates"], key=lambda c: (c["rejected"] is not None, -c["noise_free_score"], c["index"])
     )
