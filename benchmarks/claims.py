@@ -455,14 +455,31 @@ def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str
     return evaluate(studies, seed)
 
 
-def write_scorecard(results: list[dict[str, Any]], out: str | Path) -> None:
-    """``out/claims.json`` and ``out/claims.md``."""
+def describe_studies(folders: Sequence[str | Path]) -> str:
+    """One line on what the studies ran: scenarios, trials, seed, non-default options, agent
+    parameters (from their ``config.json``)."""
+    from mimo_radar_env import EnvOptions
+
+    configs = [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+    first = configs[0]
+    options = EnvOptions(**first["env_options"]).changed()
+    names = ", ".join(c["scenario"]["name"] for c in configs)
+    text = f"Studies: {names}; {first['trials']} trials, {first['steps']} steps, seed {first['seed']}"
+    text += "; env options " + (", ".join(f"{k}={v}" for k, v in options.items()) or "v0's defaults")
+    text += f", fusion {first['env_options']['fusion']}"
+    if first.get("agent_params"):
+        text += f"; agent parameters {json.dumps(first['agent_params'])}"
+    return text + "."
+
+
+def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str = "") -> None:
+    """``out/claims.json`` and ``out/claims.md`` (``about``: a line on the studies judged)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "claims.json").write_text(json.dumps(results, indent=2, allow_nan=False))
     scenarios = sorted({r["scenario"] for r in results})
     title = f"The paper's claims ({', '.join(scenarios)})"
-    (out / "claims.md").write_text(scorecard_markdown(results, title))
+    (out / "claims.md").write_text(scorecard_markdown(results, title, about))
 
 
 def load_study(run_dir: str | Path) -> tuple[str, Policies]:
@@ -528,8 +545,9 @@ def comparison_markdown(scorecards: dict[str, list[dict[str, Any]]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def scorecard_markdown(results: list[dict[str, Any]], title: str) -> str:
-    lines = [f"# {title}", "", f"Verdicts from paired 95 % intervals ({uncertainty.METHOD}).", ""]
+def scorecard_markdown(results: list[dict[str, Any]], title: str, about: str = "") -> str:
+    lines = [f"# {title}", ""] + ([about, ""] if about else [])
+    lines += [f"Verdicts from paired 95 % intervals ({uncertainty.METHOD}).", ""]
     counts = {v: sum(r["verdict"] == v for r in results) for v in ("holds", "consistent", "contradicted")}
     lines += [", ".join(f"{k}: {v}" for k, v in counts.items()), ""]
     lines += [

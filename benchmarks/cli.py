@@ -252,7 +252,7 @@ def build_parser() -> argparse.ArgumentParser:
         "the paper's text (region, 2 km from every nominal track, Best's selections in Scenario 1), "
         "rank the rest by noise-free checks, judge the best by short scorecards, then the best of "
         "those and the reference by full scorecards (--trials). Writes OUT/calibration.md and "
-        "OUT/calibration.json with every candidate's score; resumable (docs/results.md).",
+        "OUT/calibration.json with every candidate's score; resumable (docs/benchmark.md).",
     )
     calibrate.add_argument(
         "--candidates", type=_integer(1), default=400, help="jittered layouts to draw (default 400)"
@@ -387,7 +387,7 @@ def _claims(args: argparse.Namespace) -> int:
         names = [paper_scenario(n, args.env_version) for n in numbers]
         runs = _study_runner(args)(names, out, args.trials)
     results = claims.judge_studies(runs, args.seed)
-    claims.write_scorecard(results, out)
+    claims.write_scorecard(results, out, claims.describe_studies(runs))
     print((out / "claims.md").read_text())
     return 0
 
@@ -415,8 +415,9 @@ def _calibrate(args: argparse.Namespace) -> int:
     run = _study_runner(args)
 
     def scorecard(scenarios: Sequence[Any], out: Path, trials: int) -> list[dict[str, Any]]:
-        results = claims.judge_studies(run(scenarios, out, trials), args.seed)
-        claims.write_scorecard(results, out)
+        folders = run(scenarios, out, trials)
+        results = claims.judge_studies(folders, args.seed)
+        claims.write_scorecard(results, out, claims.describe_studies(folders))
         return results
 
     report = calibration.calibrate(

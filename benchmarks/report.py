@@ -134,6 +134,8 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
     if paper_armse:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
     lines = [
+        f"# {name}: {', '.join(summary['policies'])}",
+        "",
         f"Scenario `{name}`, {summary['trials']} trials, {summary['steps']} steps, seed {summary['seed']}, "
         f"fusion `{summary['env_options']['fusion']}`" + _changed_options(summary["env_options"]),
         "",
