@@ -26,6 +26,10 @@ Runner = Callable[[dict[str, Any], str, int], dict]
 def worker_init(parent: int) -> None:
     """Worker set-up: one compute thread, SIGINT left to the parent, exit when the parent dies."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # libraries imported later (torch, for a trained PPO policy) start one thread each too;
+    # with their default of one per core, two workers on two cores ran PPO 3x slower
+    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[name] = "1"
     try:
         import numba
 
