@@ -109,6 +109,15 @@ class IMMUKFTracker:
         per_model = np.einsum("rij,bkj->bkri", self.transitions, self.estimate)
         return np.einsum("bkr,bkri->bki", self.model_probabilities, per_model)
 
+    def predicted_covariance(self) -> NDArray[np.float64]:
+        """``P_bar``: the covariance of the IMM mixture of the one-step predictions (B, K, 4, 4):
+        each model's mixed posterior predicted exactly, combined with the predicted model
+        probabilities ``c_j``. The tracker's state is unchanged."""
+        mixed_means, mixed_covs, log_c = imm.mix(self.log_probs, self.means, self.covs, self.log_markov)
+        pred_means, pred_covs = imm.predict(mixed_means, mixed_covs, self.transitions, self.model.process_cov)
+        probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
+        return imm.combine(pred_means, pred_covs, probs)[1]
+
     # ------------------------------------------------------------ cycle
     def step(
         self,
