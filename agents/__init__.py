@@ -9,7 +9,7 @@ from .base import Agent, IndexPolicy
 from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
-from .oracle import BestAgent
+from .oracle import BestAgent, BestTrackingAgent
 from .ppo import PPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
@@ -37,6 +37,7 @@ __all__ = [
     "UCB1",
     "Agent",
     "BestAgent",
+    "BestTrackingAgent",
     "CombinatorialThompson",
     "DiscountedThompson",
     "DiscountedUCB",

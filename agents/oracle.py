@@ -45,3 +45,39 @@ class BestAgent(Agent):
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         assert self._oracle is not None
         return np.asarray(self._oracle(), dtype=np.int8).reshape(self.batch_size, -1)
+
+
+class BestTrackingAgent(BestAgent):
+    """The tracking oracle: the super arm with the smallest predicted posterior position error.
+
+    Each step it minimises ``sum_k Omega_k trace`` (``criterion="trace"``, m^2) or ``log det``
+    (``"logdet"``) of the position block of ``(P_bar^-1 + sum H' R^-1 H)^-1`` over all super arms
+    (docs/model.md, section 14): the tracker's one-step prediction, each channel's Jacobian at
+    it and the channels' true ``lambda`` (it reads the truth, through the env's
+    ``tracking_oracle_action()``). It needs the env's tracker.
+    """
+
+    name = "best-tracking"
+
+    def __init__(
+        self, scenario: Scenario | str, seed: int | None = None, env: Any = None, criterion: str = "trace"
+    ) -> None:
+        from mimo_radar_env.tracking.information import CRITERIA
+
+        if criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+        self.criterion = criterion
+        super().__init__(scenario, seed, env)
+
+    def attach(self, env: Any) -> None:
+        """Read the super arm from ``env.tracking_oracle_action()`` (single or vector env)."""
+        target = env if hasattr(env, "tracking_oracle_action") else getattr(env, "unwrapped", env)
+        if not hasattr(target, "tracking_oracle_action"):
+            raise ValueError(
+                "env must be a MimoRadarSelect env (it has tracking_oracle_action()), "
+                f"got {type(env).__name__}"
+            )
+        if getattr(target, "options", None) is not None and not target.options.tracking:
+            raise ValueError("best-tracking needs the tracker: the env was made with tracking=False")
+        criterion = self.criterion
+        self._oracle = lambda: target.tracking_oracle_action(criterion)

@@ -16,7 +16,7 @@ from .base import Agent
 from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
-from .oracle import BestAgent
+from .oracle import BestAgent, BestTrackingAgent
 from .ppo import PPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
@@ -60,6 +60,7 @@ for _cls in (
     CombinatorialThompson,
     RecencyBasedExploration,
     BestAgent,
+    BestTrackingAgent,
     RandomAgent,
     FixedAgent,
 ):

@@ -120,3 +120,84 @@ def test_predicted_covariance_is_the_mixture_of_the_models_predictions():
         p = sum(c[j] * (covs[j] + np.outer(means[j] - x, means[j] - x)) for j in range(3))
         np.testing.assert_allclose(pbar[b, 0], p, rtol=1e-10, atol=1e-10)
     np.testing.assert_array_equal(tracker.predicted_covariance(), pbar)  # a pure query
+
+
+def test_average_fusion_criterion_is_the_mean_of_single_channel_posteriors():
+    rng = np.random.default_rng(3)
+    tx, rx, states, cov, variance, weights = _random_case(rng)
+    tx_masks, rx_masks = _super_arms(3, 4, 2, 2)
+    info = channel_information(states[..., [0, 2]], tx, rx, variance)
+    position_cov = cov[..., [0, 2], :][..., [0, 2]]
+    mine = super_arm_criterion(position_cov, info, tx_masks, rx_masks, weights, "trace", fusion="average")
+    for b in range(3):
+        for a in range(0, len(tx_masks), 5):
+            total = 0.0
+            for k in range(2):
+                posteriors = []
+                for m in np.flatnonzero(tx_masks[a]):
+                    for n in np.flatnonzero(rx_masks[a]):
+                        one_tx, one_rx = np.eye(3, dtype=bool)[m], np.eye(4, dtype=bool)[n]
+                        posteriors.append(
+                            _direct(tx, rx, states[b, k], cov[b, k], variance[b, k], one_tx, one_rx, "trace")
+                        )
+                total += weights[k] * np.mean(posteriors)  # the trace of a mean is the mean of traces
+            assert mine[b, a] == pytest.approx(total, rel=1e-6)
+
+
+def test_best_tracking_selects_the_brute_force_minimum_of_the_criterion():
+    import gymnasium as gym
+
+    import agents
+
+    for fusion in ("centralized", "average"):
+        env = gym.make("MimoRadarSelect-v1", horizon=30, fusion=fusion).unwrapped
+        agent = agents.make_agent("best-tracking", env.scenario, seed=0, env=env)
+        obs, _ = env.reset(seed=1)
+        agent.reset(obs)
+        engine = env.engine
+        for _ in range(10):
+            action = np.asarray(agent.act(obs)).reshape(-1)
+            # brute force: every super arm scored one by one with the same inputs
+            upcoming = engine.simulation.upcoming_state()[..., [0, 2]]
+            variance = engine.model.measurement_variance(
+                engine.simulation.quality(engine.model.mean_sinr(upcoming))
+            )
+            predicted = engine.tracker.predicted_state()
+            pcov = engine.tracker.predicted_covariance()[..., [0, 2], :][..., [0, 2]]
+            info = channel_information(predicted[..., [0, 2]], engine.model.tx, engine.model.rx, variance)
+            scores = {}
+            for tx_idx in itertools.combinations(range(4), 2):
+                for rx_idx in itertools.combinations(range(6), 3):
+                    t, r = np.zeros((1, 4), bool), np.zeros((1, 6), bool)
+                    t[0, list(tx_idx)], r[0, list(rx_idx)] = True, True
+                    scores[(tx_idx, rx_idx)] = super_arm_criterion(
+                        pcov, info, t, r, env.scenario.weights, fusion=fusion
+                    )[0, 0]
+            best = min(scores, key=scores.get)
+            assert (tuple(np.flatnonzero(action[:4])), tuple(np.flatnonzero(action[4:]))) == best
+            obs, reward, *_ = env.step(action)
+            agent.update(obs, np.atleast_1d(reward))
+
+
+@pytest.mark.parametrize("fusion", ["centralized", "average"])
+def test_greedy_finds_the_exact_optimum_on_most_mid_size_instances(fusion):
+    """6 TX x 8 RX, 2 and 3 per step (840 super arms), 200 random instances: the greedy and swap
+    search (8 starts) finds the exact optimum in 96.0 % of them with the centralised criterion
+    and 99.0 % with the average one (measured; asserted: at least 90 %, and within 5 % of the
+    optimum in at least 95 %)."""
+    from mimo_radar_env.tracking.information import greedy_super_arm
+
+    rng = np.random.default_rng(2)
+    tx, rx, states, cov, variance, weights = _random_case(rng, batch=200, targets=1, num_tx=6, num_rx=8)
+    info = channel_information(states[..., [0, 2]], tx, rx, variance)
+    pcov = cov[..., [0, 2], :][..., [0, 2]]
+    all_tx, all_rx = _super_arms(6, 8, 2, 3)
+    exact = super_arm_criterion(pcov, info, all_tx, all_rx, weights, fusion=fusion).min(axis=1)
+    g_tx, g_rx = greedy_super_arm(pcov, info, weights, 2, 3, fusion=fusion)
+    assert np.all(g_tx.sum(1) == 2) and np.all(g_rx.sum(1) == 3)
+    greedy = super_arm_criterion(pcov, info, g_tx[:, None], g_rx[:, None], weights, fusion=fusion)[:, 0]
+    assert np.all(greedy >= exact - 1e-9)
+    optimal = np.isclose(greedy, exact, rtol=1e-9)
+    close = greedy <= 1.05 * exact
+    print(f"{fusion}: greedy optimal in {optimal.mean():.1%}, within 5 % in {close.mean():.1%}")
+    assert optimal.mean() >= 0.9 and close.mean() >= 0.95

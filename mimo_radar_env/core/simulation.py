@@ -191,6 +191,13 @@ class RadarSimulation:
         draws = self.streams.exponential(Stream.SINR, self.step_index, full_index(self.batch_size, shape))
         return self.mean_sinr() * draws
 
+    def quality(self, mean_sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
+        """eq32's ``lambda`` of channels with mean SINR ``mean_sinr`` on this run's scale, or the
+        constant ``measurement_quality`` when it is set."""
+        if self.measurement_quality is None:
+            return self.model.quality(mean_sinr, target_axis=target_axis, scale=self.lambda_scale)
+        return np.full_like(mean_sinr, self.measurement_quality)
+
     def observe(
         self, tx_index: NDArray[np.int64], rx_index: NDArray[np.int64], valid: NDArray[np.bool_]
     ) -> ChannelObservations:
@@ -208,10 +215,7 @@ class RadarSimulation:
         mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
         sinr = mean * self.streams.exponential(Stream.SINR, self.step_index, flat)
-        if self.measurement_quality is None:
-            lam = model.quality(mean, target_axis=1, scale=self.lambda_scale)
-        else:
-            lam = np.full_like(mean, self.measurement_quality)
+        lam = self.quality(mean, target_axis=1)
         variance = model.measurement_variance(lam)  # (B, K, C, 2)
         clean = bistatic_measurement(
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]

@@ -8,6 +8,7 @@ the B = 1 case and squeezes that axis; there is no second implementation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -17,10 +18,14 @@ from numpy.typing import NDArray
 from ..core.model import RadarModel, check_memory
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
-from ..core.superarm import best_super_arm, super_arm_value
+from ..core.superarm import best_super_arm, subset_masks, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
+from ..tracking.information import channel_information, greedy_super_arm, super_arm_criterion
 from .options import EnvOptions
+
+#: Super arms the tracking oracle enumerates at most (exact search); greedy beyond.
+MAX_ENUMERATED_SUPER_ARMS = 5_000
 
 
 def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.int8]:
@@ -76,6 +81,7 @@ class RadarEngine:
         self.step_index = 0
         self.last_action = np.zeros((batch_size, self.action_size), dtype=np.int8)
         self.last_valid = np.zeros(batch_size, dtype=bool)
+        self._super_arms: tuple[NDArray[np.bool_], NDArray[np.bool_]] | None = None
 
     @property
     def horizon(self) -> int:
@@ -159,6 +165,39 @@ class RadarEngine:
             weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.options.oracle_solver
         )
         return np.concatenate([tx, rx], axis=1).astype(np.int8)
+
+    def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
+        """The super arm of the coming step that minimises the predicted posterior position
+        error (:mod:`~mimo_radar_env.tracking.information`, for the env's fusion), from the
+        tracker's prediction and the channels' true ``lambda``: exact over all super arms up
+        to :data:`MAX_ENUMERATED_SUPER_ARMS`, greedy over stations beyond; (B, M + N)."""
+        if self.tracker is None:
+            raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
+        sc = self.scenario
+        upcoming = self.simulation.upcoming_state()[..., [0, 2]]
+        variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(upcoming)))
+        predicted = self.tracker.predicted_state()
+        position_cov = self.tracker.predicted_covariance()[..., [0, 2], :][..., [0, 2]]
+        info = channel_information(predicted[..., [0, 2]], self.model.tx, self.model.rx, variance)
+        count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
+        if count > MAX_ENUMERATED_SUPER_ARMS:
+            tx, rx = greedy_super_arm(
+                position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
+            )
+            return np.concatenate([tx, rx], axis=1).astype(np.int8)
+        tx_masks, rx_masks = self._all_super_arms()
+        scores = super_arm_criterion(
+            position_cov, info, tx_masks, rx_masks, sc.weights, criterion, fusion=self.options.fusion
+        )
+        best = np.argmin(scores, axis=1)
+        return np.concatenate([tx_masks[best], rx_masks[best]], axis=1).astype(np.int8)
+
+    def _all_super_arms(self) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        if self._super_arms is None:
+            sc = self.scenario
+            tx, rx = subset_masks(sc.num_tx, sc.tx_per_step), subset_masks(sc.num_rx, sc.rx_per_step)
+            self._super_arms = (np.repeat(tx, len(rx), axis=0), np.tile(rx, (len(tx), 1)))
+        return self._super_arms
 
     # ----------------------------------------------------------- helpers
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:

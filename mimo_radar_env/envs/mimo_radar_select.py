@@ -242,6 +242,12 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         """The optimal super arm for the coming step (reads the truth: oracle only)."""
         return self.engine.oracle_action()[0]
 
+    def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
+        """The super arm for the coming step with the smallest predicted posterior position
+        error (``"trace"``, m^2, or ``"logdet"``), from the tracker's prediction and the
+        channels' true ``lambda`` (reads the truth: oracle only)."""
+        return self.engine.tracking_oracle_action(criterion)[0]
+
     def render(self) -> NDArray[np.uint8] | None:
         if self.render_mode is None:
             gym.logger.warn(
@@ -380,3 +386,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     def oracle_action(self) -> NDArray[np.int8]:
         """Optimal super arms for the coming step, (B, M + N) (reads the truth: oracle only)."""
         return self.engine.oracle_action()
+
+    def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
+        """Super arms of the coming step with the smallest predicted posterior position error,
+        (B, M + N) (reads the truth: oracle only)."""
+        return self.engine.tracking_oracle_action(criterion)

@@ -10,6 +10,12 @@ measurements see the position only, the position block of ``J_A^-1`` is
 ``P_bar``) and ``I_A`` the channels' position information: every super arm costs one 2 x 2
 inverse. The criterion is ``sum_k Omega_k trace`` of that block (the predicted posterior
 position MSE, m^2), or ``sum_k Omega_k log det`` of it; smaller is better.
+
+That is the posterior of centralised fusion, which adds the channels' information. The
+paper's eq22 fusion (``"average"``) averages the channels' single-channel posteriors instead,
+so under it the predicted position covariance of a super arm is the mean over its channels of
+``(S^-1 + I_mn)^-1`` (the spread of the channels' means left out); ``fusion="average"`` scores
+that.
 """
 
 from __future__ import annotations
@@ -58,22 +64,125 @@ def super_arm_criterion(
     rx_masks: NDArray[np.bool_],
     weights: NDArray[np.float64],
     criterion: str = "trace",
+    fusion: str = "centralized",
 ) -> NDArray[np.float64]:
     """The criterion of every super arm in every trial: (B, A).
 
     ``position_cov`` (B, K, 2, 2) the predicted position covariance; ``information``
     (B, K, M, N, 2, 2) from :func:`channel_information`; ``tx_masks`` (A, M) and ``rx_masks``
-    (A, N) the super arms; ``weights`` (K,) ``Omega``.
+    (A, N) the super arms, or (B, A, M), (B, A, N) for per-trial ones (partial selections
+    allowed); ``weights`` (K,) ``Omega``; ``fusion`` ``"centralized"`` (the
+    channels' information adds) or ``"average"`` (eq22: their posteriors are averaged).
     """
     if criterion not in CRITERIA:
         raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+    if fusion not in ("centralized", "average"):
+        raise ValueError(f"fusion must be 'centralized' or 'average', got {fusion!r}")
     prior_info, _ = _inverse_2x2(position_cov)  # (B, K, 2, 2)
-    selected = tx_masks[:, :, None].astype(float) * rx_masks[:, None, :]  # (A, M, N)
-    gained = np.einsum("amn,bkmnij->bkaij", selected, information)  # (B, K, A, 2, 2)
-    posterior, _ = _inverse_2x2(prior_info[:, :, None] + gained)
+    selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # ([B,] A, M, N)
+    if selected.ndim == 3:
+        selected = np.broadcast_to(selected, (position_cov.shape[0], *selected.shape))
+    if fusion == "centralized":
+        gained = np.einsum("bamn,bkmnij->bkaij", selected, information)  # (B, K, A, 2, 2)
+        posterior, _ = _inverse_2x2(prior_info[:, :, None] + gained)
+    else:
+        single, _ = _inverse_2x2(prior_info[:, :, None, None] + information)  # (B, K, M, N, 2, 2)
+        channels = selected.sum(axis=(2, 3))  # (B, A)
+        posterior = np.einsum("bamn,bkmnij->bkaij", selected, single) / channels[:, None, :, None, None]
     if criterion == "trace":
         per_target = posterior[..., 0, 0] + posterior[..., 1, 1]
     else:
         _, det = _inverse_2x2(posterior)
         per_target = np.log(det)
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
+
+
+def greedy_super_arm(
+    position_cov: NDArray[np.float64],
+    information: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    tx_count: int,
+    rx_count: int,
+    criterion: str = "trace",
+    fusion: str = "centralized",
+    starts: int = 8,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """A good super arm without enumerating them all, per trial: (B, M), (B, N) masks.
+
+    From each of the ``starts`` best single channels it adds, one station at a time, the transmitter
+    or receiver whose addition gives the lowest criterion, until ``tx_count`` and
+    ``rx_count`` are reached (``Ms + Ns - 2`` batched evaluations of ``M + N`` candidates);
+    then swaps one selected station for an unselected one of the same kind while a swap
+    lowers the criterion, and keeps the best of the starts. Not always optimal: tests measure
+    how often it finds the exact optimum.
+    """
+    batch = position_cov.shape[0]
+    num_tx, num_rx = information.shape[2:4]
+    starts = min(starts, num_tx * num_rx)
+    one_tx = np.repeat(np.eye(num_tx, dtype=bool), num_rx, axis=0)  # (M*N, M)
+    one_rx = np.tile(np.eye(num_rx, dtype=bool), (num_tx, 1))
+    single = super_arm_criterion(position_cov, information, one_tx, one_rx, weights, criterion, fusion)
+    first = np.argsort(single, axis=1)[:, :starts].reshape(-1)  # (B * starts,), trial-major
+    # every start is a trial of its own from here on
+    position_cov = np.repeat(position_cov, starts, axis=0)
+    information = np.repeat(information, starts, axis=0)
+    tx, rx = one_tx[first], one_rx[first]  # (B * starts, M), (B * starts, N)
+    rows = np.arange(batch * starts)
+    eye_tx, eye_rx = np.eye(num_tx, dtype=bool)[None], np.eye(num_rx, dtype=bool)[None]
+    for _ in range(tx_count + rx_count - 2):
+        # every trial adds one station: a transmitter while it has fewer than tx_count, or a receiver
+        cand_tx = np.concatenate([tx[:, None] | eye_tx, np.repeat(tx[:, None], num_rx, axis=1)], axis=1)
+        cand_rx = np.concatenate([np.repeat(rx[:, None], num_tx, axis=1), rx[:, None] | eye_rx], axis=1)
+        scores = super_arm_criterion(position_cov, information, cand_tx, cand_rx, weights, criterion, fusion)
+        new_tx, new_rx = cand_tx.sum(2) > tx.sum(1)[:, None], cand_rx.sum(2) > rx.sum(1)[:, None]
+        allowed = (new_tx & (tx.sum(1) < tx_count)[:, None]) | (new_rx & (rx.sum(1) < rx_count)[:, None])
+        choice = np.argmin(np.where(allowed, scores, np.inf), axis=1)
+        tx, rx = cand_tx[rows, choice], cand_rx[rows, choice]
+    tx, rx = _swap_search(position_cov, information, weights, tx, rx, criterion, fusion)
+    final = super_arm_criterion(
+        position_cov, information, tx[:, None], rx[:, None], weights, criterion, fusion
+    )
+    best = np.argmin(final[:, 0].reshape(batch, starts), axis=1) + np.arange(batch) * starts
+    return tx[best], rx[best]
+
+
+def _swap_search(
+    position_cov: NDArray[np.float64],
+    information: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    tx: NDArray[np.bool_],
+    rx: NDArray[np.bool_],
+    criterion: str,
+    fusion: str,
+    max_rounds: int = 50,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Local search: while some swap of one selected station for an unselected one of the same
+    kind lowers a trial's criterion, make the best such swap (all trials at once)."""
+    batch, num_tx, num_rx = tx.shape[0], tx.shape[1], rx.shape[1]
+    rows = np.arange(batch)
+    current = super_arm_criterion(
+        position_cov, information, tx[:, None], rx[:, None], weights, criterion, fusion
+    )[:, 0]
+
+    def swaps(mask: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        size = mask.shape[1]
+        eye = np.eye(size, dtype=bool)
+        out_in = (mask[:, None, None, :] & ~eye[None, :, None, :]) | eye[None, None, :, :]  # (B, out, in, S)
+        allowed = mask[:, :, None] & ~mask[:, None, :]  # (B, out, in)
+        return out_in.reshape(batch, size * size, size), allowed.reshape(batch, size * size)
+
+    for _ in range(max_rounds):
+        swap_tx, ok_tx = swaps(tx)
+        swap_rx, ok_rx = swaps(rx)
+        cand_tx = np.concatenate([swap_tx, np.repeat(tx[:, None], num_rx * num_rx, axis=1)], axis=1)
+        cand_rx = np.concatenate([np.repeat(rx[:, None], num_tx * num_tx, axis=1), swap_rx], axis=1)
+        scores = super_arm_criterion(position_cov, information, cand_tx, cand_rx, weights, criterion, fusion)
+        scores = np.where(np.concatenate([ok_tx, ok_rx], axis=1), scores, np.inf)
+        choice = np.argmin(scores, axis=1)
+        better = scores[rows, choice] < current - 1e-12 * np.abs(current)
+        if not better.any():
+            break
+        tx = np.where(better[:, None], cand_tx[rows, choice], tx)
+        rx = np.where(better[:, None], cand_rx[rows, choice], rx)
+        current = np.where(better, scores[rows, choice], current)
+    return tx, rx
