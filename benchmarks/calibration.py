@@ -35,12 +35,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from agents.fixed import PAPER_FIXED
 from mimo_radar_env import RadarModel, Scenario, load_scenario
 from mimo_radar_env.core.geometry import measurement_jacobian
 from mimo_radar_env.scenarios.scenario import closest_approach
 
-from . import claims
+# agents (and benchmarks.claims, which imports the harness) are imported where they are used:
+# the command line reads this module's defaults before it checks that 'agents' is ours
 
 REGION_M = 100_000.0
 #: The text's hard constraint: no station this close (m) to a nominal track.
@@ -48,6 +48,9 @@ MIN_TRACK_DISTANCE = 2_000.0
 #: Station-wise jitter scales (km) the candidates cycle through.
 JITTER_KM = (2.0, 5.0, 10.0, 20.0)
 PAPER_SCENARIOS = ("paper-1", "paper-2", "paper-3")
+#: The search's sizes (the command's defaults): candidates, layouts with short scorecards,
+#: their trials, layouts with full scorecards.
+CANDIDATES, SCREEN, SCREEN_TRIALS, FINAL = 400, 10, 40, 2
 
 
 @dataclass
@@ -94,6 +97,8 @@ def _reflect(km: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def constraint_failure(candidate: Candidate) -> str | None:
     """Why the candidate breaks a hard constraint of the text, or None."""
+    from . import claims
+
     tx, rx = np.array(candidate.tx_km) * 1e3, np.array(candidate.rx_km) * 1e3
     stations = np.concatenate([tx, rx])
     if np.any(stations < 0) or np.any(stations > REGION_M):
@@ -132,6 +137,10 @@ def position_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool
 
 def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
     """Comparisons of the paper's claims that need no Monte-Carlo, on the noise-free tracks."""
+    from agents.fixed import PAPER_FIXED
+
+    from . import claims
+
     checks: dict[str, bool] = {}
     for sc in candidate.scenarios():
         model = RadarModel.from_scenario(sc)
@@ -182,11 +191,11 @@ StudyRunner = Callable[[list[Scenario], Path, int], list[dict[str, Any]]]
 def calibrate(
     out: Path,
     run_scorecard: StudyRunner,
-    count: int = 400,
+    count: int = CANDIDATES,
     seed: int = 0,
-    screen: int = 12,
-    screen_trials: int = 40,
-    final: int = 2,
+    screen: int = SCREEN,
+    screen_trials: int = SCREEN_TRIALS,
+    final: int = FINAL,
     final_trials: int = 500,
     scale: str = "db",
     log: Callable[[str], None] = print,

@@ -254,18 +254,15 @@ def build_parser() -> argparse.ArgumentParser:
         "those and the reference by full scorecards (--trials). Writes OUT/calibration.md and "
         "OUT/calibration.json with every candidate's score; resumable (docs/benchmark.md).",
     )
-    calibrate.add_argument(
-        "--candidates", type=_integer(1), default=400, help="jittered layouts to draw (default 400)"
-    )
-    calibrate.add_argument(
-        "--screen", type=_integer(1), default=10, help="layouts judged by short scorecards (default 10)"
-    )
-    calibrate.add_argument(
-        "--screen-trials", type=_integer(1), default=40, help="trials of the short scorecards (default 40)"
-    )
-    calibrate.add_argument(
-        "--final", type=_integer(1), default=2, help="layouts judged by full scorecards (default 2)"
-    )
+    from .calibration import CANDIDATES, FINAL, SCREEN, SCREEN_TRIALS
+
+    for flag, default, text in (
+        ("--candidates", CANDIDATES, "jittered layouts to draw"),
+        ("--screen", SCREEN, "layouts judged by short scorecards"),
+        ("--screen-trials", SCREEN_TRIALS, "trials of the short scorecards"),
+        ("--final", FINAL, "layouts judged by full scorecards"),
+    ):
+        calibrate.add_argument(flag, type=_integer(1), default=default, help=f"{text} (default {default})")
     _add_agent_param(calibrate, over="; over the version's reading")
     _add_run_options(calibrate)
 
