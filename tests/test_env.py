@@ -281,3 +281,35 @@ def test_measurements_in_info_are_eq6_plus_noise_of_the_stated_covariance():
     assert abs(z.mean()) < 0.06 and abs(z.std() - 1) < 0.04  # standard normal, 3600 draws
     _, _, _, _, info = env.step(np.zeros(sc.num_tx + sc.num_rx, np.int8))
     assert np.isnan(info["measurement"]).all() and np.isnan(info["measurement_covariance"]).all()
+
+
+def test_information_reward_is_the_trackers_log_det_reduction_and_info_has_both_terms():
+    for reward_kind in ("sinr", "information"):
+        env = gym.make("MimoRadarSelect-v1", scenario="paper-3-v1", reward=reward_kind).unwrapped
+        obs, _ = env.reset(seed=2)
+        weights = env.scenario.weights
+        rng = np.random.default_rng(0)
+        sc = env.scenario
+        for step, action in enumerate(random_valid_actions(rng, 40, sc.num_tx, sc.num_rx, 2, 3)):
+            if step == 5:
+                action = np.zeros_like(action)  # probes nothing: no information, no SINR
+            tracker = env.engine.tracker
+            predicted = tracker.predicted_covariance()[..., [0, 2], :][..., [0, 2]][0]  # before the step
+            obs, reward, _, _, info = env.step(action)
+            posterior = tracker.covariance[0][..., [0, 2], :][..., [0, 2]]
+            gain = sum(
+                weights[k] * (np.log(np.linalg.det(predicted[k])) - np.log(np.linalg.det(posterior[k])))
+                for k in range(sc.num_targets)
+            )
+            sinr = np.einsum("k,kmn->", weights, obs["sinr"])  # eq17 from the observed samples
+            assert info["reward_information"] == pytest.approx(gain, rel=1e-8, abs=1e-10)
+            assert info["reward_sinr"] == pytest.approx(sinr, rel=1e-12)
+            assert reward == (
+                info["reward_information"] if reward_kind == "information" else info["reward_sinr"]
+            )
+            if step == 5:
+                assert reward == 0 and info["reward_information"] == pytest.approx(0, abs=1e-12)
+            else:
+                assert info["reward_information"] > 0  # a measurement shrinks the position uncertainty
+    with pytest.raises(ValueError, match="needs tracking=True"):
+        gym.make("MimoRadarSelect-v1", reward="information", tracking=False)

@@ -25,6 +25,7 @@ NON_DEFAULT = {
     "lambda_scale": ("db", ["--lambda-scale", "db"]),
     "truth": ("shared", ["--truth", "shared"]),
     "measurements": (True, ["--measurements"]),
+    "reward": ("information", ["--reward", "information"]),
 }
 #: A bad value of every option, as a CLI argument and as a Python value.
 BAD = {
@@ -37,6 +38,7 @@ BAD = {
     "lambda_scale": ("--lambda-scale", "log", "log"),
     "truth": ("--truth", "per-run", "per-run"),
     "measurements": (None, None, 1),  # a switch: no bad CLI value
+    "reward": ("--reward", "regret", "regret"),
 }
 
 

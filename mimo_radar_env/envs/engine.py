@@ -129,7 +129,7 @@ class RadarEngine:
         rx_index = np.where(valid[:, None], true_indices(rx_mask, sc.rx_per_step), np.arange(sc.rx_per_step))
         channels = self.simulation.observe(tx_index, rx_index, valid)
 
-        reward = np.einsum("k,bkc->b", self.model.weights, channels.sinr) * valid
+        sinr_reward = np.einsum("k,bkc->b", self.model.weights, channels.sinr) * valid
         sinr = np.zeros((self.batch_size, self.model.num_targets, self.num_tx, self.num_rx))
         probed = (tx_mask[:, :, None] & rx_mask[:, None, :] & valid[:, None, None]).astype(np.int8)
         batch = np.arange(self.batch_size)[:, None, None]
@@ -150,6 +150,12 @@ class RadarEngine:
         info["optimal_reward"] = best_value
         info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
         info["action_valid"] = valid
+        info["reward_sinr"] = sinr_reward
+        reward = sinr_reward
+        if self.tracker is not None:
+            info["reward_information"] = self._information_gain()
+            if self.options.reward == "information":
+                reward = info["reward_information"]
         if self.options.measurements:
             info |= self._measurement_info(channels)
         obs = self._observation(sinr, probed)
@@ -200,6 +206,14 @@ class RadarEngine:
         return self._super_arms
 
     # ----------------------------------------------------------- helpers
+    def _information_gain(self) -> NDArray[np.float64]:
+        """``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` of the last step, (B,) nats."""
+        assert self.tracker is not None
+        index = np.ix_([0, 2], [0, 2])
+        _, before = np.linalg.slogdet(self.tracker.prior_covariance[..., index[0], index[1]])
+        _, after = np.linalg.slogdet(self.tracker.covariance[..., index[0], index[1]])
+        return (before - after) @ self.model.weights
+
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
         """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""
         if self.options.filter_noise == "true":

@@ -102,7 +102,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     ## Rewards
 
     ``sum_k Omega_k sum_{(m, n) selected} gamma[k, m, n]`` (eq17): the weighted
-    sum of the SINR samples of the selected channels.
+    sum of the SINR samples of the selected channels; with ``reward="information"``, the
+    tracker's position information gain of the step (Arguments). ``info`` carries both terms
+    after every step: ``reward_sinr`` and (with the tracker) ``reward_information``.
 
     ## Info (truth, for evaluation only)
 
@@ -159,7 +161,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
       ``measurement_covariance`` (K, Ms*Ns, 2, 2), the diagonal covariance the env's tracker
       uses (``Sigma0 / lambda``, per ``filter_noise``); ``measurement_tx`` and
       ``measurement_rx`` (Ms*Ns,), the stations of each channel (TX-major order). After an
-      action that probes nothing the measurements and covariances are NaN.
+      action that probes nothing the measurements and covariances are NaN;
+    * ``reward``: ``"sinr"`` (eq17, below) or ``"information"``: the realised reduction of the
+      tracker's position uncertainty, ``sum_k Omega_k (log det P_pos,pred - log det
+      P_pos,post)`` in nats, for learning to select for tracking (needs ``tracking=True``).
 
     ``MimoRadarSelect-v0`` defaults to ``lambda_scale="linear"``, ``truth="per-trial"``
     (reading 0 of the paper's ambiguous points, unchanged since release);

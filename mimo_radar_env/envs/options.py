@@ -59,6 +59,7 @@ FilterNoise = Literal["true", "estimated"]
 InvalidAction = Literal["probe-nothing", "raise"]
 LambdaScale = Literal["linear", "db"]
 Truth = Literal["per-trial", "shared"]
+Reward = Literal["sinr", "information"]
 OracleSolver = Literal[SUPER_ARM_METHODS]  # type: ignore[valid-type]
 
 
@@ -105,6 +106,12 @@ class EnvOptions:
         channel; ``measurement_covariance`` (K, Ms*Ns, 2, 2), the covariance the env's tracker
         uses (per ``filter_noise``); ``measurement_tx``/``measurement_rx`` (Ms*Ns,), each
         channel's stations. NaN after an action that probes nothing.
+    reward : {"sinr", "information"}
+        The reward a step returns: eq17's weighted sum of the selected channels' SINR samples,
+        or the realised reduction of the tracker's position uncertainty,
+        ``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` in nats (needs the
+        tracker). ``info`` carries both terms at every step (``reward_sinr``,
+        ``reward_information``, the latter with the tracker only).
     """
 
     fusion: FusionName = _option("average", "tracker fusion: the paper's eq22 'average' or 'centralized'")
@@ -124,6 +131,9 @@ class EnvOptions:
     lambda_scale: LambdaScale = _option("linear", "the scale eq32 maps SINR to measurement quality on")
     truth: Truth = _option("per-trial", "a true trajectory per trial, or one shared by all trials")
     measurements: bool = _option(False, "put each step's raw measurements and their covariances in info")
+    reward: Reward = _option(
+        "sinr", "the step reward: eq17's 'sinr' sum, or the tracker's position 'information' gain (nats)"
+    )
 
     @classmethod
     def for_version(cls, version: str, **options: Any) -> EnvOptions:
@@ -140,6 +150,8 @@ class EnvOptions:
         for name in ("tracking", "measurements"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
+        if self.reward == "information" and not self.tracking:
+            raise ValueError("reward='information' is the tracker's information gain: it needs tracking=True")
         quality = self.measurement_quality
         if quality is not None:
             if isinstance(quality, bool) or not isinstance(quality, int | float):

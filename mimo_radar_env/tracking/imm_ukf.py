@@ -97,6 +97,8 @@ class IMMUKFTracker:
         self.log_probs = np.broadcast_to(self.log_initial, (B, K, R)).copy()
         self.estimate = start.copy()
         self.covariance = np.broadcast_to(initial_cov, (B, K, 4, 4)).copy()
+        #: the covariance of the last step's prediction (the IMM mixture), before its update
+        self.prior_covariance = self.covariance.copy()
         self.repairs[:] = 0
 
     @property
@@ -144,6 +146,8 @@ class IMMUKFTracker:
         mixed_means, mixed_covs, log_c = imm.mix(self.log_probs, self.means, self.covs, self.log_markov)
         pred_means, pred_covs = imm.predict(mixed_means, mixed_covs, self.transitions, self.model.process_cov)
         prior = self._prior(pred_means, pred_covs, log_c)
+        probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
+        self.prior_covariance = imm.combine(prior.means, prior.covs, probs)[1]
         posterior = self.fusion.update(prior, tx_positions, rx_positions, measurement, noise_variance)
         self._keep(posterior, prior, valid)
 
