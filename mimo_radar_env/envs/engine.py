@@ -21,7 +21,13 @@ from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, subset_masks, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
-from ..tracking.information import channel_information, greedy_super_arm, super_arm_criterion
+from ..tracking.information import (
+    bound_step,
+    channel_information,
+    greedy_super_arm,
+    position_bound,
+    super_arm_criterion,
+)
 from .options import EnvOptions
 
 #: Super arms the tracking oracle enumerates at most (exact search); greedy beyond.
@@ -96,6 +102,10 @@ class RadarEngine:
         self.simulation.reset(keys)
         if self.tracker is not None:
             self.tracker.reset(self.simulation.initial_estimates)
+            initial_cov = np.stack([t.initial_covariance for t in self.scenario.targets])
+            self._bound_information = np.broadcast_to(
+                np.linalg.inv(initial_cov), (self.batch_size, *initial_cov.shape)
+            ).copy()
         self.step_index = 0
         self.last_action[:] = 0
         self.last_valid[:] = False
@@ -138,6 +148,8 @@ class RadarEngine:
         sinr *= valid[:, None, None, None]
 
         self._track(channels)
+        if self.tracker is not None:
+            self._advance_bound(tx_mask & valid[:, None], rx_mask & valid[:, None])
         self.last_action = actions
         self.last_valid = valid
 
@@ -153,6 +165,7 @@ class RadarEngine:
         info["reward_sinr"] = sinr_reward
         reward = sinr_reward
         if self.tracker is not None:
+            info["position_bound"] = position_bound(self._bound_information)
             info["reward_information"] = self._information_gain()
             if self.options.reward == "information":
                 reward = info["reward_information"]
@@ -206,6 +219,19 @@ class RadarEngine:
         return self._super_arms
 
     # ----------------------------------------------------------- helpers
+    def _advance_bound(self, tx_mask: NDArray[np.bool_], rx_mask: NDArray[np.bool_]) -> None:
+        """The PCRB information of the step: the true motion, then the probed channels at the
+        true positions with their true covariances (docs/model.md, section 14)."""
+        positions = self.simulation.positions  # the truth of this step, (B, K, 2)
+        variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(positions)))
+        channels = channel_information(positions, self.model.tx, self.model.rx, variance)
+        selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(float)  # (B, M, N)
+        measured = np.einsum("bmn,bkmnij->bkij", selected, channels)
+        transition = self.model.transitions[:, self.step_index - 1]  # (K, 4, 4): step t-1 -> t
+        self._bound_information = bound_step(
+            self._bound_information, transition, self.model.process_cov, measured
+        )
+
     def _information_gain(self) -> NDArray[np.float64]:
         """``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` of the last step, (B,) nats."""
         assert self.tracker is not None

@@ -110,8 +110,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     ``mean_sinr`` (K, M, N), ``true_state`` (K, 4), ``position_error`` (K,) in
     metres; after a step also ``expected_reward`` (``mu_t`` of eq13 for the
-    action), ``optimal_reward`` (``mu*_t``), ``optimal_action`` (M + N,) and
-    ``action_valid``. Non-oracle agents must not read them. The Best oracle reads
+    action), ``optimal_reward`` (``mu*_t``), ``optimal_action`` (M + N,),
+    ``action_valid`` and, with the tracker, ``position_bound`` (K,): the posterior
+    Cramer-Rao bound of the position error (m) for the selections made so far along the true
+    trajectory (docs/model.md, section 14). Non-oracle agents must not read them. The Best oracle reads
     the optimal super arm of the coming step with ``env.unwrapped.oracle_action()``.
 
     ## Starting State

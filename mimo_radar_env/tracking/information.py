@@ -186,3 +186,28 @@ def _swap_search(
         rx = np.where(better[:, None], cand_rx[rows, choice], rx)
         current = np.where(better, scores[rows, choice], current)
     return tx, rx
+
+
+def bound_step(
+    information: NDArray[np.float64],
+    transition: NDArray[np.float64],
+    process_cov: NDArray[np.float64],
+    measured: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """One step of the posterior Cramer-Rao bound's information recursion (linear Gaussian
+    motion, Tichavsky et al. 1998): ``J' = (Q + F J^-1 F')^-1 + E' I E``.
+
+    ``information`` (B, K, 4, 4) the last step's ``J``; ``transition`` (K, 4, 4) the true
+    ``F`` of each target's step; ``process_cov`` (4, 4) ``Q``; ``measured`` (B, K, 2, 2) the
+    position information of the channels probed, at the true state with the true ``R``.
+    """
+    predicted_cov = transition @ np.linalg.inv(information) @ np.swapaxes(transition, -1, -2) + process_cov
+    updated = np.linalg.inv(predicted_cov)
+    updated[..., 0::2, 0::2] += measured  # state [x, vx, y, vy]: position rows/columns 0 and 2
+    return updated
+
+
+def position_bound(information: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sqrt(trace)`` of the position block of ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
+    cov = np.linalg.inv(information)
+    return np.sqrt(cov[..., 0, 0] + cov[..., 2, 2])
