@@ -77,19 +77,26 @@ def station_geometry(
     return tx_range, rx_range, np.arctan2(rx_dy, rx_dx), rx_dy / rx_range, rx_dx / rx_range
 
 
+def channel_jacobian(
+    positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """``d h / d(x, y)`` of eq6 for positions and stations that broadcast (last axis (x, y)):
+    shape (..., 2, 2).
+
+    Row 0 is the range sum's gradient, the sum of the unit vectors from the TX and the RX to
+    the target; row 1 the azimuth's, ``(-dy, dx) / R_rx^2`` from the RX.
+    """
+    to_tx, to_rx = positions - tx, positions - rx
+    tx_range = np.maximum(np.linalg.norm(to_tx, axis=-1, keepdims=True), MIN_RANGE)
+    rx_range = np.maximum(np.linalg.norm(to_rx, axis=-1, keepdims=True), MIN_RANGE)
+    range_sum = to_tx / tx_range + to_rx / rx_range
+    azimuth = np.stack([-to_rx[..., 1], to_rx[..., 0]], axis=-1) / rx_range**2
+    return np.stack(np.broadcast_arrays(range_sum, azimuth), axis=-2)
+
+
 def measurement_jacobian(
     positions: NDArray[np.float64], tx: NDArray[np.float64], rx: NDArray[np.float64]
 ) -> NDArray[np.float64]:
-    """``d h_mn / d(x, y)`` of eq6 for every channel: shape (..., M, N, 2, 2).
-
-    Row 0 is the range sum's gradient, the sum of the unit vectors from TX m and RX n to the
-    target; row 1 the azimuth's, ``(-dy, dx) / R_rx^2`` from RX n. Positions (..., 2).
-    """
-    to_tx = positions[..., None, :] - tx  # (..., M, 2)
-    to_rx = positions[..., None, :] - rx  # (..., N, 2)
-    tx_range = np.maximum(np.linalg.norm(to_tx, axis=-1, keepdims=True), MIN_RANGE)
-    rx_range = np.maximum(np.linalg.norm(to_rx, axis=-1, keepdims=True), MIN_RANGE)
-    range_sum = (to_tx / tx_range)[..., :, None, :] + (to_rx / rx_range)[..., None, :, :]
-    azimuth = np.stack([-to_rx[..., 1], to_rx[..., 0]], axis=-1) / rx_range**2  # (..., N, 2)
-    azimuth = np.broadcast_to(azimuth[..., None, :, :], range_sum.shape)
-    return np.stack([range_sum, azimuth], axis=-2)
+    """:func:`channel_jacobian` of every channel: positions (..., 2), stations (M, 2), (N, 2);
+    shape (..., M, N, 2, 2)."""
+    return channel_jacobian(positions[..., None, None, :], tx[:, None, :], rx[None, :, :])

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel, check_memory
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
@@ -103,9 +104,7 @@ class RadarEngine:
         if self.tracker is not None:
             self.tracker.reset(self.simulation.initial_estimates)
             initial_cov = np.stack([t.initial_covariance for t in self.scenario.targets])
-            self._bound_information = np.broadcast_to(
-                np.linalg.inv(initial_cov), (self.batch_size, *initial_cov.shape)
-            ).copy()
+            self._bound_covariance = np.broadcast_to(initial_cov, (self.batch_size, *initial_cov.shape))
         self.step_index = 0
         self.last_action[:] = 0
         self.last_valid[:] = False
@@ -149,7 +148,7 @@ class RadarEngine:
 
         self._track(channels)
         if self.tracker is not None:
-            self._advance_bound(tx_mask & valid[:, None], rx_mask & valid[:, None])
+            self._advance_bound(channels)
         self.last_action = actions
         self.last_valid = valid
 
@@ -165,7 +164,7 @@ class RadarEngine:
         info["reward_sinr"] = sinr_reward
         reward = sinr_reward
         if self.tracker is not None:
-            info["position_bound"] = position_bound(self._bound_information)
+            info["position_bound"] = position_bound(self._bound_covariance)
             info["reward_information"] = self._information_gain()
             if self.options.reward == "information":
                 reward = info["reward_information"]
@@ -219,26 +218,27 @@ class RadarEngine:
         return self._super_arms
 
     # ----------------------------------------------------------- helpers
-    def _advance_bound(self, tx_mask: NDArray[np.bool_], rx_mask: NDArray[np.bool_]) -> None:
-        """The PCRB information of the step: the true motion, then the probed channels at the
-        true positions with their true covariances (docs/model.md, section 14)."""
-        positions = self.simulation.positions  # the truth of this step, (B, K, 2)
-        variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(positions)))
-        channels = channel_information(positions, self.model.tx, self.model.rx, variance)
-        selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(float)  # (B, M, N)
-        measured = np.einsum("bmn,bkmnij->bkij", selected, channels)
+    def _advance_bound(self, channels: ChannelObservations) -> None:
+        """The PCRB of the step: the true motion, then the probed channels at the true
+        positions with their true covariances (docs/model.md, section 14)."""
+        positions = self.simulation.positions[:, :, None, :]  # the truth of this step, (B, K, 1, 2)
+        tx = self.model.tx[channels.tx_index][:, None]  # (B, 1, C, 2)
+        rx = self.model.rx[channels.rx_index][:, None]
+        jac = channel_jacobian(positions, tx, rx)  # (B, K, C, 2, 2)
+        weighted = jac / channels.noise_variance[..., :, None]  # R^-1 H, R the true Sigma0 / lambda
+        measured = np.einsum("bkcji,bkcjl->bkil", jac, weighted) * channels.valid[:, None, None, None]
         transition = self.model.transitions[:, self.step_index - 1]  # (K, 4, 4): step t-1 -> t
-        self._bound_information = bound_step(
-            self._bound_information, transition, self.model.process_cov, measured
-        )
+        process_cov = self.model.process_cov
+        self._bound_covariance = bound_step(self._bound_covariance, transition, process_cov, measured)
 
     def _information_gain(self) -> NDArray[np.float64]:
         """``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` of the last step, (B,) nats."""
         assert self.tracker is not None
-        index = np.ix_([0, 2], [0, 2])
-        _, before = np.linalg.slogdet(self.tracker.prior_covariance[..., index[0], index[1]])
-        _, after = np.linalg.slogdet(self.tracker.covariance[..., index[0], index[1]])
-        return (before - after) @ self.model.weights
+        before, after = self.tracker.prior_covariance, self.tracker.covariance
+        ratio = (before[..., 0, 0] * before[..., 2, 2] - before[..., 0, 2] * before[..., 2, 0]) / (
+            after[..., 0, 0] * after[..., 2, 2] - after[..., 0, 2] * after[..., 2, 0]
+        )  # the position blocks' determinants
+        return np.log(ratio) @ self.model.weights
 
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
         """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""

@@ -189,25 +189,26 @@ def _swap_search(
 
 
 def bound_step(
-    information: NDArray[np.float64],
+    covariance: NDArray[np.float64],
     transition: NDArray[np.float64],
     process_cov: NDArray[np.float64],
     measured: NDArray[np.float64],
 ) -> NDArray[np.float64]:
     """One step of the posterior Cramer-Rao bound's information recursion (linear Gaussian
-    motion, Tichavsky et al. 1998): ``J' = (Q + F J^-1 F')^-1 + E' I E``.
+    motion, Tichavsky et al. 1998): ``J' = (Q + F J^-1 F')^-1 + E' I E``; returns ``J'^-1``.
 
-    ``information`` (B, K, 4, 4) the last step's ``J``; ``transition`` (K, 4, 4) the true
+    ``covariance`` (B, K, 4, 4) the last step's ``J^-1``; ``transition`` (K, 4, 4) the true
     ``F`` of each target's step; ``process_cov`` (4, 4) ``Q``; ``measured`` (B, K, 2, 2) the
-    position information of the channels probed, at the true state with the true ``R``.
+    position information ``I`` of the channels probed, at the true state with the true ``R``
+    (0 when nothing was probed). ``E`` picks the position (state ``[x, vx, y, vy]``). The
+    information form is kept for its numerical robustness: channel information can be huge
+    near a station.
     """
-    predicted_cov = transition @ np.linalg.inv(information) @ np.swapaxes(transition, -1, -2) + process_cov
-    updated = np.linalg.inv(predicted_cov)
-    updated[..., 0::2, 0::2] += measured  # state [x, vx, y, vy]: position rows/columns 0 and 2
-    return updated
+    information = np.linalg.inv(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
+    information[..., 0::2, 0::2] += measured
+    return np.linalg.inv(information)
 
 
-def position_bound(information: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``sqrt(trace)`` of the position block of ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
-    cov = np.linalg.inv(information)
-    return np.sqrt(cov[..., 0, 0] + cov[..., 2, 2])
+def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sqrt(trace)`` of the position block of the bound's ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
+    return np.sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
