@@ -16,7 +16,6 @@ for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``).
 
 from __future__ import annotations
 
-import itertools
 import math
 from typing import Any
 
@@ -26,7 +25,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from .core.geometry import squared_range_products
-from .core.superarm import top_mask
+from .core.superarm import all_super_arms, top_mask
 from .scenarios import Scenario
 
 #: Largest number of super arms :class:`SuperArmDiscreteAction` enumerates.
@@ -53,12 +52,8 @@ class SuperArmIndex:
                 f"{count} super arms are too many for a Discrete action (limit {MAX_DISCRETE_SUPER_ARMS}); "
                 "use StationScoreAction for this layout"
             )
-        tx = list(itertools.combinations(range(sc.num_tx), sc.tx_per_step))
-        rx = list(itertools.combinations(range(sc.num_rx), sc.rx_per_step))
-        self.actions = np.zeros((len(tx) * len(rx), sc.num_tx + sc.num_rx), dtype=np.int8)
-        for i, (t, r) in enumerate(itertools.product(tx, rx)):
-            self.actions[i, list(t)] = 1
-            self.actions[i, [sc.num_tx + n for n in r]] = 1
+        tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        self.actions = np.concatenate([tx, rx], axis=1).astype(np.int8)
 
     @property
     def size(self) -> int:

@@ -35,6 +35,15 @@ def subset_masks(size: int, chosen: int) -> NDArray[np.bool_]:
     return masks
 
 
+def all_super_arms(
+    num_tx: int, num_rx: int, tx_count: int, rx_count: int
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Every super arm as masks (A, M), (A, N): super arm ``i`` is the ``i // C(N, Ns)``-th
+    transmitter subset with the ``i % C(N, Ns)``-th receiver subset (both lexicographic)."""
+    tx, rx = subset_masks(num_tx, tx_count), subset_masks(num_rx, rx_count)
+    return np.repeat(tx, len(rx), axis=0), np.tile(rx, (len(tx), 1))
+
+
 def top_mask(scores: NDArray[np.float64], count: int) -> NDArray[np.bool_]:
     """Boolean mask of the ``count`` largest entries along the last axis (ties: lowest index)."""
     order = np.argsort(-scores, axis=-1, kind="stable")[..., :count]

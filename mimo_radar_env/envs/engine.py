@@ -19,14 +19,16 @@ from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel, check_memory
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
-from ..core.superarm import best_super_arm, subset_masks, super_arm_value
+from ..core.superarm import all_super_arms, best_super_arm, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
 from ..tracking.information import (
     bound_step,
     channel_information,
     greedy_super_arm,
+    jacobian_information,
     position_bound,
+    position_determinant,
     super_arm_criterion,
 )
 from .options import EnvOptions
@@ -203,19 +205,14 @@ class RadarEngine:
                 position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
             )
             return np.concatenate([tx, rx], axis=1).astype(np.int8)
-        tx_masks, rx_masks = self._all_super_arms()
+        if self._super_arms is None:
+            self._super_arms = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        tx_masks, rx_masks = self._super_arms
         scores = super_arm_criterion(
             position_cov, info, tx_masks, rx_masks, sc.weights, criterion, fusion=self.options.fusion
         )
         best = np.argmin(scores, axis=1)
         return np.concatenate([tx_masks[best], rx_masks[best]], axis=1).astype(np.int8)
-
-    def _all_super_arms(self) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        if self._super_arms is None:
-            sc = self.scenario
-            tx, rx = subset_masks(sc.num_tx, sc.tx_per_step), subset_masks(sc.num_rx, sc.rx_per_step)
-            self._super_arms = (np.repeat(tx, len(rx), axis=0), np.tile(rx, (len(tx), 1)))
-        return self._super_arms
 
     # ----------------------------------------------------------- helpers
     def _advance_bound(self, channels: ChannelObservations) -> None:
@@ -225,8 +222,8 @@ class RadarEngine:
         tx = self.model.tx[channels.tx_index][:, None]  # (B, 1, C, 2)
         rx = self.model.rx[channels.rx_index][:, None]
         jac = channel_jacobian(positions, tx, rx)  # (B, K, C, 2, 2)
-        weighted = jac / channels.noise_variance[..., :, None]  # R^-1 H, R the true Sigma0 / lambda
-        measured = np.einsum("bkcji,bkcjl->bkil", jac, weighted) * channels.valid[:, None, None, None]
+        per_channel = jacobian_information(jac, channels.noise_variance)  # the true Sigma0 / lambda
+        measured = per_channel.sum(axis=2) * channels.valid[:, None, None, None]
         transition = self.model.transitions[:, self.step_index - 1]  # (K, 4, 4): step t-1 -> t
         process_cov = self.model.process_cov
         self._bound_covariance = bound_step(self._bound_covariance, transition, process_cov, measured)
@@ -234,11 +231,9 @@ class RadarEngine:
     def _information_gain(self) -> NDArray[np.float64]:
         """``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` of the last step, (B,) nats."""
         assert self.tracker is not None
-        before, after = self.tracker.prior_covariance, self.tracker.covariance
-        ratio = (before[..., 0, 0] * before[..., 2, 2] - before[..., 0, 2] * before[..., 2, 0]) / (
-            after[..., 0, 0] * after[..., 2, 2] - after[..., 0, 2] * after[..., 2, 0]
-        )  # the position blocks' determinants
-        return np.log(ratio) @ self.model.weights
+        before = position_determinant(self.tracker.prior_covariance)
+        after = position_determinant(self.tracker.covariance)
+        return np.log(before / after) @ self.model.weights
 
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
         """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""

@@ -115,10 +115,7 @@ class IMMUKFTracker:
         """``P_bar``: the covariance of the IMM mixture of the one-step predictions (B, K, 4, 4):
         each model's mixed posterior predicted exactly, combined with the predicted model
         probabilities ``c_j``. The tracker's state is unchanged."""
-        mixed_means, mixed_covs, log_c = imm.mix(self.log_probs, self.means, self.covs, self.log_markov)
-        pred_means, pred_covs = imm.predict(mixed_means, mixed_covs, self.transitions, self.model.process_cov)
-        probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
-        return imm.combine(pred_means, pred_covs, probs)[1]
+        return _mixture_covariance(*self._predict())
 
     # ------------------------------------------------------------ cycle
     def step(
@@ -143,13 +140,16 @@ class IMMUKFTracker:
         valid : (B,) bool
             False for trials that probed nothing: those only predict.
         """
-        mixed_means, mixed_covs, log_c = imm.mix(self.log_probs, self.means, self.covs, self.log_markov)
-        pred_means, pred_covs = imm.predict(mixed_means, mixed_covs, self.transitions, self.model.process_cov)
-        prior = self._prior(pred_means, pred_covs, log_c)
-        probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
-        self.prior_covariance = imm.combine(prior.means, prior.covs, probs)[1]
+        prior = self._prior(*self._predict())
+        self.prior_covariance = _mixture_covariance(prior.means, prior.covs, prior.log_c)
         posterior = self.fusion.update(prior, tx_positions, rx_positions, measurement, noise_variance)
         self._keep(posterior, prior, valid)
+
+    def _predict(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """Mixing and each model's exact prediction: means, covariances, log ``c_j``."""
+        mixed_means, mixed_covs, log_c = imm.mix(self.log_probs, self.means, self.covs, self.log_markov)
+        pred_means, pred_covs = imm.predict(mixed_means, mixed_covs, self.transitions, self.model.process_cov)
+        return pred_means, pred_covs, log_c
 
     def _prior(
         self, means: NDArray[np.float64], covs: NDArray[np.float64], log_c: NDArray[np.float64]
@@ -179,3 +179,11 @@ class IMMUKFTracker:
             covariance = np.where(use_update[..., None, None], covariance, pred_cov)
         self.estimate = estimate
         self.covariance = covariance
+
+
+def _mixture_covariance(
+    means: NDArray[np.float64], covs: NDArray[np.float64], log_c: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The covariance of the IMM mixture of predicted models weighted by ``c_j``."""
+    probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
+    return imm.combine(means, covs, probs)[1]

@@ -43,14 +43,27 @@ def channel_information(
     ``variance`` (..., K, M, N, 2) the diagonal of ``R_mn`` (range sum, azimuth).
     Returns (..., K, M, N, 2, 2).
     """
-    jac = measurement_jacobian(positions, tx, rx)  # (..., K, M, N, 2, 2): rows = measurements
-    weighted = jac / variance[..., :, None]
-    return np.einsum("...ji,...jk->...ik", jac, weighted)
+    return jacobian_information(measurement_jacobian(positions, tx, rx), variance)
+
+
+def jacobian_information(jacobian: NDArray[np.float64], variance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``H' R^-1 H`` of Jacobians (..., 2, 2) (rows: range sum, azimuth) with diagonal ``R``,
+    variances (..., 2): shape (..., 2, 2)."""
+    return np.einsum("...ji,...jk->...ik", jacobian, jacobian / variance[..., :, None])
+
+
+def _det_2x2(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    return a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+
+
+def position_determinant(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``det`` of the position block of state covariances (..., 4, 4) (``[x, vx, y, vy]``)."""
+    return _det_2x2(covariance[..., 0::2, 0::2])
 
 
 def _inverse_2x2(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Inverse and determinant of (..., 2, 2) matrices, in closed form."""
-    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    det = _det_2x2(a)
     inv = np.stack(
         [np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)], -2
     )
@@ -92,8 +105,7 @@ def super_arm_criterion(
     if criterion == "trace":
         per_target = posterior[..., 0, 0] + posterior[..., 1, 1]
     else:
-        _, det = _inverse_2x2(posterior)
-        per_target = np.log(det)
+        per_target = np.log(_det_2x2(posterior))
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
 
 
