@@ -36,8 +36,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
-from mimo_radar_env.core.geometry import measurement_jacobian
 from mimo_radar_env.scenarios.scenario import closest_approach
+from mimo_radar_env.tracking.information import channel_information
 
 # agents (and benchmarks.claims, which imports the harness) are imported where they are used:
 # the command line reads this module's defaults before it checks that 'agents' is ours
@@ -121,17 +121,16 @@ def constraint_failure(candidate: Candidate) -> str | None:
     return None
 
 
-def position_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], scale: str) -> NDArray:
+def scan_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], scale: str) -> NDArray:
     """Per target and step, ``sqrt(trace J^-1)`` of the position from one scan of the selected
-    channels on the noise-free track, ``J = sum lambda_mn H_mn' Sigma0^-1 H_mn`` (eq6, eq32):
-    the measurement-only Cramer-Rao bound (m), shape (T+1, K). ``tx``/``rx`` masks (T+1, M/N)."""
+    channels on the noise-free track, ``J = sum H_mn' (Sigma0 / lambda_mn)^-1 H_mn`` (eq6,
+    eq32): the measurement-only Cramer-Rao bound (m), shape (T+1, K). ``tx``/``rx`` masks
+    (T+1, M/N)."""
     positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)  # (T+1, K, 2)
-    quality = model.quality(model.mean_sinr(positions), scale=scale)  # (T+1, K, M, N)
-    jac = measurement_jacobian(positions, model.tx, model.rx)  # (T+1, K, M, N, 2, 2)
-    inv_sigma0 = np.linalg.inv(model.scenario.measurement_covariance)
-    info = np.einsum("...ji,jk,...kl->...il", jac, inv_sigma0, jac)  # (T+1, K, M, N, 2, 2)
+    variance = model.measurement_variance(model.quality(model.mean_sinr(positions), scale=scale))
+    info = channel_information(positions, model.tx, model.rx, variance)  # (T+1, K, M, N, 2, 2)
     selected = (tx[:, :, None] & rx[:, None, :]).astype(float)  # (T+1, M, N)
-    total = np.einsum("tmn,tkmn,tkmnij->tkij", selected, quality, info)
+    total = np.einsum("tmn,tkmnij->tkij", selected, info)
     return np.sqrt(np.trace(np.linalg.inv(total), axis1=-2, axis2=-1))
 
 
@@ -150,16 +149,16 @@ def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
             tx, rx = np.zeros((steps, model.num_tx), bool), np.zeros((steps, model.num_rx), bool)
             tx[:, list(tx_idx)], rx[:, list(rx_idx)] = True, True
             masks[name] = (tx, rx)
-        bound = {p: position_bound(model, *m, scale) for p, m in masks.items()}
+        bound = {p: scan_bound(model, *m, scale) for p, m in masks.items()}
+        positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)
+        weights = model.channel_weights(model.mean_sinr(positions))  # (T+1, M, N)
 
         def armse(policy: str, a: int = 0, b: int = steps, bound: dict = bound) -> float:
             return float(bound[policy][a:b].mean(axis=0).mean())
 
-        def sinr(policy: str, a: int, b: int, model: RadarModel = model, masks: dict = masks) -> float:
-            positions = model.nominal[:, a:b, [0, 2]].transpose(1, 0, 2)
-            weights = model.channel_weights(model.mean_sinr(positions))
+        def sinr(policy: str, a: int, b: int, masks: dict = masks, weights: NDArray = weights) -> float:
             tx, rx = masks[policy]
-            return float(np.einsum("tm,tn,tmn->", tx[a:b], rx[a:b], weights))
+            return float(np.einsum("tm,tn,tmn->", tx[a:b], rx[a:b], weights[a:b]))
 
         n = sc.name[-1]
         if sc.name == "paper-1":

@@ -52,13 +52,13 @@ def test_a_station_near_a_track_or_moving_best_is_rejected():
     assert "Best selects the paper's super arm" in calibration.constraint_failure(moved)
 
 
-def test_position_bound_is_the_explicit_fisher_information_inverse():
+def test_scan_bound_is_the_explicit_fisher_information_inverse():
     model = RadarModel.from_scenario(load_scenario("paper-1", horizon=20))
     steps = model.nominal.shape[1]
     tx = np.zeros((steps, 4), bool)
     rx = np.zeros((steps, 6), bool)
     tx[:, [0, 1]], rx[:, [0, 1, 2]] = True, True
-    bound = calibration.position_bound(model, tx, rx, "db")
+    bound = calibration.scan_bound(model, tx, rx, "db")
     t = 7
     p = model.nominal[0, t, [0, 2]]
     sigma0 = model.scenario.measurement_covariance
