@@ -86,6 +86,10 @@ def env_options_from(args: argparse.Namespace) -> Any:
     return EnvOptions.for_version(args.env_version, **given)
 
 
+#: How --agent-param combines with the paper study's per-version agent parameters.
+OVER_READING = "; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})"
+
+
 def _add_agent_param(parser: argparse.ArgumentParser, over: str = "") -> None:
     parser.add_argument(
         "--agent-param",
@@ -163,7 +167,7 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument(
         "--scenario", type=int, choices=(1, 2, 3), required=True, help="paper scenario 1, 2 or 3"
     )
-    _add_agent_param(paper, over="; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})")
+    _add_agent_param(paper, over=OVER_READING)
     _add_run_options(paper)
 
     run = sub.add_parser(
@@ -242,7 +246,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     claims.add_argument("runs", nargs="*", help="finished paper-study folders (default: run them into --out)")
     claims.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
-    _add_agent_param(claims, over="; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})")
+    _add_agent_param(claims, over=OVER_READING)
     _add_run_options(claims)
 
     calibrate = sub.add_parser(
@@ -263,7 +267,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("--final", FINAL, "layouts judged by full scorecards"),
     ):
         calibrate.add_argument(flag, type=_integer(1), default=default, help=f"{text} (default {default})")
-    _add_agent_param(calibrate, over="; over the version's reading")
+    _add_agent_param(calibrate, over=OVER_READING)
     _add_run_options(calibrate)
 
     compare = sub.add_parser(

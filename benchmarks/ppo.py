@@ -22,7 +22,7 @@ META_FILE = "ppo.json"
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
-def load_hyperparams(path: str | Path | None = None, key: str = "MimoRadarSelectFlat-v1") -> dict[str, Any]:
+def load_hyperparams(path: str | Path | None = None, key: str = FLAT_ENV_IDS["v1"]) -> dict[str, Any]:
     """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped ``hyperparams/ppo.yml``).
 
     ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads

@@ -100,17 +100,12 @@ def test_calibrate_adopts_only_a_layout_that_beats_the_reference(tmp_path):
     pool = calibration.candidates(40, seed=0)
     passing = [c.index for c in pool[1:] if calibration.constraint_failure(c) is None]
     better = passing[0]
+    def calibrate(out, run):
+        sizes = dict(count=40, screen=len(passing), screen_trials=3, final=2, final_trials=7)
+        return calibration.calibrate(out, run, **sizes, log=lambda _: None)
+
     run, calls = _fake_scorecard({0: (8, 13), better: (9, 12)})
-    report = calibration.calibrate(
-        tmp_path,
-        run,
-        count=40,
-        screen=len(passing),
-        screen_trials=3,
-        final=2,
-        final_trials=7,
-        log=lambda _: None,
-    )
+    report = calibrate(tmp_path, run)
     assert report["best"] == better and report["adopted"]
     assert (
         (0, 7, "final") in calls
@@ -122,16 +117,7 @@ def test_calibrate_adopts_only_a_layout_that_beats_the_reference(tmp_path):
     assert "adopted" in (tmp_path / "calibration.md").read_text()
 
     run, _ = _fake_scorecard({0: (8, 13), better: (8, 13)})  # a tie keeps the reference
-    report = calibration.calibrate(
-        tmp_path / "tie",
-        run,
-        count=40,
-        screen=len(passing),
-        screen_trials=3,
-        final=2,
-        final_trials=7,
-        log=lambda _: None,
-    )
+    report = calibrate(tmp_path / "tie", run)
     assert report["best"] == 0 and not report["adopted"]
     assert "not adopted" in (tmp_path / "tie" / "calibration.md").read_text()
 
