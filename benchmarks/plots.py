@@ -89,10 +89,14 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
                 lambda w, m=m, k=k: m.rmse_curve(w, k),
             )
             line.set_label(policy)
+            if m.bounded:  # the floor the policy's own selections allow
+                bound = metrics.rmse_curve(total["bound_squared"], n)[:, k]
+                ax.plot(t, bound, lw=0.8, ls="--", color=line.get_color())
         ax.set(
             xlabel="time (s)",
             ylabel="RMSE (m)",
-            title=f"{scenario.name}: position RMSE, target {k + 1}, 95 % bands",
+            title=f"{scenario.name}: position RMSE (solid, 95 % bands) and its bound (dashed), "
+            f"target {k + 1}",
         )
         ax.set_yscale("log")
         ax.grid(alpha=0.3)

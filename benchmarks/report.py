@@ -66,9 +66,17 @@ def summarize(
         armse_all, per_target = (
             metrics.armse(total["squared_error"], config.trials) if tracked else (None, None)
         )
+        bound_all, bound_per_target = (
+            metrics.armse(total["bound_squared"], config.trials)
+            if tracked and "bound_squared" in total
+            else (None, None)
+        )
         policies[policy] = {
             "armse": armse_all,
             "armse_per_target": per_target,
+            "bound": bound_all,
+            "bound_per_target": bound_per_target,
+            "armse_over_bound": armse_all / bound_all if bound_all else None,
             "asr": metrics.asr(total["matches"], config.trials),
             "final_regret": float(
                 metrics.regret_curve(total["optimal"], total["expected"], config.trials)[-1]
@@ -109,6 +117,7 @@ def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dic
         sinr = metrics.mean_sinr_db_curve(total["expected"], config.trials, scenario.num_channels_per_step)
         regret = metrics.regret_curve(total["optimal"], total["expected"], config.trials)
         rmse = metrics.rmse_curve(total["squared_error"], config.trials)
+        bound = metrics.rmse_curve(total["bound_squared"], config.trials)
         match = total["matches"] / config.trials
         for t in range(config.steps):
             row = {
@@ -120,17 +129,21 @@ def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dic
                 "rmse": rmse[t].mean(),
             }
             row.update({f"rmse_target{k + 1}": rmse[t, k] for k in range(rmse.shape[1])})
+            row["bound"] = bound[t].mean()
+            row.update({f"bound_target{k + 1}": bound[t, k] for k in range(bound.shape[1])})
             rows.append(row)
     return rows
 
 
 def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
-    """The paper's Table 2/3/4 layout (ARMSE) plus ASR, final regret and mean SINR."""
+    """The paper's Table 2/3/4 layout (ARMSE) plus the bound (the time-averaged posterior
+    Cramer-Rao bound of the selections made) and ARMSE / bound, ASR, final regret and mean SINR."""
     name = summary["scenario"]
     paper_armse = PAPER_ARMSE.get(paper_key(name), {})
     paper_asr = PAPER_ASR.get(paper_key(name), {})
     targets = [f"ARMSE T{k + 1} (m)" for k in range(num_targets)] if num_targets > 1 else []
-    head = ["policy", "ARMSE (m)", *targets, "ASR (%)", "final regret", "mean SINR (dB)", "wall (s)"]
+    head = ["policy", "ARMSE (m)", *targets, "bound (m)", "ARMSE / bound"]
+    head += ["ASR (%)", "final regret", "mean SINR (dB)", "wall (s)"]
     if paper_armse:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
     lines = [
@@ -158,7 +171,10 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
                 if tracked
                 else ["—"] * num_targets
             )
+        bounded = row.get("bound") is not None
         cells += [
+            _with_ci(row["bound"], ci.get("bound"), "{:.3f}") if bounded else "—",
+            _with_ci(row["armse_over_bound"], ci.get("armse_over_bound"), "{:.2f}") if bounded else "—",
             _with_ci(row["asr"], ci.get("asr"), "{:.2f}", scale=100),
             _with_ci(row["final_regret"], ci.get("final_regret"), "{:.1f}"),
             _with_ci(row["mean_sinr_db"], ci.get("mean_sinr_db"), "{:.2f}"),

@@ -22,11 +22,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 #: Per-step sums over a shard's trials; the shards of a policy add up to its totals.
-SHARD_FIELDS = ("expected", "optimal", "squared_error", "matches", "selections", "valid", "wall_s")
+SHARD_FIELDS = (
+    "expected",
+    "optimal",
+    "squared_error",
+    "bound_squared",
+    "matches",
+    "selections",
+    "valid",
+    "wall_s",
+)
 #: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
 TRUTH_FIELD = "first_trial_positions"
 #: Per-trial values (float32; trials first), from which the intervals are computed.
-TRIAL_FIELDS = ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches")
+TRIAL_FIELDS = (
+    "trial_expected",
+    "trial_optimal",
+    "trial_squared_error",
+    "trial_bound_squared",
+    "trial_matches",
+)
 DATA_FIELDS = (*SHARD_FIELDS, TRUTH_FIELD, *TRIAL_FIELDS)
 META_FIELDS = ("shard_trials", "config_hash", "checksum")
 

@@ -37,7 +37,8 @@ class TrialMetrics:
     ----------
     per_trial : dict
         ``trial_expected``, ``trial_optimal`` (N, T), ``trial_squared_error`` (N, T, K),
-        ``trial_matches`` (N, T) of one policy.
+        ``trial_matches`` (N, T) of one policy, and optionally ``trial_bound_squared``
+        (N, T, K), the squared position bound of the selections made.
     channels : int
         ``Ms * Ns``.
     """
@@ -53,6 +54,9 @@ class TrialMetrics:
         self.match = per_trial["trial_matches"].astype(np.float64).mean(axis=1)
         self.squared = per_trial["trial_squared_error"].astype(np.float64)  # (N, T, K)
         self.tracked = bool(np.isfinite(self.squared).all())
+        bound = per_trial.get("trial_bound_squared")
+        self.bound_squared = bound.astype(np.float64) if bound is not None else None  # (N, T, K)
+        self.bounded = self.tracked and self.bound_squared is not None and bool(np.isfinite(bound).all())
         self.channels = channels
 
     @property
@@ -76,6 +80,25 @@ class TrialMetrics:
 
     def armse(self, w: NDArray) -> NDArray:
         return np.mean([self.armse_target(k)(w) for k in range(self.squared.shape[2])], axis=0)
+
+    def bound_curve(self, w: NDArray, target: int) -> NDArray:
+        """The root-mean-square position bound of each step, (..., T): the RMSE's floor."""
+        assert self.bound_squared is not None
+        return np.sqrt(w @ self.bound_squared[:, :, target])
+
+    def bound(self, w: NDArray) -> NDArray:
+        """The time-averaged bound over targets weighted equally (as ARMSE averages RMSE)."""
+        targets = range(self.squared.shape[2])
+        return np.mean([self.bound_curve(w, k).mean(axis=-1) for k in targets], axis=0)
+
+    def armse_over_bound(self, w: NDArray) -> NDArray:
+        return self.armse(w) / self.bound(w)
+
+    def bound_metrics(self) -> dict[str, Metric]:
+        """The bound and ARMSE / bound (with a tracker and recorded bounds; not paired)."""
+        if not self.bounded:
+            return {}
+        return {"bound": self.bound, "armse_over_bound": self.armse_over_bound}
 
     def scalar_metrics(self) -> dict[str, Metric]:
         """The table's metrics (ARMSE only with a tracker)."""
@@ -141,10 +164,10 @@ def band(curve: Callable[[NDArray], NDArray], num_trials: int, seed: int = 0) ->
 
 
 def policy_intervals(metrics: TrialMetrics, seed: int = 0) -> dict[str, list[float]]:
-    """``{metric: [low, high]}`` for the table's metrics, and ``armse_per_target``."""
-    out = {
-        name: list(interval(fn, metrics.num_trials, seed)) for name, fn in metrics.scalar_metrics().items()
-    }
+    """``{metric: [low, high]}`` for the table's metrics (with the bound's), and
+    ``armse_per_target``."""
+    every = metrics.scalar_metrics() | metrics.bound_metrics()
+    out = {name: list(interval(fn, metrics.num_trials, seed)) for name, fn in every.items()}
     if metrics.tracked:
         out["armse_per_target"] = [
             list(interval(metrics.armse_target(k), metrics.num_trials, seed))

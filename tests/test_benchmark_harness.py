@@ -17,7 +17,18 @@ from benchmarks.harness import HarnessError, load_totals, make_config, parse_age
 from benchmarks.report import write_outputs
 from mimo_radar_env import metrics
 
-SUMMARY_KEYS = {"ci", "armse", "armse_per_target", "asr", "final_regret", "mean_sinr_db", "wall_s"}
+SUMMARY_KEYS = {
+    "ci",
+    "armse",
+    "armse_per_target",
+    "bound",
+    "bound_per_target",
+    "armse_over_bound",
+    "asr",
+    "final_regret",
+    "mean_sinr_db",
+    "wall_s",
+}
 
 
 def _read_curves(path):
@@ -86,6 +97,11 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
         per_target = [np.mean([float(r[f"rmse_target{k}"]) for r in mine]) for k in (1, 2)]
         assert row["armse_per_target"] == pytest.approx(per_target, rel=1e-9)
         assert row["armse"] == pytest.approx(np.mean(per_target), rel=1e-9)
+        bounds = [np.mean([float(r[f"bound_target{k}"]) for r in mine]) for k in (1, 2)]
+        assert row["bound_per_target"] == pytest.approx(bounds, rel=1e-9)
+        assert row["armse_over_bound"] == pytest.approx(row["armse"] / np.mean(bounds), rel=1e-9)
+        low, high = row["ci"]["bound"]  # from float32 per-trial values: equal to 1e-6
+        assert 0 < row["bound"] and low * (1 - 1e-6) <= row["bound"] <= high * (1 + 1e-6)
         assert row["asr"] == pytest.approx(np.mean([float(r["asr"]) for r in mine]), rel=1e-9)
         assert row["final_regret"] == pytest.approx(float(mine[-1]["cumulative_regret"]), rel=1e-9, abs=1e-9)
         linear = np.mean([10 ** (float(r["mean_sinr_db"]) / 10) for r in mine])
