@@ -14,6 +14,7 @@ from .ppo import PPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
     agent_argument,
+    agent_class,
     agent_parameters,
     agent_summary,
     available_agents,
@@ -23,6 +24,7 @@ from .registry import (
 )
 from .solvers import SOLVERS, SuperArmSolver, make_solver
 from .thompson import CombinatorialThompson, DiscountedThompson
+from .tracking import TrackingUCB
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
 from .uniform import RandomAgent
 
@@ -49,7 +51,9 @@ __all__ = [
     "RecencyBasedExploration",
     "SlidingWindowUCB",
     "SuperArmSolver",
+    "TrackingUCB",
     "agent_argument",
+    "agent_class",
     "agent_parameters",
     "agent_summary",
     "available_agents",

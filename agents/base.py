@@ -68,6 +68,12 @@ class Agent(ABC):
     needs_oracle: ClassVar[bool] = False
     #: True for agents that need the tracker's keys in the observation.
     needs_tracking: ClassVar[bool] = False
+    #: Env options the agent needs set (they add observation keys and change no number);
+    #: the benchmark harness sets them on the envs the agent runs in.
+    observation_options: ClassVar[dict[str, Any]] = {}
+    #: Parameters named after env options (``"fusion"``...) that must match the env's; the
+    #: harness passes the run's values unless they are given.
+    env_option_params: ClassVar[tuple[str, ...]] = ()
 
     def __init__(self, scenario: Scenario | str, seed: int | None = None) -> None:
         self.scenario = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario

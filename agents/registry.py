@@ -20,6 +20,7 @@ from .oracle import BestAgent, BestTrackingAgent
 from .ppo import PPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
+from .tracking import TrackingUCB
 from .ucb import CUCB, UCB1, DiscountedUCB, SlidingWindowUCB
 from .uniform import RandomAgent
 
@@ -61,6 +62,7 @@ for _cls in (
     RecencyBasedExploration,
     BestAgent,
     BestTrackingAgent,
+    TrackingUCB,
     RandomAgent,
     FixedAgent,
 ):
@@ -101,6 +103,11 @@ def required_parameters(name: str) -> list[str]:
 
 def agent_summary(name: str) -> str:
     return _spec(name).summary
+
+
+def agent_class(name: str) -> type[Agent]:
+    """The class of a registered agent."""
+    return _spec(name).cls
 
 
 def agent_argument(name: str) -> str | None:

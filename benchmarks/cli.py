@@ -433,8 +433,10 @@ def _calibrate(args: argparse.Namespace) -> int:
         scale=env_options_from(args).lambda_scale,
     )
     print(Path(args.out, "calibration.md").read_text().split("\n\n| layout")[0])
-    print(f"best layout {report['best']}: {'adopted' if report['adopted'] else 'not adopted'}; "
-          f"every candidate in {Path(args.out, 'calibration.md')}")
+    print(
+        f"best layout {report['best']}: {'adopted' if report['adopted'] else 'not adopted'}; "
+        f"every candidate in {Path(args.out, 'calibration.md')}"
+    )
     return 0
 
 

@@ -161,11 +161,13 @@ def make_config(
                 f"unknown policy {policy!r}; available policies are {available} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
             )
-    probe = MimoRadarSelectVectorEnv(num_envs=1, scenario=sc, **options.to_dict())
-    obs, _ = probe.reset(seed=seed)
     for policy in policies:
         try:
-            agent = make_policy(policy, sc, params.get(policy, {}), seed=seed)
+            agent = make_policy(policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict())
+            probe = MimoRadarSelectVectorEnv(
+                num_envs=1, scenario=sc, **policy_env_options(agent, options.to_dict())
+            )
+            obs, _ = probe.reset(seed=seed)
             if agent.needs_oracle:
                 agent.attach(probe)
             agent.reset(obs)
@@ -221,18 +223,29 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
 
     Returns arrays: ``expected`` (T,) sum of mu_t, ``optimal`` (T,) sum of mu*_t,
     ``squared_error`` (T, K) sum of squared position errors (NaN without a tracker),
+    ``bound_squared`` (T, K) sum of the squared position bounds (``info["position_bound"]``,
+    the PCRB of the selections made; NaN without a tracker),
     ``matches`` (T,) number of trials whose super arm equals the optimal one,
     ``selections`` (T, M + N) how often each station was selected, ``valid`` (T,) valid
     actions, ``wall_s``, ``first_trial_positions`` (T + 1, K, 2) the truth of the
     shard's first trial, and per trial (float32, for the intervals): ``trial_expected`` and
-    ``trial_optimal`` (n, T), ``trial_squared_error`` (n, T, K), ``trial_matches`` (n, T).
+    ``trial_optimal`` (n, T), ``trial_squared_error`` and ``trial_bound_squared`` (n, T, K),
+    ``trial_matches`` (n, T).
     """
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
     trials = cfg.shard_trials(shard)
     start = time.perf_counter()
-    env = MimoRadarSelectVectorEnv(num_envs=len(trials), scenario=scenario, **cfg.env_options)
-    agent = make_policy(policy, scenario, cfg.agent_params.get(policy, {}), seed=cfg.seed + trials.start)
+    agent = make_policy(
+        policy,
+        scenario,
+        cfg.agent_params.get(policy, {}),
+        seed=cfg.seed + trials.start,
+        options=cfg.env_options,
+    )
+    env = MimoRadarSelectVectorEnv(
+        num_envs=len(trials), scenario=scenario, **policy_env_options(agent, cfg.env_options)
+    )
     if agent.needs_oracle:
         agent.attach(env)
     obs, info = env.reset(seed=cfg.seed + trials.start)
@@ -242,6 +255,7 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         "expected": np.zeros(T),
         "optimal": np.zeros(T),
         "squared_error": np.full((T, K), np.nan),
+        "bound_squared": np.full((T, K), np.nan),
         "matches": np.zeros(T),
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
         "valid": np.zeros(T),
@@ -249,6 +263,7 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         "trial_expected": np.zeros((len(trials), T), np.float32),
         "trial_optimal": np.zeros((len(trials), T), np.float32),
         "trial_squared_error": np.full((len(trials), T, K), np.nan, np.float32),
+        "trial_bound_squared": np.full((len(trials), T, K), np.nan, np.float32),
         "trial_matches": np.zeros((len(trials), T), np.uint8),
     }
     out[TRUTH_FIELD][0] = info["true_state"][0][:, [0, 2]]
@@ -266,6 +281,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
             squared = info["position_error"] ** 2
             out["squared_error"][t] = squared.sum(axis=0)
             out["trial_squared_error"][:, t] = squared
+            bound = info["position_bound"] ** 2
+            out["bound_squared"][t] = bound.sum(axis=0)
+            out["trial_bound_squared"][:, t] = bound
         out["matches"][t] = matches.sum()
         out["selections"][t] = np.asarray(action).sum(axis=0)
         out["valid"][t] = info["action_valid"].sum()
@@ -274,10 +292,29 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
     return out
 
 
-def make_policy(policy: str, scenario: Scenario, params: dict[str, Any], seed: int) -> agents.Agent:
-    """The agent of a policy entry ``NAME`` or ``NAME:ARGUMENT`` with its parameters."""
+def make_policy(
+    policy: str,
+    scenario: Scenario,
+    params: dict[str, Any],
+    seed: int,
+    options: dict[str, Any] | None = None,
+) -> agents.Agent:
+    """The agent of a policy entry ``NAME`` or ``NAME:ARGUMENT`` with its parameters; the
+    parameters it names after env options (``Agent.env_option_params``) default to the
+    run's ``options``."""
     name, argument = agents.split_policy(policy)
-    return agents.make_agent(name, scenario, seed=seed, **argument, **params)
+    from_env = {
+        key: options[key]
+        for key in agents.agent_class(name).env_option_params
+        if options is not None and key not in params
+    }
+    return agents.make_agent(name, scenario, seed=seed, **argument, **from_env, **params)
+
+
+def policy_env_options(agent: agents.Agent, options: dict[str, Any]) -> dict[str, Any]:
+    """The run's env options with those the agent needs for its observation
+    (``Agent.observation_options``; they change no number of the env)."""
+    return {**options, **agent.observation_options}
 
 
 # ------------------------------------------------------------------ storage

@@ -16,7 +16,6 @@ for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``).
 
 from __future__ import annotations
 
-import math
 from typing import Any
 
 import gymnasium as gym
@@ -25,7 +24,7 @@ from gymnasium import spaces
 from numpy.typing import NDArray
 
 from .core.geometry import squared_range_products
-from .core.superarm import all_super_arms, top_mask
+from .core.superarm import all_super_arms, super_arm_count, top_mask
 from .scenarios import Scenario
 
 #: Largest number of super arms :class:`SuperArmDiscreteAction` enumerates.
@@ -46,7 +45,7 @@ class SuperArmIndex:
     def __init__(self, scenario: Scenario) -> None:
         sc = scenario
         self.num_tx, self.num_rx = sc.num_tx, sc.num_rx
-        count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
+        count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
         if count > MAX_DISCRETE_SUPER_ARMS:
             raise ValueError(
                 f"{count} super arms are too many for a Discrete action (limit {MAX_DISCRETE_SUPER_ARMS}); "
@@ -239,7 +238,7 @@ def make_flat_env(action: str = "auto", render_mode: str | None = None, **kwargs
 def wrap_for_learning(env: gym.Env, action: str = "auto") -> gym.Env:
     """``env`` with a valid action wrapper and the feature observation."""
     sc = env.unwrapped.scenario
-    count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
+    count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
     if action == "auto":
         action = "discrete" if count <= 1000 else "scores"
     if action == "discrete":

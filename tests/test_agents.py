@@ -166,7 +166,8 @@ def test_mg_crb_cl_needs_the_tracker():
 
 
 def _episode(agent_name, scenario, vector, steps):
-    kwargs = {"scenario": scenario}
+    cls = agents.agent_class(agent_name)
+    kwargs = {"scenario": scenario, **cls.observation_options}
     if vector:
         env = gym.make_vec(
             "MimoRadarSelect-v0", num_envs=3, vectorization_mode="vector_entry_point", **kwargs
@@ -182,6 +183,8 @@ def _episode(agent_name, scenario, vector, steps):
         params.update(tx=list(range(sc.tx_per_step)), rx=list(range(sc.rx_per_step)))
     if agent_name == "mg-crb-cl" and sc.num_tx > 8:
         params["solver"] = "alternating"
+    options = env.unwrapped.options if not vector else env.options
+    params.update({key: getattr(options, key) for key in cls.env_option_params})
     agent = agents.make_agent(agent_name, sc, **params)
     if agent.needs_oracle:
         agent.attach(env)

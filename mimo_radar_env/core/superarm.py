@@ -14,6 +14,7 @@ deterministic starts.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 
@@ -35,13 +36,23 @@ def subset_masks(size: int, chosen: int) -> NDArray[np.bool_]:
     return masks
 
 
+def super_arm_count(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> int:
+    """``C(M, Ms) C(N, Ns)``: the number of super arms."""
+    return math.comb(num_tx, tx_count) * math.comb(num_rx, rx_count)
+
+
+@functools.lru_cache(maxsize=16)
 def all_super_arms(
     num_tx: int, num_rx: int, tx_count: int, rx_count: int
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     """Every super arm as masks (A, M), (A, N): super arm ``i`` is the ``i // C(N, Ns)``-th
-    transmitter subset with the ``i % C(N, Ns)``-th receiver subset (both lexicographic)."""
+    transmitter subset with the ``i % C(N, Ns)``-th receiver subset (both lexicographic).
+    Cached and read-only: policies that score every super arm call it every step."""
     tx, rx = subset_masks(num_tx, tx_count), subset_masks(num_rx, rx_count)
-    return np.repeat(tx, len(rx), axis=0), np.tile(rx, (len(tx), 1))
+    masks = np.repeat(tx, len(rx), axis=0), np.tile(rx, (len(tx), 1))
+    for mask in masks:
+        mask.flags.writeable = False
+    return masks
 
 
 def top_mask(scores: NDArray[np.float64], count: int) -> NDArray[np.bool_]:

@@ -8,7 +8,6 @@ the B = 1 case and squeezes that axis; there is no second implementation.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -19,22 +18,18 @@ from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel, check_memory
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
-from ..core.superarm import all_super_arms, best_super_arm, super_arm_value
+from ..core.superarm import best_super_arm, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
 from ..tracking.information import (
     bound_step,
     channel_information,
-    greedy_super_arm,
     jacobian_information,
     position_bound,
     position_determinant,
-    super_arm_criterion,
+    select_for_tracking,
 )
 from .options import EnvOptions
-
-#: Super arms the tracking oracle enumerates at most (exact search); greedy beyond.
-MAX_ENUMERATED_SUPER_ARMS = 5_000
 
 
 def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.int8]:
@@ -90,7 +85,6 @@ class RadarEngine:
         self.step_index = 0
         self.last_action = np.zeros((batch_size, self.action_size), dtype=np.int8)
         self.last_valid = np.zeros(batch_size, dtype=bool)
-        self._super_arms: tuple[NDArray[np.bool_], NDArray[np.bool_]] | None = None
 
     @property
     def horizon(self) -> int:
@@ -190,29 +184,20 @@ class RadarEngine:
         """The super arm of the coming step that minimises the predicted posterior position
         error (:mod:`~mimo_radar_env.tracking.information`, for the env's fusion), from the
         tracker's prediction and the channels' true ``lambda``: exact over all super arms up
-        to :data:`MAX_ENUMERATED_SUPER_ARMS`, greedy over stations beyond; (B, M + N)."""
+        to :data:`~mimo_radar_env.tracking.information.MAX_ENUMERATED_SUPER_ARMS`, greedy over
+        stations beyond; (B, M + N)."""
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
         sc = self.scenario
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(upcoming)))
         predicted = self.tracker.predicted_state()
-        position_cov = self.tracker.predicted_covariance()[..., [0, 2], :][..., [0, 2]]
+        position_cov = self._predicted_position_covariance()
         info = channel_information(predicted[..., [0, 2]], self.model.tx, self.model.rx, variance)
-        count = math.comb(sc.num_tx, sc.tx_per_step) * math.comb(sc.num_rx, sc.rx_per_step)
-        if count > MAX_ENUMERATED_SUPER_ARMS:
-            tx, rx = greedy_super_arm(
-                position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
-            )
-            return np.concatenate([tx, rx], axis=1).astype(np.int8)
-        if self._super_arms is None:
-            self._super_arms = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        tx_masks, rx_masks = self._super_arms
-        scores = super_arm_criterion(
-            position_cov, info, tx_masks, rx_masks, sc.weights, criterion, fusion=self.options.fusion
+        tx, rx = select_for_tracking(
+            position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
         )
-        best = np.argmin(scores, axis=1)
-        return np.concatenate([tx_masks[best], rx_masks[best]], axis=1).astype(np.int8)
+        return np.concatenate([tx, rx], axis=1).astype(np.int8)
 
     # ----------------------------------------------------------- helpers
     def _advance_bound(self, channels: ChannelObservations) -> None:
@@ -269,12 +254,20 @@ class RadarEngine:
         tracker = self.tracker
         if tracker is None:
             return obs
-        return obs | {
+        obs |= {
             "track": tracker.estimate.copy(),
             "track_pred": tracker.predicted_state(),
             "track_pos_cov": tracker.covariance[..., [[0], [2]], [0, 2]],
             "mode_prob": tracker.model_probabilities,
         }
+        if self.options.prediction_covariance:
+            obs["track_pred_pos_cov"] = self._predicted_position_covariance()
+        return obs
+
+    def _predicted_position_covariance(self) -> NDArray[np.float64]:
+        """The position block of the tracker's predicted mixture covariance, (B, K, 2, 2)."""
+        assert self.tracker is not None
+        return self.tracker.predicted_covariance()[..., [[0], [2]], [0, 2]]
 
     def _truth_info(self) -> dict[str, NDArray]:
         state = self.simulation.state

@@ -24,10 +24,13 @@ from .engine import RadarEngine
 from .options import EnvOptions, resolve
 
 
-def observation_space(scenario: Scenario, num_models: int | None = 3) -> spaces.Dict:
+def observation_space(
+    scenario: Scenario, num_models: int | None = 3, prediction_covariance: bool = False
+) -> spaces.Dict:
     """The observation space of one trial (see :class:`MimoRadarSelectEnv`).
 
-    ``num_models=None`` is the space without a tracker (``tracking=False``).
+    ``num_models=None`` is the space without a tracker (``tracking=False``);
+    ``prediction_covariance=True`` adds ``track_pred_pos_cov``.
     """
     K, M, N = scenario.num_targets, scenario.num_tx, scenario.num_rx
     big = np.finfo(np.float64).max  # unbounded in principle; finite so that Box samples are finite
@@ -45,6 +48,11 @@ def observation_space(scenario: Scenario, num_models: int | None = 3) -> spaces.
             "track_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64),
             "mode_prob": spaces.Box(0.0, 1.0, (K, num_models), np.float64),
         }
+        | (
+            {"track_pred_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64)}
+            if prediction_covariance
+            else {}
+        )
     )
 
 
@@ -94,6 +102,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     | ``track_pred`` | (K, 4) | one-step prediction for the next step (eq24) |
     | ``track_pos_cov`` | (K, 2, 2) | position covariance of ``track`` (m^2) |
     | ``mode_prob`` | (K, 3) | model probabilities: NCV, NCT(+3 deg/s), NCT(-3 deg/s) |
+    | ``track_pred_pos_cov`` | (K, 2, 2) | predicted position covariance of ``track_pred`` (m^2) [1] |
+
+    [1] only with ``prediction_covariance=True`` (Arguments).
 
     The reset observation probes every channel once (Algorithm 1's
     initialisation): ``probed`` is all ones and ``track`` is the initial
@@ -166,7 +177,11 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
       action that probes nothing the measurements and covariances are NaN;
     * ``reward``: ``"sinr"`` (eq17, below) or ``"information"``: the realised reduction of the
       tracker's position uncertainty, ``sum_k Omega_k (log det P_pos,pred - log det
-      P_pos,post)`` in nats, for learning to select for tracking (needs ``tracking=True``).
+      P_pos,post)`` in nats, for learning to select for tracking (needs ``tracking=True``);
+    * ``prediction_covariance``: ``False`` or ``True``: the observation also carries
+      ``track_pred_pos_cov``, the position block of the tracker's predicted (IMM mixture)
+      covariance for the coming step, which tracking-aware policies score super arms with
+      (needs ``tracking=True``; no number of the env changes).
 
     ``MimoRadarSelect-v0`` defaults to ``lambda_scale="linear"``, ``truth="per-trial"``
     (reading 0 of the paper's ambiguous points, unchanged since release);
@@ -211,7 +226,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         self.options, self.scenario = resolve(kwargs)
         self.engine = RadarEngine(self.options, self.scenario, batch_size=1)
         self.action_space = spaces.MultiBinary(self.engine.action_size)
-        self.observation_space = observation_space(self.scenario, _num_models(self.engine))
+        self.observation_space = _observation_space(self.engine)
         self.render_mode = render_mode
         self._truth_history: list[NDArray] = []
         self._track_history: list[NDArray] = []
@@ -307,8 +322,9 @@ def describe(kind: str, spec: EnvSpec | None, scenario: Scenario, options: EnvOp
     return f"<{kind}{ident} {', '.join(parts)}>"
 
 
-def _num_models(engine: RadarEngine) -> int | None:
-    return None if engine.tracker is None else engine.tracker.num_models
+def _observation_space(engine: RadarEngine) -> spaces.Dict:
+    num_models = None if engine.tracker is None else engine.tracker.num_models
+    return observation_space(engine.scenario, num_models, engine.options.prediction_covariance)
 
 
 def _single_action(action: Any, size: int) -> NDArray:
@@ -350,7 +366,7 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         self.num_envs = num_envs
         self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs)
         self.single_action_space = spaces.MultiBinary(self.engine.action_size)
-        self.single_observation_space = observation_space(self.scenario, _num_models(self.engine))
+        self.single_observation_space = _observation_space(self.engine)
         self.action_space = batch_space(self.single_action_space, num_envs)
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.render_mode = None

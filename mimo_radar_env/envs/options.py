@@ -54,6 +54,7 @@ def paper_key(name: str) -> str:
             return f"paper-{names.index(name) + 1}"
     return name
 
+
 FusionName = Literal[tuple(FUSIONS)]  # type: ignore[valid-type]
 FilterNoise = Literal["true", "estimated"]
 InvalidAction = Literal["probe-nothing", "raise"]
@@ -134,6 +135,9 @@ class EnvOptions:
     reward: Reward = _option(
         "sinr", "the step reward: eq17's 'sinr' sum, or the tracker's position 'information' gain (nats)"
     )
+    prediction_covariance: bool = _option(
+        False, "add the tracker's predicted position covariance 'track_pred_pos_cov' to the observation"
+    )
 
     @classmethod
     def for_version(cls, version: str, **options: Any) -> EnvOptions:
@@ -147,11 +151,16 @@ class EnvOptions:
             value = getattr(self, name)
             if not isinstance(value, str) or value not in choices:
                 raise ValueError(f"{name} must be one of {list(choices)}, got {value!r}")
-        for name in ("tracking", "measurements"):
+        for name in ("tracking", "measurements", "prediction_covariance"):
             if not isinstance(getattr(self, name), bool):
                 raise ValueError(f"{name} must be True or False, got {getattr(self, name)!r}")
         if self.reward == "information" and not self.tracking:
             raise ValueError("reward='information' is the tracker's information gain: it needs tracking=True")
+        if self.prediction_covariance and not self.tracking:
+            raise ValueError(
+                "prediction_covariance=True observes the tracker's predicted covariance: "
+                "it needs tracking=True"
+            )
         quality = self.measurement_quality
         if quality is not None:
             if isinstance(quality, bool) or not isinstance(quality, int | float):

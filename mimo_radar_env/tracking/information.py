@@ -26,9 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.geometry import measurement_jacobian
+from ..core.superarm import all_super_arms, super_arm_count
 
 Criterion = Literal["trace", "logdet"]
 CRITERIA: tuple[str, ...] = ("trace", "logdet")
+#: Super arms :func:`select_for_tracking` enumerates at most (exact search); greedy beyond.
+MAX_ENUMERATED_SUPER_ARMS = 5_000
 
 
 def channel_information(
@@ -107,6 +110,52 @@ def super_arm_criterion(
     else:
         per_target = np.log(_det_2x2(posterior))
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
+
+
+def select_for_tracking(
+    position_cov: NDArray[np.float64],
+    information: NDArray[np.float64],
+    weights: NDArray[np.float64],
+    tx_count: int,
+    rx_count: int,
+    criterion: str = "trace",
+    fusion: str = "centralized",
+    sinr_index: NDArray[np.float64] | None = None,
+    sinr_weight: float = 0.0,
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """The super arm of each trial with the smallest criterion: masks (B, M), (B, N).
+
+    Exact over all super arms up to :data:`MAX_ENUMERATED_SUPER_ARMS`, greedy plus swap
+    search (:func:`greedy_super_arm`) beyond. With ``sinr_weight`` ``w`` in (0, 1] and a
+    fused SINR index ``sinr_index`` (B, M, N), it minimises the scalarised score
+    ``(1 - w) c(A) - w s(A)`` instead, where ``c`` is the criterion and ``s`` the super arm's
+    index sum ``sum_{(m, n) in A} I[m, n]``, each rescaled to [0, 1] by its range over the
+    trial's super arms (``w = 1``: the index maximiser; exact enumeration only).
+    """
+    num_tx, num_rx = information.shape[2:4]
+    if super_arm_count(num_tx, num_rx, tx_count, rx_count) > MAX_ENUMERATED_SUPER_ARMS:
+        if sinr_weight > 0:
+            raise ValueError(
+                f"sinr_weight > 0 scores every super arm, so it needs at most {MAX_ENUMERATED_SUPER_ARMS:,} "
+                f"of them; this layout has {super_arm_count(num_tx, num_rx, tx_count, rx_count):,}"
+            )
+        return greedy_super_arm(position_cov, information, weights, tx_count, rx_count, criterion, fusion)
+    tx_masks, rx_masks = all_super_arms(num_tx, num_rx, tx_count, rx_count)
+    scores = super_arm_criterion(position_cov, information, tx_masks, rx_masks, weights, criterion, fusion)
+    if sinr_weight > 0:
+        if sinr_index is None:
+            raise ValueError("sinr_weight > 0 needs the SINR index of the channels (sinr_index)")
+        value = np.einsum("am,bmn,an->ba", tx_masks.astype(float), sinr_index, rx_masks.astype(float))
+        scores = (1.0 - sinr_weight) * _unit_range(scores) - sinr_weight * _unit_range(value)
+    best = np.argmin(scores, axis=1)
+    return tx_masks[best], rx_masks[best]
+
+
+def _unit_range(scores: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Each row rescaled to [0, 1] by its range (a constant row becomes 0)."""
+    low = scores.min(axis=1, keepdims=True)
+    span = scores.max(axis=1, keepdims=True) - low
+    return np.divide(scores - low, span, out=np.zeros_like(scores), where=span > 0)
 
 
 def greedy_super_arm(

@@ -1,0 +1,125 @@
+"""Tracking-UCB: MG-CRB-CL's SINR learning, selecting the super arm that tracks best."""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from mimo_radar_env import Scenario
+from mimo_radar_env.core.model import RadarModel
+from mimo_radar_env.core.superarm import super_arm_count
+from mimo_radar_env.tracking.information import (
+    CRITERIA,
+    MAX_ENUMERATED_SUPER_ARMS,
+    channel_information,
+    select_for_tracking,
+)
+
+from .base import Observation, check_parameter
+from .mg_crb_cl import MGCRBCL
+
+#: The observation key the policy scores super arms with (env option ``prediction_covariance``).
+PREDICTED_COVARIANCE = "track_pred_pos_cov"
+
+
+class TrackingUCB(MGCRBCL):
+    """Tracking-UCB: learns the channels' SINR as MG-CRB-CL does and selects for tracking.
+
+    It keeps MG-CRB-CL's estimates (eq16's geometric prediction ``Y_bar``, eq14's update,
+    eq15's counts) and its optimism, ``Y_up = Y_bar + sqrt(beta ln t / d)`` (eq18), but
+    instead of maximising the summed index it turns ``Y_up`` into a measurement quality
+    ``lambda_hat = eq32(Y_up)`` and picks the super arm with the smallest predicted posterior
+    position error (docs/model.md, section 14): ``sum_k Omega_k trace`` (or ``log det``) of the
+    position block of ``(P_bar^-1 + sum_{(m, n) in A} H_mn' R_mn^-1 H_mn)^-1``, where
+    ``R_mn = Sigma0 / lambda_hat_mn``, ``H_mn`` is eq6's Jacobian at the tracker's prediction
+    (observation ``track_pred``) and ``P_bar`` the tracker's predicted position covariance
+    (observation ``track_pred_pos_cov``: make the env with ``prediction_covariance=True``).
+    It reads no truth. Optimism makes it probe channels it knows little about: a larger
+    SINR means a smaller predicted error.
+
+    Parameters
+    ----------
+    alpha, alpha_bar, beta : float
+        MG-CRB-CL's eq16 weight (0.998), eq14 step (0.2) and eq18 exploration constant (2).
+    criterion : {"trace", "logdet"}
+        The predicted position MSE (m^2) or the log-determinant of the position covariance.
+    fusion : {"average", "centralized"}
+        The fusion whose posterior is predicted (as the env's ``fusion`` option; the harness
+        passes the run's). ``"average"`` averages the channels' single-channel posteriors
+        (eq22), ``"centralized"`` adds their information.
+    lambda_scale : {"linear", "db"}
+        The scale of eq32's SINR-to-quality mapping (as the env's option; the harness passes
+        the run's).
+    sinr_weight : float
+        In [0, 1]: 0 selects for tracking only; ``w`` > 0 minimises ``(1 - w) c(A) - w s(A)``,
+        the criterion ``c`` and MG-CRB-CL's index sum ``s`` (eq34), each rescaled to [0, 1]
+        over the step's super arms; 1 is MG-CRB-CL with exact search. Needs at most
+        5,000 super arms when above 0.
+    seed : int, optional
+        Unused (the policy draws nothing); accepted like every agent's.
+    """
+
+    name = "tracking-ucb"
+    default_solver = "exact"
+    env_option_params: ClassVar[tuple[str, ...]] = ("fusion", "lambda_scale")
+    observation_options: ClassVar[dict[str, Any]] = {"prediction_covariance": True}
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        alpha: float = 0.998,
+        alpha_bar: float = 0.2,
+        beta: float = 2.0,
+        criterion: str = "trace",
+        fusion: str = "average",
+        lambda_scale: str = "db",
+        sinr_weight: float = 0.0,
+    ) -> None:
+        super().__init__(scenario, seed, alpha, alpha_bar, beta, solver="exact")
+        if criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+        if fusion not in ("average", "centralized"):
+            raise ValueError(f"fusion must be 'average' or 'centralized', got {fusion!r}")
+        if lambda_scale not in ("linear", "db"):
+            raise ValueError(f"lambda_scale must be 'linear' or 'db', got {lambda_scale!r}")
+        check_parameter("sinr_weight", sinr_weight, 0.0, 1.0)
+        sc = self.scenario
+        count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        if sinr_weight > 0 and count > MAX_ENUMERATED_SUPER_ARMS:
+            raise ValueError(
+                f"sinr_weight > 0 scores every super arm: at most {MAX_ENUMERATED_SUPER_ARMS:,}, "
+                f"this layout has {count:,}"
+            )
+        self.criterion, self.fusion, self.lambda_scale = criterion, fusion, lambda_scale
+        self.sinr_weight = float(sinr_weight)
+        self.model = RadarModel.from_scenario(sc)
+
+    def _reset(self, obs: Observation) -> None:
+        if PREDICTED_COVARIANCE not in obs:
+            raise ValueError(
+                f"{self.name} scores super arms with the tracker's predicted covariance: "
+                "make the env with prediction_covariance=True"
+            )
+        super()._reset(obs)
+
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        self.predicted = self.predict(obs)  # eq16
+        optimistic = self.predicted + self.bonus(self.beta)[:, None]  # eq18, per target
+        variance = self.model.measurement_variance(self.model.quality(optimistic, scale=self.lambda_scale))
+        positions = np.asarray(obs["track_pred"])[..., [0, 2]]
+        information = channel_information(positions, self.model.tx, self.model.rx, variance)
+        tx, rx = select_for_tracking(
+            np.asarray(obs[PREDICTED_COVARIANCE]),
+            information,
+            self.weights,
+            self.tx_count,
+            self.rx_count,
+            self.criterion,
+            self.fusion,
+            sinr_index=self.fuse(optimistic) if self.sinr_weight > 0 else None,
+            sinr_weight=self.sinr_weight,
+        )
+        return self.actions_from_masks(tx, rx)

@@ -1,0 +1,175 @@
+"""tracking-ucb: MG-CRB-CL's learning, selecting for tracking; against direct computations."""
+
+import itertools
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import agents
+from benchmarks.harness import make_policy, policy_env_options
+from mimo_radar_env import EnvOptions, RadarModel, load_scenario
+from mimo_radar_env.core.geometry import bistatic_measurement
+
+
+def _jacobian(position, tx, rx):
+    """Finite-difference Jacobian (2 x 2) of eq6's range sum and azimuth in position."""
+    jac = np.zeros((2, 2))
+    for i in range(2):
+        step = np.zeros(2)
+        step[i] = 1e-3
+        jac[:, i] = (
+            bistatic_measurement(position + step, tx, rx) - bistatic_measurement(position - step, tx, rx)
+        ) / 2e-3
+    return jac
+
+
+def _quality_db(sinr, s_min, peak):
+    """eq32 on the dB scale, written out: (S_dB - S_min,dB) / (S_max,dB - S_min,dB) + 0.2 in [0.2, 1.2]."""
+    lam = (10 * np.log10(sinr) - 10 * np.log10(s_min)) / (10 * np.log10(peak) - 10 * np.log10(s_min)) + 0.2
+    return np.clip(lam, 0.2, 1.2)
+
+
+def _brute_force(agent, obs, model, fusion):
+    """Every super arm scored one by one: optimistic SINR -> lambda -> R -> information -> posterior."""
+    sc = agent.scenario
+    optimistic = agent.predicted[0] + np.sqrt(agent.beta * np.log(agent.t) / agent.counts[0])  # eq18
+    sigma0 = np.diag(sc.measurement_covariance)
+    scores = {}
+    for tx_idx in itertools.combinations(range(sc.num_tx), sc.tx_per_step):
+        for rx_idx in itertools.combinations(range(sc.num_rx), sc.rx_per_step):
+            total = 0.0
+            for k in range(sc.num_targets):
+                position = obs["track_pred"][0, k][[0, 2]]
+                prior = np.linalg.inv(obs["track_pred_pos_cov"][0, k])
+                gains = []
+                for m in tx_idx:
+                    for n in rx_idx:
+                        lam = _quality_db(optimistic[k, m, n], model.min_sinr[k], sc.peak_sinr)
+                        jac = _jacobian(position, sc.tx_positions[m], sc.rx_positions[n])
+                        gains.append(jac.T @ np.diag(lam / sigma0) @ jac)
+                if fusion == "centralized":
+                    posterior = np.linalg.inv(prior + sum(gains))
+                else:  # eq22: the mean of the single-channel posteriors
+                    posterior = np.mean([np.linalg.inv(prior + g) for g in gains], axis=0)
+                total += sc.weights[k] * np.trace(posterior)
+            scores[(tx_idx, rx_idx)] = total
+    return min(scores, key=scores.get)
+
+
+@pytest.mark.parametrize("fusion", ["centralized", "average"])
+def test_selection_is_the_brute_force_minimum_with_optimistic_sinr(fusion):
+    env = gym.make("MimoRadarSelect-v1", horizon=30, fusion=fusion, prediction_covariance=True)
+    sc = env.unwrapped.scenario
+    agent = agents.make_agent("tracking-ucb", sc, fusion=fusion, lambda_scale="db")
+    model = RadarModel.from_scenario(sc)
+    obs, _ = env.reset(seed=2)
+    agent.reset(obs)
+    for _ in range(8):
+        action = agent.act(obs)
+        batch = {key: np.asarray(value)[None] for key, value in obs.items()}
+        chosen = (tuple(np.flatnonzero(action[: sc.num_tx])), tuple(np.flatnonzero(action[sc.num_tx :])))
+        assert chosen == _brute_force(agent, batch, model, fusion)
+        obs, reward, *_ = env.step(action)
+        agent.update(obs, reward)
+
+
+def test_sinr_weight_one_is_mg_crb_cl_with_exact_search():
+    venv = gym.make_vec(
+        "MimoRadarSelect-v1", num_envs=4, vectorization_mode="vector_entry_point", prediction_covariance=True
+    )
+    tucb = agents.make_agent("tracking-ucb", venv.scenario, sinr_weight=1.0)
+    mg = agents.make_agent("mg-crb-cl", venv.scenario, solver="exact")
+    obs, _ = venv.reset(seed=0)
+    tucb.reset(obs)
+    mg.reset(obs)
+    for _ in range(40):
+        action = mg.act(obs)
+        np.testing.assert_array_equal(tucb.act(obs), action)
+        obs, reward, *_ = venv.step(action)
+        mg.update(obs, reward)
+        tucb.update(obs, reward)
+
+
+class _TruthWithheld(gym.Wrapper):
+    """Gives the agent nothing but observations: info is emptied and the oracles raise."""
+
+    def step(self, action):
+        obs, reward, terminated, truncated, _ = self.env.step(action)
+        return obs, reward, terminated, truncated, {}
+
+    def reset(self, **kwargs):
+        obs, _ = self.env.reset(**kwargs)
+        return obs, {}
+
+
+def test_it_reads_no_truth():
+    def run(withhold):
+        env = gym.make("MimoRadarSelect-v1", horizon=60, prediction_covariance=True)
+        if withhold:
+
+            def refuse(*args, **kwargs):
+                raise AssertionError("the policy read the truth")
+
+            env.unwrapped.engine.oracle_action = refuse
+            env.unwrapped.engine.tracking_oracle_action = refuse
+            env = _TruthWithheld(env)
+        agent = agents.make_agent("tracking-ucb", env.unwrapped.scenario)
+        assert not agent.needs_oracle
+        obs, info = env.reset(seed=4)
+        assert (info == {}) == withhold
+        agent.reset(obs)
+        actions = []
+        for _ in range(60):
+            actions.append(agent.act(obs))
+            obs, reward, *_ = env.step(actions[-1])
+            agent.update(obs, reward)
+        return np.array(actions)
+
+    np.testing.assert_array_equal(run(withhold=True), run(withhold=False))
+
+
+def test_it_needs_the_predicted_covariance_and_checks_its_parameters():
+    env = gym.make("MimoRadarSelect-v1")
+    obs, _ = env.reset(seed=0)
+    with pytest.raises(ValueError, match="prediction_covariance=True"):
+        agents.make_agent("tracking-ucb", env.unwrapped.scenario).reset(obs)
+    for params, message in [
+        ({"sinr_weight": 1.5}, r"sinr_weight must be in \[0, 1\], got 1.5"),
+        ({"criterion": "max"}, r"criterion must be one of \['trace', 'logdet'\], got 'max'"),
+        ({"fusion": "mean"}, r"fusion must be 'average' or 'centralized', got 'mean'"),
+        ({"lambda_scale": "log"}, r"lambda_scale must be 'linear' or 'db', got 'log'"),
+    ]:
+        with pytest.raises(ValueError, match=message):
+            agents.make_agent("tracking-ucb", "paper-1-v1", **params)
+    with pytest.raises(ValueError, match="prediction_covariance=True observes .* needs tracking=True"):
+        EnvOptions(tracking=False, prediction_covariance=True)
+
+
+def test_the_harness_gives_it_the_runs_fusion_scale_and_observation():
+    options = EnvOptions.for_version("v0", fusion="centralized").to_dict()
+    sc = load_scenario("paper-1")
+    agent = make_policy("tracking-ucb", sc, {}, seed=0, options=options)
+    assert (agent.fusion, agent.lambda_scale) == ("centralized", "linear")
+    assert policy_env_options(agent, options) == {**options, "prediction_covariance": True}
+    given = make_policy("tracking-ucb", sc, {"fusion": "average"}, seed=0, options=options)
+    assert given.fusion == "average"  # a parameter given wins over the run's option
+    ucb = make_policy("ucb1", sc, {}, seed=0, options=options)
+    assert policy_env_options(ucb, options) == options
+
+
+def test_the_observation_key_is_the_trackers_predicted_position_covariance():
+    for version in ("v0", "v1"):
+        env = gym.make(f"MimoRadarSelect-{version}", prediction_covariance=True).unwrapped
+        plain = gym.make(f"MimoRadarSelect-{version}").unwrapped
+        obs, _ = env.reset(seed=3)
+        ref, _ = plain.reset(seed=3)
+        assert env.observation_space.contains(obs) and "track_pred_pos_cov" not in plain.observation_space
+        for _ in range(5):
+            full = env.engine.tracker.predicted_covariance()[0]
+            np.testing.assert_array_equal(obs["track_pred_pos_cov"], full[:, [0, 2]][:, :, [0, 2]])
+            action = np.asarray(env.oracle_action()).reshape(-1)
+            obs, *_ = env.step(action)
+            ref, *_ = plain.step(action)
+            for key in ref:  # the option changes no number of the env
+                np.testing.assert_array_equal(obs[key], ref[key])
