@@ -1,12 +1,14 @@
 """Agents by name: ``make_agent("mg-crb-cl", scenario, **params)``.
 
 A policy of a benchmark run is written ``NAME`` or ``NAME:ARGUMENT``; the argument goes to
-the agent's registered ``argument`` parameter (a trained PPO model: ``ppo:runs/ppo/model.zip``).
+the agent's registered ``argument`` parameter (a trained PPO model: ``ppo:runs/ppo/model.zip``;
+tracking-ucb's SINR weight: ``tracking-ucb:0.5``).
 """
 
 from __future__ import annotations
 
 import inspect
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -34,16 +36,23 @@ class AgentSpec:
     preset: dict[str, Any] = field(default_factory=dict)
     summary: str = ""
     argument: str | None = None
+    argument_type: Callable[[str], Any] = str
 
 
 _REGISTRY: dict[str, AgentSpec] = {}
 
 
 def register_agent(
-    name: str, cls: type[Agent], summary: str = "", argument: str | None = None, **preset: Any
+    name: str,
+    cls: type[Agent],
+    summary: str = "",
+    argument: str | None = None,
+    argument_type: Callable[[str], Any] = str,
+    **preset: Any,
 ) -> None:
-    """Register an agent class (with preset parameters) under ``name``."""
-    _REGISTRY[name] = AgentSpec(cls, preset, summary, argument)
+    """Register an agent class (with preset parameters) under ``name``; ``NAME:ARGUMENT`` sets
+    its parameter ``argument`` to ``argument_type(ARGUMENT)``."""
+    _REGISTRY[name] = AgentSpec(cls, preset, summary, argument, argument_type)
 
 
 def _first_line(cls: type) -> str:
@@ -62,12 +71,15 @@ for _cls in (
     RecencyBasedExploration,
     BestAgent,
     BestTrackingAgent,
-    TrackingUCB,
     RandomAgent,
     FixedAgent,
 ):
     register_agent(_cls.name, _cls, _first_line(_cls))
 register_agent(PPOAgent.name, PPOAgent, _first_line(PPOAgent), argument="path")
+# tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run
+register_agent(
+    TrackingUCB.name, TrackingUCB, _first_line(TrackingUCB), argument="sinr_weight", argument_type=float
+)
 for _name, (_tx, _rx) in PAPER_FIXED.items():
     register_agent(
         _name,
@@ -122,7 +134,8 @@ def _spec(name: str) -> AgentSpec:
 
 
 def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
-    """``"ppo:runs/a/model.zip"`` -> ``("ppo", {"path": "runs/a/model.zip"})``;
+    """``"ppo:runs/a/model.zip"`` -> ``("ppo", {"path": "runs/a/model.zip"})``,
+    ``"tracking-ucb:0.5"`` -> ``("tracking-ucb", {"sinr_weight": 0.5})``;
     ``"ucb1"`` -> ``("ucb1", {})``."""
     name, sep, argument = policy.partition(":")
     spec = _spec(name)
@@ -134,7 +147,14 @@ def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
         raise ValueError(
             f"{policy!r}: give the {spec.argument} after the colon ({name}:{spec.argument.upper()})"
         )
-    return name, {spec.argument: argument}
+    try:
+        value = spec.argument_type(argument)
+    except ValueError:
+        raise ValueError(
+            f"{policy!r}: the {spec.argument} after the colon must be a {spec.argument_type.__name__}, "
+            f"got {argument!r}"
+        ) from None
+    return name, {spec.argument: value}
 
 
 def make_agent(name: str, scenario: Scenario | str, **params: Any) -> Agent:

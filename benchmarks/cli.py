@@ -249,6 +249,29 @@ def build_parser() -> argparse.ArgumentParser:
     _add_agent_param(claims, over=OVER_READING)
     _add_run_options(claims)
 
+    tracking = sub.add_parser(
+        "tracking",
+        help="the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets",
+        description="Run best, best-tracking, mg-crb-cl, tracking-ucb (and its SINR weights "
+        "0.25, 0.5, 0.75), ucb1, epsilon-greedy, fix1, fix2 and random on the paper scenarios under "
+        "both fusions (into OUT/<scenario>-<fusion>, resumable); judge the targets on paired "
+        "differences; write OUT/targets.md, OUT/targets.json and OUT/tradeoff_paper-N.png.",
+    )
+    tracking.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
+    tracking.add_argument(
+        "--fusions", default="average,centralized", help="fusions to run (default average,centralized)"
+    )
+    tracking.add_argument(
+        "--ppo",
+        default=None,
+        metavar="PATTERN",
+        help="also run a trained PPO: its model path with {scenario} and {fusion} filled in, e.g. "
+        "runs/ppo-info/paper-{scenario}-{fusion}/model.zip",
+    )
+    _add_agent_param(tracking, over=OVER_READING)
+    _add_run_options(tracking)
+    tracking.set_defaults(trials=200)
+
     calibrate = sub.add_parser(
         "calibrate-layout",
         help="search station layouts under which the most of the paper's claims hold",
@@ -372,24 +395,59 @@ def _claims(args: argparse.Namespace) -> int:
     from mimo_radar_env import paper_scenario
 
     from . import claims
-    from .harness import HarnessError
 
     out = Path(args.out)
     runs = [Path(r) for r in args.runs]
     if not runs:
-        try:
-            numbers = [int(s) for s in args.scenarios.split(",")]
-        except ValueError:
-            raise HarnessError(
-                f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}"
-            ) from None
-        if not numbers or not set(numbers) <= {1, 2, 3}:
-            raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {args.scenarios!r}")
-        names = [paper_scenario(n, args.env_version) for n in numbers]
+        names = [paper_scenario(n, args.env_version) for n in _paper_numbers(args.scenarios)]
         runs = _study_runner(args)(names, out, args.trials)
     results = claims.judge_studies(runs, args.seed)
     claims.write_scorecard(results, out, claims.describe_studies(runs))
     print((out / "claims.md").read_text())
+    return 0
+
+
+def _paper_numbers(text: str) -> list[int]:
+    from .harness import HarnessError
+
+    try:
+        numbers = [int(s) for s in text.split(",")]
+    except ValueError:
+        raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {text!r}") from None
+    if not numbers or not set(numbers) <= {1, 2, 3}:
+        raise HarnessError(f"--scenarios must list paper scenarios 1, 2, 3, got {text!r}")
+    return numbers
+
+
+def _tracking(args: argparse.Namespace) -> int:
+    from . import tracking
+    from .harness import HarnessError
+
+    if hasattr(args, "fusion"):
+        raise HarnessError("the tracking study runs each of --fusions; --fusion does not apply")
+    fusions = [f.strip() for f in args.fusions.split(",") if f.strip()]
+    folders = tracking.run_tracking_studies(
+        args.out,
+        scenarios=_paper_numbers(args.scenarios),
+        fusions=fusions,
+        trials=args.trials,
+        options=env_options_from(args),
+        agent_params=study_agent_params(args.env_version, args.agent_param),
+        ppo=args.ppo,
+        env_version=args.env_version,
+        steps=args.steps,
+        seed=args.seed,
+        shard_size=args.shard_size,
+        workers=args.workers if args.workers is not None else (os.cpu_count() or 1),
+        backend=args.backend,
+        address=args.address,
+        progress=not args.quiet,
+        figures=not args.no_figures,
+    )
+    path = tracking.write_targets(tracking.judge_targets(folders), args.out)
+    if not args.no_figures:
+        tracking.plot_tradeoff(folders, args.out)
+    print(path.read_text())
     return 0
 
 
@@ -487,6 +545,8 @@ def _dispatch(args: argparse.Namespace) -> int:
         return 0
     if args.command == "claims":
         return _claims(args)
+    if args.command == "tracking":
+        return _tracking(args)
     if args.command == "calibrate-layout":
         return _calibrate(args)
     if args.command == "compare-claims":

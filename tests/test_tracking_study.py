@@ -1,0 +1,70 @@
+"""The tracking study's command: its runs, targets and trade-off figure, against its summaries."""
+
+import json
+import re
+
+import pytest
+
+from benchmarks import tracking
+from benchmarks.cli import main
+
+
+@pytest.fixture(scope="module")
+def study(tmp_path_factory):
+    out = tmp_path_factory.mktemp("tracking")
+    args = ["tracking", "--out", str(out), "--scenarios", "2", "--fusions", "centralized"]
+    args += ["--trials", "4", "--steps", "15", "--shard-size", "2", "--workers", "1", "--quiet"]
+    assert main(args) == 0
+    return out
+
+
+def test_it_runs_every_policy_and_writes_the_targets_and_figure(study, capsys):
+    folder = study / "paper-2-v1-centralized"
+    summary = json.loads((folder / "summary.json").read_text())
+    assert list(summary["policies"]) == list(tracking.TRACKING_POLICIES)
+    assert summary["env_options"]["fusion"] == "centralized" and summary["trials"] == 4
+    config = json.loads((folder / "config.json").read_text())
+    assert config["agent_params"] == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}  # v1's reading
+    assert (study / "tradeoff_paper-2.png").stat().st_size > 0
+    assert "best-tracking has a lower ARMSE" in (study / "targets.md").read_text()
+
+
+def test_targets_follow_from_the_summary(study):
+    (result,) = json.loads((study / tracking.TARGETS_FILE).read_text())
+    summary = json.loads((study / "paper-2-v1-centralized" / "summary.json").read_text())
+    rows = summary["policies"]
+    assert (result["scenario"], result["fusion"]) == (2, "centralized")
+    judged = result["best_tracking_lower"] + result["tracking_ucb_lower"]
+    assert [(c["a"], c["b"]) for c in judged] == [("best-tracking", p) for p in tracking.SINR_DRIVEN] + [
+        ("tracking-ucb", "best"),
+        ("tracking-ucb", "mg-crb-cl"),
+    ]
+    for c in judged:
+        # the paired estimate is the difference of the two ARMSEs (per-trial float32 vs float64 sums)
+        assert c["difference"] == pytest.approx(rows[c["a"]]["armse"] - rows[c["b"]]["armse"], abs=1e-4)
+        assert c["ci"][0] <= c["ci"][1] and c["holds"] == (c["ci"][1] < 0)
+    for policy, cost in result["cost"].items():
+        assert cost["ratio"] == pytest.approx(rows[policy]["wall_s"] / rows["mg-crb-cl"]["wall_s"])
+        assert cost["holds"] == (cost["ratio"] <= tracking.COST_LIMIT)
+    assert result["regret"]["tracking-ucb"]["value"] == rows["tracking-ucb"]["final_regret"]
+
+
+def test_paired_reads_either_order():
+    summary = {"paired_differences": {"a - b": {"armse": {"estimate": 1.0, "ci": [0.5, 2.0]}}}}
+    assert tracking.paired(summary, "a", "b", "armse") == (1.0, [0.5, 2.0])
+    assert tracking.paired(summary, "b", "a", "armse") == (-1.0, [-2.0, -0.5])
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (["--fusion", "average"], "--fusion does not apply"),
+        (["--fusions", "mean"], r"fusions must be among \['average', 'centralized'\]"),
+        (["--scenarios", "4"], "--scenarios must list paper scenarios 1, 2, 3"),
+    ],
+)
+def test_bad_arguments_are_named(tmp_path, capsys, extra, message):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["tracking", "--out", str(tmp_path / "x"), "--trials", "2", "--quiet", *extra])
+    assert exit_info.value.code == 2
+    assert re.search(message, capsys.readouterr().err)
