@@ -26,6 +26,7 @@ NON_DEFAULT = {
     "truth": ("shared", ["--truth", "shared"]),
     "measurements": (True, ["--measurements"]),
     "reward": ("information", ["--reward", "information"]),
+    "prediction_covariance": (True, ["--prediction-covariance"]),
 }
 #: A bad value of every option, as a CLI argument and as a Python value.
 BAD = {
@@ -39,6 +40,7 @@ BAD = {
     "truth": ("--truth", "per-run", "per-run"),
     "measurements": (None, None, 1),  # a switch: no bad CLI value
     "reward": ("--reward", "regret", "regret"),
+    "prediction_covariance": (None, None, "no"),  # a switch: no bad CLI value
 }
 
 
