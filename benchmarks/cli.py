@@ -444,7 +444,7 @@ def _tracking(args: argparse.Namespace) -> int:
         progress=not args.quiet,
         figures=not args.no_figures,
     )
-    path = tracking.write_targets(tracking.judge_targets(folders), args.out)
+    path = tracking.write_targets(tracking.judge_targets(folders), args.out, folders)
     if not args.no_figures:
         tracking.plot_tradeoff(folders, args.out)
     print(path.read_text())

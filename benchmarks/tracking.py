@@ -237,12 +237,46 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_targets(results: list[dict[str, Any]], out: str | Path) -> Path:
+def studies_markdown(folders: dict[tuple[int, str], Path]) -> str:
+    """Per scenario, every policy's ARMSE, bound, final regret and mean SINR under each fusion."""
+    lines = ["## The studies", ""]
+    for number in sorted({n for n, _ in folders}):
+        fusions = [f for n, f in folders if n == number]
+        summaries = {
+            f: json.loads((Path(folders[(number, f)]) / "summary.json").read_text()) for f in fusions
+        }
+        head = ["policy"]
+        for fusion in fusions:
+            head += [f"ARMSE, {fusion} (m)", f"bound, {fusion} (m)", f"final regret, {fusion}"]
+        head.append(f"mean SINR, {fusions[0]} (dB)")
+        lines += [f"### paper-{number}", "", "| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        for policy in summaries[fusions[0]]["policies"]:
+            label = "ppo (information reward)" if policy.startswith("ppo:") else policy
+            cells = [label]
+            for fusion in fusions:
+                row = summaries[fusion]["policies"][policy]
+                cells += [
+                    _interval(row["armse"], row["ci"]["armse"]),
+                    _interval(row["bound"], row["ci"]["bound"]),
+                    _interval(row["final_regret"], row["ci"]["final_regret"], "{:.0f}"),
+                ]
+            row = summaries[fusions[0]]["policies"][policy]
+            cells.append(_interval(row["mean_sinr_db"], row["ci"]["mean_sinr_db"], "{:.2f}"))
+            lines.append("| " + " | ".join(cells) + " |")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def write_targets(
+    results: list[dict[str, Any]], out: str | Path, folders: dict[tuple[int, str], Path] | None = None
+) -> Path:
+    """``out/targets.json`` and ``out/targets.md`` (with the studies' summary tables when
+    ``folders`` are given)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / TARGETS_FILE).write_text(json.dumps(results, indent=2, allow_nan=False))
     path = out / "targets.md"
-    path.write_text(targets_markdown(results))
+    path.write_text(targets_markdown(results) + ("\n" + studies_markdown(folders) if folders else ""))
     return path
 
 

@@ -100,6 +100,7 @@ def test_calibrate_adopts_only_a_layout_that_beats_the_reference(tmp_path):
     pool = calibration.candidates(40, seed=0)
     passing = [c.index for c in pool[1:] if calibration.constraint_failure(c) is None]
     better = passing[0]
+
     def calibrate(out, run):
         sizes = dict(count=40, screen=len(passing), screen_trials=3, final=2, final_trials=7)
         return calibration.calibrate(out, run, **sizes, log=lambda _: None)

@@ -26,7 +26,12 @@ def test_it_runs_every_policy_and_writes_the_targets_and_figure(study, capsys):
     config = json.loads((folder / "config.json").read_text())
     assert config["agent_params"] == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}  # v1's reading
     assert (study / "tradeoff_paper-2.png").stat().st_size > 0
-    assert "best-tracking has a lower ARMSE" in (study / "targets.md").read_text()
+    text = (study / "targets.md").read_text()
+    assert "best-tracking has a lower ARMSE" in text
+    row = summary["policies"]["tracking-ucb"]
+    line = next(x for x in text.splitlines() if x.startswith("| tracking-ucb | "))
+    assert f"{row['armse']:.3f} [{row['ci']['armse'][0]:.3f}, {row['ci']['armse'][1]:.3f}]" in line
+    assert f"{row['bound']:.3f} [{row['ci']['bound'][0]:.3f}, {row['ci']['bound'][1]:.3f}]" in line
 
 
 def test_targets_follow_from_the_summary(study):
