@@ -25,6 +25,22 @@ def _figure(width: float = 7.0, height: float = 4.0):
     return fig
 
 
+def palette(count: int) -> list[tuple[float, float, float]]:
+    """``count`` distinct colours: matplotlib's tab10, or tab20's dark shades then its light
+    ones beyond ten (so no two policies of a figure share a colour up to twenty)."""
+    from matplotlib import colormaps
+
+    if count <= 10:
+        return list(colormaps["tab10"].colors[:count])
+    pairs = colormaps["tab20"].colors
+    return [pairs[2 * (i % 10) + i // 10 % 2] for i in range(count)]
+
+
+def short_label(policy: str, width: int = 28) -> str:
+    """A legend label: the policy, its middle elided when longer than ``width``."""
+    return policy if len(policy) <= width else f"{policy[:10]}...{policy[-(width - 13) :]}"
+
+
 def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path) -> list[Path]:
     """Write sinr.png, regret.png, rmse.png (each curve with its 95 % band over trials),
     selection_<policy>.png and geometry.png."""
@@ -37,6 +53,8 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     }
     n = config.trials
 
+    colours = palette(len(totals))
+
     def draw(ax: Any, curve: NDArray, band_curve: Any) -> Any:
         line = ax.plot(t, curve, lw=1)[0]
         low, high = uncertainty.band(band_curve, n, config.seed)
@@ -45,6 +63,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
 
     fig = _figure()
     ax = fig.add_subplot()
+    ax.set_prop_cycle(color=colours)
     for policy, total in totals.items():
         m = trial_metrics[policy]
         line = draw(
@@ -52,7 +71,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
             metrics.mean_sinr_db_curve(total["expected"], n, scenario.num_channels_per_step),
             lambda w, m=m: 10.0 * np.log10(w @ m.reward_curve_per_trial / m.channels),
         )
-        line.set_label(policy)
+        line.set_label(short_label(policy))
     ax.set(xlabel="time (s)", ylabel="average SINR (dB)", title=f"{scenario.name}: average SINR, 95 % bands")
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
@@ -60,6 +79,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
 
     fig = _figure()
     ax = fig.add_subplot()
+    ax.set_prop_cycle(color=colours)
     for policy, total in totals.items():
         m = trial_metrics[policy]
         line = draw(
@@ -67,7 +87,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
             metrics.regret_curve(total["optimal"], total["expected"], n),
             lambda w, m=m: w @ m.regret_curve_per_trial,
         )
-        line.set_label(policy)
+        line.set_label(short_label(policy))
     ax.set(
         xlabel="time (s)",
         ylabel="cumulative SINR regret",
@@ -81,6 +101,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     fig = _figure(7.0, 3.0 * K) if config.options.tracking else None
     for k in range(K if fig is not None else 0):
         ax = fig.add_subplot(K, 1, k + 1)
+        ax.set_prop_cycle(color=colours)
         for policy, total in totals.items():
             m = trial_metrics[policy]
             line = draw(
@@ -88,15 +109,14 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
                 metrics.rmse_curve(total["squared_error"], n)[:, k],
                 lambda w, m=m, k=k: m.rmse_curve(w, k),
             )
-            line.set_label(policy)
+            line.set_label(short_label(policy))
             if m.bounded:  # the floor the policy's own selections allow
                 bound = metrics.rmse_curve(total["bound_squared"], n)[:, k]
                 ax.plot(t, bound, lw=0.8, ls="--", color=line.get_color())
         ax.set(
             xlabel="time (s)",
             ylabel="RMSE (m)",
-            title=f"{scenario.name}: position RMSE (solid, 95 % bands) and its bound (dashed), "
-            f"target {k + 1}",
+            title=f"{scenario.name}, target {k + 1}: RMSE (95 % bands), bound (dashed)",
         )
         ax.set_yscale("log")
         ax.grid(alpha=0.3)

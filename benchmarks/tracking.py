@@ -237,6 +237,15 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _same_policy(summary: dict[str, Any], policy: str) -> dict[str, Any]:
+    """``policy``'s row of a summary; a PPO's model differs between fusions, so ``ppo:...`` is
+    the summary's PPO row."""
+    rows = summary["policies"]
+    if policy.startswith("ppo:"):
+        return next(row for name, row in rows.items() if name.startswith("ppo:"))
+    return rows[policy]
+
+
 def studies_markdown(folders: dict[tuple[int, str], Path]) -> str:
     """Per scenario, every policy's ARMSE, bound, final regret and mean SINR under each fusion."""
     lines = ["## The studies", ""]
@@ -254,7 +263,7 @@ def studies_markdown(folders: dict[tuple[int, str], Path]) -> str:
             label = "ppo (information reward)" if policy.startswith("ppo:") else policy
             cells = [label]
             for fusion in fusions:
-                row = summaries[fusion]["policies"][policy]
+                row = _same_policy(summaries[fusion], policy)
                 cells += [
                     _interval(row["armse"], row["ci"]["armse"]),
                     _interval(row["bound"], row["ci"]["bound"]),
@@ -289,9 +298,10 @@ def _error_bar(value: float, ci: list[float]) -> list[list[float]]:
 def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list[Path]:
     """``tradeoff_paper-N.png``: final SINR regret against ARMSE for every policy, one panel per
     fusion, with 95 % intervals on both axes; tracking-ucb's trade-off points joined by a line."""
-    from matplotlib import colormaps
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+
+    from .plots import palette
 
     written = []
     for number in sorted({n for n, _ in folders}):
@@ -302,7 +312,7 @@ def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list
             summary = json.loads((Path(folders[(number, fusion)]) / "summary.json").read_text())
             ax = fig.add_subplot(1, len(fusions), i + 1)
             curve = []
-            colours = colormaps["tab20"].colors
+            colours = palette(len(summary["policies"]))
             for j, (policy, row) in enumerate(summary["policies"].items()):
                 x, y = row["final_regret"], row["armse"]
                 xerr, yerr = _error_bar(x, row["ci"]["final_regret"]), _error_bar(y, row["ci"]["armse"])
@@ -318,7 +328,7 @@ def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list
                     capsize=2,
                     lw=0.8,
                     label=label,
-                    color=colours[(2 * j) % 20 + (2 * j) // 20 % 2],
+                    color=colours[j],
                 )
                 ax.annotate(
                     label.split(" ")[0], (x, y), fontsize=6, xytext=(3, 3), textcoords="offset points"
