@@ -270,3 +270,26 @@ def test_the_bound_is_below_the_rmse_of_a_centralised_tracker_with_true_noise():
     assert np.mean(rmse[later]) >= 0.97 * np.mean(bound[later])
     assert np.mean(rmse[later]) <= 2.0 * np.mean(bound[later])  # and the tracker is not far from it
     print(f"time-averaged RMSE {np.mean(rmse[later]):.3f} m, bound {np.mean(bound[later]):.3f} m")
+
+
+def test_bound_of_a_static_target_is_the_closed_form_posterior():
+    """Linear case: a target that does not move (F = I, Q = 0) measured with the same position
+    information I at every step has J_t = P0^-1 + t E' I E, so the position block of J_t^-1 is
+    the Schur-complement closed form, and with a diagonal P0 it is (S0^-1 + t I)^-1."""
+    from mimo_radar_env.tracking.information import bound_step, position_bound
+
+    rng = np.random.default_rng(8)
+    variances = rng.uniform(10, 400, (2, 3, 4))
+    prior = np.zeros((2, 3, 4, 4))
+    prior[..., np.arange(4), np.arange(4)] = variances
+    root = rng.normal(size=(2, 3, 2, 2))
+    measured = root @ np.swapaxes(root, -1, -2) + 0.1 * np.eye(2)
+    covariance = prior
+    for t in range(1, 6):
+        covariance = bound_step(covariance, np.broadcast_to(np.eye(4), (3, 4, 4)), np.zeros((4, 4)), measured)
+        position_prior = prior[..., [0, 2], :][..., [0, 2]]
+        expected = np.linalg.inv(np.linalg.inv(position_prior) + t * measured)
+        np.testing.assert_allclose(covariance[..., [0, 2], :][..., [0, 2]], expected, rtol=1e-9)
+        np.testing.assert_allclose(
+            position_bound(covariance), np.sqrt(np.trace(expected, axis1=-2, axis2=-1)), rtol=1e-9
+        )
