@@ -112,7 +112,7 @@ def study_agent_params(env_version: str, items: Sequence[str]) -> dict[str, dict
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default 500)")
+    parser.add_argument("--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default %(default)s)")
     parser.add_argument(
         "--steps",
         type=_integer(1),
@@ -251,7 +251,8 @@ def build_parser() -> argparse.ArgumentParser:
 
     tracking = sub.add_parser(
         "tracking",
-        help="the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets",
+        help="the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets "
+        "(default 200 trials)",
         description="Run best, best-tracking, mg-crb-cl, tracking-ucb (and its SINR weights "
         "0.25, 0.5, 0.75), ucb1, epsilon-greedy, fix1, fix2 and random on the paper scenarios under "
         "both fusions (into OUT/<scenario>-<fusion>, resumable); judge the targets on paired "
@@ -270,7 +271,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _add_agent_param(tracking, over=OVER_READING)
     _add_run_options(tracking)
-    tracking.set_defaults(trials=200)
+    from .tracking import DEFAULT_TRIALS
+
+    tracking.set_defaults(trials=DEFAULT_TRIALS)
 
     calibrate = sub.add_parser(
         "calibrate-layout",

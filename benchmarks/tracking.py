@@ -10,7 +10,8 @@ both fusions) and prints the targets. Runs resume like every run of the harness.
 
 Targets (docs/results.md, "Selecting for tracking"):
 
-* ``best-tracking`` has a lower ARMSE than Best and every SINR-driven policy;
+* ``best-tracking`` has a lower ARMSE than Best and every SINR-driven policy (the paper's
+  six, :data:`~benchmarks.harness.PAPER_POLICIES`);
 * ``tracking-ucb`` has a lower ARMSE than Best and MG-CRB-CL (its SINR regret stated beside
   MG-CRB-CL's);
 * each tracking-aware policy costs at most twice MG-CRB-CL's compute time.
@@ -26,9 +27,10 @@ from pathlib import Path
 from typing import Any
 
 from mimo_radar_env import paper_scenario
+from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 
-#: The SINR-driven policies of the study (the paper's six).
-SINR_DRIVEN = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
+# Light on purpose (the command line reads DEFAULT_TRIALS while it builds its parser, before
+# it checks which 'agents' package is installed): the harness is imported where it is used.
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
 TRADEOFF_WEIGHTS = (0.25, 0.5, 0.75)
 TRACKING_POLICIES = (
@@ -43,7 +45,7 @@ TRACKING_POLICIES = (
     "fix2",
     "random",
 )
-FUSIONS = ("average", "centralized")
+FUSIONS = tuple(FUSION_REGISTRY)
 DEFAULT_TRIALS = 200
 #: The most a tracking-aware policy may cost, as a multiple of MG-CRB-CL's compute time.
 COST_LIMIT = 2.0
@@ -56,7 +58,15 @@ def study_folder(out: str | Path, scenario: str, fusion: str) -> Path:
 
 def ppo_policy(pattern: str, number: int, fusion: str) -> str:
     """``ppo:PATH`` with ``{scenario}`` (1, 2, 3) and ``{fusion}`` filled into ``pattern``."""
-    return "ppo:" + pattern.format(scenario=number, fusion=fusion)
+    from .harness import HarnessError
+
+    try:
+        return "ppo:" + pattern.format(scenario=number, fusion=fusion)
+    except (KeyError, IndexError, ValueError) as exc:
+        raise HarnessError(
+            f"--ppo {pattern!r}: a pattern may hold {{scenario}} and {{fusion}} only "
+            f"({type(exc).__name__}: {exc})"
+        ) from None
 
 
 def run_tracking_studies(
@@ -127,6 +137,8 @@ def _lower(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
 
 def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
     """Each study's targets: the paired ARMSE differences, the regrets and the cost ratios."""
+    from .harness import PAPER_POLICIES
+
     results = []
     for (number, fusion), folder in folders.items():
         summary = json.loads((Path(folder) / "summary.json").read_text())
@@ -138,7 +150,7 @@ def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
                 "scenario": number,
                 "fusion": fusion,
                 "trials": summary["trials"],
-                "best_tracking_lower": [_lower(summary, "best-tracking", p) for p in SINR_DRIVEN],
+                "best_tracking_lower": [_lower(summary, "best-tracking", p) for p in PAPER_POLICIES],
                 "tracking_ucb_lower": [_lower(summary, "tracking-ucb", p) for p in ("best", "mg-crb-cl")],
                 "ppo_lower": [_lower(summary, ppo[0], p) for p in ("best", "mg-crb-cl")] if ppo else [],
                 "regret": {
@@ -171,6 +183,8 @@ def _verdict(holds: bool) -> str:
 
 def targets_markdown(results: list[dict[str, Any]]) -> str:
     """The targets as tables, one row per (scenario, fusion)."""
+    from .harness import PAPER_POLICIES
+
     trials = sorted({r["trials"] for r in results})
     lines = [
         "# Tracking-aware selection: the targets",
@@ -181,8 +195,8 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
         "",
         "## best-tracking has a lower ARMSE than every SINR-driven policy",
         "",
-        "| scenario | fusion | " + " | ".join(f"best-tracking - {p}" for p in SINR_DRIVEN) + " |",
-        "|" + "---|" * (len(SINR_DRIVEN) + 2),
+        "| scenario | fusion | " + " | ".join(f"best-tracking - {p}" for p in PAPER_POLICIES) + " |",
+        "|" + "---|" * (len(PAPER_POLICIES) + 2),
     ]
     for r in results:
         cells = [

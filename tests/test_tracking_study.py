@@ -7,6 +7,7 @@ import pytest
 
 from benchmarks import tracking
 from benchmarks.cli import main
+from benchmarks.harness import PAPER_POLICIES
 
 
 @pytest.fixture(scope="module")
@@ -40,7 +41,7 @@ def test_targets_follow_from_the_summary(study):
     rows = summary["policies"]
     assert (result["scenario"], result["fusion"]) == (2, "centralized")
     judged = result["best_tracking_lower"] + result["tracking_ucb_lower"]
-    assert [(c["a"], c["b"]) for c in judged] == [("best-tracking", p) for p in tracking.SINR_DRIVEN] + [
+    assert [(c["a"], c["b"]) for c in judged] == [("best-tracking", p) for p in PAPER_POLICIES] + [
         ("tracking-ucb", "best"),
         ("tracking-ucb", "mg-crb-cl"),
     ]
@@ -66,6 +67,7 @@ def test_paired_reads_either_order():
         (["--fusion", "average"], "--fusion does not apply"),
         (["--fusions", "mean"], r"fusions must be among \['average', 'centralized'\]"),
         (["--scenarios", "4"], "--scenarios must list paper scenarios 1, 2, 3"),
+        (["--ppo", "runs/{model}/model.zip"], r"a pattern may hold \{scenario\} and \{fusion\} only"),
     ],
 )
 def test_bad_arguments_are_named(tmp_path, capsys, extra, message):
