@@ -52,6 +52,10 @@ class TrackingUCB(MGCRBCL):
     lambda_scale : {"linear", "db"}
         The scale of eq32's SINR-to-quality mapping (as the env's option; the harness passes
         the run's).
+    measurement_quality : float or None
+        As the env's option (the harness passes the run's): ``None`` maps the optimistic SINR
+        through eq32; a number is the constant ``lambda`` of every channel, so only geometry
+        is scored.
     sinr_weight : float
         In [0, 1]: 0 selects for tracking only; ``w`` > 0 minimises ``(1 - w) c(A) - w s(A)``,
         the criterion ``c`` and MG-CRB-CL's index sum ``s`` (eq34), each rescaled to [0, 1]
@@ -63,7 +67,7 @@ class TrackingUCB(MGCRBCL):
 
     name = "tracking-ucb"
     default_solver = "exact"
-    env_option_params: ClassVar[tuple[str, ...]] = ("fusion", "lambda_scale")
+    env_option_params: ClassVar[tuple[str, ...]] = ("fusion", "lambda_scale", "measurement_quality")
     observation_options: ClassVar[dict[str, Any]] = {"prediction_covariance": True}
 
     def __init__(
@@ -77,6 +81,7 @@ class TrackingUCB(MGCRBCL):
         fusion: str = "average",
         lambda_scale: str = "db",
         sinr_weight: float = 0.0,
+        measurement_quality: float | None = None,
     ) -> None:
         super().__init__(scenario, seed, alpha, alpha_bar, beta, solver="exact")
         if criterion not in CRITERIA:
@@ -86,6 +91,8 @@ class TrackingUCB(MGCRBCL):
         if lambda_scale not in ("linear", "db"):
             raise ValueError(f"lambda_scale must be 'linear' or 'db', got {lambda_scale!r}")
         check_parameter("sinr_weight", sinr_weight, 0.0, 1.0)
+        if measurement_quality is not None:
+            check_parameter("measurement_quality", measurement_quality, 0.0, low_open=True)
         sc = self.scenario
         count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
         if sinr_weight > 0 and count > MAX_ENUMERATED_SUPER_ARMS:
@@ -95,6 +102,7 @@ class TrackingUCB(MGCRBCL):
             )
         self.criterion, self.fusion, self.lambda_scale = criterion, fusion, lambda_scale
         self.sinr_weight = float(sinr_weight)
+        self.measurement_quality = measurement_quality
         self.model = RadarModel.from_scenario(sc)
 
     def _reset(self, obs: Observation) -> None:
@@ -108,7 +116,11 @@ class TrackingUCB(MGCRBCL):
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         self.predicted = self.predict(obs)  # eq16
         optimistic = self.predicted + self.bonus(self.beta)[:, None]  # eq18, per target
-        variance = self.model.measurement_variance(self.model.quality(optimistic, scale=self.lambda_scale))
+        if self.measurement_quality is None:
+            quality = self.model.quality(optimistic, scale=self.lambda_scale)  # eq32
+        else:
+            quality = np.full(optimistic.shape, float(self.measurement_quality))
+        variance = self.model.measurement_variance(quality)
         positions = np.asarray(obs["track_pred"])[..., [0, 2]]
         information = channel_information(positions, self.model.tx, self.model.rx, variance)
         tx, rx = select_for_tracking(

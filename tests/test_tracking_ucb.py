@@ -103,6 +103,37 @@ class _TruthWithheld(gym.Wrapper):
         return obs, {}
 
 
+def test_with_a_constant_quality_it_scores_geometry_only():
+    """measurement_quality=q: every channel has lambda = q, so the choice is the criterion's
+    minimum with R = Sigma0 / q, whatever the SINR estimates."""
+    from mimo_radar_env.tracking.information import channel_information, select_for_tracking
+
+    env = gym.make(
+        "MimoRadarSelect-v1",
+        scenario="paper-3-v1",
+        prediction_covariance=True,
+        measurement_quality=0.7,
+    )
+    sc = env.unwrapped.scenario
+    agent = agents.make_agent("tracking-ucb", sc, measurement_quality=0.7)
+    obs, _ = env.reset(seed=5)
+    agent.reset(obs)
+    shape = (1, sc.num_targets, sc.num_tx, sc.num_rx, 2)
+    variance = np.broadcast_to(np.diag(sc.measurement_covariance) / 0.7, shape)
+    for _ in range(5):
+        action = agent.act(obs)
+        batch = {key: np.asarray(value)[None] for key, value in obs.items()}
+        info = channel_information(
+            batch["track_pred"][..., [0, 2]], sc.tx_positions, sc.rx_positions, variance
+        )
+        tx, rx = select_for_tracking(
+            batch["track_pred_pos_cov"], info, sc.weights, sc.tx_per_step, sc.rx_per_step, fusion="average"
+        )
+        np.testing.assert_array_equal(action, np.concatenate([tx[0], rx[0]]).astype(np.int8))
+        obs, reward, *_ = env.step(action)
+        agent.update(obs, reward)
+
+
 def test_it_reads_no_truth():
     def run(withhold):
         env = gym.make("MimoRadarSelect-v1", horizon=60, prediction_covariance=True)
@@ -150,7 +181,9 @@ def test_the_harness_gives_it_the_runs_fusion_scale_and_observation():
     options = EnvOptions.for_version("v0", fusion="centralized").to_dict()
     sc = load_scenario("paper-1")
     agent = make_policy("tracking-ucb", sc, {}, seed=0, options=options)
-    assert (agent.fusion, agent.lambda_scale) == ("centralized", "linear")
+    assert (agent.fusion, agent.lambda_scale, agent.measurement_quality) == ("centralized", "linear", None)
+    constant = make_policy("tracking-ucb", sc, {}, seed=0, options=options | {"measurement_quality": 0.5})
+    assert constant.measurement_quality == 0.5
     assert policy_env_options(agent, options) == {**options, "prediction_covariance": True}
     given = make_policy("tracking-ucb", sc, {"fusion": "average"}, seed=0, options=options)
     assert given.fusion == "average"  # a parameter given wins over the run's option
