@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.model import RadarModel
 from mimo_radar_env.core.superarm import super_arm_count
+from mimo_radar_env.envs.options import option_choices
 from mimo_radar_env.tracking.information import (
     CRITERIA,
     MAX_ENUMERATED_SUPER_ARMS,
@@ -86,10 +87,10 @@ class TrackingUCB(MGCRBCL):
         super().__init__(scenario, seed, alpha, alpha_bar, beta, solver="exact")
         if criterion not in CRITERIA:
             raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
-        if fusion not in ("average", "centralized"):
-            raise ValueError(f"fusion must be 'average' or 'centralized', got {fusion!r}")
-        if lambda_scale not in ("linear", "db"):
-            raise ValueError(f"lambda_scale must be 'linear' or 'db', got {lambda_scale!r}")
+        choices = option_choices()  # the env options' own choices
+        for option, value in (("fusion", fusion), ("lambda_scale", lambda_scale)):
+            if value not in choices[option]:
+                raise ValueError(f"{option} must be one of {list(choices[option])}, got {value!r}")
         check_parameter("sinr_weight", sinr_weight, 0.0, 1.0)
         if measurement_quality is not None:
             check_parameter("measurement_quality", measurement_quality, 0.0, low_open=True)

@@ -168,8 +168,8 @@ def test_it_needs_the_predicted_covariance_and_checks_its_parameters():
     for params, message in [
         ({"sinr_weight": 1.5}, r"sinr_weight must be in \[0, 1\], got 1.5"),
         ({"criterion": "max"}, r"criterion must be one of \['trace', 'logdet'\], got 'max'"),
-        ({"fusion": "mean"}, r"fusion must be 'average' or 'centralized', got 'mean'"),
-        ({"lambda_scale": "log"}, r"lambda_scale must be 'linear' or 'db', got 'log'"),
+        ({"fusion": "mean"}, r"fusion must be one of \['average', 'centralized'\], got 'mean'"),
+        ({"lambda_scale": "log"}, r"lambda_scale must be one of \['linear', 'db'\], got 'log'"),
     ]:
         with pytest.raises(ValueError, match=message):
             agents.make_agent("tracking-ucb", "paper-1-v1", **params)
