@@ -112,7 +112,9 @@ def study_agent_params(env_version: str, items: Sequence[str]) -> dict[str, dict
 
 
 def _add_run_options(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default %(default)s)")
+    parser.add_argument(
+        "--trials", type=_integer(1), default=500, help="Monte-Carlo trials (default %(default)s)"
+    )
     parser.add_argument(
         "--steps",
         type=_integer(1),
