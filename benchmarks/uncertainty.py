@@ -73,23 +73,19 @@ class TrialMetrics:
         return 10.0 * np.log10(w @ self.mean_reward / self.channels)
 
     def rmse_curve(self, w: NDArray, target: int) -> NDArray:
-        return np.sqrt(w @ self.squared[:, :, target])  # (..., T)
+        return _root_mean_square(self.squared, w, target)  # (..., T)
 
     def armse_target(self, target: int) -> Metric:
         return lambda w: self.rmse_curve(w, target).mean(axis=-1)
 
     def armse(self, w: NDArray) -> NDArray:
-        return np.mean([self.armse_target(k)(w) for k in range(self.squared.shape[2])], axis=0)
-
-    def bound_curve(self, w: NDArray, target: int) -> NDArray:
-        """The root-mean-square position bound of each step, (..., T): the RMSE's floor."""
-        assert self.bound_squared is not None
-        return np.sqrt(w @ self.bound_squared[:, :, target])
+        return _time_averaged(self.squared, w)
 
     def bound(self, w: NDArray) -> NDArray:
-        """The time-averaged bound over targets weighted equally (as ARMSE averages RMSE)."""
-        targets = range(self.squared.shape[2])
-        return np.mean([self.bound_curve(w, k).mean(axis=-1) for k in targets], axis=0)
+        """The time-averaged root-mean-square position bound over targets weighted equally
+        (as ARMSE averages the RMSE): the floor the policy's selections set."""
+        assert self.bound_squared is not None
+        return _time_averaged(self.bound_squared, w)
 
     def armse_over_bound(self, w: NDArray) -> NDArray:
         return self.armse(w) / self.bound(w)
@@ -110,6 +106,17 @@ class TrialMetrics:
         if self.tracked:
             metrics["armse"] = self.armse
         return metrics
+
+
+def _root_mean_square(squared: NDArray, w: NDArray, target: int) -> NDArray:
+    """``sqrt`` of the trial-weighted mean of squared values (N, T, K) for one target: (..., T)."""
+    return np.sqrt(w @ squared[:, :, target])
+
+
+def _time_averaged(squared: NDArray, w: NDArray) -> NDArray:
+    """The mean over targets of the mean over steps of the root mean square: ARMSE's shape."""
+    targets = range(squared.shape[2])
+    return np.mean([_root_mean_square(squared, w, k).mean(axis=-1) for k in targets], axis=0)
 
 
 def _weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
