@@ -39,6 +39,8 @@ from mimo_radar_env import RadarModel, Scenario, load_scenario
 from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
+from . import verdicts
+
 # agents (and benchmarks.claims, which imports the harness) are imported where they are used:
 # the command line reads this module's defaults before it checks that 'agents' is ours
 
@@ -176,12 +178,7 @@ def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
 
 
 def scorecard_counts(results: list[dict[str, Any]]) -> dict[str, int]:
-    return {v: sum(r["verdict"] == v for r in results) for v in ("holds", "consistent", "contradicted")}
-
-
-def rank_key(counts: dict[str, int]) -> tuple[int, int]:
-    """Higher is better: more claims hold, then fewer contradicted."""
-    return counts["holds"], -counts["contradicted"]
+    return verdicts.count(r["verdict"] for r in results)
 
 
 StudyRunner = Callable[[list[Scenario], Path, int], list[dict[str, Any]]]
@@ -219,14 +216,16 @@ def calibrate(
         results = run_scorecard(c.scenarios(), out / "screen" / f"layout-{c.index:04d}", screen_trials)
         c.scorecards[str(screen_trials)] = scorecard_counts(results)
         log(f"stage 2: layout {c.index}: {c.scorecards[str(screen_trials)]}")
-    finalists = sorted(shortlist[1:], key=lambda c: rank_key(c.scorecards[str(screen_trials)]), reverse=True)
+    finalists = sorted(
+        shortlist[1:], key=lambda c: verdicts.rank_key(c.scorecards[str(screen_trials)]), reverse=True
+    )
     for c in [reference, *finalists[:final]]:
         results = run_scorecard(c.scenarios(), out / "final" / f"layout-{c.index:04d}", final_trials)
         c.scorecards[str(final_trials)] = scorecard_counts(results)
         log(f"stage 3: layout {c.index}: {c.scorecards[str(final_trials)]}")
     judged = [c for c in pool if str(final_trials) in c.scorecards]
-    best = max(judged, key=lambda c: (rank_key(c.scorecards[str(final_trials)]), c.index == 0))
-    adopted = best.index != 0 and rank_key(best.scorecards[str(final_trials)]) > rank_key(
+    best = max(judged, key=lambda c: (verdicts.rank_key(c.scorecards[str(final_trials)]), c.index == 0))
+    adopted = best.index != 0 and verdicts.rank_key(best.scorecards[str(final_trials)]) > verdicts.rank_key(
         reference.scorecards[str(final_trials)]
     )
     report = {

@@ -37,7 +37,6 @@ from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, Scena
 
 from . import backends
 from .shards import (
-    SHARD_FIELDS,
     TRIAL_FIELDS,
     TRUTH_FIELD,
     config_hash,
@@ -219,19 +218,10 @@ def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
 
 # ------------------------------------------------------------------ one task
 def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArray]:
-    """Run ``policy`` on shard ``shard`` of the run; per-step sums over its trials.
-
-    Returns arrays: ``expected`` (T,) sum of mu_t, ``optimal`` (T,) sum of mu*_t,
-    ``squared_error`` (T, K) sum of squared position errors (NaN without a tracker),
-    ``bound_squared`` (T, K) sum of the squared position bounds (``info["position_bound"]``,
-    the PCRB of the selections made; NaN without a tracker),
-    ``matches`` (T,) number of trials whose super arm equals the optimal one,
-    ``selections`` (T, M + N) how often each station was selected, ``valid`` (T,) valid
-    actions, ``wall_s``, ``first_trial_positions`` (T + 1, K, 2) the truth of the
-    shard's first trial, and per trial (float32, for the intervals): ``trial_expected`` and
-    ``trial_optimal`` (n, T), ``trial_squared_error`` and ``trial_bound_squared`` (n, T, K),
-    ``trial_matches`` (n, T).
-    """
+    """Run ``policy`` on shard ``shard`` of the run; the shard's fields
+    (:mod:`benchmarks.shards` lists them): per-trial float64 arrays of the mean rewards, the
+    squared position errors and bounds, the matches with the optimal super arm, the station
+    selection counts, the compute time and the first trial's truth."""
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
     trials = cfg.shard_trials(shard)
@@ -250,43 +240,28 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         agent.attach(env)
     obs, info = env.reset(seed=cfg.seed + trials.start)
     agent.reset(obs)
-    T, K = cfg.steps, scenario.num_targets
+    n, T, K = len(trials), cfg.steps, scenario.num_targets
     out = {
-        "expected": np.zeros(T),
-        "optimal": np.zeros(T),
-        "squared_error": np.full((T, K), np.nan),
-        "bound_squared": np.full((T, K), np.nan),
-        "matches": np.zeros(T),
+        "trial_expected": np.zeros((n, T)),
+        "trial_optimal": np.zeros((n, T)),
+        "trial_squared_error": np.full((n, T, K), np.nan),
+        "trial_bound_squared": np.full((n, T, K), np.nan),
+        "trial_matches": np.zeros((n, T), np.uint8),
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
-        "valid": np.zeros(T),
         TRUTH_FIELD: np.empty((T + 1, K, 2)),
-        "trial_expected": np.zeros((len(trials), T), np.float32),
-        "trial_optimal": np.zeros((len(trials), T), np.float32),
-        "trial_squared_error": np.full((len(trials), T, K), np.nan, np.float32),
-        "trial_bound_squared": np.full((len(trials), T, K), np.nan, np.float32),
-        "trial_matches": np.zeros((len(trials), T), np.uint8),
     }
     out[TRUTH_FIELD][0] = info["true_state"][0][:, [0, 2]]
     for t in range(T):
         action = agent.act(obs)
         obs, reward, _, _, info = env.step(action)
         agent.update(obs, reward)
-        matches = np.all(np.asarray(action) == info["optimal_action"], axis=1)
         out["trial_expected"][:, t] = info["expected_reward"]
         out["trial_optimal"][:, t] = info["optimal_reward"]
-        out["trial_matches"][:, t] = matches
-        out["expected"][t] = info["expected_reward"].sum()
-        out["optimal"][t] = info["optimal_reward"].sum()
+        out["trial_matches"][:, t] = np.all(np.asarray(action) == info["optimal_action"], axis=1)
         if "position_error" in info:
-            squared = info["position_error"] ** 2
-            out["squared_error"][t] = squared.sum(axis=0)
-            out["trial_squared_error"][:, t] = squared
-            bound = info["position_bound"] ** 2
-            out["bound_squared"][t] = bound.sum(axis=0)
-            out["trial_bound_squared"][:, t] = bound
-        out["matches"][t] = matches.sum()
+            out["trial_squared_error"][:, t] = info["position_error"] ** 2
+            out["trial_bound_squared"][:, t] = info["position_bound"] ** 2
         out["selections"][t] = np.asarray(action).sum(axis=0)
-        out["valid"][t] = info["action_valid"].sum()
         out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
@@ -389,7 +364,8 @@ def run(
     progress: bool = True,
     max_tasks: int | None = None,
 ) -> dict[str, dict[str, NDArray]] | None:
-    """Run every (policy, shard) task not yet in ``out``; return the per-policy totals.
+    """Run every (policy, shard) task not yet in ``out``; return every policy's shard fields
+    joined over trials (:func:`load_per_trial`).
 
     ``max_tasks`` stops after that many new tasks (to test resumption); the run is
     then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
@@ -448,13 +424,7 @@ def run(
             ) from None
         finally:
             bar.close()
-        return None if _tasks_to_run(out, config, tqdm.write) else load_totals(out, config)
-
-
-def load_first_trial_truth(out: Path, config: RunConfig) -> NDArray[np.float64]:
-    """True positions (steps + 1, K, 2) of trial 0, as recorded by the run (the truth does not
-    depend on the policy)."""
-    return _read(Path(out), config, config.policies[0], 0)[TRUTH_FIELD]
+        return None if _tasks_to_run(out, config, tqdm.write) else load_per_trial(out, config)
 
 
 def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, NDArray]:
@@ -468,24 +438,15 @@ def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, ND
 
 
 def load_per_trial(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
-    """Every policy's per-trial arrays (``TRIAL_FIELDS``), trials in order: (trials, T, ...)."""
+    """Every policy's shard fields joined in trial order: the per-trial arrays concatenated
+    (trials first), the selection counts and compute times summed over shards (in shard
+    order, so every backend gives the same numbers)."""
     per_trial: dict[str, dict[str, NDArray]] = {}
     for policy in config.policies:
         parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
-        per_trial[policy] = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
+        joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
+        for key in ("selections", "wall_s"):
+            joined[key] = functools.reduce(np.add, (part[key] for part in parts))
+        joined[TRUTH_FIELD] = parts[0][TRUTH_FIELD]  # trial 0's truth, the same for every policy
+        per_trial[policy] = joined
     return per_trial
-
-
-def load_totals(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
-    """Sum the shards of every policy, in shard order (the same sums whatever the backend)."""
-    totals: dict[str, dict[str, NDArray]] = {}
-    for policy in config.policies:
-        parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
-        summed = {}
-        for key in SHARD_FIELDS:
-            total = parts[0][key].copy()
-            for part in parts[1:]:
-                total = total + part[key]
-            summed[key] = total
-        totals[policy] = summed
-    return totals

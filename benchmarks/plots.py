@@ -8,12 +8,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env import metrics
+from mimo_radar_env.metrics import TrialMetrics
 from mimo_radar_env.rendering import draw_scenario
 
 from . import uncertainty
-from .harness import RunConfig, load_first_trial_truth, load_per_trial
-from .shards import policy_folder
+from .harness import RunConfig
+from .shards import TRUTH_FIELD, policy_folder
 
 
 def _figure(width: float = 7.0, height: float = 4.0):
@@ -41,78 +41,48 @@ def short_label(policy: str, width: int = 28) -> str:
     return policy if len(policy) <= width else f"{policy[:10]}...{policy[-(width - 13) :]}"
 
 
-def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path) -> list[Path]:
+def plot_all(
+    config: RunConfig, per_trial: dict[str, dict[str, NDArray]], metrics: dict[str, TrialMetrics], out: Path
+) -> list[Path]:
     """Write sinr.png, regret.png, rmse.png (each curve with its 95 % band over trials),
-    selection_<policy>.png and geometry.png."""
+    selection_<policy>.png and geometry.png; every curve is a :class:`TrialMetrics` curve at equal
+    weights, its band the same curve's bootstrap."""
     scenario = config.scenario_object
     t = np.arange(1, config.steps + 1)
     written = []
-    per_trial = load_per_trial(out, config)
-    trial_metrics = {
-        p: uncertainty.TrialMetrics(per_trial[p], scenario.num_channels_per_step) for p in totals
-    }
     n = config.trials
+    colours = palette(len(metrics))
 
-    colours = palette(len(totals))
-
-    def draw(ax: Any, curve: NDArray, band_curve: Any) -> Any:
-        line = ax.plot(t, curve, lw=1)[0]
-        low, high = uncertainty.band(band_curve, n, config.seed)
+    def draw(ax: Any, curve: Any, m: TrialMetrics) -> Any:
+        line = ax.plot(t, curve(m.equal()), lw=1)[0]
+        low, high = uncertainty.band(curve, n, config.seed)
         ax.fill_between(t, low, high, color=line.get_color(), alpha=0.2, lw=0)
         return line
 
-    fig = _figure()
-    ax = fig.add_subplot()
-    ax.set_prop_cycle(color=colours)
-    for policy, total in totals.items():
-        m = trial_metrics[policy]
-        line = draw(
-            ax,
-            metrics.mean_sinr_db_curve(total["expected"], n, scenario.num_channels_per_step),
-            lambda w, m=m: 10.0 * np.log10(w @ m.reward_curve_per_trial / m.channels),
-        )
-        line.set_label(short_label(policy))
-    ax.set(xlabel="time (s)", ylabel="average SINR (dB)", title=f"{scenario.name}: average SINR, 95 % bands")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    written.append(_save(fig, out / "sinr.png"))
-
-    fig = _figure()
-    ax = fig.add_subplot()
-    ax.set_prop_cycle(color=colours)
-    for policy, total in totals.items():
-        m = trial_metrics[policy]
-        line = draw(
-            ax,
-            metrics.regret_curve(total["optimal"], total["expected"], n),
-            lambda w, m=m: w @ m.regret_curve_per_trial,
-        )
-        line.set_label(short_label(policy))
-    ax.set(
-        xlabel="time (s)",
-        ylabel="cumulative SINR regret",
-        title=f"{scenario.name}: regret (eq13), 95 % bands",
-    )
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize=7)
-    written.append(_save(fig, out / "regret.png"))
+    for name, curve_of, ylabel, title in (
+        ("sinr", "sinr_db_curve", "average SINR (dB)", "average SINR, 95 % bands"),
+        ("regret", "regret_curve", "cumulative SINR regret", "regret (eq13), 95 % bands"),
+    ):
+        fig = _figure()
+        ax = fig.add_subplot()
+        ax.set_prop_cycle(color=colours)
+        for policy, m in metrics.items():
+            draw(ax, getattr(m, curve_of), m).set_label(short_label(policy))
+        ax.set(xlabel="time (s)", ylabel=ylabel, title=f"{scenario.name}: {title}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+        written.append(_save(fig, out / f"{name}.png"))
 
     K = scenario.num_targets
     fig = _figure(7.0, 3.0 * K) if config.options.tracking else None
     for k in range(K if fig is not None else 0):
         ax = fig.add_subplot(K, 1, k + 1)
         ax.set_prop_cycle(color=colours)
-        for policy, total in totals.items():
-            m = trial_metrics[policy]
-            line = draw(
-                ax,
-                metrics.rmse_curve(total["squared_error"], n)[:, k],
-                lambda w, m=m, k=k: m.rmse_curve(w, k),
-            )
+        for policy, m in metrics.items():
+            line = draw(ax, lambda w, m=m, k=k: m.rmse_curve(w, k), m)
             line.set_label(short_label(policy))
             if m.bounded:  # the floor the policy's own selections allow
-                bound = metrics.rmse_curve(total["bound_squared"], n)[:, k]
-                ax.plot(t, bound, lw=0.8, ls="--", color=line.get_color())
+                ax.plot(t, m.bound_curve(m.equal(), k), lw=0.8, ls="--", color=line.get_color())
         ax.set(
             xlabel="time (s)",
             ylabel="RMSE (m)",
@@ -126,11 +96,11 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
         written.append(_save(fig, out / "rmse.png"))
 
     labels = [f"TX{m + 1}" for m in range(scenario.num_tx)] + [f"RX{n + 1}" for n in range(scenario.num_rx)]
-    for policy, total in totals.items():
+    for policy in metrics:
         fig = _figure(7.0, 0.25 * len(labels) + 1.5)
         ax = fig.add_subplot()
         image = ax.imshow(
-            (total["selections"] / config.trials).T,
+            (per_trial[policy]["selections"] / config.trials).T,
             aspect="auto",
             interpolation="nearest",
             cmap="viridis",
@@ -149,7 +119,7 @@ def plot_all(config: RunConfig, totals: dict[str, dict[str, NDArray]], out: Path
     draw_scenario(
         fig.add_subplot(),
         scenario,
-        true_tracks=load_first_trial_truth(out, config),
+        true_tracks=per_trial[config.policies[0]][TRUTH_FIELD],
         title=f"{scenario.name}: stations and the true tracks of trial 0",
     )
     written.append(_save(fig, out / "geometry.png"))

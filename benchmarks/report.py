@@ -10,8 +10,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env import EnvOptions, metrics
+from mimo_radar_env import EnvOptions
 from mimo_radar_env.envs.options import paper_key
+from mimo_radar_env.metrics import TrialMetrics
 
 from . import uncertainty
 from .harness import HarnessError, RunConfig, load_per_trial
@@ -50,75 +51,73 @@ PAPER_ASR = {
 }
 
 
+def trial_metrics(config: RunConfig, per_trial: dict[str, dict[str, NDArray]]) -> dict[str, TrialMetrics]:
+    """Every policy's :class:`~mimo_radar_env.metrics.TrialMetrics`: the one source of every
+    number the run reports."""
+    channels = config.scenario_object.num_channels_per_step
+    return {policy: TrialMetrics(per_trial[policy], channels) for policy in config.policies}
+
+
+#: The table's value keys of a summary row, in order; each also has its ``ci`` and ``method``.
+VALUE_KEYS = ("armse", "armse_per_target", "bound", "bound_per_target", "armse_over_bound")
+VALUE_KEYS += ("asr", "final_regret", "mean_sinr_db")
+
+
 def summarize(
     config: RunConfig,
-    totals: dict[str, dict[str, NDArray]],
-    per_trial: dict[str, dict[str, NDArray]] | None = None,
+    per_trial: dict[str, dict[str, NDArray]],
+    metrics: dict[str, TrialMetrics] | None = None,
 ) -> dict[str, Any]:
-    """The summary.json document (schema in docs/benchmark.md); with ``per_trial`` (the run's
-    per-trial arrays) every metric gets its 95 % interval and every pair of policies its paired
-    differences."""
-    scenario = config.scenario_object
-    channels = scenario.num_channels_per_step
-    tracked = config.options.tracking
+    """The summary.json document (schema in docs/benchmark.md): each policy's metrics with
+    their 95 % intervals and the method of each (``ci``, ``method``), its compute time, and
+    every pair of policies' paired differences."""
+    metrics = metrics or trial_metrics(config, per_trial)
     policies = {}
-    for policy, total in totals.items():
-        armse_all, per_target = (
-            metrics.armse(total["squared_error"], config.trials) if tracked else (None, None)
-        )
-        bound_all, bound_per_target = (
-            metrics.armse(total["bound_squared"], config.trials)
-            if tracked and "bound_squared" in total
-            else (None, None)
-        )
-        policies[policy] = {
-            "armse": armse_all,
-            "armse_per_target": per_target,
-            "bound": bound_all,
-            "bound_per_target": bound_per_target,
-            "armse_over_bound": armse_all / bound_all if bound_all else None,
-            "asr": metrics.asr(total["matches"], config.trials),
-            "final_regret": float(
-                metrics.regret_curve(total["optimal"], total["expected"], config.trials)[-1]
-            ),
-            "mean_sinr_db": metrics.mean_sinr_db(total["expected"], config.trials, channels),
-            "wall_s": float(total["wall_s"]),
-        }
-    for policy, row in policies.items():
-        for key, value in row.items():
-            values = value if isinstance(value, list) else [value]
-            if any(v is not None and not np.isfinite(v) for v in values):
-                raise HarnessError(
-                    f"policy {policy!r}: {key} is not a finite number ({value}); a non-finite mean SINR "
-                    "or error means the scenario's SINR or tracks overflowed: check its field values"
-                )
+    for policy, m in metrics.items():
+        estimates = uncertainty.policy_estimates(m, config.seed)
+        row: dict[str, Any] = {key: None for key in VALUE_KEYS}
+        ci: dict[str, Any] = {}
+        method: dict[str, Any] = {}
+        for key, value in estimates.items():
+            parts = value if isinstance(value, list) else [value]
+            for part in parts:
+                if not np.isfinite(part["estimate"]):
+                    raise HarnessError(
+                        f"policy {policy!r}: {key} is not a finite number ({part['estimate']}); a "
+                        "non-finite mean SINR or error means the scenario's SINR or tracks overflowed: "
+                        "check its field values"
+                    )
+            row[key] = [p["estimate"] for p in value] if isinstance(value, list) else value["estimate"]
+            ci[key] = [p["ci"] for p in value] if isinstance(value, list) else value["ci"]
+            method[key] = [p["method"] for p in value] if isinstance(value, list) else value["method"]
+        row["wall_s"] = float(per_trial[policy]["wall_s"])
+        if config.trials >= 2:  # an interval needs two trials or more
+            row["ci"], row["method"] = ci, method
+        policies[policy] = row
     summary = {
-        "scenario": scenario.name,
+        "scenario": config.scenario["name"],
         "trials": config.trials,
         "steps": config.steps,
         "seed": config.seed,
         "env_options": config.env_options,
         "policies": policies,
     }
-    if per_trial is not None and config.trials >= 2:  # an interval needs two trials or more
-        trial_metrics = {p: uncertainty.TrialMetrics(per_trial[p], channels) for p in totals}
-        for policy, row in policies.items():
-            row["ci"] = uncertainty.policy_intervals(trial_metrics[policy], config.seed)
+    if config.trials >= 2:
         summary["uncertainty"] = uncertainty.METHOD
-        summary["paired_differences"] = uncertainty.paired_differences(trial_metrics, config.seed)
+        summary["paired_differences"] = uncertainty.paired_differences(metrics, config.seed)
     return summary
 
 
-def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dict[str, Any]]:
-    """Per-step rows: t, policy, mean SINR (dB), cumulative regret, ASR, RMSE over and per target."""
-    scenario = config.scenario_object
+def curves(config: RunConfig, metrics: dict[str, TrialMetrics]) -> list[dict[str, Any]]:
+    """Per-step rows: t, policy, mean SINR (dB), cumulative regret, ASR, RMSE and bound over and
+    per target (NaN without a tracker), all at equal trial weights."""
     rows = []
-    for policy, total in totals.items():
-        sinr = metrics.mean_sinr_db_curve(total["expected"], config.trials, scenario.num_channels_per_step)
-        regret = metrics.regret_curve(total["optimal"], total["expected"], config.trials)
-        rmse = metrics.rmse_curve(total["squared_error"], config.trials)
-        bound = metrics.rmse_curve(total["bound_squared"], config.trials)
-        match = total["matches"] / config.trials
+    for policy, m in metrics.items():
+        w = m.equal()
+        sinr, regret, match = m.sinr_db_curve(w), m.regret_curve(w), m.asr_curve(w)
+        nan = np.full((config.steps, m.num_targets), np.nan)
+        rmse = np.stack([m.rmse_curve(w, k) for k in range(m.num_targets)], axis=1) if m.tracked else nan
+        bound = np.stack([m.bound_curve(w, k) for k in range(m.num_targets)], axis=1) if m.bounded else nan
         for t in range(config.steps):
             row = {
                 "t": t + 1,
@@ -128,11 +127,46 @@ def curves(config: RunConfig, totals: dict[str, dict[str, NDArray]]) -> list[dic
                 "asr": match[t],
                 "rmse": rmse[t].mean(),
             }
-            row.update({f"rmse_target{k + 1}": rmse[t, k] for k in range(rmse.shape[1])})
+            row.update({f"rmse_target{k + 1}": rmse[t, k] for k in range(m.num_targets)})
             row["bound"] = bound[t].mean()
-            row.update({f"bound_target{k + 1}": bound[t, k] for k in range(bound.shape[1])})
+            row.update({f"bound_target{k + 1}": bound[t, k] for k in range(m.num_targets)})
             rows.append(row)
     return rows
+
+
+#: How a cell marks its interval's method (BCa is unmarked).
+METHOD_MARKS = {"percentile": "†", "constant over trials": "‡"}
+METHOD_LEGEND = (
+    "Marks: † a percentile interval, ‡ constant over trials (the interval is the value); unmarked: BCa."
+)
+
+
+def _number(value: float, fmt: str) -> str:
+    text = fmt.format(value)
+    return text[1:] if text.startswith("-") and float(text) == 0 else text  # no "-0.0"
+
+
+def format_estimate(
+    value: float | None, ci: list[float] | None, fmt: str, scale: float = 1.0, method: str | None = None
+) -> str:
+    """``value [low, high]`` with the interval's method mark; ``—`` for a missing value."""
+    if value is None:
+        return "—"
+    text = _number(scale * value, fmt)
+    if ci is None:
+        return text
+    mark = METHOD_MARKS.get(method or "", "")
+    return f"{text} [{_number(scale * ci[0], fmt)}, {_number(scale * ci[1], fmt)}]{mark}"
+
+
+def _cell(row: dict[str, Any], key: str, fmt: str, scale: float = 1.0, target: int | None = None) -> str:
+    """A summary row's ``key`` (of one target) with its interval and method mark."""
+    value, ci, method = row.get(key), row.get("ci", {}).get(key), row.get("method", {}).get(key)
+    if target is not None and value is not None:
+        value = value[target]
+        ci = ci[target] if ci is not None else None
+        method = method[target] if method is not None else None
+    return format_estimate(value, ci, fmt, scale, method)
 
 
 def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
@@ -153,7 +187,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
         f"fusion `{summary['env_options']['fusion']}`" + _changed_options(summary["env_options"]),
         "",
         *(
-            [f"Each cell: the value [its 95 % interval] ({summary['uncertainty']}).", ""]
+            [f"Each cell: the value [its 95 % interval] ({summary['uncertainty']}). {METHOD_LEGEND}", ""]
             if "uncertainty" in summary
             else []
         ),
@@ -161,23 +195,15 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
         "|" + "---|" * len(head),
     ]
     for policy, row in summary["policies"].items():
-        tracked = row["armse"] is not None
-        ci = row.get("ci", {})
-        cells = [policy, _with_ci(row["armse"], ci.get("armse"), "{:.3f}") if tracked else "—"]
+        cells = [policy, _cell(row, "armse", "{:.3f}")]
         if num_targets > 1:
-            per_target = ci.get("armse_per_target", [None] * num_targets)
-            cells += (
-                [_with_ci(v, c, "{:.3f}") for v, c in zip(row["armse_per_target"], per_target, strict=True)]
-                if tracked
-                else ["—"] * num_targets
-            )
-        bounded = row.get("bound") is not None
+            cells += [_cell(row, "armse_per_target", "{:.3f}", target=k) for k in range(num_targets)]
         cells += [
-            _with_ci(row["bound"], ci.get("bound"), "{:.3f}") if bounded else "—",
-            _with_ci(row["armse_over_bound"], ci.get("armse_over_bound"), "{:.2f}") if bounded else "—",
-            _with_ci(row["asr"], ci.get("asr"), "{:.2f}", scale=100),
-            _with_ci(row["final_regret"], ci.get("final_regret"), "{:.1f}"),
-            _with_ci(row["mean_sinr_db"], ci.get("mean_sinr_db"), "{:.2f}"),
+            _cell(row, "bound", "{:.3f}"),
+            _cell(row, "armse_over_bound", "{:.2f}"),
+            _cell(row, "asr", "{:.2f}", scale=100),
+            _cell(row, "final_regret", "{:.1f}"),
+            _cell(row, "mean_sinr_db", "{:.2f}"),
             f"{row['wall_s']:.1f}",
         ]
         if paper_armse:
@@ -186,18 +212,6 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
             cells.append(f"{paper_asr[policy]:.2f}" if policy in paper_asr else "—")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
-
-
-def _number(value: float, fmt: str) -> str:
-    text = fmt.format(value)
-    return text[1:] if text.startswith("-") and float(text) == 0 else text  # no "-0.0"
-
-
-def _with_ci(value: float, ci: list[float] | None, fmt: str, scale: float = 1.0) -> str:
-    text = _number(scale * value, fmt)
-    if ci is None:
-        return text
-    return f"{text} [{_number(scale * ci[0], fmt)}, {_number(scale * ci[1], fmt)}]"
 
 
 def paired_markdown(summary: dict[str, Any]) -> str:
@@ -214,14 +228,17 @@ def paired_markdown(summary: dict[str, Any]) -> str:
     lines = [
         "",
         "Paired differences `A - B` on the same trials, with their 95 % intervals "
-        f"({summary['uncertainty']}); an interval that excludes 0 is a significant difference.",
+        f"({summary['uncertainty']}); an interval that excludes 0 is a significant difference. "
+        + METHOD_LEGEND,
         "",
         "| A - B | " + " | ".join(label for _, label, _, _ in present) + " |",
         "|" + "---|" * (len(present) + 1),
     ]
     for pair, values in pairs.items():
         cells = [
-            _with_ci(values[key]["estimate"], values[key]["ci"], fmt, scale) if key in values else "—"
+            format_estimate(values[key]["estimate"], values[key]["ci"], fmt, scale, values[key]["method"])
+            if key in values
+            else "—"
             for key, _, fmt, scale in present
         ]
         lines.append(f"| {pair} | " + " | ".join(cells) + " |")
@@ -236,13 +253,19 @@ def _changed_options(options: dict[str, Any]) -> str:
 
 
 def write_outputs(
-    config: RunConfig, totals: dict[str, dict[str, NDArray]], out: str | Path, figures: bool = True
+    config: RunConfig,
+    per_trial: dict[str, dict[str, NDArray]] | None,
+    out: str | Path,
+    figures: bool = True,
 ) -> dict[str, Any]:
-    """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``."""
+    """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``,
+    from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None)."""
     out = Path(out)
-    summary = summarize(config, totals, load_per_trial(out, config))
+    per_trial = per_trial if per_trial is not None else load_per_trial(out, config)
+    metrics = trial_metrics(config, per_trial)
+    summary = summarize(config, per_trial, metrics)
     (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False))
-    rows = curves(config, totals)
+    rows = curves(config, metrics)
     with open(out / "curves.csv", "w", newline="") as handle:
         writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
         writer.writeheader()
@@ -252,5 +275,5 @@ def write_outputs(
     if figures:
         from .plots import plot_all
 
-        plot_all(config, totals, out)
+        plot_all(config, per_trial, metrics, out)
     return summary

@@ -1,10 +1,29 @@
 """Shard files of a run: where they live, how they are written, checked and read.
 
-A shard holds one policy's per-step sums over a block of trials (``SHARD_FIELDS``), the
-truth of its first trial, and three fields that make it self-describing: its trial range,
-the hash of the run configuration and policy it belongs to, and a checksum of its data. A
-shard that fails any check (unreadable, truncated, another run's, another block's, altered)
-is named, set aside and computed again; it never enters a result.
+A shard holds what the reports of one policy need about a block of trials, each piece once:
+
+``trial_expected``, ``trial_optimal`` (n, T) float64
+    the mean reward ``mu_t`` of the selected super arm and of the optimal one, per trial;
+``trial_squared_error`` (n, T, K) float64
+    the squared position error of each target's track (NaN without a tracker);
+``trial_bound_squared`` (n, T, K) float64
+    the squared posterior Cramer-Rao bound of the position for the selections made
+    (``info["position_bound"]``; NaN without a tracker);
+``trial_matches`` (n, T) uint8
+    1 where the selected super arm is the optimal one;
+``selections`` (T, M + N) float64
+    how many of the shard's trials selected each station at each step (the selection maps);
+``wall_s`` () float64
+    the task's compute time in seconds;
+``first_trial_positions`` (T + 1, K, 2) float64
+    the true positions of the shard's first trial (the geometry figure);
+
+and three fields that make it self-describing: ``shard_trials`` (its trial range),
+``config_hash`` (the hash of the run configuration, the policy and :data:`SHARD_FORMAT`) and
+``checksum`` (of its data). Every reported number is computed from the per-trial arrays
+(:class:`mimo_radar_env.metrics.TrialMetrics`). A shard that fails any check (unreadable,
+truncated, another run's or format's, another block's, altered) is named, set aside and
+computed again; it never enters a result.
 """
 
 from __future__ import annotations
@@ -21,28 +40,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-#: Per-step sums over a shard's trials; the shards of a policy add up to its totals.
-SHARD_FIELDS = (
-    "expected",
-    "optimal",
-    "squared_error",
-    "bound_squared",
-    "matches",
-    "selections",
-    "valid",
-    "wall_s",
-)
+from mimo_radar_env.metrics import TRIAL_FIELDS
+
+#: The layout of the fields above; part of every shard's identity, so that shards of an older
+#: layout are recomputed rather than read.
+SHARD_FORMAT = 2
 #: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
 TRUTH_FIELD = "first_trial_positions"
-#: Per-trial values (float32; trials first), from which the intervals are computed.
-TRIAL_FIELDS = (
-    "trial_expected",
-    "trial_optimal",
-    "trial_squared_error",
-    "trial_bound_squared",
-    "trial_matches",
-)
-DATA_FIELDS = (*SHARD_FIELDS, TRUTH_FIELD, *TRIAL_FIELDS)
+DATA_FIELDS = (*TRIAL_FIELDS, "selections", "wall_s", TRUTH_FIELD)
 META_FIELDS = ("shard_trials", "config_hash", "checksum")
 
 
@@ -61,7 +66,7 @@ def shard_path(out: Path, policy: str, shard: int) -> Path:
 
 def config_hash(config: dict[str, Any], policy: str) -> str:
     """The identity of a (run configuration, policy) pair, written into each of its shards."""
-    text = json.dumps(config, sort_keys=True, allow_nan=False) + "\n" + policy
+    text = json.dumps(config, sort_keys=True, allow_nan=False) + "\n" + policy + f"\nformat {SHARD_FORMAT}"
     return hashlib.sha256(text.encode()).hexdigest()
 
 

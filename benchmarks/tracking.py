@@ -29,6 +29,8 @@ from typing import Any
 from mimo_radar_env import paper_scenario
 from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 
+from . import verdicts
+
 # Light on purpose (the command line reads DEFAULT_TRIALS while it builds its parser, before
 # it checks which 'agents' package is installed): the harness is imported where it is used.
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
@@ -131,8 +133,10 @@ def paired(summary: dict[str, Any], a: str, b: str, metric: str) -> tuple[float,
 
 
 def _lower(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
+    """The target "``a`` has a lower ARMSE than ``b``", judged on the paired difference."""
     estimate, ci = paired(summary, a, b, "armse")
-    return {"a": a, "b": b, "difference": estimate, "ci": ci, "holds": ci[1] < 0}
+    verdict = verdicts.verdict(ci, -1)
+    return {"a": a, "b": b, "difference": estimate, "ci": ci, "verdict": verdict, "holds": verdict == "holds"}
 
 
 def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
@@ -178,7 +182,12 @@ def _interval(value: float, ci: list[float], fmt: str = "{:.3f}") -> str:
 
 
 def _verdict(holds: bool) -> str:
-    return "holds" if holds else "**fails**"
+    return verdicts.HOLDS if holds else "**fails**"
+
+
+def _mark(verdict: str) -> str:
+    """A target's verdict, in bold unless it holds."""
+    return verdict if verdict == verdicts.HOLDS else f"**{verdict}**"
 
 
 def targets_markdown(results: list[dict[str, Any]]) -> str:
@@ -200,7 +209,7 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     ]
     for r in results:
         cells = [
-            f"{_interval(c['difference'], c['ci'])} {_verdict(c['holds'])}" for c in r["best_tracking_lower"]
+            f"{_interval(c['difference'], c['ci'])} {_mark(c['verdict'])}" for c in r["best_tracking_lower"]
         ]
         lines.append(f"| paper-{r['scenario']} | {r['fusion']} | " + " | ".join(cells) + " |")
     lines += [
@@ -213,7 +222,7 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     ]
     for r in results:
         cells = [
-            f"{_interval(c['difference'], c['ci'])} {_verdict(c['holds'])}" for c in r["tracking_ucb_lower"]
+            f"{_interval(c['difference'], c['ci'])} {_mark(c['verdict'])}" for c in r["tracking_ucb_lower"]
         ]
         cells += [
             _interval(r["regret"][p]["value"], r["regret"][p]["ci"], "{:.0f}")
@@ -304,9 +313,8 @@ def write_targets(
 
 
 def _error_bar(value: float, ci: list[float]) -> list[list[float]]:
-    """Matplotlib's [[below], [above]]; an interval from float32 per-trial values may miss a
-    point estimate of float64 sums by rounding (Best's zero regret), hence the floor at 0."""
-    return [[max(value - ci[0], 0.0)], [max(ci[1] - value, 0.0)]]
+    """Matplotlib's [[below], [above]] (every interval contains its value)."""
+    return [[value - ci[0]], [ci[1] - value]]
 
 
 def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list[Path]:

@@ -1,145 +1,71 @@
 """95 % intervals over trials, by the bootstrap, for every number a run reports.
 
-Each metric is a function of per-trial values, evaluated on a resample of the trials (a
-weight per trial: how often the resample drew it). Intervals are ``scipy.stats.bootstrap``'s
-BCa intervals with resamples of the trials (percentile intervals where BCa is undefined: a
-metric constant over trials, such as Best's zero regret); comparisons between two policies resample the
-*same* trials for both (paired), so the common truth and channel draws cancel. The per-step
-bands of the figures are the same bootstrap applied to each step's value.
+A metric is a function of trial weights (:class:`mimo_radar_env.metrics.TrialMetrics`): its
+value is the function at equal weights, and its interval is ``scipy.stats.bootstrap`` over
+resamples of the trials, each resample a vector of weights fed to the *same* function. The
+method:
+
+* **BCa** with :data:`BCA_MIN_TRIALS` trials or more;
+* **percentile** below that (BCa's acceleration is a jackknife over trials, unreliable on a
+  handful of them), where BCa is undefined, or where BCa's interval would exclude the value
+  (a strongly skewed resampling distribution);
+* **constant**: a metric whose every resample gives the value (within floating-point
+  rounding) is constant over trials, and its interval is the value itself (Best's zero regret,
+  a fixed policy's regret under a shared truth).
+
+Each interval records its method, and every interval contains its value: an end that misses
+the value by rounding alone (``<= ROUNDING`` of the resamples' spread) is set to it, and a
+larger miss raises. Comparisons between two policies resample the *same* trials for both
+(paired), so the common truth and channel draws cancel. The per-step bands of the figures are
+the percentile bootstrap applied to each step's value.
 """
 
 from __future__ import annotations
 
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from itertools import combinations
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
+from mimo_radar_env.metrics import TrialMetrics, trial_weights
+
 CONFIDENCE = 0.95
 RESAMPLES = 2000
 BAND_RESAMPLES = 1000
+#: Below this many trials intervals are percentile intervals, not BCa.
+BCA_MIN_TRIALS = 20
+#: Relative size (of the resamples' spread, or of the value where they do not spread) of a
+#: miss that is floating-point rounding.
+ROUNDING = 1e-9
+METHODS = {"BCa": "BCa", "percentile": "percentile", "constant": "constant over trials"}
 METHOD = (
-    f"BCa bootstrap over trials (scipy.stats.bootstrap, {RESAMPLES} resamples, {CONFIDENCE:.0%}); "
-    "differences paired on the same trials; curve bands: percentile bootstrap per step "
-    f"({BAND_RESAMPLES} resamples)"
+    f"bootstrap over trials (scipy.stats.bootstrap, {RESAMPLES} resamples, {CONFIDENCE:.0%}): BCa from "
+    f"{BCA_MIN_TRIALS} trials, percentile below or where BCa is undefined or would exclude the value, "
+    f"the value itself for a metric constant over trials; differences paired on the same trials; "
+    f"curve bands: percentile bootstrap per step ({BAND_RESAMPLES} resamples)"
 )
 
 Metric = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 
-class TrialMetrics:
-    """The run's metrics as functions of trial weights ``w`` (..., N) that sum to 1.
-
-    Parameters
-    ----------
-    per_trial : dict
-        ``trial_expected``, ``trial_optimal`` (N, T), ``trial_squared_error`` (N, T, K),
-        ``trial_matches`` (N, T) of one policy, and optionally ``trial_bound_squared``
-        (N, T, K), the squared position bound of the selections made.
-    channels : int
-        ``Ms * Ns``.
-    """
-
-    def __init__(self, per_trial: dict[str, NDArray], channels: int) -> None:
-        expected = per_trial["trial_expected"].astype(np.float64)
-        optimal = per_trial["trial_optimal"].astype(np.float64)
-        self.steps = expected.shape[1]
-        self.mean_reward = expected.mean(axis=1)  # (N,)
-        self.regret = (optimal - expected).sum(axis=1)
-        self.regret_curve_per_trial = np.cumsum(optimal - expected, axis=1)  # (N, T)
-        self.reward_curve_per_trial = expected
-        self.match = per_trial["trial_matches"].astype(np.float64).mean(axis=1)
-        self.squared = per_trial["trial_squared_error"].astype(np.float64)  # (N, T, K)
-        self.tracked = bool(np.isfinite(self.squared).all())
-        bound = per_trial.get("trial_bound_squared")
-        self.bound_squared = bound.astype(np.float64) if bound is not None else None  # (N, T, K)
-        self.bounded = self.tracked and self.bound_squared is not None and bool(np.isfinite(bound).all())
-        self.channels = channels
-
-    @property
-    def num_trials(self) -> int:
-        return len(self.regret)
-
-    def final_regret(self, w: NDArray) -> NDArray:
-        return w @ self.regret
-
-    def asr(self, w: NDArray) -> NDArray:
-        return w @ self.match
-
-    def mean_sinr_db(self, w: NDArray) -> NDArray:
-        return 10.0 * np.log10(w @ self.mean_reward / self.channels)
-
-    def rmse_curve(self, w: NDArray, target: int) -> NDArray:
-        return _root_mean_square(self.squared, w, target)  # (..., T)
-
-    def armse_target(self, target: int) -> Metric:
-        return lambda w: self.rmse_curve(w, target).mean(axis=-1)
-
-    def armse(self, w: NDArray) -> NDArray:
-        return _time_averaged(self.squared, w)
-
-    def bound(self, w: NDArray) -> NDArray:
-        """The time-averaged root-mean-square position bound over targets weighted equally
-        (as ARMSE averages the RMSE): the floor the policy's selections set."""
-        assert self.bound_squared is not None
-        return _time_averaged(self.bound_squared, w)
-
-    def armse_over_bound(self, w: NDArray) -> NDArray:
-        return self.armse(w) / self.bound(w)
-
-    def bound_metrics(self) -> dict[str, Metric]:
-        """The bound and ARMSE / bound (with a tracker and recorded bounds; not paired)."""
-        if not self.bounded:
-            return {}
-        return {"bound": self.bound, "armse_over_bound": self.armse_over_bound}
-
-    def scalar_metrics(self) -> dict[str, Metric]:
-        """The table's metrics (ARMSE only with a tracker)."""
-        metrics: dict[str, Metric] = {
-            "asr": self.asr,
-            "final_regret": self.final_regret,
-            "mean_sinr_db": self.mean_sinr_db,
-        }
-        if self.tracked:
-            metrics["armse"] = self.armse
-        return metrics
+class IntervalError(ArithmeticError):
+    """A bootstrap interval excludes its own value by more than rounding."""
 
 
-def _root_mean_square(squared: NDArray, w: NDArray, target: int) -> NDArray:
-    """``sqrt`` of the trial-weighted mean of squared values (N, T, K) for one target: (..., T)."""
-    return np.sqrt(w @ squared[:, :, target])
-
-
-def _time_averaged(squared: NDArray, w: NDArray) -> NDArray:
-    """The mean over targets of the mean over steps of the root mean square: ARMSE's shape."""
-    targets = range(squared.shape[2])
-    return np.mean([_root_mean_square(squared, w, k).mean(axis=-1) for k in targets], axis=0)
-
-
-def _weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
-    """Resampled trial indices (..., n) as weights (..., N) summing to 1."""
-    index = np.asarray(index)
-    rows = index.reshape(-1, index.shape[-1])
-    weights = np.zeros((rows.shape[0], num_trials))
-    np.add.at(weights, (np.arange(rows.shape[0])[:, None], rows), 1.0)
-    return (weights / rows.shape[1]).reshape((*index.shape[:-1], num_trials))
-
-
-def _bootstrap(
-    metric: Callable[[NDArray], NDArray], num_trials: int, resamples: int, method: str, seed: int
-) -> tuple[NDArray, NDArray]:
+def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, seed: int) -> Any:
     """``scipy.stats.bootstrap`` over resampled trials of ``metric(weights) -> (...,) or (..., T)``."""
 
     def statistic(index: NDArray, axis: int = -1) -> NDArray:
-        value = metric(_weights(index, num_trials))
+        value = metric(trial_weights(index, num_trials))
         return np.moveaxis(value, -1, 0) if value.ndim > np.ndim(index) - 1 else value
 
     with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", stats.DegenerateDataWarning)
-        result = stats.bootstrap(
+        return stats.bootstrap(
             (np.arange(num_trials),),
             statistic,
             vectorized=True,
@@ -148,60 +74,70 @@ def _bootstrap(
             method=method,
             random_state=np.random.default_rng(seed),
         )
+
+
+def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
+    """``{"estimate", "ci", "method"}``: the metric at equal weights and its 95 % interval
+    (``ci`` None with a single trial, which has no interval)."""
+    value = float(metric(trial_weights(np.arange(num_trials), num_trials)))
+    if num_trials < 2:
+        return {"estimate": value, "ci": None, "method": "none (one trial)"}
+    method = "BCa" if num_trials >= BCA_MIN_TRIALS else "percentile"
+    result = _bootstrap(metric, num_trials, RESAMPLES, method, seed)
+    low, high = float(result.confidence_interval.low), float(result.confidence_interval.high)
+    distribution = np.asarray(result.bootstrap_distribution, np.float64)
+    spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
+    if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
+        return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
+    if method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high):
+        method = "percentile"  # BCa undefined, or skewed past the value
+        alpha = (1 - CONFIDENCE) / 2
+        low, high = (float(q) for q in np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)]))
+    miss = max(low - value, value - high, 0.0)
+    if miss > ROUNDING * spread:
+        raise IntervalError(f"the {method} interval [{low}, {high}] excludes its value {value}")
+    return {"estimate": value, "ci": [min(low, value), max(high, value)], "method": METHODS[method]}
+
+
+def interval(metric: Metric, num_trials: int, seed: int = 0) -> tuple[float, float]:
+    """The 95 % interval of ``metric`` over ``num_trials`` trials (see :func:`estimate`)."""
+    ci = estimate(metric, num_trials, seed)["ci"]
+    return (float("nan"), float("nan")) if ci is None else (ci[0], ci[1])
+
+
+def band(curve: Metric, num_trials: int, seed: int = 0) -> tuple[NDArray, NDArray]:
+    """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``."""
+    if num_trials < 2:
+        nan = np.full(curve(trial_weights(np.arange(num_trials), num_trials)).shape[-1], np.nan)
+        return nan, nan
+    result = _bootstrap(curve, num_trials, BAND_RESAMPLES, "percentile", seed)
     return result.confidence_interval.low, result.confidence_interval.high
 
 
-def interval(metric: Metric, num_trials: int, seed: int = 0, method: str = "BCa") -> tuple[float, float]:
-    """The 95 % bootstrap interval of ``metric`` over ``num_trials`` trials (BCa; percentile where
-    BCa is undefined)."""
-    if num_trials < 2:
-        return float("nan"), float("nan")
-    low, high = _bootstrap(metric, num_trials, RESAMPLES, method, seed)
-    if not (np.isfinite(low) and np.isfinite(high)):  # BCa is undefined for a constant statistic
-        low, high = _bootstrap(metric, num_trials, RESAMPLES, "percentile", seed)
-    return float(low), float(high)
-
-
-def band(curve: Callable[[NDArray], NDArray], num_trials: int, seed: int = 0) -> tuple[NDArray, NDArray]:
-    """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``."""
-    if num_trials < 2:
-        nan = np.full(curve(np.full(num_trials, 1.0 / num_trials)).shape[-1], np.nan)
-        return nan, nan
-    return _bootstrap(curve, num_trials, BAND_RESAMPLES, "percentile", seed)
-
-
-def policy_intervals(metrics: TrialMetrics, seed: int = 0) -> dict[str, list[float]]:
-    """``{metric: [low, high]}`` for the table's metrics (with the bound's), and
-    ``armse_per_target``."""
-    every = metrics.scalar_metrics() | metrics.bound_metrics()
-    out = {name: list(interval(fn, metrics.num_trials, seed)) for name, fn in every.items()}
-    if metrics.tracked:
-        out["armse_per_target"] = [
-            list(interval(metrics.armse_target(k), metrics.num_trials, seed))
-            for k in range(metrics.squared.shape[2])
-        ]
+def policy_estimates(metrics: TrialMetrics, seed: int = 0) -> dict[str, Any]:
+    """Every table metric of one policy: ``{metric: {"estimate", "ci", "method"}}``, and
+    ``{metric_per_target: [one such dict per target]}``."""
+    n = metrics.num_trials
+    out: dict[str, Any] = {name: estimate(fn, n, seed) for name, fn in metrics.scalar_metrics().items()}
+    for name, per_target in metrics.per_target_metrics().items():
+        out[name] = [estimate(fn, n, seed) for fn in per_target]
     return out
 
 
-def paired_differences(all_metrics: dict[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
-    """``{"A - B": {metric: {"estimate", "ci"}}}`` for every pair of policies, paired on trials."""
+def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
+    """``{"A - B": {metric: {"estimate", "ci", "method"}}}`` for every pair of policies, paired on
+    trials."""
     out: dict[str, dict[str, dict]] = {}
     for a, b in combinations(all_metrics, 2):
-        ma, mb = all_metrics[a], all_metrics[b]
-        n = ma.num_trials
-        ones = np.full(n, 1.0 / n)
+        fa_all, fb_all = all_metrics[a].scalar_metrics(), all_metrics[b].scalar_metrics()
         pair = {}
-        for name, fa in ma.scalar_metrics().items():
-            fb = mb.scalar_metrics().get(name)
-            if fb is None:
+        for name in ("armse", "asr", "final_regret", "mean_sinr_db"):
+            if name not in fa_all or name not in fb_all:
                 continue
 
-            def difference(w: NDArray, fa: Metric = fa, fb: Metric = fb) -> NDArray:
+            def difference(w: NDArray, fa: Metric = fa_all[name], fb: Metric = fb_all[name]) -> NDArray:
                 return fa(w) - fb(w)
 
-            pair[name] = {
-                "estimate": float(difference(ones)),
-                "ci": list(interval(difference, n, seed)),
-            }
+            pair[name] = estimate(difference, all_metrics[a].num_trials, seed)
         out[f"{a} - {b}"] = pair
     return out

@@ -1,43 +1,179 @@
-"""The evaluation metrics (docs/model.md, section 11), from per-step sums over Monte-Carlo trials.
+"""The evaluation metrics (docs/model.md, section 11): one implementation, from per-trial arrays.
 
-Every function takes sums over trials at each step (what a harness accumulates
-shard by shard) and the number of trials.
+Every metric a run reports is a function of the per-trial arrays of one policy (float64,
+trials first) and of *trial weights* ``w`` of shape ``(..., N)`` that sum to 1 over the
+trials. The reported value is the metric at equal weights (:meth:`TrialMetrics.equal`); the
+bootstrap of :mod:`benchmarks.uncertainty` evaluates the very same function on resampled
+weights (how often each trial was drawn), so an estimate and its interval can never come
+from two computations. Curves are the same functions before the average over steps.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 from numpy.typing import NDArray
 
-
-def rmse_curve(squared_error_sum: NDArray[np.float64], trials: int) -> NDArray[np.float64]:
-    """``RMSE_k(t) = sqrt(mean over trials of position error^2)``: (T, K) from (T, K) sums."""
-    return np.sqrt(np.asarray(squared_error_sum) / trials)
-
-
-def armse(squared_error_sum: NDArray[np.float64], trials: int) -> tuple[float, list[float]]:
-    """ARMSE over targets weighted equally, and per target: means over t of ``RMSE_k(t)``."""
-    per_target = rmse_curve(squared_error_sum, trials).mean(axis=0)
-    return float(per_target.mean()), [float(v) for v in per_target]
-
-
-def mean_sinr_db_curve(expected_sum: NDArray[np.float64], trials: int, channels: int) -> NDArray[np.float64]:
-    """Average SINR in dB at t: ``10 log10(mean over trials of mu_t / (Ms Ns))``."""
-    return 10.0 * np.log10(np.asarray(expected_sum) / (trials * channels))
+#: Steps ``[start, stop)``; ``None`` is the whole run.
+Window = tuple[int, int] | None
+#: The per-trial arrays a run records for each policy (shard fields of the harness).
+TRIAL_FIELDS = (
+    "trial_expected",
+    "trial_optimal",
+    "trial_squared_error",
+    "trial_bound_squared",
+    "trial_matches",
+)
 
 
-def mean_sinr_db(expected_sum: NDArray[np.float64], trials: int, channels: int) -> float:
-    """``10 log10`` of the mean over trials and steps of ``mu_t / (Ms Ns)``."""
-    return float(10.0 * np.log10(np.sum(expected_sum) / (trials * channels * len(expected_sum))))
+def trial_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
+    """Resampled trial indices ``(..., n)`` as weights ``(..., num_trials)`` that sum to 1
+    (``arange(num_trials)`` gives the equal weights of the estimate)."""
+    index = np.asarray(index)
+    rows = index.reshape(-1, index.shape[-1])
+    weights = np.zeros((rows.shape[0], num_trials))
+    np.add.at(weights, (np.arange(rows.shape[0])[:, None], rows), 1.0)
+    return (weights / rows.shape[1]).reshape((*index.shape[:-1], num_trials))
 
 
-def regret_curve(
-    optimal_sum: NDArray[np.float64], expected_sum: NDArray[np.float64], trials: int
-) -> NDArray[np.float64]:
-    """Cumulative regret ``sum_{s <= t} (mu*_s - mu_s)``, mean over trials (eq13)."""
-    return np.cumsum((np.asarray(optimal_sum) - np.asarray(expected_sum)) / trials)
+class TrialMetrics:
+    """One policy's metrics as functions of trial weights ``w`` (..., N).
+
+    Parameters
+    ----------
+    per_trial : mapping
+        ``trial_expected`` and ``trial_optimal`` (N, T): the mean reward ``mu_t`` of the
+        selected and of the optimal super arm; ``trial_matches`` (N, T): 1 where the selection
+        was the optimal one; optionally ``trial_squared_error`` and ``trial_bound_squared``
+        (N, T, K): the squared position error of the tracks and the squared position bound of
+        the selections made (NaN, or absent, without a tracker).
+    channels : int
+        ``Ms * Ns``, the channels probed per step.
+    """
+
+    def __init__(self, per_trial: Mapping[str, NDArray], channels: int) -> None:
+        self.expected = np.asarray(per_trial["trial_expected"], np.float64)
+        self.optimal = np.asarray(per_trial["trial_optimal"], np.float64)
+        self.matches = np.asarray(per_trial["trial_matches"], np.float64)
+        self.num_trials, self.steps = self.expected.shape
+        self.channels = channels
+        squared = per_trial.get("trial_squared_error")
+        self.squared = None if squared is None else np.asarray(squared, np.float64)  # (N, T, K)
+        self.tracked = self.squared is not None and bool(np.isfinite(self.squared).all())
+        bound = per_trial.get("trial_bound_squared")
+        self.bound_squared = None if bound is None else np.asarray(bound, np.float64)
+        self.bounded = (
+            self.tracked and self.bound_squared is not None and bool(np.isfinite(self.bound_squared).all())
+        )
+        self.num_targets = self.squared.shape[2] if self.squared is not None else 0
+        self._regret_steps = np.cumsum(self.optimal - self.expected, axis=1)  # (N, T)
+
+    # ------------------------------------------------------------ weights
+    def equal(self) -> NDArray[np.float64]:
+        """The equal trial weights at which every reported value is evaluated."""
+        return trial_weights(np.arange(self.num_trials), self.num_trials)
+
+    def _span(self, window: Window) -> slice:
+        a, b = window or (0, self.steps)
+        return slice(a, b)
+
+    # ------------------------------------------------------------ SINR and regret
+    def sinr_db_curve(self, w: NDArray) -> NDArray:
+        """Average SINR (dB) at each step: ``10 log10(mean over trials of mu_t / (Ms Ns))``, (..., T)."""
+        return 10.0 * np.log10(w @ self.expected / self.channels)
+
+    def mean_sinr_db(self, w: NDArray, window: Window = None) -> NDArray:
+        """``10 log10`` of the mean over trials and the window's steps of ``mu_t / (Ms Ns)``."""
+        return 10.0 * np.log10(w @ self.expected[:, self._span(window)].mean(axis=1) / self.channels)
+
+    def regret_curve(self, w: NDArray) -> NDArray:
+        """Cumulative regret ``sum_{s <= t} (mu*_s - mu_s)``, mean over trials (eq13), (..., T)."""
+        return w @ self._regret_steps
+
+    def regret(self, w: NDArray, at: int | None = None) -> NDArray:
+        """The cumulative regret at step ``at`` (1-based; default the last)."""
+        return w @ self._regret_steps[:, (at or self.steps) - 1]
+
+    def final_regret(self, w: NDArray) -> NDArray:
+        return self.regret(w)
+
+    # ------------------------------------------------------------ selection
+    def asr_curve(self, w: NDArray) -> NDArray:
+        """The fraction of trials whose super arm is the optimal one at each step, (..., T)."""
+        return w @ self.matches
+
+    def asr(self, w: NDArray) -> NDArray:
+        """eq33: the mean over trials and steps of ``1[A_t == A_Best,t]``, in [0, 1]."""
+        return w @ self.matches.mean(axis=1)
+
+    # ------------------------------------------------------------ tracking
+    def rmse_curve(self, w: NDArray, target: int) -> NDArray:
+        """``RMSE_k(t) = sqrt(mean over trials of the squared position error)``, (..., T)."""
+        return _root_mean_square(self._tracked(self.squared), w, target)
+
+    def armse(self, w: NDArray, window: Window = None, target: int | None = None) -> NDArray:
+        """The mean over the window's steps of ``RMSE_k(t)``, averaged over targets with equal
+        weights (or of one ``target``)."""
+        return _time_averaged(self._tracked(self.squared), w, self._span(window), target)
+
+    def armse_target(self, target: int):
+        """``w -> armse(w, target=target)``."""
+        return lambda w: self.armse(w, target=target)
+
+    def bound_curve(self, w: NDArray, target: int) -> NDArray:
+        """The root-mean-square position bound of the selections made at each step, (..., T)."""
+        return _root_mean_square(self._bounded(), w, target)
+
+    def bound(self, w: NDArray, window: Window = None, target: int | None = None) -> NDArray:
+        """The bound averaged as ARMSE averages the RMSE: the floor the selections set."""
+        return _time_averaged(self._bounded(), w, self._span(window), target)
+
+    def bound_target(self, target: int):
+        return lambda w: self.bound(w, target=target)
+
+    def armse_over_bound(self, w: NDArray) -> NDArray:
+        return self.armse(w) / self.bound(w)
+
+    def _tracked(self, squared: NDArray | None) -> NDArray:
+        if not self.tracked or squared is None:
+            raise ValueError("this run has no tracker (tracking=False): it has no position error")
+        return squared
+
+    def _bounded(self) -> NDArray:
+        if not self.bounded or self.bound_squared is None:
+            raise ValueError("this run recorded no position bound")
+        return self.bound_squared
+
+    # ------------------------------------------------------------ the table
+    def scalar_metrics(self) -> dict:
+        """The table's metrics, ``{name: w -> value}`` (ARMSE only with a tracker; the bound and
+        ARMSE / bound only where the bound was recorded)."""
+        metrics = {"asr": self.asr, "final_regret": self.final_regret, "mean_sinr_db": self.mean_sinr_db}
+        if self.tracked:
+            metrics["armse"] = self.armse
+        if self.bounded:
+            metrics["bound"] = self.bound
+            metrics["armse_over_bound"] = self.armse_over_bound
+        return metrics
+
+    def per_target_metrics(self) -> dict:
+        """``{name: [w -> value of target k]}`` for ARMSE and the bound."""
+        out = {}
+        if self.tracked:
+            out["armse_per_target"] = [self.armse_target(k) for k in range(self.num_targets)]
+        if self.bounded:
+            out["bound_per_target"] = [self.bound_target(k) for k in range(self.num_targets)]
+        return out
 
 
-def asr(matches_sum: NDArray[np.float64], trials: int) -> float:
-    """eq33: mean over trials and steps of ``1[A_t == A_Best,t]``, a fraction in [0, 1]."""
-    return float(np.sum(matches_sum) / (trials * len(matches_sum)))
+def _root_mean_square(squared: NDArray, w: NDArray, target: int, span: slice = slice(None)) -> NDArray:
+    """``sqrt`` of the trial-weighted mean of squared values (N, T, K) for one target over the
+    span's steps: (..., steps)."""
+    return np.sqrt(w @ squared[:, span, target])
+
+
+def _time_averaged(squared: NDArray, w: NDArray, span: slice, target: int | None) -> NDArray:
+    """The mean over targets (or one) of the mean over the span's steps of the root mean square."""
+    targets = range(squared.shape[2]) if target is None else [target]
+    return np.mean([_root_mean_square(squared, w, k, span).mean(axis=-1) for k in targets], axis=0)

@@ -7,18 +7,18 @@ import signal
 import subprocess
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 from benchmarks.cli import main
-from benchmarks.harness import HarnessError, load_totals, make_config, parse_agent_params, run, shard_path
+from benchmarks.harness import HarnessError, make_config, parse_agent_params, run, shard_path
 from benchmarks.report import write_outputs
-from mimo_radar_env import metrics
+from mimo_radar_env.metrics import TrialMetrics
 
 SUMMARY_KEYS = {
     "ci",
+    "method",
     "armse",
     "armse_per_target",
     "bound",
@@ -37,15 +37,32 @@ def _read_curves(path):
 
 
 def test_metrics_on_a_hand_made_case():
-    # 2 trials, 3 steps, 2 targets; squared errors summed over trials
-    squared = np.array([[2 * 1.0, 2 * 4.0], [2 * 9.0, 2 * 16.0], [2 * 0.0, 2 * 1.0]])
-    overall, per_target = metrics.armse(squared, trials=2)
+    # 2 trials, 3 steps, 2 targets, per trial
+    squared = np.array([[1.0, 4.0], [9.0, 16.0], [0.0, 1.0]])
+    m = TrialMetrics(
+        {
+            "trial_expected": np.array([[3.0, 5.0, 2.0], [3.0, 5.0, 2.0]]),
+            "trial_optimal": np.array([[5.0, 5.0, 6.0], [5.0, 5.0, 6.0]]),
+            "trial_squared_error": np.stack([squared, squared]),
+            "trial_matches": np.array([[1, 1, 0], [1, 0, 0]]),
+        },
+        channels=6,
+    )
+    w = m.equal()
+    per_target = [float(m.armse(w, target=k)) for k in range(2)]
     assert per_target == pytest.approx([(1 + 3 + 0) / 3, (2 + 4 + 1) / 3])
-    assert overall == pytest.approx(np.mean(per_target))
-    assert metrics.asr(np.array([2, 1, 0]), trials=2) == pytest.approx(0.5)
-    regret = metrics.regret_curve(np.array([10.0, 10.0, 12.0]), np.array([6.0, 10.0, 4.0]), trials=2)
-    np.testing.assert_allclose(regret, [2.0, 2.0, 6.0])
-    assert metrics.mean_sinr_db(np.array([60.0, 60.0]), trials=1, channels=6) == pytest.approx(10.0)
+    assert float(m.armse(w)) == pytest.approx(np.mean(per_target))
+    assert float(m.asr(w)) == pytest.approx(0.5)
+    np.testing.assert_allclose(m.regret_curve(w), [2.0, 2.0, 6.0])
+    one = TrialMetrics(
+        {
+            "trial_expected": np.array([[60.0, 60.0]]),
+            "trial_optimal": np.array([[60.0, 60.0]]),
+            "trial_matches": np.ones((1, 2)),
+        },
+        channels=6,
+    )
+    assert float(one.mean_sinr_db(one.equal())) == pytest.approx(10.0)
 
 
 def test_paper_subcommand_writes_every_output(tmp_path, capsys):
@@ -264,7 +281,7 @@ def test_local_workers_give_the_numbers_of_one_process(tmp_path):
     one = run(config, tmp_path / "one", workers=1, progress=False)
     two = run(config, tmp_path / "two", workers=2, progress=False)
     for policy in config.policies:
-        for key in ("expected", "optimal", "squared_error", "matches", "selections"):
+        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
             np.testing.assert_array_equal(one[policy][key], two[policy][key])
 
 
@@ -274,7 +291,7 @@ def test_ray_backend_gives_the_numbers_of_the_local_path(tmp_path):
     local = run(config, tmp_path / "local", workers=1, progress=False)
     remote = run(config, tmp_path / "ray", backend="ray", progress=False)
     for policy in config.policies:
-        for key in ("expected", "optimal", "squared_error", "matches", "selections"):
+        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
             np.testing.assert_array_equal(local[policy][key], remote[policy][key])
 
 
@@ -288,6 +305,6 @@ def test_outputs_regenerate_from_saved_shards(tmp_path):
     config = make_config("paper-1", ["fix1", "best"], trials=2, steps=10, shard_size=1)
     totals = run(config, tmp_path, progress=False)
     first = write_outputs(config, totals, tmp_path, figures=False)
-    again = write_outputs(config, load_totals(Path(tmp_path), config), tmp_path, figures=False)
+    again = write_outputs(config, None, tmp_path, figures=False)
     assert first == again
     assert shard_path(tmp_path, "fix1", 1).exists()

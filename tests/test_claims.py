@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from benchmarks import claims, uncertainty
+from benchmarks import claims, uncertainty, verdicts
 from benchmarks.cli import main
 
 SHARED = np.random.default_rng(9).normal(0, 0.5, size=(60, 1))  # per-trial, common to all policies
@@ -50,11 +50,11 @@ def test_s2_3_is_judged_right(mg_regret, verdict):
 
 
 def test_claim_verdicts_combine_their_comparisons():
-    assert claims.claim_verdict(["holds", "holds"]) == "holds"
-    assert claims.claim_verdict(["holds", "consistent"]) == "consistent"
-    assert claims.claim_verdict(["holds", "contradicted", "consistent"]) == "contradicted"
-    assert claims.claim_verdict(["holds", "not evaluated"]) == "consistent"
-    assert claims.claim_verdict(["not evaluated"]) == "not evaluated"
+    assert verdicts.combine(["holds", "holds"]) == "holds"
+    assert verdicts.combine(["holds", "consistent"]) == "consistent"
+    assert verdicts.combine(["holds", "contradicted", "consistent"]) == "contradicted"
+    assert verdicts.combine(["holds", "not evaluated"]) == "consistent"
+    assert verdicts.combine(["not evaluated"]) == "not evaluated"
 
 
 def test_every_claim_names_policies_the_paper_study_runs():

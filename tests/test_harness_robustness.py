@@ -56,14 +56,14 @@ def test_3_damaged_shards_are_named_set_aside_and_recomputed(damage, tmp_path, c
     else:  # valid archive, altered numbers
         with np.load(target) as data:
             fields = {k: data[k] for k in data.files}
-        fields["expected"] = fields["expected"] * 2
+        fields["trial_expected"] = fields["trial_expected"] * 2
         np.savez(target, **fields)
     again = run(config, out, progress=False)
     err = capsys.readouterr()
     assert f"shard {target} is not valid" in err.out + err.err
     assert target.with_name(target.name + ".damaged").exists()
     for policy in config.policies:
-        for key in ("expected", "optimal", "squared_error", "matches"):
+        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches"):
             np.testing.assert_array_equal(again[policy][key], clean[policy][key])
 
 
@@ -75,7 +75,7 @@ def test_8_policy_folders_never_collide_and_model_files_are_part_of_the_configur
 def test_9_non_finite_metrics_are_errors_and_json_is_strict(tmp_path):
     config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
     totals = run(config, tmp_path, progress=False)
-    totals["fix1"]["expected"][2] = np.nan
+    totals["fix1"]["trial_expected"][0, 2] = np.nan
     with pytest.raises(HarnessError, match=r"policy 'fix1': \w+ is not a finite number"):
         summarize(config, totals)
     summary = (tmp_path / "config.json").read_text()
@@ -91,7 +91,7 @@ def test_14_results_do_not_depend_on_the_shard_size(tmp_path):
         results.append(run(config, tmp_path / f"size{size}", progress=False))
     for other in results[1:]:
         for policy in policies:
-            for key in ("expected", "matches", "selections", "squared_error"):
+            for key in ("trial_expected", "trial_matches", "selections", "trial_squared_error"):
                 np.testing.assert_allclose(other[policy][key], results[0][policy][key], rtol=1e-12)
 
 

@@ -64,7 +64,7 @@ def test_run_outputs_carry_intervals_that_hold_their_values(tmp_path):
     argv = ["run", "--scenario", "paper-3", "--policies", "ucb1,epsilon-greedy,best", "--trials", "12"]
     assert main([*argv, "--steps", "40", "--workers", "1", "--quiet", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
-    assert "BCa bootstrap" in summary["uncertainty"]
+    assert "BCa from 20 trials, percentile below" in summary["uncertainty"]
     for row in summary["policies"].values():
         for key in ("armse", "asr", "final_regret", "mean_sinr_db"):
             low, high = row["ci"][key]
@@ -76,7 +76,77 @@ def test_run_outputs_carry_intervals_that_hold_their_values(tmp_path):
         "epsilon-greedy - best",
     }
     best = summary["policies"]["best"]
-    assert best["ci"]["final_regret"] == [0.0, 0.0]  # a constant: the percentile fallback
+    # Best's regret is 0 up to the rounding of the env's sums, the same in every trial: a
+    # constant, whose interval is the value itself
+    assert abs(best["final_regret"]) < 1e-9
+    assert best["method"]["final_regret"] == "constant over trials"
+    assert best["ci"]["final_regret"] == [best["final_regret"], best["final_regret"]]
     table = (out / "table.md").read_text()
     assert "95 % interval" in table and "| ucb1 - best |" in table
     assert (out / "rmse.png").exists() and (out / "regret.png").exists()
+
+
+def _every_estimate(summary):
+    """Every (value, interval, method) of a summary: the table's cells and the paired differences."""
+    for policy, row in summary["policies"].items():
+        for key, ci in row["ci"].items():
+            values, cis, methods = row[key], ci, row["method"][key]
+            if not isinstance(values, list):
+                values, cis, methods = [values], [cis], [methods]
+            for value, interval, method in zip(values, cis, methods, strict=True):
+                yield f"{policy} {key}", value, interval, method
+    for pair, metrics in summary["paired_differences"].items():
+        for key, judged in metrics.items():
+            yield f"{pair} {key}", judged["estimate"], judged["ci"], judged["method"]
+
+
+@pytest.mark.parametrize("trials", [2, 5, 10, 24])
+def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-3", "--policies", "mg-crb-cl,ucb1,best,fix1,random"]
+    argv += ["--trials", str(trials), "--steps", "30", "--workers", "1", "--quiet", "--no-figures"]
+    assert main([*argv, "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    seen = set()
+    for name, value, (low, high), method in _every_estimate(summary):
+        assert low <= value <= high, (name, value, low, high, method)
+        seen.add(method)
+    expected = {"percentile", "constant over trials"} if trials < uncertainty.BCA_MIN_TRIALS else {"BCa"}
+    assert expected <= seen, seen
+    if trials < uncertainty.BCA_MIN_TRIALS:
+        assert "BCa" not in seen
+
+
+@pytest.mark.parametrize("trials", [2, 3, 5, 10, 19, 20, 50, 500])
+def test_every_interval_contains_its_value_on_heavy_tailed_synthetic_policies(trials):
+    """Pareto-tailed errors and rewards (the worst case for BCa's skew correction)."""
+    rng = np.random.default_rng(trials)
+    t = 40
+    policies = {
+        name: _policy(
+            rng.pareto(1.5, size=(trials, t)) + 0.1,
+            rng.pareto(1.2, size=(trials, t, 2)) * scale,
+            optimal=np.full((trials, t), 50.0),
+        )
+        for name, scale in (("a", 1.0), ("b", 3.0), ("c", 0.3))
+    }
+    for m in policies.values():
+        for name, judged in uncertainty.policy_estimates(m).items():
+            for one in judged if isinstance(judged, list) else [judged]:
+                low, high = one["ci"]
+                assert low <= one["estimate"] <= high, (name, one)
+    for pair, metrics in uncertainty.paired_differences(policies).items():
+        for name, one in metrics.items():
+            assert one["ci"][0] <= one["estimate"] <= one["ci"][1], (pair, name, one)
+
+
+def test_the_estimate_is_the_metric_at_equal_weights_and_a_constant_has_a_point_interval():
+    x = np.array([1.0, 2.0, 4.0, 8.0])
+    judged = uncertainty.estimate(lambda w: w @ x, 4)
+    assert judged["estimate"] == x.mean() and judged["method"] == "percentile"
+    constant = uncertainty.estimate(lambda w: w @ np.full(30, 7.0), 30)
+    assert constant["estimate"] == pytest.approx(7.0, rel=1e-15)
+    assert constant["ci"] == [constant["estimate"]] * 2 and constant["method"] == "constant over trials"
+    assert uncertainty.estimate(lambda w: w @ x[:1], 1)["ci"] is None
+    wide = uncertainty.estimate(lambda w: w @ np.random.default_rng(0).normal(size=40), 40)
+    assert wide["method"] == "BCa" and wide["ci"][0] < wide["estimate"] < wide["ci"][1]
