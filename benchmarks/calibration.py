@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env import RadarModel, Scenario, load_scenario
+from mimo_radar_env import VERSIONS, RadarModel, Scenario, load_scenario
 from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
@@ -49,7 +49,9 @@ REGION_M = 100_000.0
 MIN_TRACK_DISTANCE = 2_000.0
 #: Station-wise jitter scales (km) the candidates cycle through.
 JITTER_KM = (2.0, 5.0, 10.0, 20.0)
-PAPER_SCENARIOS = ("paper-1", "paper-2", "paper-3")
+#: The version whose paper scenarios hold the reference layout (section 1's reconstruction).
+REFERENCE_VERSION = "v0"
+PAPER_SCENARIOS = VERSIONS[REFERENCE_VERSION].paper_scenarios
 #: The search's sizes (the command's defaults): candidates, layouts with short scorecards,
 #: their trials, layouts with full scorecards.
 CANDIDATES, SCREEN, SCREEN_TRIALS, FINAL = 400, 10, 40, 2
@@ -78,7 +80,7 @@ class Candidate:
 
 def candidates(count: int, seed: int) -> list[Candidate]:
     """The reference layout (index 0) and ``count`` jittered layouts, reproducibly."""
-    reference = load_scenario("paper-1")
+    reference = load_scenario(PAPER_SCENARIOS[0])
     tx0, rx0 = reference.tx_positions / 1e3, reference.rx_positions / 1e3
     rng = np.random.default_rng(seed)
     out = [Candidate(0, tx0.tolist(), rx0.tolist())]
@@ -163,7 +165,7 @@ def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
             return float(np.einsum("tm,tn,tmn->", tx[a:b], rx[a:b], weights[a:b]))
 
         n = sc.name[-1]
-        if sc.name == "paper-1":
+        if sc.name == PAPER_SCENARIOS[0]:
             checks["S1.2 fix1 > fix2 SINR 0-500 s"] = sinr("fix1", 0, 500) > sinr("fix2", 0, 500)
             checks["S1.2 fix2 > fix1 SINR 500-1000 s"] = sinr("fix2", 500, 1000) > sinr("fix1", 500, 1000)
             checks["S1.8 fix1 lowest bound 268-360 s"] = armse("fix1", 268, 360) < min(

@@ -455,7 +455,7 @@ def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str =
 def load_study(run_dir: str | Path) -> tuple[str, Policies]:
     """The paper scenario (``paper-N`` of any version) and the policies of a finished run."""
     run_dir = Path(run_dir)
-    from mimo_radar_env.envs.options import paper_key
+    from mimo_radar_env.envs.versions import paper_key
 
     config = RunConfig(**json.loads((run_dir / "config.json").read_text()))
     metrics = trial_metrics(config, load_per_trial(run_dir, config))

@@ -50,22 +50,23 @@ def _quality(text: str) -> float | None:
 
 def add_env_options(parser: argparse.ArgumentParser) -> None:
     """One flag per env option, with the choices, default and help of :class:`EnvOptions`."""
-    from mimo_radar_env import VERSION_DEFAULTS, EnvOptions
+    from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions
     from mimo_radar_env.envs.options import option_choices, option_help
 
     defaults, choices = EnvOptions().to_dict(), option_choices()
     group = parser.add_argument_group("env options (MimoRadarSelect keywords)")
     group.add_argument(
         "--env-version",
-        choices=sorted(VERSION_DEFAULTS),
-        default="v1",
-        help="MimoRadarSelect version whose defaults the options start from: v1 (reading 1 of the "
-        "paper's ambiguous points, default) or v0 (the first reading, unchanged since release)",
+        choices=sorted(VERSIONS),
+        default=DEFAULT_VERSION,
+        help="MimoRadarSelect version whose defaults the options start from: "
+        + "; ".join(f"{v.name}: {v.summary}" for v in VERSIONS.values())
+        + " (default %(default)s)",
     )
     for name, text in option_help().items():
         flag = "--" + name.replace("_", "-")
         versions = ", ".join(
-            f"{v}: {VERSION_DEFAULTS[v].get(name, defaults[name])}" for v in sorted(VERSION_DEFAULTS)
+            f"{v.name}: {v.option_defaults.get(name, defaults[name])}" for v in VERSIONS.values()
         )
         help_text = f"{text} (default {versions})"
         given = argparse.SUPPRESS  # absent unless given: the version's default applies
@@ -86,8 +87,19 @@ def env_options_from(args: argparse.Namespace) -> Any:
     return EnvOptions.for_version(args.env_version, **given)
 
 
-#: How --agent-param combines with the paper study's per-version agent parameters.
-OVER_READING = "; over the version's reading (v1: mg-crb-cl.solver_params={rule: set})"
+def _over_reading() -> str:
+    """How --agent-param combines with the paper study's per-version agent parameters."""
+    from mimo_radar_env import VERSIONS
+
+    readings = "; ".join(
+        f"{v.name}: "
+        + (
+            ", ".join(f"{a}.{k}={val}" for a, p in v.paper_agent_params.items() for k, val in p.items())
+            or "none"
+        )
+        for v in VERSIONS.values()
+    )
+    return f"; over the version's paper-study parameters ({readings})"
 
 
 def _add_agent_param(parser: argparse.ArgumentParser, over: str = "") -> None:
@@ -103,9 +115,11 @@ def _add_agent_param(parser: argparse.ArgumentParser, over: str = "") -> None:
 def study_agent_params(env_version: str, items: Sequence[str]) -> dict[str, dict[str, Any]]:
     """The paper study's agent parameters: the version's reading, then ``--agent-param`` over it
     (key by key, so ``mg-crb-cl.solver_params={rule: xor}`` replaces the reading's solver_params)."""
-    from .harness import READING_AGENT_PARAMS, parse_agent_params
+    from mimo_radar_env import env_version as version_of
 
-    params = json.loads(json.dumps(READING_AGENT_PARAMS[env_version]))
+    from .harness import parse_agent_params
+
+    params = version_of(env_version).paper_study_params()
     for policy, values in parse_agent_params(items).items():
         params.setdefault(policy, {}).update(values)
     return params
@@ -169,7 +183,7 @@ def build_parser() -> argparse.ArgumentParser:
     paper.add_argument(
         "--scenario", type=int, choices=(1, 2, 3), required=True, help="paper scenario 1, 2 or 3"
     )
-    _add_agent_param(paper, over=OVER_READING)
+    _add_agent_param(paper, over=_over_reading())
     _add_run_options(paper)
 
     run = sub.add_parser(
@@ -248,7 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     claims.add_argument("runs", nargs="*", help="finished paper-study folders (default: run them into --out)")
     claims.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
-    _add_agent_param(claims, over=OVER_READING)
+    _add_agent_param(claims, over=_over_reading())
     _add_run_options(claims)
 
     tracking = sub.add_parser(
@@ -271,7 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="also run a trained PPO: its model path with {scenario} and {fusion} filled in, e.g. "
         "runs/ppo-info/paper-{scenario}-{fusion}/model.zip",
     )
-    _add_agent_param(tracking, over=OVER_READING)
+    _add_agent_param(tracking, over=_over_reading())
     _add_run_options(tracking)
     from .tracking import DEFAULT_TRIALS
 
@@ -295,7 +309,7 @@ def build_parser() -> argparse.ArgumentParser:
         ("--final", FINAL, "layouts judged by full scorecards"),
     ):
         calibrate.add_argument(flag, type=_integer(1), default=default, help=f"{text} (default {default})")
-    _add_agent_param(calibrate, over=OVER_READING)
+    _add_agent_param(calibrate, over=_over_reading())
     _add_run_options(calibrate)
 
     compare = sub.add_parser(

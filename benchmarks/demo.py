@@ -5,17 +5,17 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
-from mimo_radar_env import ENV_IDS, PAPER_SCENARIOS
+from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 from mimo_radar_env.core.superarm import random_super_arms
 
 
 def run_demo(
-    scenario: str = PAPER_SCENARIOS["v1"][0], seed: int = 0, steps: int | None = None
+    scenario: str = VERSIONS[DEFAULT_VERSION].default_scenario, seed: int = 0, steps: int | None = None
 ) -> dict[str, dict[str, float]]:
     """Run one episode per policy (same seed, so the same target trajectory) and summarise it."""
     results: dict[str, dict[str, float]] = {}
     for policy in ("random-valid", "oracle"):
-        env = gym.make(ENV_IDS["v1"], scenario=scenario)
+        env = gym.make(VERSIONS[DEFAULT_VERSION].env_id, scenario=scenario)
         env.reset(seed=seed)
         sc = env.unwrapped.scenario
         rng = np.random.default_rng(seed)

@@ -49,12 +49,6 @@ from .shards import (
 CONFIG_FILE = "config.json"
 LOCK_FILE = ".lock"
 PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
-#: The agent parameters of each reading in the paper's study (``paper``): reading 1 runs
-#: MG-CRB-CL's BPSO with the standard position rule (docs/agents.md).
-READING_AGENT_PARAMS: dict[str, dict[str, dict[str, Any]]] = {
-    "v0": {},
-    "v1": {"mg-crb-cl": {"solver_params": {"rule": "set"}}},
-}
 
 
 class HarnessError(ValueError):

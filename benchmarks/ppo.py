@@ -14,7 +14,7 @@ from pathlib import Path
 from typing import Any
 
 from agents.ppo import MODEL_FILE, NORMALIZATION_FILE, require_sb3, save_normalization
-from mimo_radar_env import FLAT_ENV_IDS, EnvOptions, Scenario, load_scenario
+from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, Scenario, load_scenario
 
 #: The hyperparameter file shipped with the package (rl-zoo3 style).
 DEFAULT_HYPERPARAMS = "hyperparams/ppo.yml"
@@ -22,7 +22,9 @@ META_FILE = "ppo.json"
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
-def load_hyperparams(path: str | Path | None = None, key: str = FLAT_ENV_IDS["v1"]) -> dict[str, Any]:
+def load_hyperparams(
+    path: str | Path | None = None, key: str = VERSIONS[DEFAULT_VERSION].flat_env_id
+) -> dict[str, Any]:
     """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped ``hyperparams/ppo.yml``).
 
     ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads
@@ -84,7 +86,7 @@ def train_ppo(
 
     options = options or EnvOptions()
     sc = load_scenario(scenario)
-    params = load_hyperparams(hyperparams, hyperparams_key or FLAT_ENV_IDS["v1"])
+    params = load_hyperparams(hyperparams, hyperparams_key or VERSIONS[DEFAULT_VERSION].flat_env_id)
     n_envs = int(params.get("n_envs", 8))
     if timesteps is not None and timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")

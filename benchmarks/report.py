@@ -11,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import EnvOptions
-from mimo_radar_env.envs.options import paper_key
+from mimo_radar_env.envs.versions import paper_key
 from mimo_radar_env.metrics import TrialMetrics
 
 from . import uncertainty

@@ -7,8 +7,17 @@ points, unchanged since its release) and ``MimoRadarSelect-v1`` (reading 1), ide
 from gymnasium.envs.registration import register, registry
 
 from .core.model import RadarModel
-from .envs import EnvOptions, MimoRadarSelectEnv, MimoRadarSelectVectorEnv, default_config
-from .envs.options import ENV_IDS, FLAT_ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
+from .envs import (
+    DEFAULT_VERSION,
+    VERSIONS,
+    EnvOptions,
+    EnvVersion,
+    MimoRadarSelectEnv,
+    MimoRadarSelectVectorEnv,
+    default_config,
+    env_version,
+)
+from .envs.versions import ENV_IDS, FLAT_ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -21,30 +30,33 @@ from .scenarios import (
 
 ENV_ID = ENV_IDS["v0"]
 
-for _version, _env_id in ENV_IDS.items():
-    if _env_id not in registry:
+for _version in VERSIONS.values():
+    if _version.env_id not in registry:
         register(
-            id=_env_id,
+            id=_version.env_id,
             entry_point="mimo_radar_env.envs:MimoRadarSelectEnv",
             vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
-            kwargs={**VERSION_DEFAULTS[_version], "scenario": PAPER_SCENARIOS[_version][0]},
+            kwargs=_version.registration_kwargs(),
         )
-    if FLAT_ENV_IDS[_version] not in registry:
+    if _version.flat_env_id not in registry:
         register(
-            id=FLAT_ENV_IDS[_version],
+            id=_version.flat_env_id,
             entry_point="mimo_radar_env.wrappers:make_flat_env",
-            kwargs={**VERSION_DEFAULTS[_version], "scenario": PAPER_SCENARIOS[_version][0]},
+            kwargs=_version.registration_kwargs(),
         )
 
 __version__ = "0.1.0"
 
 __all__ = [
+    "DEFAULT_VERSION",
     "ENV_ID",
     "ENV_IDS",
     "FLAT_ENV_IDS",
     "PAPER_SCENARIOS",
+    "VERSIONS",
     "VERSION_DEFAULTS",
     "EnvOptions",
+    "EnvVersion",
     "Maneuver",
     "MimoRadarSelectEnv",
     "MimoRadarSelectVectorEnv",
@@ -54,6 +66,7 @@ __all__ = [
     "Target",
     "available_scenarios",
     "default_config",
+    "env_version",
     "load_scenario",
     "paper_scenario",
     "random_scenario",

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from .envs import MimoRadarSelectVectorEnv
-from .envs.options import ENV_IDS
+from .envs.versions import ENV_IDS
 from .extras import require
 from .scenarios import Scenario
 from .wrappers import RadarFeatures, SuperArmDiscreteAction, SuperArmIndex, make_ppo_env, scores_to_action

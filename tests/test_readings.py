@@ -90,7 +90,7 @@ def test_versions_register_their_defaults():
 
 def test_each_version_names_its_paper_scenarios():
     from mimo_radar_env import PAPER_SCENARIOS, paper_scenario
-    from mimo_radar_env.envs.options import paper_key
+    from mimo_radar_env.envs.versions import paper_key
 
     assert PAPER_SCENARIOS["v0"] == ("paper-1", "paper-2", "paper-3")
     assert [paper_scenario(n, "v1") for n in (1, 2, 3)] == ["paper-1-v1", "paper-2-v1", "paper-3-v1"]

@@ -18,41 +18,9 @@ from ..core.superarm import SUPER_ARM_METHODS
 from ..scenarios import Scenario, load_scenario
 from ..tracking import FUSIONS
 
-#: The scenario of ``gym.make("MimoRadarSelect-v0")`` without a ``scenario`` keyword.
+#: The scenario of the env class made without a ``scenario`` keyword (each registered version
+#: names its own: :mod:`mimo_radar_env.envs.versions`).
 DEFAULT_SCENARIO = "paper-1"
-#: The defaults that differ from :class:`EnvOptions`' (v0's) in each registered env version:
-#: v1 is reading 1 of the paper's ambiguous points (docs/model.md, section 13).
-VERSION_DEFAULTS: dict[str, dict[str, Any]] = {
-    "v0": {},
-    "v1": {"lambda_scale": "db", "truth": "shared"},
-}
-ENV_IDS = {version: f"MimoRadarSelect-{version}" for version in VERSION_DEFAULTS}
-#: The same envs with a valid Discrete (or station-score) action and a flat float32 feature
-#: observation, for tools that take an env id (``mimo_radar_env.wrappers.make_flat_env``).
-FLAT_ENV_IDS = {version: f"MimoRadarSelectFlat-{version}" for version in VERSION_DEFAULTS}
-#: The paper's three scenarios as each version ships them (docs/model.md, section 13); the
-#: first is the version's default scenario.
-PAPER_SCENARIOS: dict[str, tuple[str, ...]] = {
-    "v0": ("paper-1", "paper-2", "paper-3"),
-    "v1": ("paper-1-v1", "paper-2-v1", "paper-3-v1"),
-}
-
-
-def paper_scenario(number: int, version: str) -> str:
-    """The name of paper scenario ``number`` (1, 2, 3) of env ``version``."""
-    if version not in PAPER_SCENARIOS:
-        raise ValueError(f"env version must be one of {sorted(PAPER_SCENARIOS)}, got {version!r}")
-    if number not in (1, 2, 3):
-        raise ValueError(f"paper scenarios are 1, 2 and 3, got {number!r}")
-    return PAPER_SCENARIOS[version][number - 1]
-
-
-def paper_key(name: str) -> str:
-    """``"paper-N"`` for paper scenario N of any version; other names unchanged."""
-    for names in PAPER_SCENARIOS.values():
-        if name in names:
-            return f"paper-{names.index(name) + 1}"
-    return name
 
 
 FusionName = Literal[tuple(FUSIONS)]  # type: ignore[valid-type]
@@ -142,9 +110,9 @@ class EnvOptions:
     @classmethod
     def for_version(cls, version: str, **options: Any) -> EnvOptions:
         """The options of env version ``version`` (``"v0"``, ``"v1"``) with some overridden."""
-        if version not in VERSION_DEFAULTS:
-            raise ValueError(f"env version must be one of {sorted(VERSION_DEFAULTS)}, got {version!r}")
-        return cls(**{**VERSION_DEFAULTS[version], **options})
+        from .versions import env_version
+
+        return env_version(version).options(**options)
 
     def __post_init__(self) -> None:
         for name, choices in option_choices().items():
@@ -217,8 +185,3 @@ def resolve(kwargs: Mapping[str, Any]) -> tuple[EnvOptions, Scenario]:
     """The options and the scenario (with its field overrides) of ``gym.make`` keywords."""
     options, overrides = EnvOptions.from_kwargs(kwargs)
     return options, load_scenario(kwargs.get("scenario", DEFAULT_SCENARIO), **overrides)
-
-
-def default_config() -> dict[str, Any]:
-    """The defaults of every ``gym.make`` keyword besides scenario fields (highway-env style)."""
-    return {"scenario": DEFAULT_SCENARIO, **EnvOptions().to_dict()}

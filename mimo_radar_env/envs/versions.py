@@ -1,0 +1,143 @@
+"""The registered versions of ``MimoRadarSelect``: one definition each.
+
+An :class:`EnvVersion` is everything a version means: its env ids (``MimoRadarSelect-vN`` and
+the flat ``MimoRadarSelectFlat-vN``), the option defaults that differ from
+:class:`~mimo_radar_env.EnvOptions`' own (v0's), its three paper scenarios (the first is its
+default scenario), and the agent parameters of its paper study. Registration, the benchmark
+harness, the command line and the layout calibration all read :data:`VERSIONS`; a new version
+is one more entry here (and, where it moves any number, a new name: versions are promises).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from types import MappingProxyType
+from typing import Any
+
+from .options import EnvOptions
+
+
+def _frozen(mapping: Mapping[str, Any]) -> Mapping[str, Any]:
+    return MappingProxyType(dict(mapping))
+
+
+@dataclass(frozen=True)
+class EnvVersion:
+    """One registered version of the env.
+
+    Attributes
+    ----------
+    name : str
+        ``"v0"``, ``"v1"``.
+    summary : str
+        One line on what the version reads the paper as.
+    option_defaults : mapping
+        The option defaults that differ from :class:`EnvOptions`' (docs/model.md, section 13).
+    paper_scenarios : tuple of str
+        The paper's Scenarios 1, 2 and 3 as this version ships them; the first is its default.
+    paper_agent_params : mapping
+        ``{agent: {parameter: value}}`` of the version's paper study (``mimo-radar-bench paper``).
+    """
+
+    name: str
+    summary: str
+    option_defaults: Mapping[str, Any] = field(default_factory=dict)
+    paper_scenarios: tuple[str, str, str] = ("paper-1", "paper-2", "paper-3")
+    paper_agent_params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        EnvOptions(**self.option_defaults)  # the defaults are valid options
+        object.__setattr__(self, "option_defaults", _frozen(self.option_defaults))
+        object.__setattr__(
+            self, "paper_agent_params", _frozen({k: _frozen(v) for k, v in self.paper_agent_params.items()})
+        )
+
+    @property
+    def env_id(self) -> str:
+        return f"MimoRadarSelect-{self.name}"
+
+    @property
+    def flat_env_id(self) -> str:
+        """The same env with a valid Discrete action and a flat float32 observation
+        (``mimo_radar_env.wrappers.make_flat_env``), for tools that take an env id."""
+        return f"MimoRadarSelectFlat-{self.name}"
+
+    @property
+    def default_scenario(self) -> str:
+        return self.paper_scenarios[0]
+
+    def options(self, **overrides: Any) -> EnvOptions:
+        """The version's options, some overridden."""
+        return EnvOptions(**{**self.option_defaults, **overrides})
+
+    def paper_scenario(self, number: int) -> str:
+        """The name of paper scenario ``number`` (1, 2, 3) of this version."""
+        if number not in (1, 2, 3):
+            raise ValueError(f"paper scenarios are 1, 2 and 3, got {number!r}")
+        return self.paper_scenarios[number - 1]
+
+    def registration_kwargs(self) -> dict[str, Any]:
+        """The ``gym.make`` keywords the version's ids are registered with."""
+        return {**self.option_defaults, "scenario": self.default_scenario}
+
+    def default_config(self) -> dict[str, Any]:
+        """Every ``gym.make`` keyword besides scenario fields, with the version's defaults
+        (highway-env's ``default_config``)."""
+        return {"scenario": self.default_scenario, **self.options().to_dict()}
+
+    def paper_study_params(self) -> dict[str, dict[str, Any]]:
+        """A mutable copy of :attr:`paper_agent_params`."""
+        return {agent: dict(values) for agent, values in self.paper_agent_params.items()}
+
+
+VERSIONS: dict[str, EnvVersion] = {
+    version.name: version
+    for version in (
+        EnvVersion(
+            "v0",
+            "reading 0: the first reading of the paper's ambiguous points, unchanged since release",
+        ),
+        EnvVersion(
+            "v1",
+            "reading 1 of the paper's ambiguous points (eq32 on dB, a shared truth, BPSO's standard "
+            "rule in the paper study, the calibrated layout)",
+            option_defaults={"lambda_scale": "db", "truth": "shared"},
+            paper_scenarios=("paper-1-v1", "paper-2-v1", "paper-3-v1"),
+            paper_agent_params={"mg-crb-cl": {"solver_params": {"rule": "set"}}},
+        ),
+    )
+}
+#: The version ``mimo-radar-bench`` runs unless told otherwise.
+DEFAULT_VERSION = "v1"
+
+# Views of VERSIONS, by version name.
+ENV_IDS = {name: v.env_id for name, v in VERSIONS.items()}
+FLAT_ENV_IDS = {name: v.flat_env_id for name, v in VERSIONS.items()}
+PAPER_SCENARIOS = {name: v.paper_scenarios for name, v in VERSIONS.items()}
+VERSION_DEFAULTS = {name: dict(v.option_defaults) for name, v in VERSIONS.items()}
+
+
+def env_version(name: str) -> EnvVersion:
+    """The version called ``name``; ``ValueError`` naming the versions there are."""
+    if name not in VERSIONS:
+        raise ValueError(f"env version must be one of {sorted(VERSIONS)}, got {name!r}")
+    return VERSIONS[name]
+
+
+def paper_scenario(number: int, version: str) -> str:
+    """The name of paper scenario ``number`` (1, 2, 3) of env ``version``."""
+    return env_version(version).paper_scenario(number)
+
+
+def paper_key(name: str) -> str:
+    """``"paper-N"`` for paper scenario N of any version; other names unchanged."""
+    for names in PAPER_SCENARIOS.values():
+        if name in names:
+            return f"paper-{names.index(name) + 1}"
+    return name
+
+
+def default_config(version: str = DEFAULT_VERSION) -> dict[str, Any]:
+    """The defaults of every ``gym.make`` keyword of ``version`` besides scenario fields."""
+    return env_version(version).default_config()
