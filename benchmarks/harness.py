@@ -22,7 +22,7 @@ import functools
 import hashlib
 import json
 import time
-from collections.abc import Callable, Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -36,6 +36,7 @@ from agents.ppo import model_file
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
 
 from . import backends
+from .errors import BenchError
 from .shards import (
     TRIAL_FIELDS,
     TRUTH_FIELD,
@@ -51,8 +52,9 @@ LOCK_FILE = ".lock"
 PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
 
 
-class HarnessError(ValueError):
-    """A run cannot start: bad configuration, or a different one already in DIR."""
+#: The harness's name for :class:`~benchmarks.errors.BenchError` (a run cannot start: a bad
+#: configuration, or a different one already in DIR).
+HarnessError = BenchError
 
 
 @dataclass(frozen=True)
@@ -187,27 +189,6 @@ def _policy_files(policy: str) -> dict[str, str]:
     model = model_file(argument["path"])
     files = [model, *sorted(model.parent.glob("vecnormalize.*"))]
     return {str(f): hashlib.sha256(f.read_bytes()).hexdigest() for f in files if f.is_file()}
-
-
-def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
-    """``["mg-crb-cl.beta=1.5", "ucb1.solver=bpso"]`` -> ``{"mg-crb-cl": {"beta": 1.5}, ...}``.
-
-    Values are read as YAML scalars (numbers, booleans, lists, strings).
-    """
-    import yaml
-
-    params: dict[str, dict[str, Any]] = {}
-    for item in items:
-        if "=" not in item or "." not in item.split("=", 1)[0]:
-            raise HarnessError(f"--agent-param must look like agent.key=value, got {item!r}")
-        target, raw = item.split("=", 1)
-        policy, key = target.rsplit(".", 1)
-        try:
-            params.setdefault(policy, {})[key] = yaml.safe_load(raw)
-        except yaml.YAMLError as exc:
-            problem = getattr(exc, "problem", None) or "not valid YAML"
-            raise HarnessError(f"--agent-param {item!r}: the value is {problem}") from None
-    return params
 
 
 # ------------------------------------------------------------------ one task

@@ -1,7 +1,8 @@
-"""Reference numbers of MimoRadarSelect-v0 (docs/performance.md, "No result changes").
+"""Reference numbers of MimoRadarSelect-v0 and -v1 (docs/performance.md, "No result changes").
 
-``python -m tests.golden`` rewrites tests/data/golden.npz; only do that for an intended
-change of results, never to make a fast path pass.
+``python -m tests.golden`` rewrites tests/data/golden.npz (v0) and golden_v1.npz (v1); only do
+that for an intended change of results, never to make a fast path pass (and never for v0,
+whose numbers are a promise).
 """
 
 from pathlib import Path
@@ -10,9 +11,10 @@ import gymnasium as gym
 import numpy as np
 
 import agents
-import mimo_radar_env  # noqa: F401
+import mimo_radar_env
 
 GOLDEN = Path(__file__).with_name("data") / "golden.npz"
+GOLDEN_V1 = Path(__file__).with_name("data") / "golden_v1.npz"
 
 
 def record() -> dict[str, np.ndarray]:
@@ -44,6 +46,38 @@ def record() -> dict[str, np.ndarray]:
     return out
 
 
+def record_v1() -> dict[str, np.ndarray]:
+    """v1 (its calibrated layout, dB eq32, shared truth) with its paper-study agent parameters,
+    both fusions, and the per-step position bound."""
+    version = mimo_radar_env.VERSIONS["v1"]
+    out = {}
+    for scenario, fusion in (("paper-1-v1", "centralized"), ("paper-3-v1", "average")):
+        venv = gym.make_vec(
+            version.env_id,
+            num_envs=5,
+            vectorization_mode="vector_entry_point",
+            scenario=scenario,
+            fusion=fusion,
+        )
+        params = version.paper_study_params()
+        for name in ("mg-crb-cl", "epsilon-greedy"):
+            agent = agents.make_agent(name, venv.scenario, seed=7, **params.get(name, {}))
+            obs, _ = venv.reset(seed=3)
+            agent.reset(obs)
+            recorded: dict[str, list] = {"track": [], "reward": [], "action": [], "bound": []}
+            for _ in range(80):
+                action = agent.act(obs)
+                obs, reward, _, _, info = venv.step(action)
+                agent.update(obs, reward)
+                for key, value in (("track", obs["track"]), ("reward", reward), ("action", action)):
+                    recorded[key].append(value)
+                recorded["bound"].append(info["position_bound"])
+            for key, values in recorded.items():
+                out[f"{scenario}_{fusion}_{name}_{key}"] = np.array(values)
+    return out
+
+
 if __name__ == "__main__":
     np.savez_compressed(GOLDEN, **record())
-    print(f"wrote {GOLDEN}")
+    np.savez_compressed(GOLDEN_V1, **record_v1())
+    print(f"wrote {GOLDEN} and {GOLDEN_V1}")

@@ -1,13 +1,15 @@
 """Fast paths change no result: the numbers recorded before the performance work."""
 
 import numpy as np
+import pytest
 
-from tests.golden import GOLDEN, record
+from tests.golden import GOLDEN, GOLDEN_V1, record, record_v1
 
 
-def test_results_match_the_recorded_reference():
-    now = record()
-    with np.load(GOLDEN) as reference:
+@pytest.mark.parametrize(("path", "recorder"), [(GOLDEN, record), (GOLDEN_V1, record_v1)], ids=["v0", "v1"])
+def test_results_match_the_recorded_reference(path, recorder):
+    now = recorder()
+    with np.load(path) as reference:
         assert set(reference.files) == set(now)
         for key in reference.files:
             if key.endswith("_action"):

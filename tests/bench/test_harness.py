@@ -12,9 +12,8 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
-from benchmarks.harness import HarnessError, make_config, parse_agent_params, run, shard_path
+from benchmarks.harness import HarnessError, make_config, run, shard_path
 from benchmarks.report import write_outputs
-from mimo_radar_env.metrics import TrialMetrics
 
 SUMMARY_KEYS = {
     "ci",
@@ -34,35 +33,6 @@ SUMMARY_KEYS = {
 def _read_curves(path):
     with open(path) as handle:
         return list(csv.DictReader(handle))
-
-
-def test_metrics_on_a_hand_made_case():
-    # 2 trials, 3 steps, 2 targets, per trial
-    squared = np.array([[1.0, 4.0], [9.0, 16.0], [0.0, 1.0]])
-    m = TrialMetrics(
-        {
-            "trial_expected": np.array([[3.0, 5.0, 2.0], [3.0, 5.0, 2.0]]),
-            "trial_optimal": np.array([[5.0, 5.0, 6.0], [5.0, 5.0, 6.0]]),
-            "trial_squared_error": np.stack([squared, squared]),
-            "trial_matches": np.array([[1, 1, 0], [1, 0, 0]]),
-        },
-        channels=6,
-    )
-    w = m.equal()
-    per_target = [float(m.armse(w, target=k)) for k in range(2)]
-    assert per_target == pytest.approx([(1 + 3 + 0) / 3, (2 + 4 + 1) / 3])
-    assert float(m.armse(w)) == pytest.approx(np.mean(per_target))
-    assert float(m.asr(w)) == pytest.approx(0.5)
-    np.testing.assert_allclose(m.regret_curve(w), [2.0, 2.0, 6.0])
-    one = TrialMetrics(
-        {
-            "trial_expected": np.array([[60.0, 60.0]]),
-            "trial_optimal": np.array([[60.0, 60.0]]),
-            "trial_matches": np.ones((1, 2)),
-        },
-        channels=6,
-    )
-    assert float(one.mean_sinr_db(one.equal())) == pytest.approx(10.0)
 
 
 def test_paper_subcommand_writes_every_output(tmp_path, capsys):
@@ -274,31 +244,6 @@ def test_a_killed_run_restarted_gives_exactly_the_uninterrupted_numbers(tmp_path
     for policy in a:
         for key in SUMMARY_KEYS - {"wall_s"}:
             assert a[policy][key] == b[policy][key], (policy, key)
-
-
-def test_local_workers_give_the_numbers_of_one_process(tmp_path):
-    config = make_config("paper-1", ["mg-crb-cl", "ucb1"], trials=4, steps=15, shard_size=1)
-    one = run(config, tmp_path / "one", workers=1, progress=False)
-    two = run(config, tmp_path / "two", workers=2, progress=False)
-    for policy in config.policies:
-        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
-            np.testing.assert_array_equal(one[policy][key], two[policy][key])
-
-
-def test_ray_backend_gives_the_numbers_of_the_local_path(tmp_path):
-    pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
-    config = make_config("paper-3", ["mg-crb-cl", "fix2"], trials=4, steps=15, shard_size=2)
-    local = run(config, tmp_path / "local", workers=1, progress=False)
-    remote = run(config, tmp_path / "ray", backend="ray", progress=False)
-    for policy in config.policies:
-        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
-            np.testing.assert_array_equal(local[policy][key], remote[policy][key])
-
-
-def test_parse_agent_params_reads_yaml_values():
-    assert parse_agent_params(
-        ["mg-crb-cl.beta=1.5", "mg-crb-cl.solver=exact", "sliding-window-ucb.window=20"]
-    ) == {"mg-crb-cl": {"beta": 1.5, "solver": "exact"}, "sliding-window-ucb": {"window": 20}}
 
 
 def test_outputs_regenerate_from_saved_shards(tmp_path):

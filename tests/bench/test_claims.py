@@ -3,8 +3,9 @@
 import numpy as np
 import pytest
 
-from benchmarks import claims, uncertainty, verdicts
+from benchmarks import uncertainty, verdicts
 from benchmarks.cli import main
+from benchmarks.studies import claims
 
 SHARED = np.random.default_rng(9).normal(0, 0.5, size=(60, 1))  # per-trial, common to all policies
 

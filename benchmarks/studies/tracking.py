@@ -21,18 +21,22 @@ A "lower ARMSE" holds when the paired difference's 95 % interval lies below 0.
 
 from __future__ import annotations
 
+import argparse
+import dataclasses
 import json
-from collections.abc import Sequence
+from collections.abc import Hashable
 from pathlib import Path
 from typing import Any
 
-from mimo_radar_env import paper_scenario
+from mimo_radar_env import env_version
 from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 
-from . import verdicts
+from .. import verdicts
+from ..errors import BenchError
+from ..harness import PAPER_POLICIES
+from .base import Finished, Run, Study
+from .settings import paper_numbers
 
-# Light on purpose (the command line reads DEFAULT_TRIALS while it builds its parser, before
-# it checks which 'agents' package is installed): the harness is imported where it is used.
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
 TRADEOFF_WEIGHTS = (0.25, 0.5, 0.75)
 TRACKING_POLICIES = (
@@ -60,66 +64,72 @@ def study_folder(out: str | Path, scenario: str, fusion: str) -> Path:
 
 def ppo_policy(pattern: str, number: int, fusion: str) -> str:
     """``ppo:PATH`` with ``{scenario}`` (1, 2, 3) and ``{fusion}`` filled into ``pattern``."""
-    from .harness import HarnessError
-
     try:
         return "ppo:" + pattern.format(scenario=number, fusion=fusion)
     except (KeyError, IndexError, ValueError) as exc:
-        raise HarnessError(
+        raise BenchError(
             f"--ppo {pattern!r}: a pattern may hold {{scenario}} and {{fusion}} only "
             f"({type(exc).__name__}: {exc})"
         ) from None
 
 
-def run_tracking_studies(
-    out: str | Path,
-    scenarios: Sequence[int] = (1, 2, 3),
-    fusions: Sequence[str] = FUSIONS,
-    trials: int = DEFAULT_TRIALS,
-    options: Any = None,
-    agent_params: dict[str, dict[str, Any]] | None = None,
-    ppo: str | None = None,
-    env_version: str = "v1",
-    steps: int | None = None,
-    seed: int = 0,
-    shard_size: int = 50,
-    workers: int = 1,
-    backend: str = "local",
-    address: str | None = None,
-    progress: bool = True,
-    figures: bool = True,
-) -> dict[tuple[int, str], Path]:
-    """Run the study of every (paper scenario, fusion); returns their folders."""
-    import dataclasses
+class TrackingStudy(Study):
+    name = "tracking"
+    order = 3
+    help = (
+        f"the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets "
+        f"(default {DEFAULT_TRIALS} trials)"
+    )
+    description = (
+        f"Run {', '.join(TRACKING_POLICIES)} on the paper scenarios under both fusions (into "
+        "OUT/<scenario>-<fusion>, resumable); judge the targets on paired differences; write "
+        "OUT/targets.md, OUT/targets.json and OUT/tradeoff_paper-N.png."
+    )
+    default_trials = DEFAULT_TRIALS
+    paper_study = True
 
-    from mimo_radar_env import EnvOptions
+    @classmethod
+    def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
+        parser.add_argument(
+            "--fusions",
+            default=",".join(FUSIONS),
+            help=f"fusions to run (default {','.join(FUSIONS)})",
+        )
+        parser.add_argument(
+            "--ppo",
+            default=None,
+            metavar="PATTERN",
+            help="also run a trained PPO: its model path with {scenario} and {fusion} filled in, e.g. "
+            "runs/ppo-info/paper-{scenario}-{fusion}/model.zip",
+        )
 
-    from .harness import HarnessError, make_config, run
-    from .report import write_outputs
+    def runs(self) -> list[Run]:
+        if hasattr(self.args, "fusion"):
+            raise BenchError("the tracking study runs each of --fusions; --fusion does not apply")
+        fusions = [f.strip() for f in self.args.fusions.split(",") if f.strip()]
+        if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
+            raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {self.args.fusions!r}")
+        version = env_version(self.settings.env_version)
+        runs = []
+        for number in paper_numbers(self.args.scenarios):
+            name = version.paper_scenario(number)
+            for fusion in fusions:
+                ppo = [ppo_policy(self.args.ppo, number, fusion)] if self.args.ppo else []
+                options = dataclasses.replace(self.settings.options, fusion=fusion)
+                folder = study_folder(self.settings.out, name, fusion)
+                runs.append(Run((number, fusion), name, (*TRACKING_POLICIES, *ppo), folder, options))
+        return runs
 
-    options = options or EnvOptions.for_version(env_version)
-    unknown = sorted(set(fusions) - set(FUSIONS))
-    if unknown or not fusions:
-        raise HarnessError(f"fusions must be among {list(FUSIONS)}, got {list(fusions)}")
-    folders = {}
-    for number in scenarios:
-        for fusion in fusions:
-            policies = list(TRACKING_POLICIES) + ([ppo_policy(ppo, number, fusion)] if ppo else [])
-            config = make_config(
-                paper_scenario(number, env_version),
-                policies,
-                trials,
-                steps,
-                seed,
-                shard_size,
-                agent_params,
-                options=dataclasses.replace(options, fusion=fusion),
-            )
-            folder = study_folder(out, config.scenario["name"], fusion)
-            totals = run(config, folder, workers=workers, backend=backend, address=address, progress=progress)
-            write_outputs(config, totals, folder, figures=figures)
-            folders[(number, fusion)] = folder
-    return folders
+    def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
+        return judge_targets({key: f.folder for key, f in finished.items()})
+
+    def report(self, finished: dict[Hashable, Finished], judged: list[dict[str, Any]]) -> str:
+        folders = {key: f.folder for key, f in finished.items()}
+        path = write_targets(judged, self.settings.out, folders)
+        if self.settings.figures:
+            plot_tradeoff(folders, self.settings.out)
+        return path.read_text()
 
 
 def paired(summary: dict[str, Any], a: str, b: str, metric: str) -> tuple[float, list[float]]:
@@ -141,8 +151,6 @@ def _lower(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
 
 def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
     """Each study's targets: the paired ARMSE differences, the regrets and the cost ratios."""
-    from .harness import PAPER_POLICIES
-
     results = []
     for (number, fusion), folder in folders.items():
         summary = json.loads((Path(folder) / "summary.json").read_text())
@@ -192,8 +200,6 @@ def _mark(verdict: str) -> str:
 
 def targets_markdown(results: list[dict[str, Any]]) -> str:
     """The targets as tables, one row per (scenario, fusion)."""
-    from .harness import PAPER_POLICIES
-
     trials = sorted({r["trials"] for r in results})
     lines = [
         "# Tracking-aware selection: the targets",
@@ -323,7 +329,7 @@ def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from .plots import palette
+    from ..plots import palette
 
     written = []
     for number in sorted({n for n, _ in folders}):

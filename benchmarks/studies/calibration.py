@@ -26,6 +26,8 @@ candidates, and every study folder resumes, so a stopped calibration continues.
 
 from __future__ import annotations
 
+import argparse
+import dataclasses
 import json
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
@@ -39,10 +41,10 @@ from mimo_radar_env import VERSIONS, RadarModel, Scenario, load_scenario
 from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
-from . import verdicts
-
-# agents (and benchmarks.claims, which imports the harness) are imported where they are used:
-# the command line reads this module's defaults before it checks that 'agents' is ours
+from .. import verdicts
+from . import claims
+from .base import Study
+from .settings import integer
 
 REGION_M = 100_000.0
 #: The text's hard constraint: no station this close (m) to a nominal track.
@@ -101,8 +103,6 @@ def _reflect(km: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def constraint_failure(candidate: Candidate) -> str | None:
     """Why the candidate breaks a hard constraint of the text, or None."""
-    from . import claims
-
     tx, rx = np.array(candidate.tx_km) * 1e3, np.array(candidate.rx_km) * 1e3
     stations = np.concatenate([tx, rx])
     if np.any(stations < 0) or np.any(stations > REGION_M):
@@ -141,8 +141,6 @@ def scan_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], 
 def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
     """Comparisons of the paper's claims that need no Monte-Carlo, on the noise-free tracks."""
     from agents.fixed import PAPER_FIXED
-
-    from . import claims
 
     checks: dict[str, bool] = {}
     for sc in candidate.scenarios():
@@ -299,3 +297,52 @@ def calibration_markdown(report: dict[str, Any]) -> str:
         cells = [str(c["index"]), jitter, constraint, checks, counts(c, screen), counts(c, final)]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+class CalibrationStudy(Study):
+    name = "calibrate-layout"
+    order = 4
+    help = "search station layouts under which the most of the paper's claims hold"
+    description = (
+        "Jitter the reference layout into candidates (seeded), reject those that break the paper's "
+        "text (region, 2 km from every nominal track, Best's selections in Scenario 1), rank the rest "
+        "by noise-free checks, judge the best by short scorecards, then the best of those and the "
+        "reference by full scorecards (--trials). Writes OUT/calibration.md and OUT/calibration.json "
+        "with every candidate's score; resumable (docs/benchmark.md)."
+    )
+    paper_study = True
+
+    @classmethod
+    def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        for flag, default, text in (
+            ("--candidates", CANDIDATES, "jittered layouts to draw"),
+            ("--screen", SCREEN, "layouts judged by short scorecards"),
+            ("--screen-trials", SCREEN_TRIALS, "trials of the short scorecards"),
+            ("--final", FINAL, "layouts judged by full scorecards"),
+        ):
+            parser.add_argument(flag, type=integer(1), default=default, help=f"{text} (default {default})")
+
+    def main(self) -> int:
+        settings = self.settings
+
+        def scorecard(scenarios: list[Scenario], out: Path, trials: int) -> list[dict[str, Any]]:
+            return claims.scorecard(scenarios, out, dataclasses.replace(settings, trials=trials))
+
+        out = settings.out
+        report = calibrate(
+            out,
+            scorecard,
+            count=self.args.candidates,
+            seed=settings.seed,
+            screen=self.args.screen,
+            screen_trials=self.args.screen_trials,
+            final=self.args.final,
+            final_trials=settings.trials,
+            scale=settings.options.lambda_scale,
+        )
+        print((out / "calibration.md").read_text().split("\n\n| layout")[0])
+        print(
+            f"best layout {report['best']}: {'adopted' if report['adopted'] else 'not adopted'}; "
+            f"every candidate in {out / 'calibration.md'}"
+        )
+        return 0

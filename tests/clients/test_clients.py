@@ -35,10 +35,28 @@ def test_maskable_ppo_trains_on_the_discrete_wrapper_and_every_action_is_valid()
     assert len(valid) == 40 and all(valid)
 
 
-def test_action_masks_allow_exactly_the_discrete_actions():
-    env = SuperArmDiscreteAction(make_ppo_env(horizon=5).unwrapped)
+def test_action_masks_allow_exactly_the_valid_super_arms():
+    """Brute force: every station subset of the right sizes is one allowed action, each once, and
+    each allowed action the env accepts as valid."""
+    from itertools import combinations
+
+    base = make_ppo_env(horizon=50).unwrapped
+    env = SuperArmDiscreteAction(base)
+    sc = base.scenario
     mask = env.action_masks()
-    assert mask.dtype == np.bool_ and mask.shape == (env.action_space.n,) and mask.all()
+    assert mask.dtype == np.bool_ and mask.shape == (env.action_space.n,)
+    allowed = {tuple(env.action(i)) for i in np.flatnonzero(mask)}
+    brute = set()
+    for tx in combinations(range(sc.num_tx), sc.tx_per_step):
+        for rx in combinations(range(sc.num_rx), sc.rx_per_step):
+            bits = np.zeros(sc.num_tx + sc.num_rx, np.int8)
+            bits[list(tx)] = 1
+            bits[[sc.num_tx + r for r in rx]] = 1
+            brute.add(tuple(bits))
+    assert allowed == brute and int(mask.sum()) == len(brute)
+    env.reset(seed=0)
+    for i in np.flatnonzero(mask)[:: max(1, len(brute) // 10)]:
+        assert env.step(int(i))[4]["action_valid"]
 
 
 def test_stone_soup_recipe_tracks_from_the_info_measurements():
@@ -48,7 +66,7 @@ def test_stone_soup_recipe_tracks_from_the_info_measurements():
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).parents[1] / "docs" / "examples" / "stone_soup_tracker.py"
+    path = Path(__file__).parents[2] / "docs" / "examples" / "stone_soup_tracker.py"
     spec = importlib.util.spec_from_file_location("stone_soup_tracker", path)
     recipe = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(recipe)
@@ -101,7 +119,7 @@ def test_rl_zoo3_trains_with_the_shipped_hyperparameter_file(tmp_path):
     import sys
     from pathlib import Path
 
-    conf = Path(__file__).parents[1] / "benchmarks" / "hyperparams" / "ppo.yml"
+    conf = Path(__file__).parents[2] / "benchmarks" / "hyperparams" / "ppo.yml"
     command = [sys.executable, "-m", "rl_zoo3.train", "--algo", "ppo", "--env", "MimoRadarSelectFlat-v1"]
     command += ["--gym-packages", "mimo_radar_env", "-conf", str(conf), "-n", "256", "--seed", "0"]
     command += ["--env-kwargs", "horizon:40", "-f", str(tmp_path), "--eval-freq", "-1"]

@@ -5,9 +5,9 @@ import re
 
 import pytest
 
-from benchmarks import tracking
 from benchmarks.cli import main
 from benchmarks.harness import PAPER_POLICIES
+from benchmarks.studies import tracking
 
 
 @pytest.fixture(scope="module")

@@ -12,8 +12,9 @@ paper's 1000-step horizon (time in seconds, ``Ts = 1 s``); a window the run did 
 
 from __future__ import annotations
 
+import argparse
 import json
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -21,11 +22,17 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env import Scenario, env_version
 from mimo_radar_env.metrics import TrialMetrics
 
-from . import uncertainty, verdicts
-from .harness import RunConfig, load_per_trial
-from .report import PAPER_ARMSE, PAPER_ASR, trial_metrics
+from .. import uncertainty, verdicts
+from ..errors import BenchError
+from ..harness import PAPER_POLICIES, RunConfig, load_per_trial
+from ..report import PAPER_ARMSE, PAPER_ASR, trial_metrics
+from .base import Finished, Run, Study, execute
+from .settings import Settings, paper_numbers
+
+PAPER_KEYS = ("paper-1", "paper-2", "paper-3")
 
 LEARNING = ("mg-crb-cl", "ucb1", "epsilon-greedy")
 FIXED = ("fix1", "fix2")
@@ -380,47 +387,73 @@ def evaluate(policies_by_scenario: dict[str, Policies], seed: int = 0) -> list[d
     return results
 
 
-def run_studies(
-    scenarios: Sequence[str | Any],
-    out: Path,
-    trials: int,
-    agent_params: dict[str, dict[str, Any]],
-    options: Any,
-    steps: int | None = None,
-    seed: int = 0,
-    shard_size: int = 50,
-    workers: int = 1,
-    backend: str = "local",
-    address: str | None = None,
-    progress: bool = True,
-    figures: bool = True,
-) -> list[Path]:
-    """Run the paper study (:data:`~benchmarks.harness.PAPER_POLICIES`) on each scenario (a name
-    or a :class:`~mimo_radar_env.Scenario`) into ``out/<scenario name>``, resumably."""
-    from .harness import PAPER_POLICIES, make_config, run
-    from .report import write_outputs
+def paper_runs(scenarios: Sequence[str | Scenario], out: Path) -> list[Run]:
+    """The paper study (:data:`~benchmarks.harness.PAPER_POLICIES`) on each scenario (a name or
+    a :class:`~mimo_radar_env.Scenario`), into ``out/<scenario name>``."""
+    return [
+        Run(name, scenario, PAPER_POLICIES, Path(out) / name)
+        for scenario in scenarios
+        for name in [scenario.name if isinstance(scenario, Scenario) else str(scenario)]
+    ]
 
-    folders = []
-    for scenario in scenarios:
-        config = make_config(
-            scenario, list(PAPER_POLICIES), trials, steps, seed, shard_size, agent_params, options=options
+
+def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings) -> list[dict[str, Any]]:
+    """Run the paper studies of ``scenarios`` into ``out`` (resumably), judge the claims and
+    write ``out/claims.md`` and ``out/claims.json``; the judged claims."""
+    folders = [f.folder for f in execute(paper_runs(scenarios, out), settings).values()]
+    results = judge_studies(folders, settings.seed)
+    write_scorecard(results, out, describe_studies(folders))
+    return results
+
+
+class ClaimsStudy(Study):
+    name = "claims"
+    order = 2
+    help = "judge the paper's claims on paper studies (holds / consistent / contradicted)"
+    description = (
+        "Evaluate the paper's claims (docs/results.md) on finished 'paper' runs, or run the paper "
+        "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."
+    )
+    paper_study = True
+
+    @classmethod
+    def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "runs", nargs="*", help="finished paper-study folders (default: run them into --out)"
         )
-        folder = Path(out) / config.scenario["name"]
-        totals = run(config, folder, workers=workers, backend=backend, address=address, progress=progress)
-        write_outputs(config, totals, folder, figures=figures)
-        folders.append(folder)
-    return folders
+        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
+
+    def runs(self) -> list[Run]:
+        if self.args.runs:
+            return []
+        version = env_version(self.settings.env_version)
+        names = [version.paper_scenario(n) for n in paper_numbers(self.args.scenarios)]
+        return paper_runs(names, self.settings.out)
+
+    def judge(self, finished: dict[Hashable, Finished]) -> tuple[list[Path], list[dict[str, Any]]]:
+        folders = [Path(r) for r in self.args.runs] or [f.folder for f in finished.values()]
+        return folders, judge_studies(folders, self.settings.seed)
+
+    def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
+        folders, results = judged
+        write_scorecard(results, self.settings.out, describe_studies(folders))
+        return (self.settings.out / "claims.md").read_text()
 
 
 def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str, Any]]:
     """Every claim judged on finished paper studies (one folder per scenario)."""
-    from .harness import HarnessError
-
     studies = {}
     for folder in map(Path, folders):
         if not (folder / "config.json").exists():
-            raise HarnessError(f"{folder} holds no finished run (no config.json)")
+            raise BenchError(f"{folder} holds no finished run (no config.json)")
         name, policies = load_study(folder)
+        if name not in PAPER_KEYS:
+            raise BenchError(
+                f"{folder} ran scenario {name!r}, not a paper scenario "
+                f"({', '.join(PAPER_KEYS)} of any version)"
+            )
+        if name in studies:
+            raise BenchError(f"two of the runs are studies of {name}: give one folder per paper scenario")
         studies[name] = policies
     return evaluate(studies, seed)
 

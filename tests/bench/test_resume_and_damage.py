@@ -1,4 +1,4 @@
-"""Issue 15's harness findings as regression tests: locks, damaged shards, Ctrl-C, orphans,
+"""Runs that survive: locks, damaged shards, Ctrl-C, orphans,
 strict JSON, PPO files, and results independent of the shard size."""
 
 import json
@@ -16,7 +16,7 @@ from benchmarks.harness import HarnessError, make_config, output_lock, run
 from benchmarks.report import summarize
 from benchmarks.shards import policy_folder, shard_path
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _cli(*args, **kwargs):
@@ -30,7 +30,7 @@ def _cli(*args, **kwargs):
     )
 
 
-def test_2_a_second_run_into_the_same_out_is_refused_while_the_first_writes(tmp_path):
+def test_a_second_run_into_the_same_out_is_refused_while_the_first_writes(tmp_path):
     config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
     with output_lock(tmp_path), pytest.raises(HarnessError, match="another run is writing into"):
         run(config, tmp_path, progress=False)
@@ -39,7 +39,7 @@ def test_2_a_second_run_into_the_same_out_is_refused_while_the_first_writes(tmp_
 
 
 @pytest.mark.parametrize("damage", ["truncate", "garbage", "empty", "copy", "edit"])
-def test_3_damaged_shards_are_named_set_aside_and_recomputed(damage, tmp_path, capsys):
+def test_damaged_shards_are_named_set_aside_and_recomputed(damage, tmp_path, capsys):
     config = make_config("paper-3", ["ucb1", "epsilon-greedy"], trials=4, steps=10, shard_size=2)
     clean = run(config, tmp_path / "clean", progress=False)
     out = tmp_path / "run"
@@ -67,12 +67,12 @@ def test_3_damaged_shards_are_named_set_aside_and_recomputed(damage, tmp_path, c
             np.testing.assert_array_equal(again[policy][key], clean[policy][key])
 
 
-def test_8_policy_folders_never_collide_and_model_files_are_part_of_the_configuration():
+def test_policy_folders_never_collide_and_model_files_are_part_of_the_configuration():
     assert policy_folder("ppo:R/a_b/model.zip") != policy_folder("ppo:R/a/b_model.zip")
     assert policy_folder("mg-crb-cl") == "mg-crb-cl"
 
 
-def test_9_non_finite_metrics_are_errors_and_json_is_strict(tmp_path):
+def test_non_finite_metrics_are_errors_and_json_is_strict(tmp_path):
     config = make_config("paper-1", ["fix1"], trials=2, steps=5, shard_size=1)
     totals = run(config, tmp_path, progress=False)
     totals["fix1"]["trial_expected"][0, 2] = np.nan
@@ -82,7 +82,7 @@ def test_9_non_finite_metrics_are_errors_and_json_is_strict(tmp_path):
     assert "NaN" not in summary and "Infinity" not in summary
 
 
-def test_14_results_do_not_depend_on_the_shard_size(tmp_path):
+def test_results_do_not_depend_on_the_shard_size(tmp_path):
     """Randomised policies (BPSO, exploration, Thompson, random) on the same 12 trials."""
     policies = ["mg-crb-cl", "epsilon-greedy", "cts", "random"]
     results = []
@@ -116,7 +116,7 @@ BIG_RUN = ["paper", "--scenario", "3", "--trials", "40", "--steps", "300", "--sh
 
 
 @pytest.mark.slow
-def test_4_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_path):
+def test_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_path):
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out), start_new_session=True)
     deadline = time.time() + 120
@@ -138,7 +138,7 @@ def test_4_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_p
 
 
 @pytest.mark.slow
-def test_7_workers_exit_when_their_parent_is_killed(tmp_path):
+def test_workers_exit_when_their_parent_is_killed(tmp_path):
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out))
     deadline = time.time() + 120
@@ -155,7 +155,7 @@ def test_7_workers_exit_when_their_parent_is_killed(tmp_path):
     assert not any(_alive(p) for p in workers)
 
 
-def test_5_ppo_files_run_no_code(tmp_path):
+def test_ppo_files_run_no_code(tmp_path):
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
     import base64
     import pickle
@@ -195,7 +195,7 @@ def test_5_ppo_files_run_no_code(tmp_path):
     assert not marker.exists()
 
 
-def test_8_a_changed_model_file_is_a_different_run(tmp_path):
+def test_a_changed_model_file_is_a_different_run(tmp_path):
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
     from benchmarks.ppo import train_ppo
 

@@ -4,7 +4,8 @@ import gymnasium as gym
 import pytest
 
 import mimo_radar_env
-from benchmarks.cli import build_parser, study_agent_params
+from benchmarks.cli import build_parser
+from benchmarks.studies.settings import study_agent_params
 from mimo_radar_env import VERSIONS, EnvOptions, default_config, env_version
 
 

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-DOC = Path(__file__).parents[1] / "docs" / "clients.md"
+DOC = Path(__file__).parents[2] / "docs" / "clients.md"
 BLOCKS = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
 NEEDS = {
     "stable_baselines3": "rl extra",

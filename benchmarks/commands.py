@@ -1,0 +1,183 @@
+"""The subcommands of ``mimo-radar-bench`` that are not studies: ``train-ppo``, ``perf``,
+``compare-claims``, ``agents`` and ``demo``."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+from mimo_radar_env import DEFAULT_VERSION, VERSIONS
+
+from .errors import BenchError
+from .studies.base import Command
+from .studies.settings import add_env_options, env_options_from, integer
+
+
+class TrainPPO(Command):
+    name = "train-ppo"
+    order = 6
+    help = "train a Stable-Baselines3 PPO policy (needs the rl extra)"
+    description = (
+        "Train PPO on vectorised training envs; saves DIR/model.zip, the observation normalisation "
+        "DIR/vecnormalize.npz and DIR/ppo.json. Evaluate it with "
+        "'mimo-radar-bench run --policies ppo:DIR/model.zip,...'."
+    )
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "--scenario",
+            default=None,
+            help="shipped name or YAML/TOML file (default: paper scenario 1 of --env-version, paper-1-v1)",
+        )
+        parser.add_argument(
+            "--timesteps",
+            type=integer(1),
+            default=None,
+            help="environment steps to train for (default: n_timesteps of the hyperparameters)",
+        )
+        parser.add_argument("--out", required=True, help="output directory for the model")
+        parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
+        parser.add_argument(
+            "--hyperparams",
+            default=None,
+            help="rl-zoo3-style YAML file (default: the shipped benchmarks/hyperparams/ppo.yml)",
+        )
+        parser.add_argument(
+            "--hyperparams-key",
+            default=None,
+            help="entry of the YAML file to use (default: the flat env id of --env-version, "
+            "MimoRadarSelectFlat-v1)",
+        )
+        parser.add_argument(
+            "--action",
+            choices=("auto", "discrete", "scores"),
+            default="auto",
+            help="one Discrete action per super arm, or per-station scores (default: auto)",
+        )
+        parser.add_argument(
+            "--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard"
+        )
+        parser.add_argument("--quiet", action="store_true", help="no progress bar")
+        add_env_options(parser)
+
+    def main(self) -> int:
+        from .ppo import train_ppo
+
+        args = self.args
+        version = VERSIONS[args.env_version]
+        try:
+            meta = train_ppo(
+                args.scenario or version.default_scenario,
+                args.timesteps,
+                args.out,
+                seed=args.seed,
+                hyperparams=args.hyperparams,
+                hyperparams_key=args.hyperparams_key or version.flat_env_id,
+                action=args.action,
+                tensorboard=args.tensorboard,
+                progress=not args.quiet,
+                options=env_options_from(args),
+            )
+        except (ValueError, OSError) as exc:
+            raise BenchError(str(exc)) from exc
+        print(
+            f"trained PPO for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
+            f"saved {Path(args.out, 'model.zip')}"
+        )
+        return 0
+
+
+class Perf(Command):
+    name = "perf"
+    order = 7
+    help = "performance figures, each as a ratio to a reference measured in the same run"
+    description = (
+        "Measure the tracker against filterpy, exact vs BPSO, the vector env's throughput and the wall "
+        "time of the paper's study; write DIR/perf.json and print a table."
+    )
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("--out", required=True, help="output directory for perf.json")
+        parser.add_argument(
+            "--quick", action="store_true", help="small sizes, under a minute (CI smoke test)"
+        )
+        parser.add_argument(
+            "--workers", type=integer(1), default=None, help="worker processes for the study (default: cores)"
+        )
+
+    def main(self) -> int:
+        from .speed.perf import main as perf_main
+
+        perf_main(self.args.out, quick=self.args.quick, workers=self.args.workers)
+        return 0
+
+
+class CompareClaims(Command):
+    name = "compare-claims"
+    order = 5
+    help = "the verdicts of several scorecards side by side"
+    description = (
+        "Print one row per claim and one verdict column per scorecard (LABEL=PATH, PATH a claims.json "
+        "written by 'claims' or 'calibrate-layout', or its folder)."
+    )
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "scorecards", nargs="+", metavar="LABEL=PATH", help="a label and a claims.json (or its folder)"
+        )
+
+    def main(self) -> int:
+        from .studies import claims
+
+        scorecards = {}
+        for item in self.args.scorecards:
+            label, sep, where = item.partition("=")
+            path = Path(where) / "claims.json" if Path(where).is_dir() else Path(where)
+            if not sep or not label:
+                raise BenchError(f"scorecards are given as LABEL=PATH, got {item!r}")
+            if not path.is_file():
+                raise BenchError(f"{where} is neither a scorecard (.json) nor a folder holding claims.json")
+            scorecards[label] = json.loads(path.read_text())
+        print(claims.comparison_markdown(scorecards), end="")
+        return 0
+
+
+class Agents(Command):
+    name = "agents"
+    order = 8
+    help = "list the registered agents and their parameters"
+
+    def main(self) -> int:
+        import agents
+
+        for name in agents.available_agents():
+            print(f"{name:<22}{agents.agent_summary(name)}")
+            print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
+        return 0
+
+
+class Demo(Command):
+    name = "demo"
+    order = 9
+    help = "one episode of a scenario with a random policy and the oracle"
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        default = VERSIONS[DEFAULT_VERSION].default_scenario
+        parser.add_argument(
+            "--scenario", default=default, help=f"scenario name or YAML/TOML file (default {default})"
+        )
+        parser.add_argument("--seed", type=integer(0), default=0, help="episode seed (default 0)")
+        parser.add_argument(
+            "--steps", type=integer(1), default=None, help="stop after this many steps (default: the horizon)"
+        )
+
+    def main(self) -> int:
+        from .demo import print_demo, run_demo
+
+        print_demo(run_demo(self.args.scenario, self.args.seed, self.args.steps), self.args.scenario)
+        return 0

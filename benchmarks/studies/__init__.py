@@ -1,0 +1,27 @@
+"""The studies of ``mimo-radar-bench``, on one engine (:mod:`benchmarks.studies.base`).
+
+Importing this package registers the built-in studies: ``paper`` and ``run``
+(:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`),
+``tracking`` (:mod:`~benchmarks.studies.tracking`) and ``calibrate-layout``
+(:mod:`~benchmarks.studies.calibration`). A new study is one module defining a
+:class:`~benchmarks.studies.base.Study` subclass with a ``name``.
+"""
+
+from . import calibration, claims, paper, tracking
+from .base import COMMANDS, Command, Finished, Run, Study, configure, execute
+from .settings import Settings
+
+__all__ = [
+    "COMMANDS",
+    "Command",
+    "Finished",
+    "Run",
+    "Settings",
+    "Study",
+    "calibration",
+    "claims",
+    "configure",
+    "execute",
+    "paper",
+    "tracking",
+]

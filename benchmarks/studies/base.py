@@ -1,0 +1,174 @@
+"""The study engine: commands, studies, and the one loop that runs a study's runs.
+
+A :class:`Command` is a subcommand of ``mimo-radar-bench``: it declares its name, help and
+arguments and runs from parsed arguments. Defining a subclass with a ``name`` registers it
+(:data:`COMMANDS`), so a new command or study is one module that defines one class; the
+command line builds its parser and dispatches from the registry.
+
+A :class:`Study` is a command that runs Monte-Carlo runs and judges or reports them:
+
+1. :meth:`Study.runs` lists its runs (scenario x policies x options -> folder);
+2. :func:`configure` validates every run before anything is written (a bad policy, parameter or
+   option fails here with one :class:`~benchmarks.errors.BenchError`);
+3. :func:`execute` runs each one resumably into its folder and writes its outputs
+   (summary.json, curves.csv, table.md, figures);
+4. :meth:`Study.judge` turns the finished runs into results (verdicts, targets), and
+   :meth:`Study.report` into the text the command prints (and the files it writes).
+
+Every study shares one :class:`~benchmarks.studies.settings.Settings`.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Hashable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, ClassVar
+
+from mimo_radar_env import EnvOptions, Scenario
+
+from .. import harness, report
+from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments
+
+#: Every registered command, by name, in the order of registration.
+COMMANDS: dict[str, type[Command]] = {}
+
+
+class Command:
+    """A subcommand of ``mimo-radar-bench``.
+
+    Subclasses set :attr:`name` (which registers them), :attr:`help` and optionally
+    :attr:`description`, declare their arguments in :meth:`add_arguments`, and run in
+    :meth:`main`.
+    """
+
+    name: ClassVar[str] = ""
+    help: ClassVar[str] = ""
+    description: ClassVar[str | None] = None
+    #: Where the command stands in the command line's help (lower first).
+    order: ClassVar[int] = 100
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        if "name" in cls.__dict__ and cls.name:
+            if cls.name in COMMANDS and COMMANDS[cls.name].__qualname__ != cls.__qualname__:
+                raise TypeError(f"two commands are called {cls.name!r}: {COMMANDS[cls.name]} and {cls}")
+            COMMANDS[cls.name] = cls
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """Declare the command's arguments."""
+
+    def main(self) -> int:
+        """Run the command; its exit code."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class Run:
+    """One run of a study: a scenario, its policies and options, into a folder.
+
+    ``key`` names the run among the study's (e.g. ``(scenario, fusion)``); ``options`` None
+    takes the settings' options; ``agent_params`` None takes the settings'.
+    """
+
+    key: Hashable
+    scenario: str | Path | Scenario
+    policies: tuple[str, ...]
+    folder: Path
+    options: EnvOptions | None = None
+    agent_params: dict[str, dict[str, Any]] | None = None
+
+
+@dataclass
+class Finished:
+    """A run whose outputs are written: its configuration, folder and summary.json."""
+
+    run: Run
+    config: harness.RunConfig
+    summary: dict[str, Any] = field(repr=False)
+
+    @property
+    def folder(self) -> Path:
+        return self.run.folder
+
+
+def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig]:
+    """Every run's configuration, validated; nothing is written (a bad run fails the study
+    before its first run starts)."""
+    keys = [run.key for run in runs]
+    if len(set(keys)) != len(keys):
+        raise harness.HarnessError(f"a study lists a run twice: {keys}")
+    return [
+        harness.make_config(
+            run.scenario,
+            list(run.policies),
+            settings.trials,
+            settings.steps,
+            settings.seed,
+            settings.shard_size,
+            settings.agent_params if run.agent_params is None else run.agent_params,
+            options=run.options or settings.options,
+        )
+        for run in runs
+    ]
+
+
+def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]:
+    """Configure every run, then run each (resumably) into its folder and write its outputs."""
+    configs = configure(runs, settings)
+    finished = {}
+    for run, config in zip(runs, configs, strict=True):
+        per_trial = harness.run(config, run.folder, progress=settings.progress, **settings.execution())
+        summary = report.write_outputs(config, per_trial, run.folder, figures=settings.figures)
+        finished[run.key] = Finished(run, config, summary)
+    return finished
+
+
+class Study(Command):
+    """A command that runs Monte-Carlo runs, then judges and reports them.
+
+    Subclasses declare their own arguments in :meth:`add_study_arguments` (the shared ones
+    are added for them), list their runs in :meth:`runs`, and write what they found in
+    :meth:`report` (with :meth:`judge` where they judge statements).
+    """
+
+    #: The default of ``--trials``.
+    default_trials: ClassVar[int] = DEFAULT_TRIALS
+    #: Whether agent parameters start from the env version's paper study.
+    paper_study: ClassVar[bool] = False
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__(args)
+        self.settings = Settings.from_args(args, paper_study=self.paper_study)
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        cls.add_study_arguments(parser)
+        add_agent_param(parser, paper_study=cls.paper_study)
+        add_run_arguments(parser, trials=cls.default_trials)
+
+    @classmethod
+    def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """The study's own arguments."""
+
+    def runs(self) -> list[Run]:
+        """The study's runs."""
+        raise NotImplementedError
+
+    def judge(self, finished: dict[Hashable, Finished]) -> Any:
+        """Results judged on the finished runs (None: the study only reports)."""
+        return None
+
+    def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
+        """Write the study's own outputs; the text the command prints."""
+        raise NotImplementedError
+
+    def main(self) -> int:
+        finished = execute(self.runs(), self.settings)
+        print(self.report(finished, self.judge(finished)))
+        return 0

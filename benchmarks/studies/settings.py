@@ -1,0 +1,267 @@
+"""The settings of a study, and the command-line arguments they are read from.
+
+:class:`Settings` is the one object a study passes down: how many trials and steps, the seed,
+the shards, where and how the tasks run, the env options and the agent parameters. The
+arguments every study shares are declared here once (:func:`add_run_arguments`).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
+from mimo_radar_env.envs.options import option_choices, option_help, option_names
+
+from ..errors import BenchError
+
+DEFAULT_TRIALS = 500
+DEFAULT_SHARD_SIZE = 50
+
+
+def default_workers() -> int:
+    """Local worker processes when none are given: the machine's cores."""
+    return os.cpu_count() or 1
+
+
+@dataclass(frozen=True)
+class Settings:
+    """Everything a study's runs share besides their scenarios, policies and folders.
+
+    Attributes
+    ----------
+    out : Path
+        The study's output folder.
+    trials, steps, seed, shard_size : int
+        Monte-Carlo trials, steps per episode (None: the scenario's horizon), the base seed
+        (trial ``i`` uses ``seed + i``) and trials per shard.
+    workers, backend, address
+        Local worker processes, ``"local"`` or ``"ray"``, and the Ray cluster's address.
+    progress, figures : bool
+        A progress bar; the PNG figures.
+    env_version : str
+        The env version whose defaults ``options`` start from.
+    options : EnvOptions
+        The runs' env options (a study may vary some, e.g. the fusion).
+    agent_params : dict
+        ``{policy: {parameter: value}}``.
+    """
+
+    out: Path
+    trials: int = DEFAULT_TRIALS
+    steps: int | None = None
+    seed: int = 0
+    shard_size: int = DEFAULT_SHARD_SIZE
+    workers: int = field(default_factory=default_workers)
+    backend: str = "local"
+    address: str | None = None
+    progress: bool = True
+    figures: bool = True
+    env_version: str = DEFAULT_VERSION
+    options: EnvOptions = field(default_factory=lambda: VERSIONS[DEFAULT_VERSION].options())
+    agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    @classmethod
+    def from_args(cls, args: argparse.Namespace, paper_study: bool = False) -> Settings:
+        """The settings of parsed arguments; ``paper_study`` starts the agent parameters from
+        the version's paper study (:func:`study_agent_params`)."""
+        items = getattr(args, "agent_param", [])
+        params = study_agent_params(args.env_version, items) if paper_study else parse_agent_params(items)
+        return cls(
+            out=Path(args.out),
+            trials=args.trials,
+            steps=args.steps,
+            seed=args.seed,
+            shard_size=args.shard_size,
+            workers=args.workers if args.workers is not None else default_workers(),
+            backend=args.backend,
+            address=args.address,
+            progress=not args.quiet,
+            figures=not args.no_figures,
+            env_version=args.env_version,
+            options=env_options_from(args),
+            agent_params=params,
+        )
+
+    def execution(self) -> dict[str, Any]:
+        """The keywords of :func:`benchmarks.harness.run` besides the configuration and folder."""
+        return {"workers": self.workers, "backend": self.backend, "address": self.address}
+
+
+# ------------------------------------------------------------------ argument types
+def integer(low: int) -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low``."""
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {low}"
+    return parse
+
+
+def _quality(text: str) -> float | None:
+    if text.lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected 'none' or a number > 0, got {text!r}") from None
+    if not (math.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected 'none' or a finite number > 0, got {text!r}")
+    return value
+
+
+def paper_numbers(text: str) -> list[int]:
+    """``"1,3"`` -> ``[1, 3]``: paper scenarios."""
+    try:
+        numbers = [int(s) for s in text.split(",")]
+    except ValueError:
+        raise BenchError(f"--scenarios must list paper scenarios 1, 2, 3, got {text!r}") from None
+    if not numbers or not set(numbers) <= {1, 2, 3}:
+        raise BenchError(f"--scenarios must list paper scenarios 1, 2, 3, got {text!r}")
+    if len(set(numbers)) != len(numbers):
+        raise BenchError(f"--scenarios lists a scenario twice: {text!r}")
+    return numbers
+
+
+# ------------------------------------------------------------------ env options
+def add_env_options(parser: argparse.ArgumentParser) -> None:
+    """``--env-version`` and one flag per env option, with the choices, default and help of
+    :class:`EnvOptions` (absent unless given: the version's default applies)."""
+    defaults, choices = EnvOptions().to_dict(), option_choices()
+    group = parser.add_argument_group("env options (MimoRadarSelect keywords)")
+    group.add_argument(
+        "--env-version",
+        choices=sorted(VERSIONS),
+        default=DEFAULT_VERSION,
+        help="MimoRadarSelect version whose defaults the options start from: "
+        + "; ".join(f"{v.name}: {v.summary}" for v in VERSIONS.values())
+        + " (default %(default)s)",
+    )
+    for name, text in option_help().items():
+        flag = "--" + name.replace("_", "-")
+        versions = ", ".join(
+            f"{v.name}: {v.option_defaults.get(name, defaults[name])}" for v in VERSIONS.values()
+        )
+        help_text = f"{text} (default {versions})"
+        given = argparse.SUPPRESS
+        if name in choices:
+            group.add_argument(flag, choices=choices[name], default=given, help=help_text)
+        elif isinstance(defaults[name], bool):
+            group.add_argument(flag, action=argparse.BooleanOptionalAction, default=given, help=help_text)
+        else:  # measurement_quality, the one numeric option
+            group.add_argument(flag, type=_quality, default=given, metavar="NONE|LAMBDA", help=help_text)
+
+
+def env_options_from(args: argparse.Namespace) -> EnvOptions:
+    """The :class:`EnvOptions` of parsed arguments."""
+    given = {name: getattr(args, name) for name in option_names() if hasattr(args, name)}
+    return EnvOptions.for_version(args.env_version, **given)
+
+
+# ------------------------------------------------------------------ agent parameters
+def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
+    """``["mg-crb-cl.beta=1.5", "ucb1.solver=bpso"]`` -> ``{"mg-crb-cl": {"beta": 1.5}, ...}``.
+
+    Values are read as YAML scalars (numbers, booleans, lists, strings).
+    """
+    import yaml
+
+    params: dict[str, dict[str, Any]] = {}
+    for item in items:
+        if "=" not in item or "." not in item.split("=", 1)[0]:
+            raise BenchError(f"--agent-param must look like agent.key=value, got {item!r}")
+        target, raw = item.split("=", 1)
+        policy, key = target.rsplit(".", 1)
+        try:
+            params.setdefault(policy, {})[key] = yaml.safe_load(raw)
+        except yaml.YAMLError as exc:
+            problem = getattr(exc, "problem", None) or "not valid YAML"
+            raise BenchError(f"--agent-param {item!r}: the value is {problem}") from None
+    return params
+
+
+def study_agent_params(version: str, items: Sequence[str]) -> dict[str, dict[str, Any]]:
+    """The paper study's agent parameters: the version's, then ``--agent-param`` over them
+    (key by key, so ``mg-crb-cl.solver_params={rule: xor}`` replaces v1's solver_params)."""
+    params = env_version(version).paper_study_params()
+    for policy, values in parse_agent_params(items).items():
+        params.setdefault(policy, {}).update(values)
+    return params
+
+
+def _over_paper_study() -> str:
+    readings = "; ".join(
+        f"{v.name}: "
+        + (
+            ", ".join(f"{a}.{k}={val}" for a, p in v.paper_agent_params.items() for k, val in p.items())
+            or "none"
+        )
+        for v in VERSIONS.values()
+    )
+    return f"; over the version's paper-study parameters ({readings})"
+
+
+def add_agent_param(parser: argparse.ArgumentParser, paper_study: bool = False) -> None:
+    parser.add_argument(
+        "--agent-param",
+        action="append",
+        default=[],
+        metavar="AGENT.KEY=VALUE",
+        help="agent parameter, repeatable, e.g. mg-crb-cl.solver=exact (values read as YAML)"
+        + (_over_paper_study() if paper_study else ""),
+    )
+
+
+# ------------------------------------------------------------------ a study's shared arguments
+def add_run_arguments(parser: argparse.ArgumentParser, trials: int = DEFAULT_TRIALS) -> None:
+    """The arguments every study shares: trials, steps, seed, --out, shards, workers, backend,
+    figures, progress and the env options."""
+    parser.add_argument(
+        "--trials", type=integer(1), default=trials, help="Monte-Carlo trials (default %(default)s)"
+    )
+    parser.add_argument(
+        "--steps",
+        type=integer(1),
+        default=None,
+        help="steps per episode (default: the scenario horizon, 1000 for the paper)",
+    )
+    parser.add_argument(
+        "--seed", type=integer(0), default=0, help="base seed: trial i uses seed + i (default 0)"
+    )
+    parser.add_argument("--out", required=True, help="output directory (created; reused to resume)")
+    parser.add_argument(
+        "--shard-size",
+        type=integer(1),
+        default=DEFAULT_SHARD_SIZE,
+        help=f"trials per shard; each finished shard is saved at once (default {DEFAULT_SHARD_SIZE})",
+    )
+    parser.add_argument(
+        "--workers",
+        type=integer(1),
+        default=None,
+        help="local worker processes (default: the number of cores)",
+    )
+    parser.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="'local' processes (default) or a Ray cluster ('ray')",
+    )
+    parser.add_argument(
+        "--address", default=None, help="Ray cluster address (default: start a local Ray instance)"
+    )
+    parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar")
+    add_env_options(parser)

@@ -1,0 +1,51 @@
+"""The study engine: a new study is one module; every run is checked before any is written."""
+
+import json
+
+import pytest
+
+from benchmarks.cli import build_parser, main
+from benchmarks.studies import COMMANDS, Run, Settings, configure
+from benchmarks.studies.base import Command
+
+
+def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsys):
+    from tests.bench import toy_study  # defining the class is all it takes
+
+    assert COMMANDS["toy"] is toy_study.ToyStudy
+    out = tmp_path / "toy"
+    assert main(["toy", "--out", str(out), "--steps", "20", "--workers", "1", "--quiet", "--no-figures"]) == 0
+    printed = capsys.readouterr().out
+    judged = json.loads((out / "toy.json").read_text())
+    for name in ("paper-1-v1", "paper-3-v1"):
+        summary = json.loads((out / name / "summary.json").read_text())
+        assert summary["trials"] == 4 and list(summary["policies"]) == ["best", "random"]
+        rows = summary["policies"]
+        difference = rows["best"]["final_regret"] - rows["random"]["final_regret"]
+        assert judged[name]["estimate"] == pytest.approx(difference, rel=1e-9)
+        assert judged[name]["verdict"] == "holds"  # Best's regret is 0, random's is not
+        assert f"{name}: best - random regret {judged[name]['estimate']:.1f} holds" in printed
+
+
+def test_every_run_is_checked_before_any_is_written(tmp_path):
+    settings = Settings(out=tmp_path, trials=2, steps=3, workers=1)
+    good = Run("a", "paper-1-v1", ("best",), tmp_path / "a")
+    bad = Run("b", "paper-1-v1", ("no-such-agent",), tmp_path / "b")
+    with pytest.raises(ValueError, match="unknown policy 'no-such-agent'"):
+        configure([good, bad], settings)
+    with pytest.raises(ValueError, match="lists a run twice"):
+        configure([good, good], settings)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_the_command_line_is_built_from_the_registry():
+    parser = build_parser()
+    choices = parser._subparsers._group_actions[0].choices  # argparse keeps them there
+    assert set(COMMANDS) <= set(choices)
+    for name in ("paper", "run", "claims", "tracking", "calibrate-layout", "compare-claims", "perf"):
+        assert choices[name].get_default("command_class") is COMMANDS[name]
+
+
+def test_two_commands_may_not_share_a_name():
+    with pytest.raises(TypeError, match="two commands are called 'paper'"):
+        type("Another", (Command,), {"name": "paper"})
