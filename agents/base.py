@@ -50,6 +50,28 @@ def check_parameter(
         raise ValueError(f"{name} must be in {bracket}{low:g}, {upper}, got {value}")
 
 
+def ucb_bonus(scale: float, t: int, counts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The UCB bonus ``sqrt(scale ln t / d[m, n])`` (B, M, N) of eq18 / UCB1."""
+    return np.sqrt(scale * np.log(t) / counts)
+
+
+def fuse_targets(weights: NDArray[np.float64], per_target: NDArray[np.float64]) -> NDArray[np.float64]:
+    """eq34: ``I[m, n] = sum_k Omega_k I[k, m, n]``, (B, M, N) from (B, K, M, N)."""
+    return np.einsum("k,bkmn->bmn", weights, per_target)
+
+
+def blend_samples(
+    predicted: NDArray[np.float64],
+    played: NDArray[np.bool_],
+    sample: NDArray[np.float64],
+    weight: float | NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """eq14's update: played channels ``(1 - w) Y_bar + w gamma``, the others ``Y_bar``
+    (estimates (B, K, M, N), ``played`` (B, M, N))."""
+    blended = (1.0 - weight) * predicted + weight * sample
+    return np.where(played[:, None], blended, predicted)
+
+
 class Agent(ABC):
     """Base class of selection policies.
 
@@ -231,14 +253,12 @@ class IndexPolicy(Agent):
         played = np.asarray(obs["probed"], dtype=bool)
         sample = np.asarray(obs["sinr"], dtype=np.float64)
         self.counts = self.count_discount * self.counts + played  # eq15 (1.0 * d is exact)
-        weight = self.step_size(self.counts)
-        blended = (1.0 - weight) * self.predicted + weight * sample
-        self.estimate = np.where(played[:, None], blended, self.predicted)
+        self.estimate = blend_samples(self.predicted, played, sample, self.step_size(self.counts))
 
     def fuse(self, per_target: NDArray[np.float64]) -> NDArray[np.float64]:
         """eq34: ``I[m, n] = sum_k Omega_k I[k, m, n]``."""
-        return np.einsum("k,bkmn->bmn", self.weights, per_target)
+        return fuse_targets(self.weights, per_target)
 
     def bonus(self, scale: float) -> NDArray[np.float64]:
         """The UCB bonus ``sqrt(scale ln t / d[m, n])`` (B, M, N) of eq18 / UCB1."""
-        return np.sqrt(scale * np.log(self.t) / self.counts)
+        return ucb_bonus(scale, self.t, self.counts)

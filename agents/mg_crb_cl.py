@@ -10,8 +10,60 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
 
-from .base import IndexPolicy, Observation, check_parameter
+from .base import IndexPolicy, Observation, blend_samples, check_parameter, ucb_bonus
 from .solvers import SuperArmSolver
+
+
+def check_learning_parameters(alpha: float, alpha_bar: float, beta: float) -> None:
+    check_parameter("alpha", alpha, 0.0, 1.0)
+    check_parameter("alpha_bar", alpha_bar, 0.0, 1.0)
+    check_parameter("beta", beta, 0.0)
+
+
+def geometric_prediction(
+    estimate: NDArray[np.float64], obs: Observation, scenario: Scenario, alpha: float
+) -> NDArray[np.float64]:
+    """eq16: ``Y_bar = alpha L(X_bar) / L(X_hat) Y_hat + (1 - alpha) Y_hat`` from the tracker's
+    estimate (``track``) and prediction (``track_pred``); the RCS ratio is 1."""
+    ratio = path_gain(
+        obs["track_pred"][..., [0, 2]], scenario.tx_positions, scenario.rx_positions
+    ) / path_gain(obs["track"][..., [0, 2]], scenario.tx_positions, scenario.rx_positions)
+    return alpha * ratio * estimate + (1.0 - alpha) * estimate
+
+
+class MGCRBCLEstimator:
+    """MG-CRB-CL's SINR learning as a component (for policies that select otherwise).
+
+    The same estimates as :class:`MGCRBCL`: ``reset`` from the reset observation (every
+    channel probed once), :meth:`predict` (eq16) before a step, :meth:`optimistic` (eq18,
+    per target) for it, :meth:`update` (eq15's counts, eq14's blend) after it.
+    """
+
+    def __init__(self, scenario: Scenario, alpha: float = 0.998, alpha_bar: float = 0.2, beta: float = 2.0):
+        check_learning_parameters(alpha, alpha_bar, beta)
+        self.scenario = scenario
+        self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
+
+    def reset(self, obs: Observation) -> None:
+        self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
+        self.counts = np.array(obs["probed"], dtype=np.float64)  # d(0)
+        self.predicted = self.estimate
+
+    def predict(self, obs: Observation) -> NDArray[np.float64]:
+        """``Y_bar(t)`` (eq16), kept for the update."""
+        self.predicted = geometric_prediction(self.estimate, obs, self.scenario, self.alpha)
+        return self.predicted
+
+    def optimistic(self, t: int) -> NDArray[np.float64]:
+        """``Y_up = Y_bar + sqrt(beta ln t / d)`` per target (eq18), (B, K, M, N)."""
+        return self.predicted + ucb_bonus(self.beta, t, self.counts)[:, None]
+
+    def update(self, obs: Observation) -> None:
+        played = np.asarray(obs["probed"], dtype=bool)
+        self.counts = self.counts + played  # eq15
+        self.estimate = blend_samples(
+            self.predicted, played, np.asarray(obs["sinr"], np.float64), self.alpha_bar
+        )
 
 
 class MGCRBCL(IndexPolicy):
@@ -59,18 +111,12 @@ class MGCRBCL(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        check_parameter("alpha", alpha, 0.0, 1.0)
-        check_parameter("alpha_bar", alpha_bar, 0.0, 1.0)
-        check_parameter("beta", beta, 0.0)
+        check_learning_parameters(alpha, alpha_bar, beta)
         self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
 
     def predict(self, obs: Observation) -> NDArray[np.float64]:
         """eq16 from the tracker's estimate and prediction."""
-        sc = self.scenario
-        ratio = path_gain(obs["track_pred"][..., [0, 2]], sc.tx_positions, sc.rx_positions) / path_gain(
-            obs["track"][..., [0, 2]], sc.tx_positions, sc.rx_positions
-        )
-        return self.alpha * ratio * self.estimate + (1.0 - self.alpha) * self.estimate
+        return geometric_prediction(self.estimate, obs, self.scenario, self.alpha)
 
     def step_size(self, counts: NDArray[np.float64]) -> float:
         return self.alpha_bar  # eq14

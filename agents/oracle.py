@@ -62,7 +62,7 @@ class BestTrackingAgent(BestAgent):
     def __init__(
         self, scenario: Scenario | str, seed: int | None = None, env: Any = None, criterion: str = "trace"
     ) -> None:
-        from mimo_radar_env.tracking.information import CRITERIA
+        from mimo_radar_env.tracking.selection import CRITERIA
 
         if criterion not in CRITERIA:
             raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")

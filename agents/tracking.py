@@ -11,26 +11,88 @@ from mimo_radar_env import Scenario
 from mimo_radar_env.core.model import RadarModel
 from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.envs.options import option_choices
-from mimo_radar_env.tracking.information import (
-    CRITERIA,
-    MAX_ENUMERATED_SUPER_ARMS,
-    channel_information,
-    select_for_tracking,
-)
+from mimo_radar_env.tracking.information import channel_information
+from mimo_radar_env.tracking.selection import CRITERIA, MAX_ENUMERATED_SUPER_ARMS, select_for_tracking
 
-from .base import Observation, check_parameter
-from .mg_crb_cl import MGCRBCL
+from .base import Agent, Observation, check_parameter, fuse_targets
+from .mg_crb_cl import MGCRBCLEstimator
 
 #: The observation key the policy scores super arms with (env option ``prediction_covariance``).
 PREDICTED_COVARIANCE = "track_pred_pos_cov"
 
 
-class TrackingUCB(MGCRBCL):
+class TrackingSelector:
+    """The super arm with the smallest predicted posterior position error, from a measurement
+    quality per target and channel (docs/model.md, section 14).
+
+    ``select`` maps SINR values (B, K, M, N) through eq32 to ``lambda`` (or takes the constant
+    ``measurement_quality``), builds each channel's position information at the tracker's
+    prediction and searches the super arms (:func:`~mimo_radar_env.tracking.selection.select_for_tracking`)
+    under ``fusion``; with ``sinr_weight`` > 0 it trades the criterion against a fused SINR
+    index.
+    """
+
+    def __init__(
+        self,
+        scenario: Scenario,
+        criterion: str = "trace",
+        fusion: str = "average",
+        lambda_scale: str = "db",
+        measurement_quality: float | None = None,
+        sinr_weight: float = 0.0,
+    ) -> None:
+        if criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+        choices = option_choices()  # the env options' own choices
+        for option, value in (("fusion", fusion), ("lambda_scale", lambda_scale)):
+            if value not in choices[option]:
+                raise ValueError(f"{option} must be one of {list(choices[option])}, got {value!r}")
+        check_parameter("sinr_weight", sinr_weight, 0.0, 1.0)
+        if measurement_quality is not None:
+            check_parameter("measurement_quality", measurement_quality, 0.0, low_open=True)
+        count = super_arm_count(scenario.num_tx, scenario.num_rx, scenario.tx_per_step, scenario.rx_per_step)
+        if sinr_weight > 0 and count > MAX_ENUMERATED_SUPER_ARMS:
+            raise ValueError(
+                f"sinr_weight > 0 scores every super arm: at most {MAX_ENUMERATED_SUPER_ARMS:,}, "
+                f"this layout has {count:,}"
+            )
+        self.scenario = scenario
+        self.criterion, self.fusion, self.lambda_scale = criterion, fusion, lambda_scale
+        self.measurement_quality = measurement_quality
+        self.sinr_weight = float(sinr_weight)
+        self.model = RadarModel.from_scenario(scenario)
+
+    def select(
+        self, obs: Observation, sinr: NDArray[np.float64], sinr_index: NDArray[np.float64] | None = None
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """TX and RX masks (B, M), (B, N) for the coming step."""
+        if self.measurement_quality is None:
+            quality = self.model.quality(sinr, scale=self.lambda_scale)  # eq32
+        else:
+            quality = np.full(sinr.shape, float(self.measurement_quality))
+        variance = self.model.measurement_variance(quality)
+        positions = np.asarray(obs["track_pred"])[..., [0, 2]]
+        information = channel_information(positions, self.model.tx, self.model.rx, variance)
+        return select_for_tracking(
+            np.asarray(obs[PREDICTED_COVARIANCE]),
+            information,
+            self.scenario.weights,
+            self.scenario.tx_per_step,
+            self.scenario.rx_per_step,
+            self.criterion,
+            self.fusion,
+            sinr_index=sinr_index,
+            sinr_weight=self.sinr_weight,
+        )
+
+
+class TrackingUCB(Agent):
     """Tracking-UCB: learns the channels' SINR as MG-CRB-CL does and selects for tracking.
 
-    It keeps MG-CRB-CL's estimates (eq16's geometric prediction ``Y_bar``, eq14's update,
-    eq15's counts) and its optimism, ``Y_up = Y_bar + sqrt(beta ln t / d)`` (eq18), but
-    instead of maximising the summed index it turns ``Y_up`` into a measurement quality
+    It is composed of MG-CRB-CL's SINR learning (:class:`~agents.mg_crb_cl.MGCRBCLEstimator`:
+    eq16's geometric prediction ``Y_bar``, eq14's update, eq15's counts and eq18's optimism,
+    ``Y_up = Y_bar + sqrt(beta ln t / d)``) and a :class:`TrackingSelector`: instead of
+    maximising the summed index it turns ``Y_up`` into a measurement quality
     ``lambda_hat = eq32(Y_up)`` and picks the super arm with the smallest predicted posterior
     position error (docs/model.md, section 14): ``sum_k Omega_k trace`` (or ``log det``) of the
     position block of ``(P_bar^-1 + sum_{(m, n) in A} H_mn' R_mn^-1 H_mn)^-1``, where
@@ -67,7 +129,7 @@ class TrackingUCB(MGCRBCL):
     """
 
     name = "tracking-ucb"
-    default_solver = "exact"
+    needs_tracking = True
     env_option_params: ClassVar[tuple[str, ...]] = ("fusion", "lambda_scale", "measurement_quality")
     observation_options: ClassVar[dict[str, Any]] = {"prediction_covariance": True}
 
@@ -84,27 +146,24 @@ class TrackingUCB(MGCRBCL):
         sinr_weight: float = 0.0,
         measurement_quality: float | None = None,
     ) -> None:
-        super().__init__(scenario, seed, alpha, alpha_bar, beta, solver="exact")
-        if criterion not in CRITERIA:
-            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
-        choices = option_choices()  # the env options' own choices
-        for option, value in (("fusion", fusion), ("lambda_scale", lambda_scale)):
-            if value not in choices[option]:
-                raise ValueError(f"{option} must be one of {list(choices[option])}, got {value!r}")
-        check_parameter("sinr_weight", sinr_weight, 0.0, 1.0)
-        if measurement_quality is not None:
-            check_parameter("measurement_quality", measurement_quality, 0.0, low_open=True)
-        sc = self.scenario
-        count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        if sinr_weight > 0 and count > MAX_ENUMERATED_SUPER_ARMS:
-            raise ValueError(
-                f"sinr_weight > 0 scores every super arm: at most {MAX_ENUMERATED_SUPER_ARMS:,}, "
-                f"this layout has {count:,}"
-            )
-        self.criterion, self.fusion, self.lambda_scale = criterion, fusion, lambda_scale
-        self.sinr_weight = float(sinr_weight)
-        self.measurement_quality = measurement_quality
-        self.model = RadarModel.from_scenario(sc)
+        super().__init__(scenario, seed)
+        self.learning = MGCRBCLEstimator(self.scenario, alpha, alpha_bar, beta)
+        self.selector = TrackingSelector(
+            self.scenario, criterion, fusion, lambda_scale, measurement_quality, sinr_weight
+        )
+
+    # what it learns and how it selects, as read by users and tests
+    alpha = property(lambda self: self.learning.alpha)
+    alpha_bar = property(lambda self: self.learning.alpha_bar)
+    beta = property(lambda self: self.learning.beta)
+    estimate = property(lambda self: self.learning.estimate)
+    counts = property(lambda self: self.learning.counts)
+    predicted = property(lambda self: self.learning.predicted)
+    criterion = property(lambda self: self.selector.criterion)
+    fusion = property(lambda self: self.selector.fusion)
+    lambda_scale = property(lambda self: self.selector.lambda_scale)
+    measurement_quality = property(lambda self: self.selector.measurement_quality)
+    sinr_weight = property(lambda self: self.selector.sinr_weight)
 
     def _reset(self, obs: Observation) -> None:
         if PREDICTED_COVARIANCE not in obs:
@@ -112,27 +171,14 @@ class TrackingUCB(MGCRBCL):
                 f"{self.name} scores super arms with the tracker's predicted covariance: "
                 "make the env with prediction_covariance=True"
             )
-        super()._reset(obs)
+        self.learning.reset(obs)
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
-        self.predicted = self.predict(obs)  # eq16
-        optimistic = self.predicted + self.bonus(self.beta)[:, None]  # eq18, per target
-        if self.measurement_quality is None:
-            quality = self.model.quality(optimistic, scale=self.lambda_scale)  # eq32
-        else:
-            quality = np.full(optimistic.shape, float(self.measurement_quality))
-        variance = self.model.measurement_variance(quality)
-        positions = np.asarray(obs["track_pred"])[..., [0, 2]]
-        information = channel_information(positions, self.model.tx, self.model.rx, variance)
-        tx, rx = select_for_tracking(
-            np.asarray(obs[PREDICTED_COVARIANCE]),
-            information,
-            self.weights,
-            self.tx_count,
-            self.rx_count,
-            self.criterion,
-            self.fusion,
-            sinr_index=self.fuse(optimistic) if self.sinr_weight > 0 else None,
-            sinr_weight=self.sinr_weight,
-        )
+        self.learning.predict(obs)  # eq16
+        optimistic = self.learning.optimistic(self.t)  # eq18, per target
+        index = fuse_targets(self.weights, optimistic) if self.sinr_weight > 0 else None  # eq34
+        tx, rx = self.selector.select(obs, optimistic, sinr_index=index)
         return self.actions_from_masks(tx, rx)
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        self.learning.update(obs)

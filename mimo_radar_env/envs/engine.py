@@ -21,14 +21,9 @@ from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
-from ..tracking.information import (
-    bound_step,
-    channel_information,
-    jacobian_information,
-    position_bound,
-    position_determinant,
-    select_for_tracking,
-)
+from ..tracking.bound import bound_step, position_bound
+from ..tracking.information import channel_information, jacobian_information, position_determinant
+from ..tracking.selection import select_for_tracking
 from .options import EnvOptions
 
 
@@ -182,9 +177,9 @@ class RadarEngine:
 
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """The super arm of the coming step that minimises the predicted posterior position
-        error (:mod:`~mimo_radar_env.tracking.information`, for the env's fusion), from the
+        error (:mod:`~mimo_radar_env.tracking.selection`, for the env's fusion), from the
         tracker's prediction and the channels' true ``lambda``: exact over all super arms up
-        to :data:`~mimo_radar_env.tracking.information.MAX_ENUMERATED_SUPER_ARMS`, greedy over
+        to :data:`~mimo_radar_env.tracking.selection.MAX_ENUMERATED_SUPER_ARMS`, greedy over
         stations beyond; (B, M + N)."""
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")

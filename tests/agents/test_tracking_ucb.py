@@ -106,7 +106,8 @@ class _TruthWithheld(gym.Wrapper):
 def test_with_a_constant_quality_it_scores_geometry_only():
     """measurement_quality=q: every channel has lambda = q, so the choice is the criterion's
     minimum with R = Sigma0 / q, whatever the SINR estimates."""
-    from mimo_radar_env.tracking.information import channel_information, select_for_tracking
+    from mimo_radar_env.tracking.information import channel_information
+    from mimo_radar_env.tracking.selection import select_for_tracking
 
     env = gym.make(
         "MimoRadarSelect-v1",
@@ -206,3 +207,29 @@ def test_the_observation_key_is_the_trackers_predicted_position_covariance():
             ref, *_ = plain.step(action)
             for key in ref:  # the option changes no number of the env
                 np.testing.assert_array_equal(obs[key], ref[key])
+
+
+def test_it_is_composed_of_mg_crb_cls_learning_and_the_tracking_selector():
+    """No solver it does not use, no index it does not play; its estimates are MG-CRB-CL's."""
+    from agents.base import IndexPolicy
+    from agents.tracking import TrackingSelector
+
+    venv = gym.make_vec(
+        "MimoRadarSelect-v1", num_envs=3, vectorization_mode="vector_entry_point", prediction_covariance=True
+    )
+    tracking = agents.make_agent("tracking-ucb", venv.scenario, alpha_bar=0.3)
+    mg = agents.make_agent("mg-crb-cl", venv.scenario, seed=0, solver="exact", alpha_bar=0.3)
+    assert not isinstance(tracking, IndexPolicy) and not hasattr(tracking, "solver")
+    assert not hasattr(tracking, "index") and isinstance(tracking.selector, TrackingSelector)
+    obs, _ = venv.reset(seed=5)
+    tracking.reset(obs)
+    mg.reset(obs)
+    for _ in range(12):
+        action = tracking.act(obs)
+        mg.act(obs)  # MG-CRB-CL updates on the same (tracking-ucb's) observations
+        np.testing.assert_array_equal(tracking.predicted, mg.predicted)
+        obs, reward, *_ = venv.step(action)
+        tracking.update(obs, reward)
+        mg.update(obs, reward)
+        np.testing.assert_array_equal(tracking.estimate, mg.estimate)
+        np.testing.assert_array_equal(tracking.counts, mg.counts)

@@ -1,0 +1,33 @@
+"""The posterior Cramer-Rao bound of the position for the selections made (docs/model.md,
+section 14): the information recursion of Tichavsky et al. (1998) along the true trajectory."""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+
+def bound_step(
+    covariance: NDArray[np.float64],
+    transition: NDArray[np.float64],
+    process_cov: NDArray[np.float64],
+    measured: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """One step of the posterior Cramer-Rao bound's information recursion (linear Gaussian
+    motion, Tichavsky et al. 1998): ``J' = (Q + F J^-1 F')^-1 + E' I E``; returns ``J'^-1``.
+
+    ``covariance`` (B, K, 4, 4) the last step's ``J^-1``; ``transition`` (K, 4, 4) the true
+    ``F`` of each target's step; ``process_cov`` (4, 4) ``Q``; ``measured`` (B, K, 2, 2) the
+    position information ``I`` of the channels probed, at the true state with the true ``R``
+    (0 when nothing was probed). ``E`` picks the position (state ``[x, vx, y, vy]``). The
+    information form is kept for its numerical robustness: channel information can be huge
+    near a station.
+    """
+    information = np.linalg.inv(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
+    information[..., 0::2, 0::2] += measured
+    return np.linalg.inv(information)
+
+
+def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``sqrt(trace)`` of the position block of the bound's ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
+    return np.sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
