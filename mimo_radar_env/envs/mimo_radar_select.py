@@ -21,7 +21,8 @@ from numpy.typing import NDArray
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
 from .engine import RadarEngine
-from .options import EnvOptions, resolve
+from .options import EnvOptions, options_markdown, resolve
+from .versions import versions_markdown
 
 
 def observation_space(
@@ -141,53 +142,14 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     ## Arguments
 
-    ``gym.make("MimoRadarSelect-v1", scenario="paper-1-v1", render_mode=None, **options,
-    **scenario_overrides)``. ``scenario`` is a shipped paper scenario (``paper-1-v1``,
-    ``paper-2-v1``, ``paper-3-v1``: v1's, the default of v1; ``paper-1``, ``paper-2``,
-    ``paper-3``: v0's, the default of v0), a YAML/TOML file or a
-    :class:`~mimo_radar_env.Scenario`. The options (:class:`~mimo_radar_env.EnvOptions`,
-    defaults first):
+    ``gym.make("MimoRadarSelect-v1", scenario=..., render_mode=None, **options,
+    **scenario_overrides)``. ``scenario`` is a shipped scenario (each version's paper scenarios
+    are listed below), a YAML/TOML file or a :class:`~mimo_radar_env.Scenario`. The options
+    (:class:`~mimo_radar_env.EnvOptions`, defaults first):
 
-    * ``fusion``: ``"average"`` (the paper's eq22 averaging of per-channel IMM-UKF
-      updates) or ``"centralized"`` (one update with the stacked measurements);
-    * ``tracking``: ``True`` runs the IMM-UKF in the loop; ``False`` drops it and the
-      ``track*``/``mode_prob`` keys (pure bandit studies, about 3x faster);
-    * ``filter_noise``: ``"true"`` (the tracker uses each channel's true ``Sigma0 / lambda``)
-      or ``"estimated"`` (``Sigma0 / lambda_hat`` from the SINR the channel observed);
-    * ``measurement_quality``: ``None`` (eq32's ``lambda`` from the mean SINR) or a number
-      > 0, that constant ``lambda`` on every channel (ablation);
-    * ``invalid_action``: ``"probe-nothing"`` or ``"raise"``: what an action with the
-      wrong number of TX/RX does;
-    * ``oracle_solver``: ``"auto"``, ``"exact"`` or ``"alternating"``: how
-      ``optimal_reward``, ``optimal_action`` and ``oracle_action()`` are found; ``auto`` is
-      exact up to 20,000 subsets on the smaller side and alternating maximisation (a lower
-      bound of the optimum) beyond;
-    * ``lambda_scale``: ``"linear"`` or ``"db"``: the scale on which eq32 maps the mean SINR
-      to measurement quality;
-    * ``truth``: ``"per-trial"`` (each trial's truth starts at a draw from
-      ``N(X1_hat, P1_hat)``) or ``"shared"`` (one true trajectory per target, from ``X1_hat``
-      and the scenario's ``truth_seed``, the same in every trial; each trial's tracker starts
-      at ``X1_hat + N(0, P1_hat)``);
-    * ``measurements``: ``False`` or ``True``: after each step, ``info`` also carries the raw
-      measurements for external trackers: ``measurement`` (K, Ms*Ns, 2), the range sum (m)
-      and azimuth (rad, from the receiver) of each target on each selected channel;
-      ``measurement_covariance`` (K, Ms*Ns, 2, 2), the diagonal covariance the env's tracker
-      uses (``Sigma0 / lambda``, per ``filter_noise``); ``measurement_tx`` and
-      ``measurement_rx`` (Ms*Ns,), the stations of each channel (TX-major order). After an
-      action that probes nothing the measurements and covariances are NaN;
-    * ``reward``: ``"sinr"`` (eq17, below) or ``"information"``: the realised reduction of the
-      tracker's position uncertainty, ``sum_k Omega_k (log det P_pos,pred - log det
-      P_pos,post)`` in nats, for learning to select for tracking (needs ``tracking=True``);
-    * ``prediction_covariance``: ``False`` or ``True``: the observation also carries
-      ``track_pred_pos_cov``, the position block of the tracker's predicted (IMM mixture)
-      covariance for the coming step, which tracking-aware policies score super arms with
-      (needs ``tracking=True``; no number of the env changes).
+    {options}
 
-    ``MimoRadarSelect-v0`` defaults to ``lambda_scale="linear"``, ``truth="per-trial"``
-    (reading 0 of the paper's ambiguous points, unchanged since release);
-    ``MimoRadarSelect-v1`` to ``lambda_scale="db"``, ``truth="shared"`` (reading 1; its
-    paper study also runs MG-CRB-CL's BPSO with the standard position rule). Every other
-    default is the same.
+    {versions}
 
     Any other keyword that names a scenario field overrides it (``horizon=200``); any other
     keyword raises ``TypeError``.
@@ -335,6 +297,13 @@ def _single_action(action: Any, size: int) -> NDArray:
             f"receivers), got shape {arr.shape}"
         )
     return arr[None]
+
+
+MimoRadarSelectEnv.__doc__ = (
+    (MimoRadarSelectEnv.__doc__ or "")
+    .replace("    {options}", options_markdown(indent="    "))
+    .replace("    {versions}", versions_markdown(indent="    "))
+)
 
 
 class MimoRadarSelectVectorEnv(VectorEnv):

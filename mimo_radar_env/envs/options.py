@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import textwrap
 import typing
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -32,79 +33,95 @@ Reward = Literal["sinr", "information"]
 OracleSolver = Literal[SUPER_ARM_METHODS]  # type: ignore[valid-type]
 
 
-def _option(default: Any, help: str) -> Any:
-    return field(default=default, metadata={"help": help})
+def _option(default: Any, help: str, doc: str) -> Any:
+    """A field of :class:`EnvOptions`: ``help`` is its one line (the command line's),
+    ``doc`` its full description (the env's and EnvOptions' docstrings are built from it)."""
+    return field(default=default, metadata={"help": help, "doc": " ".join(doc.split())})
 
 
 @dataclass(frozen=True)
 class EnvOptions:
-    """Options of ``MimoRadarSelect`` (any of them is a keyword of ``gym.make``).
+    # the docstring is built from the fields' metadata below the class (options_docstring)
 
-    Attributes
-    ----------
-    fusion : {"average", "centralized"}
-        How the tracker fuses the selected channels: the paper's ``"average"`` (eq22) or
-        ``"centralized"`` (one update with the stacked measurements).
-    tracking : bool
-        ``True`` runs the IMM-UKF in the loop; ``False`` drops it (and the ``track*`` and
-        ``mode_prob`` keys of the observation) for pure bandit studies.
-    filter_noise : {"true", "estimated"}
-        The measurement covariance the tracker uses: each channel's true ``Sigma0 / lambda``,
-        or ``Sigma0 / lambda_hat`` with ``lambda_hat`` from the SINR the channel observed.
-    measurement_quality : float or None
-        ``None``: eq32's ``lambda`` from the mean SINR. A number in (0, inf): that constant
-        ``lambda`` on every channel, which decouples accuracy from the selection (ablations).
-    invalid_action : {"probe-nothing", "raise"}
-        An action that does not select exactly ``Ms`` TX and ``Ns`` RX probes nothing
-        (reward 0, the tracker only predicts), or raises ``ValueError``.
-    oracle_solver : {"auto", "exact", "alternating"}
-        How ``optimal_reward``, ``optimal_action`` and ``oracle_action()`` are found: exact
-        enumeration, alternating maximisation (a lower bound of the optimum), or ``"auto"``:
-        exact up to 20,000 subsets on the smaller side, alternating beyond.
-    lambda_scale : {"linear", "db"}
-        The scale eq32 maps SINR to measurement quality on: linear SINR (reading 0, v0's
-        default) or dB (reading 1, v1's default).
-    truth : {"per-trial", "shared"}
-        A true trajectory per trial, drawn from ``N(X1_hat, P1_hat)`` (reading 0), or one
-        trajectory shared by every trial, started at ``X1_hat`` and drawn from the scenario's
-        ``truth_seed``, with each trial's tracker started at ``X1_hat + N(0, P1_hat)``
-        (reading 1).
-    measurements : bool
-        ``True`` puts each step's raw measurements in ``info`` for external trackers:
-        ``measurement`` (K, Ms*Ns, 2), range sum (m) and azimuth (rad) per target and selected
-        channel; ``measurement_covariance`` (K, Ms*Ns, 2, 2), the covariance the env's tracker
-        uses (per ``filter_noise``); ``measurement_tx``/``measurement_rx`` (Ms*Ns,), each
-        channel's stations. NaN after an action that probes nothing.
-    reward : {"sinr", "information"}
-        The reward a step returns: eq17's weighted sum of the selected channels' SINR samples,
-        or the realised reduction of the tracker's position uncertainty,
-        ``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` in nats (needs the
-        tracker). ``info`` carries both terms at every step (``reward_sinr``,
-        ``reward_information``, the latter with the tracker only).
-    """
-
-    fusion: FusionName = _option("average", "tracker fusion: the paper's eq22 'average' or 'centralized'")
-    tracking: bool = _option(True, "run the IMM-UKF tracker in the loop")
+    fusion: FusionName = _option(
+        "average",
+        "tracker fusion: the paper's eq22 'average' or 'centralized'",
+        """``"average"`` (the paper's eq22 averaging of per-channel IMM-UKF updates) or
+        ``"centralized"`` (one update with the stacked measurements)""",
+    )
+    tracking: bool = _option(
+        True,
+        "run the IMM-UKF tracker in the loop",
+        """``True`` runs the IMM-UKF in the loop; ``False`` drops it and the ``track*``/``mode_prob``
+        keys of the observation (pure bandit studies, about 3x faster)""",
+    )
     filter_noise: FilterNoise = _option(
-        "true", "tracker's measurement covariance: the channel's 'true' one or 'estimated' from its SINR"
+        "true",
+        "tracker's measurement covariance: the channel's 'true' one or 'estimated' from its SINR",
+        """``"true"`` (the tracker uses each channel's true ``Sigma0 / lambda``) or ``"estimated"``
+        (``Sigma0 / lambda_hat`` with ``lambda_hat`` from the SINR the channel observed)""",
     )
     measurement_quality: float | None = _option(
-        None, "constant lambda on every channel instead of eq32's (ablation); none: eq32"
+        None,
+        "constant lambda on every channel instead of eq32's (ablation); none: eq32",
+        """``None`` (eq32's ``lambda`` from the mean SINR) or a number in (0, inf): that constant
+        ``lambda`` on every channel, which decouples accuracy from the selection (ablations)""",
     )
     invalid_action: InvalidAction = _option(
-        "probe-nothing", "an action with the wrong number of TX/RX probes nothing, or raises"
+        "probe-nothing",
+        "an action with the wrong number of TX/RX probes nothing, or raises",
+        """``"probe-nothing"`` (an action that does not select exactly ``Ms`` TX and ``Ns`` RX
+        probes nothing: reward 0, the tracker only predicts) or ``"raise"`` (``ValueError``)""",
     )
     oracle_solver: OracleSolver = _option(
-        "auto", "how the optimal super arm is found: exact, alternating, or auto by size"
+        "auto",
+        "how the optimal super arm is found: exact, alternating, or auto by size",
+        """``"auto"``, ``"exact"`` or ``"alternating"``: how ``optimal_reward``,
+        ``optimal_action`` and ``oracle_action()`` are found; ``"auto"`` is exact enumeration up
+        to 20,000 subsets on the smaller side and alternating maximisation (a lower bound of the
+        optimum) beyond""",
     )
-    lambda_scale: LambdaScale = _option("linear", "the scale eq32 maps SINR to measurement quality on")
-    truth: Truth = _option("per-trial", "a true trajectory per trial, or one shared by all trials")
-    measurements: bool = _option(False, "put each step's raw measurements and their covariances in info")
+    lambda_scale: LambdaScale = _option(
+        "linear",
+        "the scale eq32 maps SINR to measurement quality on",
+        """``"linear"`` (reading 0, v0's default) or ``"db"`` (reading 1, v1's default): the scale
+        on which eq32 maps the mean SINR to measurement quality""",
+    )
+    truth: Truth = _option(
+        "per-trial",
+        "a true trajectory per trial, or one shared by all trials",
+        """``"per-trial"`` (each trial's truth starts at a draw from ``N(X1_hat, P1_hat)``,
+        reading 0) or ``"shared"`` (one true trajectory per target, from ``X1_hat`` and the
+        scenario's ``truth_seed``, the same in every trial; each trial's tracker starts at
+        ``X1_hat + N(0, P1_hat)``, reading 1)""",
+    )
+    measurements: bool = _option(
+        False,
+        "put each step's raw measurements and their covariances in info",
+        """``False`` or ``True``: after each step ``info`` also carries the raw measurements for
+        external trackers: ``measurement`` (K, Ms*Ns, 2), the range sum (m) and azimuth (rad,
+        from the receiver) of each target on each selected channel;
+        ``measurement_covariance`` (K, Ms*Ns, 2, 2), the diagonal covariance the env's tracker
+        uses (``Sigma0 / lambda``, per ``filter_noise``); ``measurement_tx`` and
+        ``measurement_rx`` (Ms*Ns,), the stations of each channel (TX-major order). After an
+        action that probes nothing the measurements and covariances are NaN""",
+    )
     reward: Reward = _option(
-        "sinr", "the step reward: eq17's 'sinr' sum, or the tracker's position 'information' gain (nats)"
+        "sinr",
+        "the step reward: eq17's 'sinr' sum, or the tracker's position 'information' gain (nats)",
+        """``"sinr"`` (eq17's weighted sum of the selected channels' SINR samples) or
+        ``"information"``: the realised reduction of the tracker's position uncertainty,
+        ``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` in nats, for learning to
+        select for tracking (needs ``tracking=True``); ``info`` carries both terms at every step
+        (``reward_sinr``, and with the tracker ``reward_information``)""",
     )
     prediction_covariance: bool = _option(
-        False, "add the tracker's predicted position covariance 'track_pred_pos_cov' to the observation"
+        False,
+        "add the tracker's predicted position covariance 'track_pred_pos_cov' to the observation",
+        """``False`` or ``True``: the observation also carries ``track_pred_pos_cov``, the
+        position block of the tracker's predicted (IMM mixture) covariance for the coming step,
+        which tracking-aware policies score super arms with (needs ``tracking=True``; no number
+        of the env changes)""",
     )
 
     @classmethod
@@ -179,6 +196,54 @@ def option_choices() -> dict[str, tuple[str, ...]]:
 def option_help() -> dict[str, str]:
     """One line of help per option."""
     return {f.name: f.metadata["help"] for f in dataclasses.fields(EnvOptions)}
+
+
+def option_docs() -> dict[str, str]:
+    """The full description of each option."""
+    return {f.name: f.metadata["doc"] for f in dataclasses.fields(EnvOptions)}
+
+
+def _option_type(name: str) -> str:
+    choices = option_choices().get(name)
+    if choices:
+        return "{" + ", ".join(f'"{c}"' for c in choices) + "}"
+    default = EnvOptions.__dataclass_fields__[name].default
+    return "bool" if isinstance(default, bool) else "float or None"
+
+
+def options_markdown(indent: str = "") -> str:
+    """Every option as a Markdown bullet ``* ``name``: description``, in field order (the env
+    docstring's Arguments)."""
+    docs = list(option_docs().items())
+    return "\n".join(
+        textwrap.fill(
+            f"* ``{name}``: {doc}" + (";" if i < len(docs) - 1 else "."),
+            width=92,
+            initial_indent=indent,
+            subsequent_indent=indent + "  ",
+            break_on_hyphens=False,
+        )
+        for i, (name, doc) in enumerate(docs)
+    )
+
+
+def options_docstring() -> str:
+    """EnvOptions' numpydoc docstring, from the fields' metadata."""
+    lines = [
+        "Options of ``MimoRadarSelect`` (any of them is a keyword of ``gym.make``).",
+        "",
+        "Attributes",
+        "----------",
+    ]
+    for name, doc in option_docs().items():
+        lines.append(f"{name} : {_option_type(name)}")
+        lines += textwrap.wrap(
+            doc + ".", width=92, initial_indent="    ", subsequent_indent="    ", break_on_hyphens=False
+        )
+    return "\n".join(lines) + "\n"
+
+
+EnvOptions.__doc__ = options_docstring()
 
 
 def resolve(kwargs: Mapping[str, Any]) -> tuple[EnvOptions, Scenario]:

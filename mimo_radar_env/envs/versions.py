@@ -10,6 +10,7 @@ is one more entry here (and, where it moves any number, a new name: versions are
 
 from __future__ import annotations
 
+import textwrap
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
@@ -136,6 +137,37 @@ def paper_key(name: str) -> str:
         if name in names:
             return f"paper-{names.index(name) + 1}"
     return name
+
+
+def _literal(value: Any) -> str:
+    return repr(value).replace("'", '"')
+
+
+def versions_markdown(indent: str = "") -> str:
+    """A paragraph per version: its paper scenarios, the option defaults that differ and its
+    paper study's agent parameters (the env docstring's Arguments)."""
+    paragraphs = []
+    for v in VERSIONS.values():
+        defaults = (
+            ", ".join(f"``{k}={v!r}``" for k, v in v.option_defaults.items()) or "the options' defaults"
+        )
+        text = f"``{v.env_id}`` ({v.summary}): paper scenarios " + ", ".join(
+            f"``{name}``" for name in v.paper_scenarios
+        )
+        text += f" (default ``{v.default_scenario}``); " + (
+            f"option defaults {defaults}" if defaults else "the options' own defaults"
+        )
+        if v.paper_agent_params:
+            text += "; its paper study runs " + ", ".join(
+                f"``{agent}`` with ``{_literal(dict(params))}``"
+                for agent, params in v.paper_agent_params.items()
+            )
+        paragraphs.append(
+            textwrap.fill(
+                text + ".", width=92, initial_indent=indent, subsequent_indent=indent, break_on_hyphens=False
+            )
+        )
+    return "\n\n".join(paragraphs)
 
 
 def default_config(version: str = DEFAULT_VERSION) -> dict[str, Any]:

@@ -9,6 +9,7 @@ import pytest
 
 import agents
 import benchmarks.harness as harness
+import mimo_radar_env
 from benchmarks.cli import main
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv
 from mimo_radar_env.envs.options import option_choices, option_names
@@ -48,6 +49,21 @@ def test_the_tables_above_cover_every_option_and_choices_come_from_their_registr
     assert set(NON_DEFAULT) == set(BAD) == set(option_names())
     assert option_choices()["fusion"] == tuple(FUSIONS)
     assert option_choices()["oracle_solver"] == ("auto", "exact", "alternating")
+
+
+def test_the_option_docs_are_generated_from_the_fields():
+    """One home: the env's Arguments, EnvOptions' docstring and the command line's help all read
+    the fields' metadata."""
+    from mimo_radar_env.envs.options import option_docs, option_help
+
+    flat = " ".join(gym.make("MimoRadarSelect-v1").unwrapped.__class__.__doc__.split())
+    options_doc = " ".join(EnvOptions.__doc__.split())
+    for name, doc in option_docs().items():
+        assert f"* ``{name}``: {doc}" in flat, name
+        assert f"{name} : " in options_doc and doc in options_doc, name
+        assert option_help()[name]
+    for version in mimo_radar_env.VERSIONS.values():
+        assert f"``{version.env_id}`` ({version.summary})" in flat
 
 
 def test_the_env_docstring_lists_every_option():
