@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from ..harness import PAPER_POLICIES, make_config, run
+from ..studies.settings import default_workers
 from . import env_throughput, solver_speed, tracker_speed
 
 FULL = {
@@ -68,7 +69,7 @@ def repro_wall_s(solver: str, trials: int, steps: int | None, workers: int, shar
 
 def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     sizes = QUICK if quick else FULL
-    workers = workers or os.cpu_count() or 1
+    workers = workers or default_workers()
     trials = sizes["repro_trials"]
     shard_size = max(1, -(-trials // workers))  # one shard per worker and policy: the largest batches
     results: dict[str, Any] = {
