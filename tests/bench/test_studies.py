@@ -49,3 +49,23 @@ def test_the_command_line_is_built_from_the_registry():
 def test_two_commands_may_not_share_a_name():
     with pytest.raises(TypeError, match="two commands are called 'paper'"):
         type("Another", (Command,), {"name": "paper"})
+
+
+def test_the_study_written_in_the_docs_runs_as_written(tmp_path):
+    """docs/benchmark.md's example study, as a module of its own, through the command line."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    text = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text()
+    start = text.index("```python\nfrom benchmarks import verdicts") + len("```python\n")
+    (tmp_path / "docs_study.py").write_text(text[start : text.index("```", start)])
+    argv = ["best-vs-random", "--out", str(tmp_path / "out"), "--trials", "3", "--steps", "10"]
+    argv += ["--quiet", "--no-figures", "--workers", "1"]
+    code = (
+        f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import docs_study; "
+        f"from benchmarks.cli import main; sys.exit(main({argv!r}))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip() == "Best's regret is below random's: holds"
