@@ -1,0 +1,113 @@
+"""Every module has a findable test: the test file that tests it, and a name from the module
+that the test file uses (a witness that the mapping is not stale)."""
+
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: module -> (test file, a regular expression the test file must match)
+MODULE_TESTS = {
+    "agents/base.py": ("tests/agents/test_agents.py", r"make_agent"),
+    "agents/fixed.py": ("tests/agents/test_agents.py", r'"fix1"'),
+    "agents/greedy.py": ("tests/agents/test_agents.py", r"epsilon-greedy"),
+    "agents/mg_crb_cl.py": ("tests/agents/test_agents.py", r"mg-crb-cl"),
+    "agents/oracle.py": ("tests/agents/test_agents.py", r'"best"'),
+    "agents/ppo.py": ("tests/agents/test_ppo.py", r"ppo:"),
+    "agents/random_streams.py": ("tests/agents/test_rbe_cts.py", r"TrialRandom"),
+    "agents/recency.py": ("tests/agents/test_rbe_cts.py", r'"rbe"'),
+    "agents/registry.py": ("tests/agents/test_agents.py", r"available_agents"),
+    "agents/thompson.py": ("tests/agents/test_rbe_cts.py", r'"cts"'),
+    "agents/tracking.py": ("tests/agents/test_tracking_ucb.py", r"TrackingSelector"),
+    "agents/ucb.py": ("tests/agents/test_agents.py", r'"ucb1"'),
+    "agents/uniform.py": ("tests/agents/test_agents.py", r'"random"'),
+    "agents/solvers/alternating.py": ("tests/agents/test_solvers.py", r"alternating"),
+    "agents/solvers/base.py": ("tests/agents/test_solvers.py", r"make_solver"),
+    "agents/solvers/bpso.py": ("tests/agents/test_solvers.py", r"bpso"),
+    "agents/solvers/_bpso_kernels.py": ("tests/agents/test_solvers.py", r"use_numba"),
+    "agents/solvers/exact.py": ("tests/agents/test_solvers.py", r'"exact"'),
+    "benchmarks/backends.py": ("tests/bench/test_backends.py", r"workers=2"),
+    "benchmarks/cli.py": ("tests/bench/test_cli_errors.py", r"main\("),
+    "benchmarks/commands.py": ("tests/bench/test_harness.py", r'"agents"'),
+    "benchmarks/demo.py": ("tests/bench/test_harness.py", r'"demo"'),
+    "benchmarks/errors.py": ("tests/bench/test_settings.py", r"BenchError"),
+    "benchmarks/harness.py": ("tests/bench/test_harness.py", r"make_config"),
+    "benchmarks/plots.py": ("tests/bench/test_plots.py", r"plots\.palette"),
+    "benchmarks/ppo.py": ("tests/agents/test_ppo.py", r"train_ppo"),
+    "benchmarks/report.py": ("tests/bench/test_report.py", r"format_estimate"),
+    "benchmarks/shards.py": ("tests/bench/test_shards.py", r"read_shard"),
+    "benchmarks/uncertainty.py": ("tests/bench/test_uncertainty.py", r"uncertainty\.estimate"),
+    "benchmarks/verdicts.py": ("tests/bench/test_verdicts.py", r"verdicts\.verdict"),
+    "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),
+    "benchmarks/speed/perf.py": ("tests/bench/test_perf_quick.py", r'"perf"'),
+    "benchmarks/speed/scaling.py": ("tests/bench/test_perf_quick.py", r"scaling\.measure"),
+    "benchmarks/speed/solver_speed.py": ("tests/bench/test_perf_quick.py", r"bpso_optimality_rate"),
+    "benchmarks/speed/tracker_speed.py": ("tests/bench/test_perf_quick.py", r"tracker_speedup_vs_filterpy"),
+    "benchmarks/studies/base.py": ("tests/bench/test_studies.py", r"configure"),
+    "benchmarks/studies/calibration.py": ("tests/bench/test_calibration.py", r"calibrate"),
+    "benchmarks/studies/claims.py": ("tests/bench/test_claims.py", r"claims\.evaluate|claims\.judge"),
+    "benchmarks/studies/paper.py": ("tests/bench/test_harness.py", r'"paper"'),
+    "benchmarks/studies/settings.py": ("tests/bench/test_settings.py", r"Settings\.from_args"),
+    "benchmarks/studies/tracking.py": ("tests/bench/test_tracking_study.py", r"TRACKING_POLICIES"),
+    "mimo_radar_env/core/compiled.py": ("tests/tracking/test_average_kernels.py", r"HAVE_NUMBA"),
+    "mimo_radar_env/core/counter_hash.py": ("tests/env/test_streams.py", r"Stream"),
+    "mimo_radar_env/core/geometry.py": ("tests/env/test_geometry.py", r"measurement_jacobian"),
+    "mimo_radar_env/core/model.py": ("tests/env/test_simulation.py", r"RadarModel"),
+    "mimo_radar_env/core/motion.py": ("tests/env/test_simulation.py", r"motion"),
+    "mimo_radar_env/core/simulation.py": ("tests/env/test_simulation.py", r"simulation"),
+    "mimo_radar_env/core/streams.py": ("tests/env/test_streams.py", r"TrialStreams"),
+    "mimo_radar_env/core/superarm.py": ("tests/env/test_simulation.py", r"superarm"),
+    "mimo_radar_env/envs/engine.py": ("tests/env/test_env.py", r"make_vec"),
+    "mimo_radar_env/envs/mimo_radar_select.py": ("tests/env/test_env.py", r"MimoRadarSelect-v"),
+    "mimo_radar_env/envs/options.py": ("tests/env/test_options.py", r"option_names"),
+    "mimo_radar_env/envs/versions.py": ("tests/env/test_versions.py", r"VERSIONS"),
+    "mimo_radar_env/extras.py": ("tests/agents/test_ppo.py", r"DependencyNotInstalled|extras"),
+    "mimo_radar_env/metrics.py": ("tests/bench/test_metrics.py", r"TrialMetrics"),
+    "mimo_radar_env/rendering.py": ("tests/env/test_env.py", r"rgb_array"),
+    "mimo_radar_env/sb3.py": ("tests/agents/test_ppo.py", r"make_ppo_env"),
+    "mimo_radar_env/scenarios/files.py": ("tests/env/test_scenario.py", r"yaml|toml"),
+    "mimo_radar_env/scenarios/random_layouts.py": ("tests/env/test_scenario.py", r"random_scenario"),
+    "mimo_radar_env/scenarios/scenario.py": ("tests/env/test_scenario.py", r"Scenario"),
+    "mimo_radar_env/scenarios/validation.py": ("tests/env/test_bad_input.py", r"ScenarioError"),
+    "mimo_radar_env/tracking/bound.py": ("tests/tracking/test_bound.py", r"bound_step"),
+    "mimo_radar_env/tracking/fusion/_average_kernels.py": (
+        "tests/tracking/test_average_kernels.py",
+        r"kernels\.",
+    ),
+    "mimo_radar_env/tracking/fusion/average.py": (
+        "tests/tracking/test_average_kernels.py",
+        r"average_channels",
+    ),
+    "mimo_radar_env/tracking/fusion/base.py": ("tests/tracking/test_imm_ukf_reference.py", r"use_numba"),
+    "mimo_radar_env/tracking/fusion/centralized.py": (
+        "tests/tracking/test_imm_ukf_reference.py",
+        r"centralized",
+    ),
+    "mimo_radar_env/tracking/imm.py": ("tests/tracking/test_imm_ukf_reference.py", r"IMMUKFTracker"),
+    "mimo_radar_env/tracking/imm_ukf.py": ("tests/tracking/test_imm_ukf_reference.py", r"filterpy"),
+    "mimo_radar_env/tracking/information.py": ("tests/tracking/test_selection.py", r"channel_information"),
+    "mimo_radar_env/tracking/selection.py": ("tests/tracking/test_selection.py", r"super_arm_criterion"),
+    "mimo_radar_env/tracking/unscented.py": ("tests/tracking/test_imm_ukf_reference.py", r"unscented|UKF"),
+    "mimo_radar_env/wrappers.py": ("tests/clients/test_clients.py", r"SuperArmDiscreteAction"),
+}
+
+
+def _modules():
+    for package in ("mimo_radar_env", "agents", "benchmarks"):
+        for path in sorted((ROOT / package).rglob("*.py")):
+            if path.name not in ("__init__.py", "__main__.py"):
+                yield path.relative_to(ROOT).as_posix()
+
+
+def test_every_module_is_mapped_to_its_tests():
+    assert sorted(set(_modules()) - set(MODULE_TESTS)) == []
+    assert sorted(set(MODULE_TESTS) - set(_modules())) == []
+
+
+@pytest.mark.parametrize("module", sorted(MODULE_TESTS))
+def test_each_mapped_test_file_exists_and_uses_the_module(module):
+    test_file, witness = MODULE_TESTS[module]
+    text = (ROOT / test_file).read_text()
+    assert re.search(witness, text), f"{test_file} does not match {witness!r} for {module}"
