@@ -21,6 +21,12 @@ Every study shares one :class:`~benchmarks.studies.settings.Settings`.
 from __future__ import annotations
 
 import argparse
+import datetime
+import json
+import os
+import platform
+import sys
+import time
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -169,6 +175,41 @@ class Study(Command):
         raise NotImplementedError
 
     def main(self) -> int:
+        start = time.perf_counter()
+        load_before = machine()
         finished = execute(self.runs(), self.settings)
-        print(self.report(finished, self.judge(finished)))
+        text = self.report(finished, self.judge(finished))
+        write_timing(self.settings.out, self.name, time.perf_counter() - start, load_before)
+        print(text)
         return 0
+
+
+TIMING_FILE = "timing.json"
+
+
+def machine() -> dict[str, Any]:
+    """What the timings were measured on: the platform, cores, Python and the load average."""
+    return {
+        "platform": platform.platform(),
+        "machine": platform.machine(),
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "load_average_1min": round(os.getloadavg()[0], 2),
+    }
+
+
+def write_timing(out: Path, study: str, wall_s: float, before: dict[str, Any]) -> Path:
+    """``out/timing.json``: the study's wall time in this invocation (a resumed study counts only
+    what it ran), the command and the machine, with its load before and after."""
+    after = machine()
+    record = {
+        "study": study,
+        "command": ["mimo-radar-bench", *sys.argv[1:]] if sys.argv else [],
+        "wall_s": round(wall_s, 3),
+        "finished": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "machine": {**before, "load_average_1min_after": after["load_average_1min"]},
+    }
+    path = Path(out) / TIMING_FILE
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2))
+    return path

@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import json
+import time
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -43,7 +44,7 @@ from mimo_radar_env.tracking.information import channel_information
 
 from .. import verdicts
 from . import claims
-from .base import Study
+from .base import Study, machine, write_timing
 from .settings import integer
 
 REGION_M = 100_000.0
@@ -323,6 +324,8 @@ class CalibrationStudy(Study):
             parser.add_argument(flag, type=integer(1), default=default, help=f"{text} (default {default})")
 
     def main(self) -> int:
+        start = time.perf_counter()
+        load_before = machine()
         settings = self.settings
 
         def scorecard(scenarios: list[Scenario], out: Path, trials: int) -> list[dict[str, Any]]:
@@ -340,6 +343,7 @@ class CalibrationStudy(Study):
             final_trials=settings.trials,
             scale=settings.options.lambda_scale,
         )
+        write_timing(out, self.name, time.perf_counter() - start, load_before)
         print((out / "calibration.md").read_text().split("\n\n| layout")[0])
         print(
             f"best layout {report['best']}: {'adopted' if report['adopted'] else 'not adopted'}; "

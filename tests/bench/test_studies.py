@@ -25,6 +25,9 @@ def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsy
         assert judged[name]["estimate"] == pytest.approx(difference, rel=1e-9)
         assert judged[name]["verdict"] == "holds"  # Best's regret is 0, random's is not
         assert f"{name}: best - random regret {judged[name]['estimate']:.1f} holds" in printed
+    timing = json.loads((out / "timing.json").read_text())  # timings are artefacts too
+    assert timing["study"] == "toy" and timing["wall_s"] > 0 and timing["machine"]["cores"] >= 1
+    assert "load_average_1min" in timing["machine"] and "load_average_1min_after" in timing["machine"]
 
 
 def test_every_run_is_checked_before_any_is_written(tmp_path):
