@@ -32,6 +32,8 @@ MODULE_TESTS = {
     "benchmarks/cli.py": ("tests/bench/test_cli_errors.py", r"main\("),
     "benchmarks/commands.py": ("tests/bench/test_harness.py", r'"agents"'),
     "benchmarks/demo.py": ("tests/bench/test_harness.py", r'"demo"'),
+    "benchmarks/doctables.py": ("tests/clients/test_docs_tables.py", r"regenerate"),
+    "benchmarks/docs_generators.py": ("tests/clients/test_docs_tables.py", r"calibration\.json"),
     "benchmarks/errors.py": ("tests/bench/test_settings.py", r"BenchError"),
     "benchmarks/harness.py": ("tests/bench/test_harness.py", r"make_config"),
     "benchmarks/plots.py": ("tests/bench/test_plots.py", r"plots\.palette"),

@@ -542,22 +542,26 @@ def _best_window(window: tuple[int, int]) -> Comparison:
     )
 
 
-def comparison_markdown(scorecards: dict[str, list[dict[str, Any]]]) -> str:
-    """One row per claim, one verdict column per scorecard (``{label: results}``), then the counts."""
+def comparison_markdown(scorecards: dict[str, list[dict[str, Any]]], claim_text: bool = True) -> str:
+    """One row per claim, one verdict column per scorecard (``{label: results}``), then the
+    counts; ``claim_text`` adds the column of what the paper says."""
     labels = list(scorecards)
     by_id: dict[str, dict[str, Any]] = {}
     for label, results in scorecards.items():
         for r in results:
             row = by_id.setdefault(r["id"], {"scenario": r["scenario"], "claim": r["claim"]})
             row[label] = r["verdict"]
-    lines = ["| claim | scenario | the paper says | " + " | ".join(labels) + " |"]
-    lines.append("|---|---|---|" + "---|" * len(labels))
+    fixed = ["claim", "scenario", *(["the paper says"] if claim_text else [])]
+    lines = ["| " + " | ".join(fixed + labels) + " |", "|" + "---|" * (len(fixed) + len(labels))]
     for claim_id, row in by_id.items():
-        cells = [claim_id, row["scenario"], row["claim"], *(row.get(label, "—") for label in labels)]
-        lines.append("| " + " | ".join(cells) + " |")
+        cells = [claim_id, row["scenario"], *([row["claim"]] if claim_text else [])]
+        lines.append("| " + " | ".join(cells + [row.get(label, "—") for label in labels]) + " |")
     counts = {label: verdicts.count(r["verdict"] for r in scorecards[label]) for label in labels}
+    blank = "| " * (len(fixed) - 1)
     for verdict in verdicts.VERDICTS:
-        lines.append(f"| **{verdict}** | | | " + " | ".join(str(counts[lb][verdict]) for lb in labels) + " |")
+        lines.append(
+            f"| **{verdict}** {blank}| " + " | ".join(str(counts[lb][verdict]) for lb in labels) + " |"
+        )
     return "\n".join(lines) + "\n"
 
 
