@@ -3,6 +3,7 @@ docstrings. Build: ``sphinx-build -W -b html docs docs/_build/html`` (the ``docs
 
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -25,6 +26,8 @@ myst_heading_anchors = 3
 myst_enable_extensions = ["colon_fence"]
 html_theme = "furo"
 html_title = "mimo-radar-env"
+html_static_path = ["_static"]
+html_css_files = ["tables.css"]
 
 autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_typehints = "description"
@@ -46,6 +49,8 @@ def _write_env_page() -> None:
     from mimo_radar_env import MimoRadarSelectEnv
 
     text = inspect.cleandoc(MimoRadarSelectEnv.__doc__ or "")
+    # the docstring's reST roles (:class:`~x.Y`) as MyST roles ({py:class}`~x.Y`): links
+    text = re.sub(r":(class|func|meth|mod|data|attr):`([^`]+)`", r"{py:\1}`\2`", text)
     ENV_PAGE.parent.mkdir(exist_ok=True)
     page = "# The environment: `MimoRadarSelect`\n\n"
     page += "(The docstring of `mimo_radar_env.MimoRadarSelectEnv`.)\n\n"

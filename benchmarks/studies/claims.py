@@ -28,7 +28,7 @@ from mimo_radar_env.metrics import TrialMetrics
 from .. import uncertainty, verdicts
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES, RunConfig, load_per_trial
-from ..report import PAPER_ARMSE, PAPER_ASR, trial_metrics
+from ..report import PAPER_ARMSE, PAPER_ASR, paper_armse, trial_metrics
 from .base import Finished, Run, Study, execute
 from .settings import Settings, paper_numbers
 
@@ -402,7 +402,7 @@ def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings
     write ``out/claims.md`` and ``out/claims.json``; the judged claims."""
     folders = [f.folder for f in execute(paper_runs(scenarios, out), settings).values()]
     results = judge_studies(folders, settings.seed)
-    write_scorecard(results, out, describe_studies(folders))
+    write_scorecard(results, out, describe_studies(folders), scorecard_title(folders))
     return results
 
 
@@ -436,7 +436,7 @@ class ClaimsStudy(Study):
 
     def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
         folders, results = judged
-        write_scorecard(results, self.settings.out, describe_studies(folders))
+        write_scorecard(results, self.settings.out, describe_studies(folders), scorecard_title(folders))
         return (self.settings.out / "claims.md").read_text()
 
 
@@ -475,13 +475,31 @@ def describe_studies(folders: Sequence[str | Path]) -> str:
     return text + "."
 
 
-def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str = "") -> None:
+def scorecard_title(folders: Sequence[str | Path]) -> str:
+    """A title that tells one scorecard from another: the scenarios, the options that differ
+    from v0's, the agent parameters and the trials."""
+    from mimo_radar_env import EnvOptions
+
+    configs = [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+    first = configs[0]
+    changed = EnvOptions(**first["env_options"]).changed()
+    changed["fusion"] = first["env_options"]["fusion"]
+    parts = [", ".join(c["scenario"]["name"] for c in configs)]
+    parts.append(", ".join(f"{k}={v}" for k, v in changed.items()))
+    if first.get("agent_params"):
+        parts.append(
+            ", ".join(f"{a}.{k}={v}" for a, p in first["agent_params"].items() for k, v in p.items())
+        )
+    return f"The paper's claims: {'; '.join(parts)}; {first['trials']} trials"
+
+
+def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str = "", title: str = "") -> None:
     """``out/claims.json`` and ``out/claims.md`` (``about``: a line on the studies judged)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "claims.json").write_text(json.dumps(results, indent=2, allow_nan=False))
     scenarios = sorted({r["scenario"] for r in results})
-    title = f"The paper's claims ({', '.join(scenarios)})"
+    title = title or f"The paper's claims ({', '.join(scenarios)})"
     (out / "claims.md").write_text(scorecard_markdown(results, title, about))
 
 
@@ -583,7 +601,11 @@ def scorecard_markdown(results: list[dict[str, Any]], title: str, about: str = "
             for c in r["comparisons"]
         )
         paper = "; ".join(
-            f"{metric} " + ", ".join(f"{p} {np.mean(v):.4g}" for p, v in values.items())
+            f"{metric} "
+            + ", ".join(
+                f"{p} {paper_armse(r['scenario'], p) if metric == 'armse' else np.mean(v):.4g}"
+                for p, v in values.items()
+            )
             for metric, values in r["paper"].items()
         )
         cells = [r["id"], r["scenario"], f"**{r['verdict']}**", r["claim"], measured, paper or "—"]

@@ -197,6 +197,12 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     def reset(
         self, *, seed: int | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray], dict[str, Any]]:
+        """Start an episode: the truth, the channels and the tracker from ``seed`` (Seeding).
+
+        Returns the reset observation, in which every channel is probed once (Algorithm 1's
+        initialisation), and ``info`` with the truth (Info). ``options`` is accepted, as
+        Gymnasium's API has it, and unused: the env's options are ``gym.make`` keywords.
+        """
         super().reset(seed=seed)
         obs, info = self.engine.reset([self.np_random])
         self._truth_history = [info["true_state"][0][:, [0, 2]]]
@@ -206,6 +212,12 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         return _squeeze(obs), _squeeze(info)
 
     def step(self, action: NDArray[np.int8]) -> tuple[dict[str, NDArray], float, bool, bool, dict[str, Any]]:
+        """Probe the super arm ``action`` (``MultiBinary(M + N)``, Action Space) for one step.
+
+        Returns ``(observation, reward, terminated, truncated, info)``: the SINR samples and the
+        updated track, eq17's reward (or the information gain, per ``reward``), ``False``,
+        ``True`` after the scenario's horizon, and the truth for evaluation (Info).
+        """
         obs, reward, terminated, truncated, info = self.engine.step(
             _single_action(action, self.engine.action_size)
         )
@@ -233,6 +245,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         return self.engine.tracking_oracle_action(criterion)[0]
 
     def render(self) -> NDArray[np.uint8] | None:
+        """Draw the stations, the true and estimated tracks and the current selection: an RGB
+        array with ``render_mode="rgb_array"``, a matplotlib window with ``"human"`` (None);
+        without a render mode it warns and returns None."""
         if self.render_mode is None:
             gym.logger.warn(
                 "render() called without a render_mode; make the env with render_mode='rgb_array'"
@@ -269,6 +284,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         return None
 
     def close(self) -> None:
+        """Close the ``"human"`` render window, if one is open."""
         if self._figure is not None:
             import matplotlib.pyplot as plt
 
@@ -345,6 +361,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+        """Start every trial: trial ``i`` seeded ``seed + i`` (or ``seed[i]`` for a list), as the
+        single env reset with that seed. Returns the batched reset observation and info."""
         if seed is None and self._trial_generators is None:
             base = int(
                 np.random.SeedSequence().entropy % (2**62)
@@ -365,6 +383,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     def step(
         self, actions: NDArray[np.int8]
     ) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
+        """One step of every trial with actions (B, M + N); after the horizon the next call
+        resets all trials (Gymnasium's next-step autoreset)."""
         if self._trial_generators is None:
             raise RuntimeError("call reset() before step()")
         if self._needs_reset:

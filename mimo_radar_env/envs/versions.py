@@ -154,7 +154,8 @@ def versions_markdown(indent: str = "") -> str:
         text = f"``{v.env_id}`` ({v.summary}): paper scenarios " + ", ".join(
             f"``{name}``" for name in v.paper_scenarios
         )
-        text += f" (default ``{v.default_scenario}``); " + (
+        text += f" (default ``{v.default_scenario}``); ``{v.flat_env_id}`` is the same env with a "
+        text += "Discrete super-arm action and a flat float32 observation, for deep-RL tools; " + (
             f"option defaults {defaults}" if defaults else "the options' own defaults"
         )
         if v.paper_agent_params:
