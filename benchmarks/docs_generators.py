@@ -117,9 +117,14 @@ FUSION_LABELS = {"average": "eq22 average", "centralized": "centralised"}
 PAIRS = ("best - mg-crb-cl", "mg-crb-cl - ucb1", "mg-crb-cl - epsilon-greedy", "best - epsilon-greedy")
 
 
-def study_summary(docs: Path, number: int, fusion: str) -> dict:
-    """The summary.json of the v1 paper study of scenario ``number`` under ``fusion``."""
-    return read_json(docs, f"v1/paper-{number}-v1-{fusion}.summary.json")
+#: Where each version's paper-study summaries are committed, and their scenario names.
+STUDIES = {"v1": ("v1", "paper-{n}-v1"), "v0": ("v0", "paper-{n}")}
+
+
+def study_summary(docs: Path, number: int, fusion: str, version: str = "v1") -> dict:
+    """The summary.json of ``version``'s paper study of scenario ``number`` under ``fusion``."""
+    folder, name = STUDIES[version]
+    return read_json(docs, f"{folder}/{name.format(n=number)}-{fusion}.summary.json")
 
 
 def _estimate(row: dict, key: str, fmt: str, scale: float = 1.0, target: int | None = None) -> str:
@@ -211,6 +216,7 @@ def v1_targets_table(docs: Path) -> str:
 
 for _number in (1, 2, 3):
     generator(f"v1-scenario-{_number}")(lambda docs, n=_number: v1_table(docs, n))
+    generator(f"v0-scenario-{_number}")(lambda docs, n=_number: v1_table(docs, n, "v0", ("average",)))
 generator("v1-scenario-3-targets")(v1_targets_table)
 
 
@@ -364,4 +370,128 @@ def timings(docs: Path) -> str:
             f"| {label} | `{command}` | {t['wall_s']:.0f} | {m['cores']} cores, {m['machine']}, Python "
             f"{m['python']} | {m['load_average_1min']:.2f} / {m['load_average_1min_after']:.2f} |"
         )
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ the tracking study
+def tracking_summaries(docs: Path) -> dict[tuple[int, str], dict]:
+    return {
+        (n, f): read_json(docs, f"tracking/paper-{n}-v1-{f}.summary.json")
+        for n in (1, 2, 3)
+        for f in FUSION_LABELS
+    }
+
+
+@generator("tracking-studies")
+def tracking_studies(docs: Path) -> str:
+    """Every policy's ARMSE, bound, final regret and mean SINR in each tracking study."""
+    text = tracking.studies_markdown(tracking_summaries(docs))
+    return text.split("\n", 2)[2].lstrip("\n").replace("### paper-", "#### paper-")
+
+
+def _where(key: tuple[int, str]) -> str:
+    return f"Scenario {key[0]}, {FUSION_LABELS[key[1]]}"
+
+
+@generator("tracking-findings")
+def tracking_findings(docs: Path) -> str:
+    """What the tracking study shows, every number from its targets and summaries."""
+    targets = read_json(docs, "tracking/targets.json")
+    summaries = tracking_summaries(docs)
+    by_key = {(r["scenario"], r["fusion"]): r for r in targets}
+    comparisons = [(k, c) for k, r in by_key.items() for c in r["best_tracking_lower"]]
+    holds = sum(c["verdict"] == verdicts.HOLDS for _, c in comparisons)
+    key, smallest = max(comparisons, key=lambda kc: kc[1]["difference"])
+    lines = [
+        f"- `best-tracking`'s ARMSE is below Best's and every SINR-driven policy's in {holds} of "
+        f"{len(comparisons)} paired comparisons; the smallest margin is "
+        f"{format_estimate(-smallest['difference'], [-smallest['ci'][1], -smallest['ci'][0]], '{:.3f}')} m "
+        f"(against {smallest['b']}, {_where(key)})."
+    ]
+    for b in ("best", "mg-crb-cl"):
+        cs = [(k, c) for k, r in by_key.items() for c in r["tracking_ucb_lower"] if c["b"] == b]
+        low, high = min(cs, key=lambda kc: -kc[1]["difference"]), max(cs, key=lambda kc: -kc[1]["difference"])
+        held = sum(c["verdict"] == verdicts.HOLDS for _, c in cs)
+        lines.append(
+            f"- `tracking-ucb`'s ARMSE is below {b}'s in {held} of {len(cs)} studies, by "
+            + " to ".join(
+                f"{format_estimate(-c['difference'], [-c['ci'][1], -c['ci'][0]], '{:.3f}')} m ({_where(k)})"
+                for k, c in (low, high)
+            )
+            + "."
+        )
+    ratios = [(k, p, c["ratio"]) for k, r in by_key.items() for p, c in r["cost"].items()]
+    lines.append(
+        f"- Compute time: `best-tracking` and `tracking-ucb` take {min(x[2] for x in ratios):.2f} to "
+        f"{max(x[2] for x in ratios):.2f} times MG-CRB-CL's (which runs the paper's BPSO), from the studies' "
+        "`wall (s)` columns."
+    )
+    parts = []
+    for k, s in summaries.items():
+        regret = _diff_text(s, "tracking-ucb", "mg-crb-cl", "final_regret", "{:.0f}")
+        sinr = _diff_text(s, "tracking-ucb", "mg-crb-cl", "mean_sinr_db", "{:.2f}")
+        parts.append(f"{_where(k)}: regret {regret}, mean SINR {sinr} dB")
+    lines.append(
+        "- **What selecting for tracking costs in SINR** (`tracking-ucb` minus MG-CRB-CL): "
+        + "; ".join(parts)
+        + "."
+    )
+    parts = []
+    for k, s in summaries.items():
+        if "tracking-ucb:0.75" not in s["policies"]:
+            continue
+        armse = _diff_text(s, "tracking-ucb:0.75", "mg-crb-cl", "armse", "{:.3f}")
+        regret = _diff_text(s, "tracking-ucb:0.75", "mg-crb-cl", "final_regret", "{:.0f}")
+        parts.append(f"{_where(k)}: ARMSE {armse} m, regret {regret}")
+    if parts:
+        lines.append("- **The trade-off** (`tracking-ucb:0.75` minus MG-CRB-CL): " + "; ".join(parts) + ".")
+    for fusion, label in FUSION_LABELS.items():
+        rows = [(k, p, r) for k, s in summaries.items() if k[1] == fusion for p, r in s["policies"].items()]
+        low = min(rows, key=lambda x: x[2]["armse_over_bound"])
+        high = max(rows, key=lambda x: x[2]["armse_over_bound"])
+        lines.append(
+            f"- ARMSE / bound with {label} fusion ranges from "
+            + " to ".join(
+                f"{_estimate(r, 'armse_over_bound', '{:.3f}')} (`{p}`, Scenario {k[0]})"
+                for k, p, r in (low, high)
+            )
+            + "."
+        )
+    return "\n".join(lines)
+
+
+@generator("v0-findings")
+def v0_findings(docs: Path) -> str:
+    """What the v0 tables show (eq22 average fusion), every number from the summaries."""
+    summaries = {n: study_summary(docs, n, "average", "v0") for n in (1, 2, 3)}
+    lines = []
+    for a, b in (("mg-crb-cl", "ucb1"), ("mg-crb-cl", "epsilon-greedy")):
+        parts = [
+            f"Scenario {n}: {_diff_text(s, a, b, 'final_regret', '{:.0f}')}" for n, s in summaries.items()
+        ]
+        lines.append(f"- Final regret, {a} minus {b}: " + "; ".join(parts) + ".")
+    parts = []
+    for n, s in summaries.items():
+        rows = s["policies"]
+        by_regret = sorted(rows, key=lambda p: rows[p]["final_regret"])
+        by_armse = sorted(rows, key=lambda p: rows[p]["armse"])
+        parts.append(
+            f"Scenario {n}: highest regret {by_regret[-1]} then {by_regret[-2]}; lowest ARMSE {by_armse[0]}, "
+            f"Best's ARMSE {by_armse.index('best') + 1}. of 6"
+        )
+    lines.append("- Orderings of the six: " + "; ".join(parts) + ".")
+    ratios = [
+        s["policies"][p]["armse"] / paper_armse(f"paper-{n}", p)
+        for n, s in summaries.items()
+        for p in s["policies"]
+    ]
+    lines.append(
+        f"- Our ARMSE is {_span(ratios, '{:.1f}')} times the paper's (eq22 average fusion, the six policies, "
+        "three scenarios)."
+    )
+    asr = []
+    for n, s in summaries.items():
+        paper = PAPER_ASR[f"paper-{n}"]["mg-crb-cl"]
+        asr.append(f"{100 * s['policies']['mg-crb-cl']['asr']:.1f} % against {paper:.1f} %")
+    lines.append(f"- MG-CRB-CL's ASR: {', '.join(asr)} in Scenarios 1, 2, 3.")
     return "\n".join(lines)

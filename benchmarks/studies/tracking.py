@@ -34,6 +34,7 @@ from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 from .. import verdicts
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES
+from ..report import format_estimate
 from .base import Finished, Run, Study
 from .settings import paper_numbers
 
@@ -185,10 +186,6 @@ def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
     return results
 
 
-def _interval(value: float, ci: list[float], fmt: str = "{:.3f}") -> str:
-    return f"{fmt.format(value)} [{fmt.format(ci[0])}, {fmt.format(ci[1])}]"
-
-
 def _verdict(holds: bool) -> str:
     return verdicts.HOLDS if holds else "**fails**"
 
@@ -215,7 +212,8 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     ]
     for r in results:
         cells = [
-            f"{_interval(c['difference'], c['ci'])} {_mark(c['verdict'])}" for c in r["best_tracking_lower"]
+            f"{format_estimate(c['difference'], c['ci'], '{:.3f}')} {_mark(c['verdict'])}"
+            for c in r["best_tracking_lower"]
         ]
         lines.append(f"| paper-{r['scenario']} | {r['fusion']} | " + " | ".join(cells) + " |")
     lines += [
@@ -228,10 +226,11 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
     ]
     for r in results:
         cells = [
-            f"{_interval(c['difference'], c['ci'])} {_mark(c['verdict'])}" for c in r["tracking_ucb_lower"]
+            f"{format_estimate(c['difference'], c['ci'], '{:.3f}')} {_mark(c['verdict'])}"
+            for c in r["tracking_ucb_lower"]
         ]
         cells += [
-            _interval(r["regret"][p]["value"], r["regret"][p]["ci"], "{:.0f}")
+            format_estimate(r["regret"][p]["value"], r["regret"][p]["ci"], "{:.0f}")
             for p in ("tracking-ucb", "mg-crb-cl")
         ]
         lines.append(f"| paper-{r['scenario']} | {r['fusion']} | " + " | ".join(cells) + " |")
@@ -247,8 +246,8 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
             if not r["ppo_lower"]:
                 continue
             ppo = r["ppo_lower"][0]["a"]
-            cells = [f"{_interval(c['difference'], c['ci'])}" for c in r["ppo_lower"]]
-            cells.append(_interval(r["regret"][ppo]["value"], r["regret"][ppo]["ci"], "{:.0f}"))
+            cells = [f"{format_estimate(c['difference'], c['ci'], '{:.3f}')}" for c in r["ppo_lower"]]
+            cells.append(format_estimate(r["regret"][ppo]["value"], r["regret"][ppo]["ci"], "{:.0f}"))
             lines.append(f"| paper-{r['scenario']} | {r['fusion']} | " + " | ".join(cells) + " |")
     lines += [
         "",
@@ -275,14 +274,17 @@ def _same_policy(summary: dict[str, Any], policy: str) -> dict[str, Any]:
     return rows[policy]
 
 
-def studies_markdown(folders: dict[tuple[int, str], Path]) -> str:
+def load_summaries(folders: dict[tuple[int, str], Path]) -> dict[tuple[int, str], dict[str, Any]]:
+    """Each study's summary.json, read once."""
+    return {key: json.loads((Path(folder) / "summary.json").read_text()) for key, folder in folders.items()}
+
+
+def studies_markdown(all_summaries: dict[tuple[int, str], dict[str, Any]]) -> str:
     """Per scenario, every policy's ARMSE, bound, final regret and mean SINR under each fusion."""
     lines = ["## The studies", ""]
-    for number in sorted({n for n, _ in folders}):
-        fusions = [f for n, f in folders if n == number]
-        summaries = {
-            f: json.loads((Path(folders[(number, f)]) / "summary.json").read_text()) for f in fusions
-        }
+    for number in sorted({n for n, _ in all_summaries}):
+        fusions = [f for n, f in all_summaries if n == number]
+        summaries = {f: all_summaries[(number, f)] for f in fusions}
         head = ["policy"]
         for fusion in fusions:
             head += [f"ARMSE, {fusion} (m)", f"bound, {fusion} (m)", f"final regret, {fusion}"]
@@ -294,12 +296,12 @@ def studies_markdown(folders: dict[tuple[int, str], Path]) -> str:
             for fusion in fusions:
                 row = _same_policy(summaries[fusion], policy)
                 cells += [
-                    _interval(row["armse"], row["ci"]["armse"]),
-                    _interval(row["bound"], row["ci"]["bound"]),
-                    _interval(row["final_regret"], row["ci"]["final_regret"], "{:.0f}"),
+                    format_estimate(row["armse"], row["ci"]["armse"], "{:.3f}"),
+                    format_estimate(row["bound"], row["ci"]["bound"], "{:.3f}"),
+                    format_estimate(row["final_regret"], row["ci"]["final_regret"], "{:.0f}"),
                 ]
             row = summaries[fusions[0]]["policies"][policy]
-            cells.append(_interval(row["mean_sinr_db"], row["ci"]["mean_sinr_db"], "{:.2f}"))
+            cells.append(format_estimate(row["mean_sinr_db"], row["ci"]["mean_sinr_db"], "{:.2f}"))
             lines.append("| " + " | ".join(cells) + " |")
         lines.append("")
     return "\n".join(lines)
@@ -314,7 +316,8 @@ def write_targets(
     out.mkdir(parents=True, exist_ok=True)
     (out / TARGETS_FILE).write_text(json.dumps(results, indent=2, allow_nan=False))
     path = out / "targets.md"
-    path.write_text(targets_markdown(results) + ("\n" + studies_markdown(folders) if folders else ""))
+    studies = "\n" + studies_markdown(load_summaries(folders)) if folders else ""
+    path.write_text(targets_markdown(results) + studies)
     return path
 
 
