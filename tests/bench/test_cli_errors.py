@@ -8,22 +8,6 @@ import time
 import pytest
 
 from benchmarks.cli import main
-from mimo_radar_env import load_scenario
-
-PAPER = load_scenario("paper-1").to_dict()
-
-
-def _layout(**changes):
-    data = {
-        "tx_positions": [[0, 0], [0, 1e4]],
-        "rx_positions": [[1e4, 0], [1e4, 1e4]],
-        "tx_per_step": 1,
-        "rx_per_step": 1,
-        "targets": [{"initial_state": [-1000, 100, 0, 0]}],
-        "horizon": 200,
-    }
-    data.update(changes)
-    return data
 
 
 @pytest.mark.parametrize(
