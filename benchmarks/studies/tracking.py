@@ -123,13 +123,13 @@ class TrackingStudy(Study):
         return runs
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
-        return judge_targets({key: f.folder for key, f in finished.items()})
+        return judge_targets({key: f.summary for key, f in finished.items()})
 
     def report(self, finished: dict[Hashable, Finished], judged: list[dict[str, Any]]) -> str:
-        folders = {key: f.folder for key, f in finished.items()}
-        path = write_targets(judged, self.settings.out, folders)
+        summaries = {key: f.summary for key, f in finished.items()}
+        path = write_targets(judged, self.settings.out, summaries)
         if self.settings.figures:
-            plot_tradeoff(folders, self.settings.out)
+            plot_tradeoff(summaries, self.settings.out)
         return path.read_text()
 
 
@@ -150,11 +150,14 @@ def _lower(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
     return {"a": a, "b": b, "difference": estimate, "ci": ci, "verdict": verdict, "holds": verdict == "holds"}
 
 
-def judge_targets(folders: dict[tuple[int, str], Path]) -> list[dict[str, Any]]:
-    """Each study's targets: the paired ARMSE differences, the regrets and the cost ratios."""
+Summaries = dict[tuple[int, str], dict[str, Any]]
+
+
+def judge_targets(summaries: Summaries) -> list[dict[str, Any]]:
+    """Each study's targets (``{(scenario, fusion): summary.json}``): the paired ARMSE
+    differences, the regrets and the cost ratios."""
     results = []
-    for (number, fusion), folder in folders.items():
-        summary = json.loads((Path(folder) / "summary.json").read_text())
+    for (number, fusion), summary in summaries.items():
         rows = summary["policies"]
         mg_wall = rows["mg-crb-cl"]["wall_s"]
         ppo = [p for p in rows if p.startswith("ppo:")]
@@ -274,12 +277,7 @@ def _same_policy(summary: dict[str, Any], policy: str) -> dict[str, Any]:
     return rows[policy]
 
 
-def load_summaries(folders: dict[tuple[int, str], Path]) -> dict[tuple[int, str], dict[str, Any]]:
-    """Each study's summary.json, read once."""
-    return {key: json.loads((Path(folder) / "summary.json").read_text()) for key, folder in folders.items()}
-
-
-def studies_markdown(all_summaries: dict[tuple[int, str], dict[str, Any]]) -> str:
+def studies_markdown(all_summaries: Summaries) -> str:
     """Per scenario, every policy's ARMSE, bound, final regret and mean SINR under each fusion."""
     lines = ["## The studies", ""]
     for number in sorted({n for n, _ in all_summaries}):
@@ -307,17 +305,14 @@ def studies_markdown(all_summaries: dict[tuple[int, str], dict[str, Any]]) -> st
     return "\n".join(lines)
 
 
-def write_targets(
-    results: list[dict[str, Any]], out: str | Path, folders: dict[tuple[int, str], Path] | None = None
-) -> Path:
+def write_targets(results: list[dict[str, Any]], out: str | Path, summaries: Summaries | None = None) -> Path:
     """``out/targets.json`` and ``out/targets.md`` (with the studies' summary tables when
-    ``folders`` are given)."""
+    their ``summaries`` are given)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / TARGETS_FILE).write_text(json.dumps(results, indent=2, allow_nan=False))
     path = out / "targets.md"
-    studies = "\n" + studies_markdown(load_summaries(folders)) if folders else ""
-    path.write_text(targets_markdown(results) + studies)
+    path.write_text(targets_markdown(results) + ("\n" + studies_markdown(summaries) if summaries else ""))
     return path
 
 
@@ -326,7 +321,7 @@ def _error_bar(value: float, ci: list[float]) -> list[list[float]]:
     return [[value - ci[0]], [ci[1] - value]]
 
 
-def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list[Path]:
+def plot_tradeoff(summaries: Summaries, out: str | Path) -> list[Path]:
     """``tradeoff_paper-N.png``: final SINR regret against ARMSE for every policy, one panel per
     fusion, with 95 % intervals on both axes; tracking-ucb's trade-off points joined by a line."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -335,12 +330,12 @@ def plot_tradeoff(folders: dict[tuple[int, str], Path], out: str | Path) -> list
     from ..plots import palette
 
     written = []
-    for number in sorted({n for n, _ in folders}):
-        fusions = [f for n, f in folders if n == number]
+    for number in sorted({n for n, _ in summaries}):
+        fusions = [f for n, f in summaries if n == number]
         fig = Figure(figsize=(6.0 * len(fusions), 4.8), dpi=110)
         FigureCanvasAgg(fig)
         for i, fusion in enumerate(fusions):
-            summary = json.loads((Path(folders[(number, fusion)]) / "summary.json").read_text())
+            summary = summaries[(number, fusion)]
             ax = fig.add_subplot(1, len(fusions), i + 1)
             curve = []
             colours = palette(len(summary["policies"]))
