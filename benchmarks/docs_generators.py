@@ -144,36 +144,38 @@ def _ratio(row: dict, key: str, paper: float | None, target: int | None = None) 
     return format_estimate(value / paper, [ci[0] / paper, ci[1] / paper], "{:.2f}")
 
 
-def v1_table(docs: Path, number: int) -> str:
-    """The paper's six policies in scenario ``number`` under both fusions, beside the paper."""
-    summaries = {f: study_summary(docs, number, f) for f in FUSION_LABELS}
-    average, central = summaries["average"], summaries["centralized"]
+def v1_table(
+    docs: Path, number: int, version: str = "v1", fusions: tuple[str, ...] = tuple(FUSION_LABELS)
+) -> str:
+    """The paper's six policies in scenario ``number`` of ``version`` under ``fusions``, beside
+    the paper's numbers."""
+    summaries = {f: study_summary(docs, number, f, version) for f in fusions}
+    average = summaries["average"]
     key = f"paper-{number}"
-    head = ["policy"]
-    head += [f"ARMSE, {label} (m)" for label in FUSION_LABELS.values()]
-    head += ["paper ARMSE (m)", *(f"ours / paper, {label}" for label in FUSION_LABELS.values())]
+    labels = [FUSION_LABELS[f] for f in fusions]
+    head = ["policy", *(f"ARMSE, {label} (m)" for label in labels)]
+    head += ["paper ARMSE (m)", *(f"ours / paper, {label}" for label in labels)]
     head += ["ASR (%)", "paper ASR (%)", "final regret", "mean SINR (dB)"]
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for policy, row in average["policies"].items():
         paper = paper_armse(key, policy)
-        other = central["policies"][policy]
+        rows = [summaries[f]["policies"][policy] for f in fusions]
         paper_asr = PAPER_ASR.get(key, {}).get(policy)
-        cells = [policy, _estimate(row, "armse", "{:.3f}"), _estimate(other, "armse", "{:.3f}")]
-        cells += [
-            f"{paper:.4f}" if paper is not None else "—",
-            _ratio(row, "armse", paper),
-            _ratio(other, "armse", paper),
-        ]
+        cells = [policy, *(_estimate(r, "armse", "{:.3f}") for r in rows)]
+        cells += [f"{paper:.4f}" if paper is not None else "—", *(_ratio(r, "armse", paper) for r in rows)]
         cells += [_estimate(row, "asr", "{:.2f}", 100), f"{paper_asr:.2f}" if paper_asr is not None else "—"]
         cells += [_estimate(row, "final_regret", "{:.1f}"), _estimate(row, "mean_sinr_db", "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", _about(average, "ASR, regret and SINR from the eq22-average run"), ""]
-    head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in FUSION_LABELS.values())]
+    head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in labels)]
     head += ["Δ ASR (pp)", "Δ final regret", "Δ mean SINR (dB)"]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for pair in PAIRS:
-        a, c = average["paired_differences"][pair], central["paired_differences"][pair]
-        cells = [pair, _paired(a["armse"], "{:.3f}"), _paired(c["armse"], "{:.3f}")]
+        a = average["paired_differences"][pair]
+        cells = [
+            pair,
+            *(_paired(summaries[f]["paired_differences"][pair]["armse"], "{:.3f}") for f in fusions),
+        ]
         cells += [_paired(a["asr"], "{:.2f}", 100), _paired(a["final_regret"], "{:.1f}")]
         cells += [_paired(a["mean_sinr_db"], "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
@@ -294,6 +296,16 @@ def v1_findings(docs: Path) -> str:
 
 
 # ------------------------------------------------------------------ the summary and the timings
+def _margins(comparisons: list[dict]) -> str:
+    """The smallest and the largest of targets' margins ``-(a - b)``, each with its interval."""
+
+    def margin(c: dict) -> str:
+        return format_estimate(-c["difference"], [-c["ci"][1], -c["ci"][0]], "{:.3f}")
+
+    ordered = sorted(comparisons, key=lambda c: -c["difference"])
+    return f"{margin(ordered[0])} to {margin(ordered[-1])}"
+
+
 def _span(values: list[float], fmt: str = "{:.2f}") -> str:
     low, high = min(values), max(values)
     return (
@@ -312,8 +324,8 @@ def summary(docs: Path) -> str:
     report = read_json(docs, "calibration/calibration.json")
     judged = sum(1 for c in report["candidates"] if c["scorecards"])
     targets = read_json(docs, "tracking/targets.json")
-    gains = [-c["difference"] for r in targets for c in r["best_tracking_lower"] if c["b"] == "best"]
-    ucb = [-c["difference"] for r in targets for c in r["tracking_ucb_lower"] if c["b"] == "mg-crb-cl"]
+    gains = [c for r in targets for c in r["best_tracking_lower"] if c["b"] == "best"]
+    ucb = [c for r in targets for c in r["tracking_ucb_lower"] if c["b"] == "mg-crb-cl"]
     held = all(c["holds"] for r in targets for c in r["best_tracking_lower"] + r["tracking_ucb_lower"])
     ratios = {f: [] for f in FUSION_LABELS}
     asr = []
@@ -333,8 +345,8 @@ def summary(docs: Path) -> str:
         f"is missing): v1 uses layout {report['best']}, the best of {judged} layouts judged by scorecards; "
         "a claim that holds may hold for reasons of that layout.",
         "- **Selecting for tracking** (200 trials, three scenarios x two fusions): best-tracking's ARMSE "
-        f"is below Best's by {_span(gains, '{:.3f}')} m and tracking-ucb's below MG-CRB-CL's by "
-        f"{_span(ucb, '{:.3f}')} m; "
+        f"is below Best's by {_margins(gains)} m and tracking-ucb's below MG-CRB-CL's by "
+        f"{_margins(ucb)} m; "
         + ("every target holds." if held else "not every target holds (see its section)."),
         f"- **Against the paper**: our ARMSE is {_span(ratios['average'], '{:.1f}')} times the paper's "
         f"with its eq22 average fusion and {_span(ratios['centralized'], '{:.1f}')} times with centralised "
@@ -476,8 +488,8 @@ def v0_findings(docs: Path) -> str:
         by_regret = sorted(rows, key=lambda p: rows[p]["final_regret"])
         by_armse = sorted(rows, key=lambda p: rows[p]["armse"])
         parts.append(
-            f"Scenario {n}: highest regret {by_regret[-1]} then {by_regret[-2]}; lowest ARMSE {by_armse[0]}, "
-            f"Best's ARMSE {by_armse.index('best') + 1}. of 6"
+            f"Scenario {n}: highest regret {by_regret[-1]} then {by_regret[-2]}; lowest ARMSE {by_armse[0]}; "
+            f"Best's ARMSE ranks {by_armse.index('best') + 1} of {len(rows)} (1: lowest)"
         )
     lines.append("- Orderings of the six: " + "; ".join(parts) + ".")
     ratios = [

@@ -205,7 +205,7 @@ def targets_markdown(results: list[dict[str, Any]]) -> str:
         "# Tracking-aware selection: the targets",
         "",
         f"{', '.join(map(str, trials))} trials per study; differences `A - B` in ARMSE (m) paired on the "
-        "same trials with their 95 % intervals (BCa bootstrap); a target holds when the interval "
+        "same trials with their 95 % intervals (bootstrap over trials); a target holds when the interval "
         "lies below 0.",
         "",
         "## best-tracking has a lower ARMSE than every SINR-driven policy",
