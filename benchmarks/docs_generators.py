@@ -398,7 +398,7 @@ def tracking_summaries(docs: Path) -> dict[tuple[int, str], dict]:
 def tracking_studies(docs: Path) -> str:
     """Every policy's ARMSE, bound, final regret and mean SINR in each tracking study."""
     text = tracking.studies_markdown(tracking_summaries(docs))
-    return text.split("\n", 2)[2].lstrip("\n").replace("### paper-", "#### paper-")
+    return text.split("\n", 2)[2].lstrip("\n")
 
 
 def _where(key: tuple[int, str]) -> str:
