@@ -507,3 +507,59 @@ def v0_findings(docs: Path) -> str:
         asr.append(f"{100 * s['policies']['mg-crb-cl']['asr']:.1f} % against {paper:.1f} %")
     lines.append(f"- MG-CRB-CL's ASR: {', '.join(asr)} in Scenarios 1, 2, 3.")
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ performance
+@generator("perf-figures")
+def perf_figures(docs: Path) -> str:
+    """``mimo-radar-bench perf``'s figures and targets, from its committed perf.json."""
+    from .speed.perf import FIGURES, TARGETS, target_met
+
+    results = read_json(docs, "perf/perf.json")
+    lines = ["| figure | what | measured | target |", "|---|---|---|---|"]
+    for key, unit, what in FIGURES:
+        value = results[key]
+        text = f"{value:,.3f}" if value < 10 else f"{value:,.0f}"
+        target = "—"
+        if key in TARGETS:
+            op, bound = TARGETS[key]
+            target = f"{op} {bound:g}: {'met' if target_met(key, value) else '**missed**'}"
+        lines.append(f"| `{key}` | {what} | {text} {unit} | {target} |")
+    lines += [
+        "",
+        f"{results['workers']} workers, {results['cores']} cores ({results['machine']}); load average "
+        f"{results.get('load_average_1min_before', float('nan')):.2f} before and "
+        f"{results.get('load_average_1min_after', float('nan')):.2f} after the run.",
+    ]
+    return "\n".join(lines)
+
+
+@generator("scaling")
+def scaling_table(docs: Path) -> str:
+    """``python -m benchmarks.speed.scaling --json``'s rows and the fitted growth."""
+    from .speed.scaling import growth
+
+    rows = read_json(docs, "perf/scaling.json")
+    lines = [
+        "| M x N | Ms, Ns | K | B | solver | ms/step | us/trial-step | peak MiB |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for group in rows.values():
+        for r in group:
+            lines.append(
+                f"| {r['M']} x {r['N']} | {r['Ms']}, {r['Ns']} | {r['K']} | {r['B']} | {r['solver']} | "
+                f"{r['ms_per_step']:.1f} | {r['us_per_trial_step']:.1f} | {r['peak_mib']:.1f} |"
+            )
+    t, k, a = (
+        rows["trials (paper size, K=1)"],
+        rows["targets (16x16, Ms=Ns=4, B=50)"],
+        rows["array size (K=5, Ms=Ns=4, B=20)"],
+    )
+    lines += [
+        "",
+        "Fitted growth of the time per step (log-log slope): trials B "
+        f"{growth([r['B'] for r in t], [r['ms_per_step'] for r in t]):.2f}, targets K "
+        f"{growth([r['K'] for r in k], [r['ms_per_step'] for r in k]):.2f} (16 x 16), stations M*N "
+        f"{growth([r['M'] * r['N'] for r in a], [r['ms_per_step'] for r in a]):.2f} (K = 5).",
+    ]
+    return "\n".join(lines)

@@ -3,7 +3,7 @@
 A run is fixed by a :class:`RunConfig`. Its trials are cut into shards of
 ``shard_size`` trials; one task runs one policy on one shard with the vector env
 (trial ``i`` seeded ``seed + i``, so every policy sees the same target trajectories
-for trial ``i``) and returns per-step sums over the shard's trials. Each finished
+for trial ``i``) and returns the shard's per-trial arrays (:mod:`benchmarks.shards`). Each finished
 task is written at once to ``DIR/shards/<policy>/shard_<k>.npz`` (atomically), so
 an interrupted run started again with the same configuration and ``DIR`` skips
 what is done and loses or double-counts nothing; a different configuration
