@@ -513,13 +513,13 @@ def v0_findings(docs: Path) -> str:
 @generator("perf-figures")
 def perf_figures(docs: Path) -> str:
     """``mimo-radar-bench perf``'s figures and targets, from its committed perf.json."""
-    from .speed.perf import FIGURES, TARGETS, target_met
+    from .speed.perf import FIGURES, TARGETS, format_value, target_met
 
     results = read_json(docs, "perf/perf.json")
     lines = ["| figure | what | measured | target |", "|---|---|---|---|"]
     for key, unit, what in FIGURES:
         value = results[key]
-        text = f"{value:,.3f}" if value < 10 else f"{value:,.0f}"
+        text = format_value(value)
         target = "—"
         if key in TARGETS:
             op, bound = TARGETS[key]
@@ -537,7 +537,7 @@ def perf_figures(docs: Path) -> str:
 @generator("scaling")
 def scaling_table(docs: Path) -> str:
     """``python -m benchmarks.speed.scaling --json``'s rows and the fitted growth."""
-    from .speed.scaling import growth
+    from .speed.scaling import fitted_growth
 
     rows = read_json(docs, "perf/scaling.json")
     lines = [
@@ -550,17 +550,11 @@ def scaling_table(docs: Path) -> str:
                 f"| {r['M']} x {r['N']} | {r['Ms']}, {r['Ns']} | {r['K']} | {r['B']} | {r['solver']} | "
                 f"{r['ms_per_step']:.1f} | {r['us_per_trial_step']:.1f} | {r['peak_mib']:.1f} |"
             )
-    t, k, a = (
-        rows["trials (paper size, K=1)"],
-        rows["targets (16x16, Ms=Ns=4, B=50)"],
-        rows["array size (K=5, Ms=Ns=4, B=20)"],
-    )
+    slopes = fitted_growth(rows)
     lines += [
         "",
-        "Fitted growth of the time per step (log-log slope): trials B "
-        f"{growth([r['B'] for r in t], [r['ms_per_step'] for r in t]):.2f}, targets K "
-        f"{growth([r['K'] for r in k], [r['ms_per_step'] for r in k]):.2f} (16 x 16), stations M*N "
-        f"{growth([r['M'] * r['N'] for r in a], [r['ms_per_step'] for r in a]):.2f} (K = 5).",
+        f"Fitted growth of the time per step (log-log slope): trials B {slopes['trials B']:.2f}, targets K "
+        f"{slopes['targets K']:.2f} (16 x 16), stations M*N {slopes['stations M*N']:.2f} (K = 5).",
     ]
     return "\n".join(lines)
 

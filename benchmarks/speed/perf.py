@@ -113,6 +113,11 @@ FIGURES = (
 )
 
 
+def format_value(value: float) -> str:
+    """Three decimals below 10, whole numbers with thousands separators above."""
+    return f"{value:,.3f}" if value < 10 else f"{value:,.0f}"
+
+
 def target_met(key: str, value: float) -> bool | None:
     """Whether ``value`` meets the figure's target (None: the figure has none)."""
     if key not in TARGETS:
@@ -126,7 +131,7 @@ def format_table(results: dict[str, Any]) -> str:
     lines = [f"{'figure':<34}{'value':>14}  {'target':<10}what", "-" * 90]
     for key, unit, what in rows:
         value = results[key]
-        text = f"{value:,.3f}" if value < 10 else f"{value:,.0f}"
+        text = format_value(value)
         target = ""
         if key in TARGETS and not results.get("quick"):
             op, bound = TARGETS[key]

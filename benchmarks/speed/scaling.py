@@ -14,6 +14,7 @@ import argparse
 import json
 import time
 import tracemalloc
+from typing import Any
 
 import numpy as np
 
@@ -72,6 +73,18 @@ def growth(xs: list[float], ys: list[float]) -> float:
     return float(np.polyfit(np.log(xs), np.log(ys), 1)[0])
 
 
+def fitted_growth(rows: dict[str, list[dict[str, Any]]]) -> dict[str, float]:
+    """The log-log slope of ms/step against trials B, targets K and stations M*N."""
+    t = rows["trials (paper size, K=1)"]
+    k = rows["targets (16x16, Ms=Ns=4, B=50)"]
+    a = rows["array size (K=5, Ms=Ns=4, B=20)"]
+    return {
+        "trials B": growth([r["B"] for r in t], [r["ms_per_step"] for r in t]),
+        "targets K": growth([r["K"] for r in k], [r["ms_per_step"] for r in k]),
+        "stations M*N": growth([r["M"] * r["N"] for r in a], [r["ms_per_step"] for r in a]),
+    }
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description="cost per step against M*N, K and trials")
     parser.add_argument("--steps", type=int, default=10)
@@ -88,13 +101,9 @@ def main() -> None:
                 f"{r['M']:>4} x {r['N']:<3}{r['Ms']:>3},{r['Ns']:<3}{r['K']:>4}{r['B']:>6}  {r['solver']:<12}"
                 f"{r['ms_per_step']:>10.1f}{r['us_per_trial_step']:>15.1f}{r['peak_mib']:>10.1f}"
             )
-    t = rows["trials (paper size, K=1)"]
-    k = rows["targets (16x16, Ms=Ns=4, B=50)"]
-    a = rows["array size (K=5, Ms=Ns=4, B=20)"]
     print("\nfitted growth of ms/step (log-log slope):")
-    print(f"  trials B: {growth([r['B'] for r in t], [r['ms_per_step'] for r in t]):.2f}")
-    print(f"  targets K: {growth([r['K'] for r in k], [r['ms_per_step'] for r in k]):.2f}")
-    print(f"  stations M*N: {growth([r['M'] * r['N'] for r in a], [r['ms_per_step'] for r in a]):.2f}")
+    for name, slope in fitted_growth(rows).items():
+        print(f"  {name}: {slope:.2f}")
     if args.json:
         with open(args.json, "w") as handle:
             json.dump(rows, handle, indent=2)
