@@ -9,7 +9,16 @@ import numpy as np
 
 from . import verdicts
 from .doctables import generator, read_json
-from .report import METHOD_LEGEND, PAPER_ARMSE, PAPER_ASR, format_estimate, paper_armse
+from .report import (
+    METHOD_LEGEND,
+    PAPER_ARMSE,
+    PAPER_ASR,
+    format_cell,
+    format_estimate,
+    format_judged,
+    paired_difference,
+    paper_armse,
+)
 from .studies import claims, tracking
 
 #: The scorecards of the claims table: label -> artefact.
@@ -127,13 +136,6 @@ def study_summary(docs: Path, number: int, fusion: str, version: str = "v1") -> 
     return read_json(docs, f"{folder}/{name.format(n=number)}-{fusion}.summary.json")
 
 
-def _estimate(row: dict, key: str, fmt: str, scale: float = 1.0, target: int | None = None) -> str:
-    value, ci, method = row[key], row["ci"][key], row["method"][key]
-    if target is not None:
-        value, ci, method = value[target], ci[target], method[target]
-    return format_estimate(value, ci, fmt, scale, method)
-
-
 def _ratio(row: dict, key: str, paper: float | None, target: int | None = None) -> str:
     """Ours / the paper's, with our interval divided by the paper's number."""
     if paper is None:
@@ -161,10 +163,13 @@ def v1_table(
         paper = paper_armse(key, policy)
         rows = [summaries[f]["policies"][policy] for f in fusions]
         paper_asr = PAPER_ASR.get(key, {}).get(policy)
-        cells = [policy, *(_estimate(r, "armse", "{:.3f}") for r in rows)]
+        cells = [policy, *(format_cell(r, "armse", "{:.3f}") for r in rows)]
         cells += [f"{paper:.4f}" if paper is not None else "—", *(_ratio(r, "armse", paper) for r in rows)]
-        cells += [_estimate(row, "asr", "{:.2f}", 100), f"{paper_asr:.2f}" if paper_asr is not None else "—"]
-        cells += [_estimate(row, "final_regret", "{:.1f}"), _estimate(row, "mean_sinr_db", "{:.2f}")]
+        cells += [
+            format_cell(row, "asr", "{:.2f}", 100),
+            f"{paper_asr:.2f}" if paper_asr is not None else "—",
+        ]
+        cells += [format_cell(row, "final_regret", "{:.1f}"), format_cell(row, "mean_sinr_db", "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
     lines += ["", _about(average, "ASR, regret and SINR from the eq22-average run"), ""]
     head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in labels)]
@@ -174,16 +179,12 @@ def v1_table(
         a = average["paired_differences"][pair]
         cells = [
             pair,
-            *(_paired(summaries[f]["paired_differences"][pair]["armse"], "{:.3f}") for f in fusions),
+            *(format_judged(summaries[f]["paired_differences"][pair]["armse"], "{:.3f}") for f in fusions),
         ]
-        cells += [_paired(a["asr"], "{:.2f}", 100), _paired(a["final_regret"], "{:.1f}")]
-        cells += [_paired(a["mean_sinr_db"], "{:.2f}")]
+        cells += [format_judged(a["asr"], "{:.2f}", 100), format_judged(a["final_regret"], "{:.1f}")]
+        cells += [format_judged(a["mean_sinr_db"], "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
-
-
-def _paired(judged: dict, fmt: str, scale: float = 1.0) -> str:
-    return format_estimate(judged["estimate"], judged["ci"], fmt, scale, judged["method"])
 
 
 def _about(summary: dict, what: str) -> str:
@@ -206,7 +207,7 @@ def v1_targets_table(docs: Path) -> str:
         paper = PAPER_ARMSE["paper-3"].get(policy)
         cells = [policy]
         for k in (0, 1):
-            cells += [_estimate(rows[f], "armse_per_target", "{:.3f}", target=k) for f in FUSION_LABELS]
+            cells += [format_cell(rows[f], "armse_per_target", "{:.3f}", target=k) for f in FUSION_LABELS]
             ref = paper[k] if paper else None
             cells += [
                 f"{ref:.4f}" if ref is not None else "—",
@@ -222,22 +223,8 @@ for _number in (1, 2, 3):
 generator("v1-scenario-3-targets")(v1_targets_table)
 
 
-def _pair(summary: dict, a: str, b: str, metric: str) -> tuple[float, list[float], str]:
-    """``a - b`` of ``metric`` from a summary's paired differences (either order)."""
-    pairs = summary["paired_differences"]
-    if f"{a} - {b}" in pairs:
-        d = pairs[f"{a} - {b}"][metric]
-        return d["estimate"], d["ci"], d["method"]
-    d = pairs[f"{b} - {a}"][metric]
-    return -d["estimate"], [-d["ci"][1], -d["ci"][0]], d["method"]
-
-
 def _diff_text(summary: dict, a: str, b: str, metric: str, fmt: str, scale: float = 1.0) -> str:
-    value, ci, method = _pair(summary, a, b, metric)
-    return format_estimate(value, ci, fmt, scale, method)
-
-
-LEARNERS = ("mg-crb-cl", "ucb1", "epsilon-greedy")
+    return format_judged(paired_difference(summary, a, b, metric), fmt, scale)
 
 
 @generator("v1-findings")
@@ -274,8 +261,8 @@ def v1_findings(docs: Path) -> str:
         mg, eps = s["policies"]["mg-crb-cl"], s["policies"]["epsilon-greedy"]
         paper = PAPER_ASR[f"paper-{n}"]["mg-crb-cl"]
         parts.append(
-            f"Scenario {n}: {_estimate(mg, 'asr', '{:.1f}', 100)} % against the paper's {paper:.2f} %, "
-            f"epsilon-greedy {_estimate(eps, 'asr', '{:.1f}', 100)} %"
+            f"Scenario {n}: {format_cell(mg, 'asr', '{:.1f}', 100)} % against the paper's {paper:.2f} %, "
+            f"epsilon-greedy {format_cell(eps, 'asr', '{:.1f}', 100)} %"
         )
     lines.append("- **MG-CRB-CL's ASR**: " + "; ".join(parts) + ".")
     drops, widths = [], []
@@ -296,14 +283,15 @@ def v1_findings(docs: Path) -> str:
 
 
 # ------------------------------------------------------------------ the summary and the timings
+def _margin(target: dict) -> str:
+    """A "lower ARMSE" target's margin ``-(a - b)`` (m) with its interval."""
+    return format_estimate(-target["difference"], [-target["ci"][1], -target["ci"][0]], "{:.3f}")
+
+
 def _margins(comparisons: list[dict]) -> str:
-    """The smallest and the largest of targets' margins ``-(a - b)``, each with its interval."""
-
-    def margin(c: dict) -> str:
-        return format_estimate(-c["difference"], [-c["ci"][1], -c["ci"][0]], "{:.3f}")
-
+    """The smallest and the largest of targets' margins, each with its interval."""
     ordered = sorted(comparisons, key=lambda c: -c["difference"])
-    return f"{margin(ordered[0])} to {margin(ordered[-1])}"
+    return f"{_margin(ordered[0])} to {_margin(ordered[-1])}"
 
 
 def _span(values: list[float], fmt: str = "{:.2f}") -> str:
@@ -417,7 +405,7 @@ def tracking_findings(docs: Path) -> str:
     lines = [
         f"- `best-tracking`'s ARMSE is below Best's and every SINR-driven policy's in {holds} of "
         f"{len(comparisons)} paired comparisons; the smallest margin is "
-        f"{format_estimate(-smallest['difference'], [-smallest['ci'][1], -smallest['ci'][0]], '{:.3f}')} m "
+        f"{_margin(smallest)} m "
         f"(against {smallest['b']}, {_where(key)})."
     ]
     for b in ("best", "mg-crb-cl"):
@@ -426,10 +414,7 @@ def tracking_findings(docs: Path) -> str:
         held = sum(c["verdict"] == verdicts.HOLDS for _, c in cs)
         lines.append(
             f"- `tracking-ucb`'s ARMSE is below {b}'s in {held} of {len(cs)} studies, by "
-            + " to ".join(
-                f"{format_estimate(-c['difference'], [-c['ci'][1], -c['ci'][0]], '{:.3f}')} m ({_where(k)})"
-                for k, c in (low, high)
-            )
+            + " to ".join(f"{_margin(c)} m ({_where(k)})" for k, c in (low, high))
             + "."
         )
     ratios = [(k, p, c["ratio"]) for k, r in by_key.items() for p, c in r["cost"].items()]
@@ -464,7 +449,7 @@ def tracking_findings(docs: Path) -> str:
         lines.append(
             f"- ARMSE / bound with {label} fusion ranges from "
             + " to ".join(
-                f"{_estimate(r, 'armse_over_bound', '{:.3f}')} (`{p}`, Scenario {k[0]})"
+                f"{format_cell(r, 'armse_over_bound', '{:.3f}')} (`{p}`, Scenario {k[0]})"
                 for k, p, r in (low, high)
             )
             + "."

@@ -181,7 +181,9 @@ def format_estimate(
     return f"{text} [{_number(scale * ci[0], fmt)}, {_number(scale * ci[1], fmt)}]{mark}"
 
 
-def _cell(row: dict[str, Any], key: str, fmt: str, scale: float = 1.0, target: int | None = None) -> str:
+def format_cell(
+    row: dict[str, Any], key: str, fmt: str, scale: float = 1.0, target: int | None = None
+) -> str:
     """A summary row's ``key`` (of one target) with its interval and method mark."""
     value, ci, method = row.get(key), row.get("ci", {}).get(key), row.get("method", {}).get(key)
     if target is not None and value is not None:
@@ -216,15 +218,15 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
         "|" + "---|" * len(head),
     ]
     for policy, row in summary["policies"].items():
-        cells = [policy, _cell(row, "armse", "{:.3f}")]
+        cells = [policy, format_cell(row, "armse", "{:.3f}")]
         if num_targets > 1:
-            cells += [_cell(row, "armse_per_target", "{:.3f}", target=k) for k in range(num_targets)]
+            cells += [format_cell(row, "armse_per_target", "{:.3f}", target=k) for k in range(num_targets)]
         cells += [
-            _cell(row, "bound", "{:.3f}"),
-            _cell(row, "armse_over_bound", "{:.2f}"),
-            _cell(row, "asr", "{:.2f}", scale=100),
-            _cell(row, "final_regret", "{:.1f}"),
-            _cell(row, "mean_sinr_db", "{:.2f}"),
+            format_cell(row, "bound", "{:.3f}"),
+            format_cell(row, "armse_over_bound", "{:.2f}"),
+            format_cell(row, "asr", "{:.2f}", scale=100),
+            format_cell(row, "final_regret", "{:.1f}"),
+            format_cell(row, "mean_sinr_db", "{:.2f}"),
             f"{row['wall_s']:.1f}",
         ]
         if paper_key(name) in PAPER_ARMSE:
@@ -233,6 +235,21 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
             cells.append(f"{paper_asr[policy]:.2f}" if policy in paper_asr else "—")
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def format_judged(judged: dict[str, Any], fmt: str, scale: float = 1.0) -> str:
+    """An ``{"estimate", "ci", "method"}`` (a paired difference) with its interval and mark."""
+    return format_estimate(judged["estimate"], judged["ci"], fmt, scale, judged["method"])
+
+
+def paired_difference(summary: dict[str, Any], a: str, b: str, metric: str) -> dict[str, Any]:
+    """``a - b`` of ``metric`` on the same trials (``estimate``, ``ci``, ``method``) from a
+    summary.json's paired differences, whichever order they were stored in."""
+    pairs = summary["paired_differences"]
+    if f"{a} - {b}" in pairs:
+        return dict(pairs[f"{a} - {b}"][metric])
+    d = pairs[f"{b} - {a}"][metric]
+    return {"estimate": -d["estimate"], "ci": [-d["ci"][1], -d["ci"][0]], "method": d.get("method")}
 
 
 def paired_markdown(summary: dict[str, Any]) -> str:
@@ -257,10 +274,7 @@ def paired_markdown(summary: dict[str, Any]) -> str:
     ]
     for pair, values in pairs.items():
         cells = [
-            format_estimate(values[key]["estimate"], values[key]["ci"], fmt, scale, values[key]["method"])
-            if key in values
-            else "—"
-            for key, _, fmt, scale in present
+            format_judged(values[key], fmt, scale) if key in values else "—" for key, _, fmt, scale in present
         ]
         lines.append(f"| {pair} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

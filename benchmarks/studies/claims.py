@@ -458,12 +458,17 @@ def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str
     return evaluate(studies, seed)
 
 
+def _configs(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
+    """The studies' config.json documents."""
+    return [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+
+
 def describe_studies(folders: Sequence[str | Path]) -> str:
     """One line on what the studies ran: scenarios, trials, seed, non-default options, agent
     parameters (from their ``config.json``)."""
     from mimo_radar_env import EnvOptions
 
-    configs = [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+    configs = _configs(folders)
     first = configs[0]
     options = EnvOptions(**first["env_options"]).changed()
     names = ", ".join(c["scenario"]["name"] for c in configs)
@@ -480,7 +485,7 @@ def scorecard_title(folders: Sequence[str | Path]) -> str:
     from v0's, the agent parameters and the trials."""
     from mimo_radar_env import EnvOptions
 
-    configs = [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+    configs = _configs(folders)
     first = configs[0]
     changed = EnvOptions(**first["env_options"]).changed()
     changed["fusion"] = first["env_options"]["fusion"]

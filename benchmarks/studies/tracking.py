@@ -34,7 +34,7 @@ from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 from .. import verdicts
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES
-from ..report import format_estimate
+from ..report import format_estimate, paired_difference
 from .base import Finished, Run, Study
 from .settings import paper_numbers
 
@@ -135,12 +135,8 @@ class TrackingStudy(Study):
 
 def paired(summary: dict[str, Any], a: str, b: str, metric: str) -> tuple[float, list[float]]:
     """``a - b`` of ``metric`` on the same trials and its 95 % interval, from a summary.json."""
-    pairs = summary["paired_differences"]
-    if f"{a} - {b}" in pairs:
-        value = pairs[f"{a} - {b}"][metric]
-        return value["estimate"], list(value["ci"])
-    value = pairs[f"{b} - {a}"][metric]
-    return -value["estimate"], [-value["ci"][1], -value["ci"][0]]
+    difference = paired_difference(summary, a, b, metric)
+    return difference["estimate"], list(difference["ci"])
 
 
 def _lower(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
