@@ -23,7 +23,7 @@ An interrupted run started again with the same arguments and --out continues whe
 
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every registered command, in their order."""
-    from . import commands, doctables, studies  # noqa: F401  (importing them registers the commands)
+    from . import commands, doctables, model_figures, studies  # noqa: F401  (importing them registers the commands)
     from .studies.base import COMMANDS
 
     parser = argparse.ArgumentParser(

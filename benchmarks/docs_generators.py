@@ -8,7 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from . import verdicts
-from .doctables import generator, read_json
+from .doctables import generator, read_json, value_source
+from .errors import BenchError
+from .model_figures import FIGURES_FILE, format_figure
 from .report import (
     METHOD_LEGEND,
     PAPER_ARMSE,
@@ -559,3 +561,12 @@ def solver_figures(docs: Path) -> str:
             f"{100 * r['bpso_optimality_rate']:.1f} % |",
         ]
     )
+
+
+@value_source("model")
+def model_figure(docs: Path, key: str) -> str:
+    """A figure of ``mimo-radar-bench model-figures`` (results/model/figures.json), with its interval."""
+    figures = read_json(docs, FIGURES_FILE)["figures"]
+    if key not in figures:
+        raise BenchError(f"{FIGURES_FILE} has no figure {key!r}; it has: {', '.join(figures)}")
+    return format_figure(figures[key])

@@ -11,6 +11,17 @@ A page marks a generated block with two HTML comments (invisible on the site)::
 under ``DOCS/results``; ``--check`` changes nothing and fails, naming the blocks, where a page
 differs from what the artefacts give (CI runs it). A generator is a function of the docs folder
 registered with :func:`generator`; each names the artefacts it reads.
+
+A number quoted in a sentence is a *value span* on one line::
+
+    optimal in <!-- value: model greedy-optimal-average -->99.0 % [96.4, 99.7]<!-- end value -->
+
+which the same command fills from the artefact of the source (``model``: the figures of
+``mimo-radar-bench model-figures``, :mod:`benchmarks.model_figures`), formatted with its 95 %
+interval where it has one. Outside generated blocks and value spans, a number shaped like a
+measurement (a decimal percentage, duration or interval, a ratio such as ``1.7x`` or
+``1.19 times``) is an error: :func:`unsourced_numbers` finds them, and ``--check`` fails on
+any. Constants of the model are written as code (```[0.2, 1.2]```), which the check skips.
 """
 
 from __future__ import annotations
@@ -27,8 +38,30 @@ from .errors import BenchError
 from .studies.base import Command
 
 BLOCK = re.compile(r"(<!-- generated: ([\w.-]+) -->\n)(.*?)(<!-- end generated -->)", re.DOTALL)
+VALUE = re.compile(r"(<!-- value: ([\w.-]+) ([\w.+-]+) -->)(.*?)(<!-- end value -->)")
 Generator = Callable[[Path], str]
 GENERATORS: dict[str, Generator] = {}
+#: Value sources: name -> function(docs, key) giving the text of one quoted number.
+VALUE_SOURCES: dict[str, Callable[[Path, str], str]] = {}
+#: Numbers shaped like measurements; a match outside a generated block or value span is unsourced.
+MEASUREMENT = re.compile(
+    r"(?<![\w.])(?:"
+    r"\d+\.\d+\s?%|(?!95\s?%)\d+\s?%"  # a percentage (95 % is the confidence level)
+    r"|\d+\.\d+\s?(?:ms|s|min|h)\b"  # a decimal duration
+    r"|\d+(?:\.\d+)?x\b|\d+\.\d+ times\b"  # a ratio
+    r"|\[-?\d+\.\d+, -?\d+\.\d+\]"  # an interval
+    r")"
+)
+#: What the prose check skips: generated blocks, value spans, code, maths, link targets, comments.
+_NOT_PROSE = [
+    re.compile(r"<!-- generated: .*?<!-- end generated -->", re.DOTALL),
+    VALUE,
+    re.compile(r"^(```|:::).*?^\1", re.DOTALL | re.MULTILINE),
+    re.compile(r"`[^`\n]*`"),
+    re.compile(r"\$[^$\n]+\$"),
+    re.compile(r"\]\([^)\s]*\)"),
+    re.compile(r"<!--.*?-->", re.DOTALL),
+]
 
 
 def generator(name: str) -> Callable[[Generator], Generator]:
@@ -39,6 +72,28 @@ def generator(name: str) -> Callable[[Generator], Generator]:
         return function
 
     return register
+
+
+def value_source(name: str) -> Callable[[Callable[[Path, str], str]], Callable[[Path, str], str]]:
+    """Register the source of value spans ``<!-- value: NAME KEY -->``."""
+
+    def register(function: Callable[[Path, str], str]) -> Callable[[Path, str], str]:
+        VALUE_SOURCES[name] = function
+        return function
+
+    return register
+
+
+def unsourced_numbers(text: str) -> list[tuple[int, str]]:
+    """The measurement-shaped numbers of ``text`` outside generated blocks and value spans,
+    as ``(line, number)``; code, maths and link targets are not prose."""
+
+    def blank(match: re.Match[str]) -> str:
+        return re.sub(r"[^\n]", " ", match.group(0))  # keeps the line numbers
+
+    for pattern in _NOT_PROSE:
+        text = pattern.sub(blank, text)
+    return [(text.count("\n", 0, match.start()) + 1, match.group(0)) for match in MEASUREMENT.finditer(text)]
 
 
 def read_json(docs: Path, relative: str) -> Any:
@@ -59,11 +114,17 @@ def render(text: str, docs: Path) -> str:
         body = GENERATORS[name](docs).rstrip("\n") + "\n"
         return match.group(1) + body + match.group(4)
 
-    return BLOCK.sub(fill, text)
+    def quote(match: re.Match[str]) -> str:
+        source, key = match.group(2), match.group(3)
+        if source not in VALUE_SOURCES:
+            raise BenchError(f"no value source called {source!r}; known: {sorted(VALUE_SOURCES)}")
+        return match.group(1) + VALUE_SOURCES[source](docs, key) + match.group(5)
+
+    return VALUE.sub(quote, BLOCK.sub(fill, text))
 
 
 def pages(docs: Path) -> list[Path]:
-    return sorted(p for p in docs.glob("*.md") if BLOCK.search(p.read_text()))
+    return sorted(docs.glob("*.md"))
 
 
 def regenerate(docs: Path, check: bool = False) -> list[str]:
@@ -89,6 +150,18 @@ def regenerate(docs: Path, check: bool = False) -> list[str]:
     return differences
 
 
+def unsourced(docs: Path) -> list[str]:
+    """Every measurement-shaped number of the pages (and of the README beside the docs folder)
+    outside generated blocks and value spans."""
+    readme = docs.parent / "README.md"
+    return [
+        f"{page}:{line}: {number!r} is quoted without an artefact (put it in a value span or a "
+        "generated block; write a model constant as code)"
+        for page in [*pages(docs), *([readme] if readme.is_file() else [])]
+        for line, number in unsourced_numbers(page.read_text())
+    ]
+
+
 class DocsCommand(Command):
     name = "docs"
     order = 10
@@ -111,6 +184,11 @@ class DocsCommand(Command):
         if self.args.check and differences:
             print("\n\n".join(differences))
             print(f"mimo-radar-bench docs: {len(differences)} page(s) differ from their artefacts")
+            return 1
+        problems = unsourced(docs)
+        if problems:
+            print("\n".join(problems))
+            print(f"mimo-radar-bench docs: {len(problems)} number(s) in prose rest on no artefact")
             return 1
         print(
             f"{len(pages(docs))} page(s) " + ("match their artefacts" if self.args.check else "regenerated")

@@ -34,6 +34,7 @@ MODULE_TESTS = {
     "benchmarks/demo.py": ("tests/bench/test_harness.py", r'"demo"'),
     "benchmarks/doctables.py": ("tests/clients/test_docs_tables.py", r"regenerate"),
     "benchmarks/docs_generators.py": ("tests/clients/test_docs_tables.py", r"calibration\.json"),
+    "benchmarks/model_figures.py": ("tests/bench/test_model_figures.py", r"brute"),
     "benchmarks/errors.py": ("tests/bench/test_settings.py", r"BenchError"),
     "benchmarks/harness.py": ("tests/bench/test_harness.py", r"make_config"),
     "benchmarks/plots.py": ("tests/bench/test_plots.py", r"plots\.palette"),

@@ -76,7 +76,7 @@ def test_bpso_returns_valid_selections_and_its_optimality_rate():
     optimal = (tx == etx).all(axis=1) & (rx == erx).all(axis=1)
     values = np.array([value_of(index[b], tx[b], rx[b]) for b in range(300)])
     best = np.array([value_of(index[b], etx[b], erx[b]) for b in range(300)])
-    # docs/agents.md states the measured rate (about 0.5 with eq21 as written); guard its order
+    # docs/agents.md quotes the rate model-figures measures (about 0.5 with eq21 as written)
     assert 0.3 < optimal.mean() < 0.8
     assert (values <= best + 1e-12).all() and (values / best).mean() > 0.9
 

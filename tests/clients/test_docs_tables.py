@@ -43,3 +43,44 @@ def test_an_unknown_generator_is_named(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["docs", "--docs", str(tmp_path), "--check"])
     assert exit_info.value.code == 2 and "no generator called 'no-such-table'" in capsys.readouterr().err
+
+
+def test_prose_numbers_need_an_artefact(tmp_path, capsys):
+    from benchmarks.doctables import unsourced_numbers
+
+    text = (
+        "It took 12.5 s and was 1.7x faster, 3 times more, optimal in 96.0 % [92.3, 98.0] of cases\n"
+        "with 95 % intervals; `clipped to [0.2, 1.2]` in code, 1000 steps, 120 super arms;\n"
+        "<!-- value: model nees-ncv -->4.01 [3.96, 4.06]<!-- end value --> and 17 % of a step.\n"
+    )
+    assert unsourced_numbers(text) == [
+        (1, "12.5 s"),
+        (1, "1.7x"),
+        (1, "96.0 %"),
+        (1, "[92.3, 98.0]"),
+        (3, "17 %"),
+    ]
+    docs = tmp_path / "docs"
+    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
+    page = docs / "model.md"
+    page.write_text(page.read_text() + "\nA step takes 12.5 s here.\n")
+    assert main(["docs", "--docs", str(docs), "--check"]) == 1
+    out = capsys.readouterr().out
+    assert "model.md:" in out and "'12.5 s' is quoted without an artefact" in out
+    assert "1 number(s) in prose rest on no artefact" in out
+
+
+def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):
+    docs = tmp_path / "docs"
+    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
+    path = docs / "results" / "model" / "figures.json"
+    record = json.loads(path.read_text())
+    record["figures"]["nees-imm"].update(value=3.5, ci=[3.4, 3.6])
+    path.write_text(json.dumps(record))
+    assert main(["docs", "--docs", str(docs), "--check"]) == 1
+    assert "+  <!-- value: model nees-imm -->3.50 [3.40, 3.60]<!-- end value -->" in capsys.readouterr().out
+    page = docs / "model.md"
+    page.write_text(page.read_text() + "\n<!-- value: model no-such-figure -->1<!-- end value -->\n")
+    with pytest.raises(SystemExit) as exit_info:
+        main(["docs", "--docs", str(docs)])
+    assert exit_info.value.code == 2 and "no figure 'no-such-figure'" in capsys.readouterr().err
