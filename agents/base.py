@@ -37,19 +37,6 @@ from .solvers import SuperArmSolver, make_solver
 Observation = dict[str, NDArray[Any]]
 
 
-def check_parameter(
-    name: str, value: float, low: float, high: float = np.inf, low_open: bool = False
-) -> None:
-    """Raise ``ValueError`` naming ``name`` unless ``value`` is a number in [low, high] (or (low, high])."""
-    bracket = "(" if low_open else "["
-    upper = "inf)" if high == np.inf else f"{high:g}]"
-    if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise ValueError(f"{name} must be a number in {bracket}{low:g}, {upper}, got {value!r}")
-    inside = (value > low if low_open else value >= low) and value <= high
-    if not inside:
-        raise ValueError(f"{name} must be in {bracket}{low:g}, {upper}, got {value}")
-
-
 def ucb_bonus(scale: float, t: int, counts: NDArray[np.float64]) -> NDArray[np.float64]:
     """The UCB bonus ``sqrt(scale ln t / d[m, n])`` (B, M, N) of eq18 / UCB1."""
     return np.sqrt(scale * np.log(t) / counts)
@@ -219,6 +206,7 @@ class IndexPolicy(Agent):
         self.solver = make_solver(
             solver or self.default_solver, self.tx_count, self.rx_count, **(solver_params or {})
         )
+        self.solver.check_layout(self.scenario.num_tx, self.scenario.num_rx)
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:

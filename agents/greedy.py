@@ -10,7 +10,8 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.counter_hash import Stream
 
-from .base import IndexPolicy, Observation, check_parameter
+from .base import IndexPolicy, Observation
+from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
 

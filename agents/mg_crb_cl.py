@@ -10,7 +10,8 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
 
-from .base import IndexPolicy, Observation, blend_samples, check_parameter, ucb_bonus
+from .base import IndexPolicy, Observation, blend_samples, ucb_bonus
+from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
 

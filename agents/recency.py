@@ -9,7 +9,8 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
 
-from .base import IndexPolicy, Observation, check_parameter
+from .base import IndexPolicy, Observation
+from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
 #: Index of a channel never probed: finite (the solvers take finite indices) and larger than any

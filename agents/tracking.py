@@ -14,8 +14,9 @@ from mimo_radar_env.envs.options import option_choices
 from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.selection import CRITERIA, MAX_ENUMERATED_SUPER_ARMS, select_for_tracking
 
-from .base import Agent, Observation, check_parameter, fuse_targets
+from .base import Agent, Observation, fuse_targets
 from .mg_crb_cl import MGCRBCLEstimator
+from .parameters import check_parameter
 
 #: The observation key the policy scores super arms with (env option ``prediction_covariance``).
 PREDICTED_COVARIANCE = "track_pred_pos_cov"

@@ -4,7 +4,6 @@
 from __future__ import annotations
 
 import argparse
-import json
 from pathlib import Path
 
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
@@ -133,15 +132,18 @@ class CompareClaims(Command):
     def main(self) -> int:
         from .studies import claims
 
-        scorecards = {}
+        paths: dict[str, Path] = {}
         for item in self.args.scorecards:
             label, sep, where = item.partition("=")
             path = Path(where) / "claims.json" if Path(where).is_dir() else Path(where)
             if not sep or not label:
                 raise BenchError(f"scorecards are given as LABEL=PATH, got {item!r}")
+            if label in paths:
+                raise BenchError(f"two scorecards are labelled {label!r}; give each its own label")
             if not path.is_file():
                 raise BenchError(f"{where} is neither a scorecard (.json) nor a folder holding claims.json")
-            scorecards[label] = json.loads(path.read_text())
+            paths[label] = path
+        scorecards = {label: claims.load_scorecard(path) for label, path in paths.items()}
         print(claims.comparison_markdown(scorecards), end="")
         return 0
 

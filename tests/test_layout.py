@@ -15,6 +15,7 @@ MODULE_TESTS = {
     "agents/greedy.py": ("tests/agents/test_agents.py", r"epsilon-greedy"),
     "agents/mg_crb_cl.py": ("tests/agents/test_agents.py", r"mg-crb-cl"),
     "agents/oracle.py": ("tests/agents/test_agents.py", r'"best"'),
+    "agents/parameters.py": ("tests/agents/test_solvers.py", r"must be an integer in"),
     "agents/ppo.py": ("tests/agents/test_ppo.py", r"ppo:"),
     "agents/random_streams.py": ("tests/agents/test_rbe_cts.py", r"TrialRandom"),
     "agents/recency.py": ("tests/agents/test_rbe_cts.py", r'"rbe"'),

@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.superarm import alternating_super_arm, top_mask
 
+from ..parameters import check_integer
 from ..random_streams import TrialRandom
 from .base import SuperArmSolver
 
@@ -36,8 +37,8 @@ class AlternatingSolver(SuperArmSolver):
 
     def __init__(self, tx_count: int, rx_count: int, restarts: int = 8, max_rounds: int = 50) -> None:
         super().__init__(tx_count, rx_count)
-        if restarts < 0 or max_rounds < 1:
-            raise ValueError(f"restarts must be >= 0 and max_rounds >= 1, got {restarts}, {max_rounds}")
+        check_integer("restarts", restarts, 0, 1_000)
+        check_integer("max_rounds", max_rounds, 1, 10_000)
         self.restarts = restarts
         self.max_rounds = max_rounds
 

@@ -33,6 +33,15 @@ class SuperArmSolver(ABC):
         self.tx_count = tx_count
         self.rx_count = rx_count
 
+    def check_layout(self, num_tx: int, num_rx: int) -> None:
+        """Raise ``ValueError`` if the solver cannot serve an ``M x N`` layout (checked when an
+        agent is made, before anything runs)."""
+        if num_tx < self.tx_count or num_rx < self.rx_count:
+            raise ValueError(
+                f"the layout has {num_tx} TX and {num_rx} RX, fewer than "
+                f"Ms={self.tx_count}, Ns={self.rx_count}"
+            )
+
     def check(self, index: NDArray[np.float64]) -> NDArray[np.float64]:
         index = np.asarray(index, dtype=np.float64)
         if index.ndim != 3:

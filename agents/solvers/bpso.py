@@ -8,12 +8,17 @@ from numpy.typing import NDArray
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.superarm import top_mask
 
+from ..parameters import check_integer, check_parameter
 from ..random_streams import TrialRandom
 from . import _bpso_kernels as _kernels
 from .base import SuperArmSolver
 
 #: BPSO position-update rules (docs/agents.md).
 BPSO_RULES = ("xor", "set")
+#: Bounds of the swarm: 200 times the paper's (Npop = 50, q_max = 100), beyond which one
+#: selection of a 500-trial batch would take minutes.
+MAX_POPULATION = 10_000
+MAX_ITERATIONS = 20_000
 
 
 class BPSOSolver(SuperArmSolver):
@@ -79,10 +84,18 @@ class BPSOSolver(SuperArmSolver):
         use_numba: bool = True,
     ) -> None:
         super().__init__(tx_count, rx_count)
-        if population < 1 or iterations < 1:
-            raise ValueError(f"population and iterations must be >= 1, got {population}, {iterations}")
-        if velocity_clamp <= 0:
-            raise ValueError(f"velocity_clamp must be > 0, got {velocity_clamp}")
+        check_integer("population", population, 1, MAX_POPULATION)
+        check_integer("iterations", iterations, 1, MAX_ITERATIONS)
+        for name, value in (
+            ("c1", c1),
+            ("c2", c2),
+            ("inertia_start", inertia_start),
+            ("inertia_end", inertia_end),
+        ):
+            check_parameter(name, value, 0.0, 10.0)
+        check_parameter("velocity_clamp", velocity_clamp, 0.0, 100.0, low_open=True)
+        if not isinstance(use_numba, bool):
+            raise ValueError(f"use_numba must be true or false, got {use_numba!r}")
         self.population = population
         self.iterations = iterations
         self.c1, self.c2 = c1, c2

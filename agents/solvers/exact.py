@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env.core.superarm import exact_super_arm
+from mimo_radar_env.core.superarm import MAX_EXACT_SUBSETS, exact_super_arm, is_exact_affordable
 
 from ..random_streams import TrialRandom
 from .base import SuperArmSolver
@@ -20,6 +22,16 @@ class ExactSolver(SuperArmSolver):
     """
 
     name = "exact"
+
+    def check_layout(self, num_tx: int, num_rx: int) -> None:
+        super().check_layout(num_tx, num_rx)
+        if not is_exact_affordable(num_tx, num_rx, self.tx_count, self.rx_count):
+            subsets = min(math.comb(num_tx, self.tx_count), math.comb(num_rx, self.rx_count))
+            raise ValueError(
+                f"the exact solver would enumerate {subsets:,} subsets (more than {MAX_EXACT_SUBSETS:,}) on "
+                f"a {num_tx} x {num_rx} layout with Ms={self.tx_count}, Ns={self.rx_count}; use "
+                "solver='alternating' (or 'bpso') there"
+            )
 
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom

@@ -147,6 +147,8 @@ class Study(Command):
     default_trials: ClassVar[int] = DEFAULT_TRIALS
     #: Whether agent parameters start from the env version's paper study.
     paper_study: ClassVar[bool] = False
+    #: The fewest trials the study accepts (2 where it judges paired intervals).
+    min_trials: ClassVar[int] = 1
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
@@ -156,7 +158,7 @@ class Study(Command):
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
         cls.add_study_arguments(parser)
         add_agent_param(parser, paper_study=cls.paper_study)
-        add_run_arguments(parser, trials=cls.default_trials)
+        add_run_arguments(parser, trials=cls.default_trials, min_trials=cls.min_trials)
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:

@@ -302,6 +302,7 @@ def calibration_markdown(report: dict[str, Any]) -> str:
 
 class CalibrationStudy(Study):
     name = "calibrate-layout"
+    min_trials = 2
     order = 4
     help = "search station layouts under which the most of the paper's claims hold"
     description = (

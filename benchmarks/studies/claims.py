@@ -408,6 +408,7 @@ def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings
 
 class ClaimsStudy(Study):
     name = "claims"
+    min_trials = 2
     order = 2
     help = "judge the paper's claims on paper studies (holds / consistent / contradicted)"
     description = (
@@ -444,8 +445,7 @@ def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str
     """Every claim judged on finished paper studies (one folder per scenario)."""
     studies = {}
     for folder in map(Path, folders):
-        if not (folder / "config.json").exists():
-            raise BenchError(f"{folder} holds no finished run (no config.json)")
+        check_paper_run(folder)
         name, policies = load_study(folder)
         if name not in PAPER_KEYS:
             raise BenchError(
@@ -456,6 +456,53 @@ def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str
             raise BenchError(f"two of the runs are studies of {name}: give one folder per paper scenario")
         studies[name] = policies
     return evaluate(studies, seed)
+
+
+def check_paper_run(folder: Path) -> None:
+    """Raise :class:`BenchError` unless ``folder`` holds a paper study the claims can be judged
+    on: the paper's policies and two trials or more (a claim past a shorter run's last step is
+    "not evaluated")."""
+    path = folder / "config.json"
+    if not path.is_file():
+        raise BenchError(f"{folder} holds no finished run (no config.json)")
+    try:
+        config = json.loads(path.read_text())
+        policies, trials = list(config["policies"]), int(config["trials"])
+    except (OSError, ValueError, KeyError, TypeError) as exc:
+        raise BenchError(f"{path} is not a run's configuration ({type(exc).__name__}: {exc})") from None
+    missing = [p for p in PAPER_POLICIES if p not in policies]
+    if missing:
+        raise BenchError(
+            f"{folder} ran {', '.join(policies)}; the claims need the paper study's policies "
+            f"({', '.join(PAPER_POLICIES)}): run 'mimo-radar-bench paper' or 'claims --out DIR'"
+        )
+    if trials < 2:
+        raise BenchError(f"{folder} ran {trials} trial; the claims' paired intervals need two or more")
+
+
+#: The fields of a judged claim that a scorecard must hold.
+SCORECARD_FIELDS = ("id", "scenario", "claim", "verdict")
+
+
+def load_scorecard(path: Path) -> list[dict[str, Any]]:
+    """A ``claims.json`` scorecard, checked: a list of judged claims with :data:`SCORECARD_FIELDS`
+    and known verdicts (:class:`BenchError` naming the file otherwise)."""
+    try:
+        results = json.loads(Path(path).read_text())
+    except (OSError, ValueError) as exc:
+        raise BenchError(f"{path} is not a JSON scorecard ({exc})") from None
+    if not isinstance(results, list) or not results:
+        raise BenchError(f"{path} is not a scorecard: expected a list of judged claims")
+    for i, result in enumerate(results):
+        missing = [f for f in SCORECARD_FIELDS if not isinstance(result, dict) or f not in result]
+        if missing:
+            raise BenchError(f"{path}: claim {i} lacks {', '.join(missing)}; is this a claims.json?")
+        known = (*verdicts.VERDICTS, verdicts.NOT_EVALUATED)
+        if result["verdict"] not in known:
+            raise BenchError(
+                f"{path}: claim {result['id']} has verdict {result['verdict']!r}; known: {', '.join(known)}"
+            )
+    return results
 
 
 def _configs(folders: Sequence[str | Path]) -> list[dict[str, Any]]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -27,6 +28,22 @@ DEFAULT_SHARD_SIZE = 50
 def default_workers() -> int:
     """Local worker processes when none are given: the machine's cores."""
     return os.cpu_count() or 1
+
+
+def local_workers(requested: int | None) -> int:
+    """Local worker processes: ``requested``, capped at the machine's cores with a message
+    (each worker is one compute thread; more than the cores only share them)."""
+    cores = default_workers()
+    if requested is None:
+        return cores
+    if requested > cores:
+        print(
+            f"mimo-radar-bench: --workers {requested} is more than this machine's {cores} cores; "
+            f"using {cores}",
+            file=sys.stderr,
+        )
+        return cores
+    return requested
 
 
 @dataclass(frozen=True)
@@ -78,7 +95,9 @@ class Settings:
             steps=args.steps,
             seed=args.seed,
             shard_size=args.shard_size,
-            workers=args.workers if args.workers is not None else default_workers(),
+            workers=local_workers(args.workers)
+            if args.backend == "local"
+            else (args.workers if args.workers is not None else default_workers()),
             backend=args.backend,
             address=args.address,
             progress=not args.quiet,
@@ -94,8 +113,9 @@ class Settings:
 
 
 # ------------------------------------------------------------------ argument types
-def integer(low: int) -> Callable[[str], int]:
-    """An argparse type: an integer >= ``low``."""
+def integer(low: int, why: str = "") -> Callable[[str], int]:
+    """An argparse type: an integer >= ``low`` (``why``: the reason for the bound, said on refusal)."""
+    reason = f" ({why})" if why else ""
 
     def parse(text: str) -> int:
         try:
@@ -103,7 +123,7 @@ def integer(low: int) -> Callable[[str], int]:
         except ValueError:
             raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}") from None
         if value < low:
-            raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {value}")
+            raise argparse.ArgumentTypeError(f"must be an integer >= {low}{reason}, got {value}")
         return value
 
     parse.__name__ = f"integer >= {low}"
@@ -225,11 +245,18 @@ def add_agent_param(parser: argparse.ArgumentParser, paper_study: bool = False) 
 
 
 # ------------------------------------------------------------------ a study's shared arguments
-def add_run_arguments(parser: argparse.ArgumentParser, trials: int = DEFAULT_TRIALS) -> None:
+def add_run_arguments(
+    parser: argparse.ArgumentParser, trials: int = DEFAULT_TRIALS, min_trials: int = 1
+) -> None:
     """The arguments every study shares: trials, steps, seed, --out, shards, workers, backend,
-    figures, progress and the env options."""
+    figures, progress and the env options (a study that judges paired intervals needs
+    ``min_trials`` = 2)."""
+    why = "a paired 95 % interval needs two trials or more" if min_trials > 1 else ""
     parser.add_argument(
-        "--trials", type=integer(1), default=trials, help="Monte-Carlo trials (default %(default)s)"
+        "--trials",
+        type=integer(min_trials, why),
+        default=trials,
+        help=f"Monte-Carlo trials, at least {min_trials} (default %(default)s)",
     )
     parser.add_argument(
         "--steps",

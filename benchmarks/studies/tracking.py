@@ -76,6 +76,7 @@ def ppo_policy(pattern: str, number: int, fusion: str) -> str:
 
 class TrackingStudy(Study):
     name = "tracking"
+    min_trials = 2
     order = 3
     help = (
         f"the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets "

@@ -126,3 +126,31 @@ def test_solver_errors():
         make_solver("bpso", 2, 3, swarm=3)
     with pytest.raises(ValueError, match="NaN"):
         ExactSolver(2, 3).solve(np.full((1, 4, 6), np.nan), TrialRandom.for_batch(0, 1))
+
+
+@pytest.mark.parametrize(
+    ("params", "message"),
+    [
+        ({"population": 2.5}, "population must be an integer in [1, 10,000], got 2.5"),
+        ({"population": True}, "population must be an integer"),
+        ({"iterations": 0}, "iterations must be in [1, 20,000], got 0"),
+        ({"c1": float("nan")}, "c1 must be in [0, 10], got nan"),
+        ({"velocity_clamp": -1}, "velocity_clamp must be in (0, 100], got -1"),
+        ({"use_numba": "yes"}, "use_numba must be true or false"),
+    ],
+)
+def test_bpso_parameters_are_checked_with_their_ranges(params, message):
+    with pytest.raises(ValueError) as error:
+        BPSOSolver(2, 3, **params)
+    assert message in str(error.value)
+
+
+def test_alternating_parameters_and_layout_feasibility_are_checked():
+    with pytest.raises(ValueError, match=r"restarts must be an integer in \[0, 1,000\], got 1.5"):
+        AlternatingSolver(2, 3, restarts=1.5)
+    ExactSolver(4, 4).check_layout(20, 20)  # 4,845 subsets
+    with pytest.raises(ValueError, match="would enumerate 635,376 subsets"):
+        ExactSolver(4, 4).check_layout(64, 64)
+    AlternatingSolver(4, 4).check_layout(64, 64)
+    with pytest.raises(ValueError, match="fewer than Ms=4, Ns=4"):
+        BPSOSolver(4, 4).check_layout(3, 8)

@@ -122,3 +122,117 @@ def test_subprocess_cli_scenario_errors_are_one_line(tmp_path):
     )
     assert result.returncode == 2
     assert result.stderr.strip().count("\n") == 0 and "maneuvers must be a list" in result.stderr
+
+
+@pytest.mark.parametrize(
+    ("param", "message"),
+    [
+        (
+            "mg-crb-cl.solver_params={population: 2.5}",
+            "policy 'mg-crb-cl': population must be an integer in [1, 10,000], got 2.5",
+        ),
+        (
+            "mg-crb-cl.solver_params={iterations: 100000000}",
+            "policy 'mg-crb-cl': iterations must be in [1, 20,000], got 100,000,000",
+        ),
+        (
+            "mg-crb-cl.solver_params={velocity_clamp: 0}",
+            "policy 'mg-crb-cl': velocity_clamp must be in (0, 100], got 0",
+        ),
+        ("ucb1.beta=inf", "policy 'ucb1': beta must be a number in [0, inf), got 'inf'"),
+    ],
+)
+def test_solver_parameters_are_checked_when_the_agent_is_made(param, message, tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", param.split(".")[0], "--agent-param", param]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--trials", "2", "--steps", "3", "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not out.exists()
+
+
+def test_an_exact_search_too_large_for_the_layout_is_refused_before_running(tmp_path, capsys):
+    import yaml
+
+    from mimo_radar_env import random_scenario
+
+    path = tmp_path / "big.yaml"
+    path.write_text(yaml.safe_dump(random_scenario(64, 64, 1, 4, 4, horizon=5, seed=0).to_dict()))
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as exit_info:
+        main(
+            [
+                "run",
+                "--scenario",
+                str(path),
+                "--policies",
+                "ucb1",
+                "--trials",
+                "2",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert "exact solver would enumerate 635,376 subsets" in err and "solver='alternating'" in err
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("study", ["tracking", "claims", "calibrate-layout"])
+def test_judged_studies_need_two_trials(study, tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main([study, "--trials", "1", "--out", str(tmp_path / "x"), "--quiet"])
+    assert exit_info.value.code == 2
+    assert "must be an integer >= 2 (a paired 95 % interval needs two trials or more), got 1" in (
+        capsys.readouterr().err
+    )
+    assert not (tmp_path / "x").exists()
+
+
+def test_workers_beyond_the_cores_are_capped_with_a_message(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("os.cpu_count", lambda: 2)
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2"]
+    assert main([*argv, "--workers", "16", "--out", str(out), "--quiet", "--no-figures"]) == 0
+    assert "--workers 16 is more than this machine's 2 cores; using 2" in capsys.readouterr().err
+
+
+def test_claims_refuse_a_run_that_is_not_a_paper_study(tmp_path, capsys):
+    run = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "2", "--steps", "2"]
+    assert main([*argv, "--out", str(run), "--quiet", "--no-figures"]) == 0
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["claims", str(run), "--out", str(tmp_path / "card"), "--quiet"])
+    assert exit_info.value.code == 2
+    assert "ran ucb1; the claims need the paper study's policies" in capsys.readouterr().err
+    (run / "config.json").write_text('{"policies": 5}')
+    with pytest.raises(SystemExit):
+        main(["claims", str(run), "--out", str(tmp_path / "card"), "--quiet"])
+    assert "config.json is not a run's configuration" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("content", "message"),
+    [
+        ("{", "is not a JSON scorecard"),
+        ('{"x": 1}', "is not a scorecard: expected a list of judged claims"),
+        ("[1, 2]", "claim 0 lacks id, scenario, claim, verdict"),
+        ('[{"id": "S1.1", "scenario": "p", "claim": "c", "verdict": "maybe"}]', "has verdict 'maybe'"),
+    ],
+)
+def test_compare_claims_on_a_foreign_file_is_one_line(content, message, tmp_path, capsys):
+    path = tmp_path / "card.json"
+    path.write_text(content)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["compare-claims", f"A={path}"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    with pytest.raises(SystemExit):
+        main(["compare-claims", f"A={path}", f"A={path}"])
+    assert "two scorecards are labelled 'A'" in capsys.readouterr().err
