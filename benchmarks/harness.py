@@ -238,6 +238,7 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
             out["trial_bound_squared"][:, t] = info["position_bound"] ** 2
         out["selections"][t] = np.asarray(action).sum(axis=0)
         out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
+    out["tracker_repairs"] = np.array(float(np.sum(info.get("tracker_repairs", 0))))
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
 
@@ -420,7 +421,7 @@ def load_per_trial(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]
     for policy in config.policies:
         parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
         joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
-        for key in ("selections", "wall_s"):
+        for key in ("selections", "wall_s", "tracker_repairs"):
             joined[key] = functools.reduce(np.add, (part[key] for part in parts))
         joined[TRUTH_FIELD] = parts[0][TRUTH_FIELD]  # trial 0's truth, the same for every policy
         per_trial[policy] = joined

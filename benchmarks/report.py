@@ -113,6 +113,7 @@ def summarize(
             ci[key] = [p["ci"] for p in value] if isinstance(value, list) else value["ci"]
             method[key] = [p["method"] for p in value] if isinstance(value, list) else value["method"]
         row["wall_s"] = float(per_trial[policy]["wall_s"])
+        row["tracker_repairs"] = int(per_trial[policy]["tracker_repairs"])
         if config.trials >= 2:  # an interval needs two trials or more
             row["ci"], row["method"] = ci, method
         policies[policy] = row

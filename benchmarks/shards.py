@@ -15,6 +15,9 @@ A shard holds what the reports of one policy need about a block of trials, each 
     how many of the shard's trials selected each station at each step (the selection maps);
 ``wall_s`` () float64
     the task's compute time in seconds;
+``tracker_repairs`` () float64
+    how many covariances the tracker repaired over the shard's trials (``info["tracker_repairs"]``
+    at the last step; 0 without a tracker);
 ``first_trial_positions`` (T + 1, K, 2) float64
     the true positions of the shard's first trial (the geometry figure);
 
@@ -44,10 +47,10 @@ from mimo_radar_env.metrics import TRIAL_FIELDS
 
 #: The layout of the fields above; part of every shard's identity, so that shards of an older
 #: layout are recomputed rather than read.
-SHARD_FORMAT = 2
+SHARD_FORMAT = 3
 #: The true positions (steps + 1, K, 2) of the shard's first trial (for the geometry figure).
 TRUTH_FIELD = "first_trial_positions"
-DATA_FIELDS = (*TRIAL_FIELDS, "selections", "wall_s", TRUTH_FIELD)
+DATA_FIELDS = (*TRIAL_FIELDS, "selections", "wall_s", "tracker_repairs", TRUTH_FIELD)
 META_FIELDS = ("shard_trials", "config_hash", "checksum")
 
 

@@ -67,6 +67,14 @@ class RadarEngine:
         self.options = options
         self.scenario = scenario
         check_memory(scenario, batch_size)
+        if options.measurement_quality is not None:
+            low, high = scenario.measurement_quality_range()
+            if not low <= options.measurement_quality <= high:
+                raise ValueError(
+                    f"measurement_quality={options.measurement_quality:g} puts the measurement variances "
+                    f"Sigma0 / lambda outside their physical ranges for scenario {scenario.name!r}; allowed: "
+                    f"[{low:.3g}, {high:.3g}]"
+                )
         self.model = RadarModel.from_scenario(scenario)
         self.batch_size = batch_size
         self.simulation = RadarSimulation(
@@ -156,6 +164,7 @@ class RadarEngine:
         reward = sinr_reward
         if self.tracker is not None:
             info["position_bound"] = position_bound(self._bound_covariance)
+            info["tracker_repairs"] = self.tracker.repairs.copy()
             info["reward_information"] = self._information_gain()
             if self.options.reward == "information":
                 reward = info["reward_information"]

@@ -125,7 +125,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     action), ``optimal_reward`` (``mu*_t``), ``optimal_action`` (M + N,),
     ``action_valid`` and, with the tracker, ``position_bound`` (K,): the posterior
     Cramer-Rao bound of the position error (m) for the selections made so far along the true
-    trajectory (docs/model.md, section 14). Non-oracle agents must not read them. The Best oracle reads
+    trajectory (docs/model.md, section 14), and ``tracker_repairs``: how many covariances the
+    tracker has repaired in this episode (docs/model.md, section 6; 0 in a healthy run).
+    Non-oracle agents must not read them. The Best oracle reads
     the optimal super arm of the coming step with ``env.unwrapped.oracle_action()``.
 
     ## Starting State

@@ -24,6 +24,18 @@ MAX_HORIZON = 1_000_000
 MIN_STATION_DISTANCE = 10.0
 #: Positions and velocities of a noise-free track stay below this (m, m/s): squares stay finite.
 MAX_COORDINATE = 1e12
+#: Stations and initial target positions lie within this distance of the origin (m).
+MAX_POSITION = 1e8
+#: The physical ranges of the noise and uncertainty fields (docs/model.md, section 1): a standard
+#: deviation from 1 mm (1 mm/s) up to the scene's extent, an azimuth error from 1 microradian up
+#: to pi. Beyond them the model means nothing and the tracker's arithmetic breaks down.
+MIN_METRE_VARIANCE = 1e-6  # m^2 (and (m/s)^2 for velocities)
+MIN_AZIMUTH_VARIANCE = 1e-12  # rad^2
+MAX_AZIMUTH_VARIANCE = float(np.pi**2)
+MIN_SAMPLE_TIME = 1e-3  # s
+MAX_SAMPLE_TIME = 1e6  # s
+#: The largest ratio of an initial covariance's eigenvalues.
+MAX_CONDITION = 1e12
 
 
 @dataclass(frozen=True)
@@ -171,6 +183,10 @@ class Scenario:
         out: dict[str, Any] = {"name": str(data["name"]), "targets": data["targets"]}
         out["tx_positions"] = check.positions("tx_positions", data["tx_positions"])
         out["rx_positions"] = check.positions("rx_positions", data["rx_positions"])
+        for name in ("tx_positions", "rx_positions"):
+            far = np.abs(out[name]).max()
+            if far > MAX_POSITION:
+                raise ScenarioError(f"{name} must lie within {MAX_POSITION:g} m of the origin, got {far:g} m")
         num_tx, num_rx = out["tx_positions"].shape[0], out["rx_positions"].shape[0]
         num_targets = len(out["targets"])
         out["tx_per_step"] = check.integer_in(
@@ -232,8 +248,81 @@ class Scenario:
                         f"targets[{k}].maneuvers overlap: [{a0}, {a1}) and one starting at {b0}"
                     )
         scenario = cls(**out)
+        scenario._check_ranges()
         scenario._check_tracks()
         return scenario
+
+    @property
+    def extent(self) -> float:
+        """The scene's size (m): the largest distance between two of its stations and initial
+        target positions, at least 1 km. It bounds the noise and uncertainty fields."""
+        points = np.concatenate(
+            [self.tx_positions, self.rx_positions, [t.initial_state[[0, 2]] for t in self.targets]]
+        )
+        spread = np.linalg.norm(points[:, None] - points[None], axis=-1).max()
+        return float(max(spread, 1e3))
+
+    def measurement_quality_range(self) -> tuple[float, float]:
+        """The values of a constant ``lambda`` (the env's ``measurement_quality``) that keep both
+        measurement variances ``Sigma0 / lambda`` within their physical ranges."""
+        low = max(self.range_variance / self.extent**2, self.azimuth_variance / MAX_AZIMUTH_VARIANCE)
+        high = min(self.range_variance / MIN_METRE_VARIANCE, self.azimuth_variance / MIN_AZIMUTH_VARIANCE)
+        return low, high
+
+    def _check_ranges(self) -> None:
+        """The noise and uncertainty fields within their physical ranges (tied to the scene's
+        extent and the sample time), each refusal naming the range allowed."""
+        extent, step = self.extent, self.sample_time
+        if not MIN_SAMPLE_TIME <= step <= MAX_SAMPLE_TIME:
+            raise ScenarioError(
+                f"sample_time must be in [{MIN_SAMPLE_TIME:g}, {MAX_SAMPLE_TIME:g}] (s), got {step:g}"
+            )
+        bounds = {
+            "range_variance": (
+                MIN_METRE_VARIANCE,
+                extent**2,
+                "m^2: from 1 mm^2 to the scene's extent squared",
+            ),
+            "azimuth_variance": (MIN_AZIMUTH_VARIANCE, MAX_AZIMUTH_VARIANCE, "rad^2: from 1 urad^2 to pi^2"),
+            "process_noise": (
+                0.0,
+                3 * extent**2 / step**3,
+                "m^2/s^3: at most a growth of the scene's extent squared in one step",
+            ),
+        }
+        for name, (low, high, unit) in bounds.items():
+            value = getattr(self, name)
+            if not low <= value <= high:
+                raise ScenarioError(f"{name} must be in [{low:.3g}, {high:.3g}] ({unit}), got {value:g}")
+        for k, target in enumerate(self.targets):
+            where = f"targets[{k}]"
+            position = np.abs(target.initial_state[[0, 2]]).max()
+            if position > MAX_POSITION:
+                raise ScenarioError(
+                    f"{where}.initial_state must lie within {MAX_POSITION:g} m of the origin, "
+                    f"got {position:g} m"
+                )
+            speed = float(np.linalg.norm(target.initial_state[[1, 3]]))
+            if speed * step > extent:
+                raise ScenarioError(
+                    f"{where} moves {speed * step:.3g} m in one sample_time of {step:g} s, more than the "
+                    f"scene's extent of {extent:.3g} m: shorten sample_time or slow the target"
+                )
+            variances = np.linalg.eigvalsh(target.initial_covariance)
+            upper = max(extent, extent / step) ** 2
+            if variances.max() > MAX_CONDITION * variances.min():
+                raise ScenarioError(
+                    f"{where}.initial_covariance has eigenvalues from {variances.min():.3g} to "
+                    f"{variances.max():.3g}: a condition number above {MAX_CONDITION:g}, beyond what the "
+                    "tracker's arithmetic resolves"
+                )
+            if variances.min() < MIN_METRE_VARIANCE or variances.max() > upper:
+                raise ScenarioError(
+                    f"{where}.initial_covariance must have eigenvalues in "
+                    f"[{MIN_METRE_VARIANCE:g}, {upper:.3g}] "
+                    f"(m^2 and (m/s)^2: from 1 mm to the scene's extent per sample time), got "
+                    f"[{variances.min():.3g}, {variances.max():.3g}]"
+                )
 
     def _check_tracks(self) -> None:
         """The noise-free tracks stay finite and at least ``MIN_STATION_DISTANCE`` from every station."""

@@ -6,6 +6,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .unscented import repair_covariance
+
 
 def bound_step(
     covariance: NDArray[np.float64],
@@ -21,11 +23,14 @@ def bound_step(
     position information ``I`` of the channels probed, at the true state with the true ``R``
     (0 when nothing was probed). ``E`` picks the position (state ``[x, vx, y, vy]``). The
     information form is kept for its numerical robustness: channel information can be huge
-    near a station.
+    near a station. Both covariances pass the tracker's condition-number guard
+    (:func:`~mimo_radar_env.tracking.unscented.repair_covariance`), which changes nothing unless
+    a prior is many orders of magnitude wider than the measurements.
     """
-    information = np.linalg.inv(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
+    prior, _ = repair_covariance(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
+    information = np.linalg.inv(prior)
     information[..., 0::2, 0::2] += measured
-    return np.linalg.inv(information)
+    return repair_covariance(np.linalg.inv(information))[0]
 
 
 def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:

@@ -25,7 +25,7 @@ from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from . import imm
 from .fusion import Posterior, Prior, make_fusion
-from .unscented import SigmaPointParameters, robust_cholesky, sigma_points
+from .unscented import SigmaPointParameters, repair_covariance, robust_cholesky, sigma_points
 
 #: The tracker's models and Markov chain (docs/model.md): NCV, NCT(+3 deg/s), NCT(-3 deg/s).
 DEFAULT_TURN_RATES_DEG = (0.0, 3.0, -3.0)
@@ -169,10 +169,20 @@ class IMMUKFTracker:
         self.repairs += (~finite & valid[:, None]).sum(axis=1)
         use_update = finite & valid[:, None]
         log_pred = prior.log_c - imm.logsumexp(prior.log_c, axis=-1, keepdims=True)
+        # the condition-number guard: a posterior that lost positive definiteness to rounding
+        # (a prior far wider than the measurements) is repaired in its trial and target alone
+        everywhere = use_update.all()
+        covs, covariance = posterior.covs, posterior.covariance
+        if not everywhere:  # the others are not used: keep their NaN out of the guard
+            covs = np.where(use_update[..., None, None, None], covs, np.eye(4))
+            covariance = np.where(use_update[..., None, None], covariance, np.eye(4))
+        posterior_covs, repaired_models = repair_covariance(covs)
+        covariance, repaired_fused = repair_covariance(covariance)
+        self.repairs += ((repaired_models.any(axis=-1) | repaired_fused) & use_update).sum(axis=1)
         self.means = np.where(use_update[..., None, None], posterior.means, prior.means)
-        self.covs = np.where(use_update[..., None, None, None], posterior.covs, prior.covs)
+        self.covs = np.where(use_update[..., None, None, None], posterior_covs, prior.covs)
         self.log_probs = np.where(use_update[..., None], posterior.log_probs, log_pred)
-        estimate, covariance = posterior.estimate, posterior.covariance
+        estimate = posterior.estimate
         if not use_update.all():
             pred_est, pred_cov = imm.combine(prior.means, prior.covs, np.exp(log_pred))
             estimate = np.where(use_update[..., None], estimate, pred_est)

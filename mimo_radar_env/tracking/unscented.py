@@ -51,6 +51,91 @@ def symmetrize(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
     return 0.5 * (matrix + np.swapaxes(matrix, -1, -2))
 
 
+#: The condition-number guard: a covariance whose eigenvalues spread more than this (estimated
+#: from its Cholesky factor) or that is not positive definite is repaired.
+MAX_CONDITION = 1e12
+
+
+def _floor_eigenvalues(
+    matrix: NDArray[np.float64], relative_floor: float
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.bool_]]:
+    """``(symmetrised, rebuilt, low)``: the re-symmetrised matrices (non-finite entries zeroed),
+    the same with eigenvalues raised to ``relative_floor * max(|eigenvalue|)`` (at least a tiny
+    absolute jitter), and where an eigenvalue was below that floor."""
+    sym = symmetrize(matrix)
+    sym = np.where(np.isfinite(sym), sym, 0.0)
+    eigenvalues, eigenvectors = np.linalg.eigh(sym)
+    top = np.max(np.abs(eigenvalues), axis=-1, keepdims=True)
+    floor = np.maximum(relative_floor * top, 1e-12)
+    low = np.any(eigenvalues < floor, axis=-1)
+    clipped = np.maximum(eigenvalues, floor)
+    rebuilt = symmetrize(np.einsum("...ij,...j,...kj->...ik", eigenvectors, clipped, eigenvectors))
+    return sym, rebuilt, low
+
+
+def _certainly_conditioned(matrix: NDArray[np.float64], max_condition: float) -> NDArray[np.bool_]:
+    """True where a symmetric 4 x 4 matrix is certainly positive definite with a condition number
+    at most ``max_condition``: its leading principal minors are positive (Sylvester) and
+    ``trace^4 / det``, an upper bound of the condition number, is within it. Closed forms, no
+    factorisation; False only says "look closer"."""
+    a = matrix
+    minor2 = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    cof = [
+        a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1],
+        a[..., 1, 0] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 0],
+        a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0],
+    ]
+    minor3 = a[..., 0, 0] * cof[0] - a[..., 0, 1] * cof[1] + a[..., 0, 2] * cof[2]
+    with np.errstate(all="ignore"):
+        det = _det4(a)
+        trace = np.trace(a, axis1=-2, axis2=-1)
+        return (
+            (a[..., 0, 0] > 0) & (minor2 > 0) & (minor3 > 0) & (det > 0) & (trace**4 <= max_condition * det)
+        )
+
+
+def _det4(a: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Determinants of (..., 4, 4) matrices by the Laplace expansion in 2 x 2 minors."""
+    s0 = a[..., 0, 0] * a[..., 1, 1] - a[..., 1, 0] * a[..., 0, 1]
+    s1 = a[..., 0, 0] * a[..., 1, 2] - a[..., 1, 0] * a[..., 0, 2]
+    s2 = a[..., 0, 0] * a[..., 1, 3] - a[..., 1, 0] * a[..., 0, 3]
+    s3 = a[..., 0, 1] * a[..., 1, 2] - a[..., 1, 1] * a[..., 0, 2]
+    s4 = a[..., 0, 1] * a[..., 1, 3] - a[..., 1, 1] * a[..., 0, 3]
+    s5 = a[..., 0, 2] * a[..., 1, 3] - a[..., 1, 2] * a[..., 0, 3]
+    c5 = a[..., 2, 2] * a[..., 3, 3] - a[..., 3, 2] * a[..., 2, 3]
+    c4 = a[..., 2, 1] * a[..., 3, 3] - a[..., 3, 1] * a[..., 2, 3]
+    c3 = a[..., 2, 1] * a[..., 3, 2] - a[..., 3, 1] * a[..., 2, 2]
+    c2 = a[..., 2, 0] * a[..., 3, 3] - a[..., 3, 0] * a[..., 2, 3]
+    c1 = a[..., 2, 0] * a[..., 3, 2] - a[..., 3, 0] * a[..., 2, 2]
+    c0 = a[..., 2, 0] * a[..., 3, 1] - a[..., 3, 0] * a[..., 2, 1]
+    return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+
+
+def repair_covariance(
+    matrix: NDArray[np.float64], relative_floor: float = 1.0 / MAX_CONDITION
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Covariances made usable, and a mask (batch shape) of those repaired.
+
+    A matrix that is not numerically positive definite, or whose condition number (estimated
+    from its Cholesky factor's diagonal) exceeds ``1 / relative_floor``, gets its eigenvalues
+    raised to ``relative_floor`` times the largest; the others are returned as given.
+    """
+    if matrix.shape[-1] == 4 and np.all(_certainly_conditioned(matrix, 1.0 / relative_floor)):
+        return matrix, np.zeros(matrix.shape[:-2], dtype=bool)  # the fast path of every healthy step
+    try:
+        diagonal = np.diagonal(np.linalg.cholesky(matrix), axis1=-2, axis2=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            spread = (diagonal.max(axis=-1) / diagonal.min(axis=-1)) ** 2
+        wanted = ~(spread <= 1.0 / relative_floor)
+        if not wanted.any():
+            return matrix, wanted
+    except np.linalg.LinAlgError:
+        wanted = np.zeros(matrix.shape[:-2], dtype=bool)
+    _, rebuilt, low = _floor_eigenvalues(matrix, relative_floor)
+    repaired = low | wanted
+    return np.where(repaired[..., None, None], rebuilt, matrix), repaired
+
+
 def robust_cholesky(
     matrix: NDArray[np.float64], relative_floor: float = 1e-12
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
@@ -66,16 +151,8 @@ def robust_cholesky(
         return np.linalg.cholesky(matrix), np.zeros(matrix.shape[:-2], dtype=bool)
     except np.linalg.LinAlgError:
         pass
-    sym = symmetrize(matrix)
-    sym = np.where(np.isfinite(sym), sym, 0.0)
-    eigenvalues, eigenvectors = np.linalg.eigh(sym)
-    top = np.max(np.abs(eigenvalues), axis=-1, keepdims=True)
-    floor = np.maximum(relative_floor * top, 1e-12)
-    repaired = np.any(eigenvalues < floor, axis=-1)
-    clipped = np.maximum(eigenvalues, floor)
-    rebuilt = symmetrize(np.einsum("...ij,...j,...kj->...ik", eigenvectors, clipped, eigenvectors))
-    fixed = np.where(repaired[..., None, None], rebuilt, sym)
-    return np.linalg.cholesky(fixed), repaired
+    sym, rebuilt, repaired = _floor_eigenvalues(matrix, relative_floor)
+    return np.linalg.cholesky(np.where(repaired[..., None, None], rebuilt, sym)), repaired
 
 
 def sigma_points(mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -125,8 +202,14 @@ def _inverse_and_logdet(
         det = a * c - b * b
         inverse = np.stack([np.stack([c, -b], -1), np.stack([-b, a], -1)], -2) / det[..., None, None]
         return inverse, np.log(det)
-    _, logdet = np.linalg.slogdet(matrix)
-    return np.linalg.inv(matrix), logdet
+    sign, logdet = np.linalg.slogdet(matrix)
+    try:
+        return np.linalg.inv(matrix), logdet
+    except np.linalg.LinAlgError:  # singular in some trials: those get NaN, and the tracker
+        pass  # keeps their prediction (IMMUKFTracker counts it as a repair)
+    singular = ~(sign > 0) | ~np.isfinite(logdet)
+    inverse = np.linalg.inv(np.where(singular[..., None, None], np.eye(matrix.shape[-1]), matrix))
+    return np.where(singular[..., None, None], np.nan, inverse), np.where(singular, np.nan, logdet)
 
 
 @dataclass

@@ -17,6 +17,7 @@ from benchmarks.report import write_outputs
 
 SUMMARY_KEYS = {
     "ci",
+    "tracker_repairs",
     "method",
     "armse",
     "armse_per_target",
@@ -78,6 +79,7 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
     rows = _read_curves(out / "curves.csv")
     for policy, row in summary["policies"].items():
         assert set(row) == SUMMARY_KEYS and 0.0 <= row["asr"] <= 1.0 and len(row["armse_per_target"]) == 2
+        assert row["tracker_repairs"] == 0  # a healthy run repairs nothing
         # independent computation from the saved per-step data
         mine = [r for r in rows if r["policy"] == policy]
         assert len(mine) == 25
