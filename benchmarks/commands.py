@@ -58,6 +58,11 @@ class TrainPPO(Command):
         parser.add_argument(
             "--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard"
         )
+        parser.add_argument(
+            "--overwrite",
+            action="store_true",
+            help="replace a model already in --out (its files are removed first)",
+        )
         parser.add_argument("--quiet", action="store_true", help="no progress bar")
         add_env_options(parser)
 
@@ -78,6 +83,7 @@ class TrainPPO(Command):
                 tensorboard=args.tensorboard,
                 progress=not args.quiet,
                 options=env_options_from(args),
+                overwrite=args.overwrite,
             )
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc

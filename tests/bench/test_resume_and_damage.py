@@ -205,7 +205,7 @@ def test_a_changed_model_file_is_a_different_run(tmp_path):
     config = make_config("paper-1", [policy], trials=1, steps=3)
     assert set(config.policy_files[policy]) == {str(folder / "model.zip"), str(folder / "vecnormalize.npz")}
     run(config, tmp_path / "out", progress=False)
-    train_ppo("paper-1", 256, folder, seed=1, progress=False)  # another model at the same path
+    train_ppo("paper-1", 256, folder, seed=1, progress=False, overwrite=True)  # another model, same path
     changed = make_config("paper-1", [policy], trials=1, steps=3)
     with pytest.raises(HarnessError, match=r"differs in \['policy_files'\]"):
         run(changed, tmp_path / "out", progress=False)

@@ -1,0 +1,73 @@
+"""train-ppo checks everything before it writes: the hyperparameter entry, the folder (locked,
+and never holding a stale normalisation of an earlier model)."""
+
+from pathlib import Path
+
+import pytest
+
+from benchmarks.cli import main
+from benchmarks.harness import output_lock
+
+ENTRY = """MimoRadarSelectFlat-v1:
+  n_envs: 2
+  n_steps: 64
+  batch_size: 64
+  n_epochs: 1
+{extra}
+"""
+
+
+def _train(tmp_path: Path, extra: str, *more: str) -> list[str]:
+    path = tmp_path / "hp.yml"
+    path.write_text(
+        ENTRY.format(extra=extra) if extra.startswith("  ") else extra
+    )  # an entry's line, or a file
+    argv = ["train-ppo", "--scenario", "paper-1-v1", "--timesteps", "128", "--hyperparams", str(path)]
+    return [*argv, "--out", str(tmp_path / "model"), "--quiet", *more]
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        ("  n_epoch: 3", "unknown hyperparameter(s) ['n_epoch']"),
+        (
+            "  learning_rate: lin_3e-4",
+            "learning_rate must be a number in (0, 1], got 'lin_3e-4' (rl-zoo3's 'lin_'",
+        ),
+        ("  gamma: 1.5", "gamma must be in (0, 1], got 1.5"),
+        ("  n_envs: 0", "n_envs must be in [1, 256], got 0"),
+        ("  n_envs: 2.5", "n_envs must be an integer in [1, 256], got 2.5"),
+        ("  batch_size: 1000", "batch_size 1000 is more than a rollout's n_steps x n_envs = 128"),
+        ("  policy: CnnPolicy", "policy must be one of ['MlpPolicy'], got 'CnnPolicy'"),
+        ("  normalize: 'dict(norm_obs=True, clip=3)'", "normalize has unknown key(s) ['clip']"),
+        ("  normalize: 'dict(norm_obs=True'", "normalize must look like dict(key=value, ...)"),
+        ("  policy_kwargs: 'dict(net_arch=[0])'", "net_arch must be a list of layer sizes in [1, 4096]"),
+        ("MimoRadarSelectFlat-v1: [1, 2]", "entry 'MimoRadarSelectFlat-v1' must be a mapping"),
+        ("MimoRadarSelectFlat-v1: {a: [1, 2}", "is not YAML"),
+    ],
+)
+def test_a_bad_hyperparameter_file_is_one_line_and_writes_nothing(extra, message, tmp_path, capsys):
+    pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
+    with pytest.raises(SystemExit) as exit_info:
+        main(_train(tmp_path, extra))
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0], err
+    assert not (tmp_path / "model").exists()
+
+
+def test_the_folder_is_locked_and_an_old_model_is_replaced_only_when_asked(tmp_path, capsys):
+    pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
+    normalised = "  normalize: 'dict(norm_obs=True, norm_reward=False)'"
+    assert main(_train(tmp_path, normalised)) == 0
+    folder = tmp_path / "model"
+    assert (folder / "vecnormalize.npz").exists()
+    with pytest.raises(SystemExit):  # a model is there: refused, untouched
+        main(_train(tmp_path, "  normalize: false"))
+    assert "already holds a trained model" in capsys.readouterr().err
+    assert (folder / "vecnormalize.npz").exists()
+    with output_lock(folder), pytest.raises(SystemExit):  # another training holds the folder
+        main(_train(tmp_path, "  normalize: false", "--overwrite"))
+    assert "another run is writing into" in capsys.readouterr().err
+    assert main(_train(tmp_path, "  normalize: false", "--overwrite")) == 0
+    assert (folder / "model.zip").exists() and not (folder / "vecnormalize.npz").exists()  # no stale file
