@@ -78,9 +78,15 @@ def run_processes(
 
 
 def check_ray_address(address: str | None, timeout: float = 3.0) -> None:
-    """Fail within ``timeout`` seconds, naming the address, when a Ray head cannot be reached."""
-    if address in (None, "auto", "local"):
+    """Fail within ``timeout`` seconds, naming the address, when a Ray head cannot be reached.
+    ``auto`` is resolved as Ray resolves it (``RAY_ADDRESS``, then the cluster started on this
+    machine), so a missing cluster is named before anything is written."""
+    if address in (None, "local"):
         return
+    if address == "auto":
+        address = _resolve_auto_address()
+        if address == "auto":
+            return
     target = address.split("://", 1)[-1]
     host, _, port = target.rpartition(":")
     if not host or not port.isdigit():
@@ -90,6 +96,24 @@ def check_ray_address(address: str | None, timeout: float = 3.0) -> None:
             pass
     except OSError as exc:
         raise ValueError(f"cannot reach the Ray cluster at {address!r}: {exc.strerror or exc}") from None
+
+
+def _resolve_auto_address() -> str:
+    """The address ``--address auto`` stands for, or a ``ValueError`` saying no cluster runs."""
+    from mimo_radar_env.extras import require
+
+    require("ray", "ray", "--backend ray")
+    try:
+        from ray._private import services
+    except ImportError:  # pragma: no cover - a Ray without the helper: let ray.init resolve it
+        return "auto"
+    try:
+        return str(services.canonicalize_bootstrap_address("auto"))
+    except ConnectionError:
+        raise ValueError(
+            "--address auto: no Ray cluster is running on this machine and RAY_ADDRESS is not set; start "
+            "one with 'ray start --head', give its HOST:PORT, or leave --address out to start a local Ray"
+        ) from None
 
 
 def run_ray(

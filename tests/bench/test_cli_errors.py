@@ -96,6 +96,20 @@ def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, capsys):
     assert f"cannot reach the Ray cluster at '127.0.0.1:{port}'" in capsys.readouterr().err
 
 
+def test_ray_address_auto_without_a_cluster_is_named_before_anything_is_written(
+    tmp_path, capsys, monkeypatch
+):
+    pytest.importorskip("ray", reason="the ray extra")
+    monkeypatch.delenv("RAY_ADDRESS", raising=False)
+    monkeypatch.setenv("RAY_TMPDIR", str(tmp_path / "no-ray"))  # no cluster file to find
+    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--backend", "ray", "--address", "auto", "--out", str(tmp_path / "o")])
+    assert exit_info.value.code == 2
+    assert "--address auto: no Ray cluster is running on this machine" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
 # ------------------------------------------------------------------ fuzz
 def test_subprocess_cli_scenario_errors_are_one_line(tmp_path):
     path = tmp_path / "bad.yaml"
