@@ -156,74 +156,132 @@ def greedy_super_arm(
     then swaps one selected station for an unselected one of the same kind while a swap
     lowers the criterion, and keeps the best of the starts. Not always optimal: tests measure
     how often it finds the exact optimum.
+
+    Both fusions' posteriors are functions of a sum over the super arm's channels (of the
+    channels' information, or of their single-channel posteriors), so a candidate that adds or
+    swaps one station is scored from the current sum and the station's row or column sum: the
+    memory per trial is ``O(K (M^2 + N^2))``, never one array per candidate and channel.
     """
     batch = position_cov.shape[0]
     num_tx, num_rx = information.shape[2:4]
     starts = min(starts, num_tx * num_rx)
-    one_tx = np.repeat(np.eye(num_tx, dtype=bool), num_rx, axis=0)  # (M*N, M)
-    one_rx = np.tile(np.eye(num_rx, dtype=bool), (num_tx, 1))
-    single = super_arm_criterion(position_cov, information, one_tx, one_rx, weights, criterion, fusion)
+    scorer = _Scorer(position_cov, information, weights, criterion, fusion)
+    single = scorer.score(scorer.terms.transpose(0, 2, 3, 1, 4, 5), 1.0).reshape(batch, -1)  # (B, M * N)
     first = np.argsort(single, axis=1)[:, :starts].reshape(-1)  # (B * starts,), trial-major
-    # every start is a trial of its own from here on
-    position_cov = np.repeat(position_cov, starts, axis=0)
-    information = np.repeat(information, starts, axis=0)
-    tx, rx = one_tx[first], one_rx[first]  # (B * starts, M), (B * starts, N)
+    scorer = scorer.repeat(starts)  # every start is a trial of its own from here on
+    tx = np.zeros((batch * starts, num_tx), dtype=bool)
+    rx = np.zeros((batch * starts, num_rx), dtype=bool)
     rows = np.arange(batch * starts)
-    eye_tx, eye_rx = np.eye(num_tx, dtype=bool)[None], np.eye(num_rx, dtype=bool)[None]
+    tx[rows, first // num_rx] = True
+    rx[rows, first % num_rx] = True
     for _ in range(tx_count + rx_count - 2):
         # every trial adds one station: a transmitter while it has fewer than tx_count, or a receiver
-        cand_tx = np.concatenate([tx[:, None] | eye_tx, np.repeat(tx[:, None], num_rx, axis=1)], axis=1)
-        cand_rx = np.concatenate([np.repeat(rx[:, None], num_tx, axis=1), rx[:, None] | eye_rx], axis=1)
-        scores = super_arm_criterion(position_cov, information, cand_tx, cand_rx, weights, criterion, fusion)
-        new_tx, new_rx = cand_tx.sum(2) > tx.sum(1)[:, None], cand_rx.sum(2) > rx.sum(1)[:, None]
-        allowed = (new_tx & (tx.sum(1) < tx_count)[:, None]) | (new_rx & (rx.sum(1) < rx_count)[:, None])
+        total, by_tx, by_rx = scorer.sums(tx, rx)
+        ntx, nrx = tx.sum(1), rx.sum(1)
+        scores = np.concatenate(
+            [
+                scorer.score(total[:, None] + by_tx, ((ntx + 1) * nrx)[:, None]),
+                scorer.score(total[:, None] + by_rx, (ntx * (nrx + 1))[:, None]),
+            ],
+            axis=1,
+        )
+        allowed = np.concatenate([~tx & (ntx < tx_count)[:, None], ~rx & (nrx < rx_count)[:, None]], axis=1)
         choice = np.argmin(np.where(allowed, scores, np.inf), axis=1)
-        tx, rx = cand_tx[rows, choice], cand_rx[rows, choice]
-    tx, rx = _swap_search(position_cov, information, weights, tx, rx, criterion, fusion)
-    final = super_arm_criterion(
-        position_cov, information, tx[:, None], rx[:, None], weights, criterion, fusion
-    )
-    best = np.argmin(final[:, 0].reshape(batch, starts), axis=1) + np.arange(batch) * starts
+        adds_tx = choice < num_tx
+        tx[rows[adds_tx], choice[adds_tx]] = True
+        rx[rows[~adds_tx], choice[~adds_tx] - num_tx] = True
+    tx, rx = _swap_search(scorer, tx, rx)
+    final = scorer.score(scorer.sums(tx, rx)[0], (tx.sum(1) * rx.sum(1)).astype(float))
+    best = np.argmin(final.reshape(batch, starts), axis=1) + np.arange(batch) * starts
     return tx[best], rx[best]
 
 
+class _Scorer:
+    """The criterion of super arms given as sums over their channels of a per-channel term
+    (B, K, M, N, 2, 2): the channels' information (centralised fusion, the posterior is
+    ``(S^-1 + sum)^-1``) or their single-channel posteriors (eq22's average, the posterior is
+    ``sum / count``)."""
+
+    def __init__(self, position_cov, information, weights, criterion, fusion) -> None:
+        if criterion not in CRITERIA:
+            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+        if fusion not in POSTERIORS:
+            raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {fusion!r}")
+        self.prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
+        if fusion == "average":
+            information = inverse_2x2(self.prior_info[:, :, None, None] + information)[0]
+        self.terms = information  # (B, K, M, N, 2, 2)
+        self.weights = np.asarray(weights, dtype=np.float64)
+        self.criterion, self.fusion = criterion, fusion
+
+    def repeat(self, times: int) -> _Scorer:
+        out = object.__new__(_Scorer)
+        out.__dict__.update(self.__dict__)
+        out.prior_info = np.repeat(self.prior_info, times, axis=0)
+        out.terms = np.repeat(self.terms, times, axis=0)
+        return out
+
+    def sums(self, tx: NDArray[np.bool_], rx: NDArray[np.bool_]) -> tuple[NDArray, NDArray, NDArray]:
+        """The super arm's sum (B, K, 2, 2) and each station's sum over the other side's selected
+        stations: by transmitter (B, M, K, 2, 2), by receiver (B, N, K, 2, 2)."""
+        by_tx = np.einsum("bn,bkmnij->bmkij", rx.astype(float), self.terms)
+        by_rx = np.einsum("bm,bkmnij->bnkij", tx.astype(float), self.terms)
+        total = np.einsum("bm,bmkij->bkij", tx.astype(float), by_tx)
+        return total, by_tx, by_rx
+
+    def score(self, total: NDArray[np.float64], count: NDArray[np.float64] | float) -> NDArray[np.float64]:
+        """The criterion (B, ...) of sums ``total`` (B, ..., K, 2, 2) over ``count`` channels."""
+        if self.fusion == "centralized":
+            extra = total.ndim - self.prior_info.ndim  # candidate axes between trials and targets
+            prior = self.prior_info.reshape(
+                self.prior_info.shape[0], *([1] * extra), *self.prior_info.shape[1:]
+            )
+            posterior = inverse_2x2(prior + total)[0]
+        else:
+            count = np.asarray(count, dtype=np.float64)
+            posterior = total / count.reshape(*count.shape, *([1] * (total.ndim - count.ndim)))
+        if self.criterion == "trace":
+            per_target = posterior[..., 0, 0] + posterior[..., 1, 1]
+        else:
+            with np.errstate(invalid="ignore", divide="ignore"):  # disallowed swaps are masked later
+                per_target = np.log(det_2x2(posterior))
+        return per_target @ self.weights
+
+
 def _swap_search(
-    position_cov: NDArray[np.float64],
-    information: NDArray[np.float64],
-    weights: NDArray[np.float64],
-    tx: NDArray[np.bool_],
-    rx: NDArray[np.bool_],
-    criterion: str,
-    fusion: str,
-    max_rounds: int = 50,
+    scorer: _Scorer, tx: NDArray[np.bool_], rx: NDArray[np.bool_], max_rounds: int = 50
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     """Local search: while some swap of one selected station for an unselected one of the same
     kind lowers a trial's criterion, make the best such swap (all trials at once)."""
     batch, num_tx, num_rx = tx.shape[0], tx.shape[1], rx.shape[1]
     rows = np.arange(batch)
-    current = super_arm_criterion(
-        position_cov, information, tx[:, None], rx[:, None], weights, criterion, fusion
-    )[:, 0]
-
-    def swaps(mask: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        size = mask.shape[1]
-        eye = np.eye(size, dtype=bool)
-        out_in = (mask[:, None, None, :] & ~eye[None, :, None, :]) | eye[None, None, :, :]  # (B, out, in, S)
-        allowed = mask[:, :, None] & ~mask[:, None, :]  # (B, out, in)
-        return out_in.reshape(batch, size * size, size), allowed.reshape(batch, size * size)
-
+    count = (tx.sum(1) * rx.sum(1)).astype(float)
+    total, by_tx, by_rx = scorer.sums(tx, rx)
+    current = scorer.score(total, count)
     for _ in range(max_rounds):
-        swap_tx, ok_tx = swaps(tx)
-        swap_rx, ok_rx = swaps(rx)
-        cand_tx = np.concatenate([swap_tx, np.repeat(tx[:, None], num_rx * num_rx, axis=1)], axis=1)
-        cand_rx = np.concatenate([np.repeat(rx[:, None], num_tx * num_tx, axis=1), swap_rx], axis=1)
-        scores = super_arm_criterion(position_cov, information, cand_tx, cand_rx, weights, criterion, fusion)
+        # swapping station "out" for station "in": the sum loses out's row and gains in's
+        swap_tx = total[:, None, None] - by_tx[:, :, None] + by_tx[:, None, :]  # (B, out, in, K, 2, 2)
+        swap_rx = total[:, None, None] - by_rx[:, :, None] + by_rx[:, None, :]
+        scores = np.concatenate(
+            [
+                scorer.score(swap_tx, count[:, None, None]).reshape(batch, -1),
+                scorer.score(swap_rx, count[:, None, None]).reshape(batch, -1),
+            ],
+            axis=1,
+        )
+        ok_tx = (tx[:, :, None] & ~tx[:, None, :]).reshape(batch, -1)
+        ok_rx = (rx[:, :, None] & ~rx[:, None, :]).reshape(batch, -1)
         scores = np.where(np.concatenate([ok_tx, ok_rx], axis=1), scores, np.inf)
         choice = np.argmin(scores, axis=1)
         better = scores[rows, choice] < current - 1e-12 * np.abs(current)
         if not better.any():
             break
-        tx = np.where(better[:, None], cand_tx[rows, choice], tx)
-        rx = np.where(better[:, None], cand_rx[rows, choice], rx)
+        is_tx = better & (choice < num_tx * num_tx)
+        is_rx = better & ~is_tx
+        out_tx, in_tx = np.divmod(choice[is_tx], num_tx)
+        tx[rows[is_tx], out_tx], tx[rows[is_tx], in_tx] = False, True
+        out_rx, in_rx = np.divmod(choice[is_rx] - num_tx * num_tx, num_rx)
+        rx[rows[is_rx], out_rx], rx[rows[is_rx], in_rx] = False, True
+        total, by_tx, by_rx = scorer.sums(tx, rx)
         current = np.where(better, scores[rows, choice], current)
     return tx, rx
