@@ -128,6 +128,13 @@ class Agent(ABC):
         batch, _ = self._batch(obs)
         self._update(batch, np.atleast_1d(np.asarray(reward, dtype=np.float64)))
 
+    def memory_per_trial(self) -> int:
+        """Bytes one trial of this agent needs at its peak within a step, roughly (an upper
+        estimate): its per-channel state and its selection's scratch. The harness adds it to
+        the env's to size shards before a run starts."""
+        sc = self.scenario
+        return 8 * 8 * sc.num_targets * sc.num_tx * sc.num_rx
+
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
         """Start an episode (default: nothing to remember)."""
@@ -207,6 +214,9 @@ class IndexPolicy(Agent):
             solver or self.default_solver, self.tx_count, self.rx_count, **(solver_params or {})
         )
         self.solver.check_layout(self.scenario.num_tx, self.scenario.num_rx)
+
+    def memory_per_trial(self) -> int:
+        return super().memory_per_trial() + self.solver.memory_per_trial(self.num_tx, self.num_rx)
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:

@@ -69,6 +69,15 @@ class BestTrackingAgent(BestAgent):
         self.criterion = criterion
         super().__init__(scenario, seed, env)
 
+    def memory_per_trial(self) -> int:
+        from mimo_radar_env.tracking.selection import selection_memory_per_trial
+
+        sc = self.scenario
+        search = selection_memory_per_trial(
+            sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
+        )
+        return super().memory_per_trial() + search
+
     def attach(self, env: Any) -> None:
         """Read the super arm from ``env.tracking_oracle_action()`` (single or vector env)."""
         target = env if hasattr(env, "tracking_oracle_action") else getattr(env, "unwrapped", env)

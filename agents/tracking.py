@@ -12,7 +12,12 @@ from mimo_radar_env.core.model import RadarModel
 from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.envs.options import option_choices
 from mimo_radar_env.tracking.information import channel_information
-from mimo_radar_env.tracking.selection import CRITERIA, MAX_ENUMERATED_SUPER_ARMS, select_for_tracking
+from mimo_radar_env.tracking.selection import (
+    CRITERIA,
+    MAX_ENUMERATED_SUPER_ARMS,
+    select_for_tracking,
+    selection_memory_per_trial,
+)
 
 from .base import Agent, Observation, fuse_targets
 from .mg_crb_cl import MGCRBCLEstimator
@@ -165,6 +170,13 @@ class TrackingUCB(Agent):
     lambda_scale = property(lambda self: self.selector.lambda_scale)
     measurement_quality = property(lambda self: self.selector.measurement_quality)
     sinr_weight = property(lambda self: self.selector.sinr_weight)
+
+    def memory_per_trial(self) -> int:
+        sc = self.scenario
+        search = selection_memory_per_trial(
+            sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
+        )
+        return super().memory_per_trial() + search
 
     def _reset(self, obs: Observation) -> None:
         if PREDICTED_COVARIANCE not in obs:

@@ -34,6 +34,7 @@ from tqdm.auto import tqdm
 import agents
 from agents.ppo import model_file
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
+from mimo_radar_env.core.model import machine_memory, memory_parts
 
 from . import backends
 from .errors import BenchError
@@ -117,12 +118,16 @@ def make_config(
     shard_size: int = 50,
     agent_params: dict[str, dict[str, Any]] | None = None,
     options: EnvOptions | None = None,
+    workers: int = 1,
+    say: Callable[[str], None] = print,
 ) -> RunConfig:
     """Validate every piece of a run and build its configuration; nothing is written.
 
     Each policy is built and reset on a one-trial env with the run's options, so a bad
     parameter, a missing model or an agent that needs the tracker fails here, with a
-    one-line :class:`HarnessError`, before any output exists.
+    one-line :class:`HarnessError`, before any output exists. The memory a task needs
+    (:func:`fit_shard_size`) is checked against the machine for ``workers`` tasks at once: the
+    shard size is lowered until it fits, and ``say`` says so, or the run is refused.
     """
     try:
         sc = load_scenario(scenario)
@@ -156,9 +161,11 @@ def make_config(
                 f"unknown policy {policy!r}; available policies are {available} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
             )
+    per_trial = {}
     for policy in policies:
         try:
             agent = make_policy(policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict())
+            per_trial[policy] = agent.memory_per_trial()
             probe = MimoRadarSelectVectorEnv(
                 num_envs=1, scenario=sc, **policy_env_options(agent, options.to_dict())
             )
@@ -168,6 +175,7 @@ def make_config(
             agent.reset(obs)
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
+    shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
     return RunConfig(
         policy_files={p: files for p in policies if (files := _policy_files(p))},
         scenario=sc.to_dict(),
@@ -179,6 +187,49 @@ def make_config(
         env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
+
+
+#: The share of the machine's memory the tasks running at once may take together.
+MEMORY_FRACTION = 0.5
+
+
+def fit_shard_size(
+    scenario: Scenario,
+    agent_per_trial: dict[str, int],
+    shard_size: int,
+    workers: int,
+    say: Callable[[str], None] = print,
+    available: int | None = None,
+) -> int:
+    """The largest shard size, at most ``shard_size``, whose ``workers`` concurrent tasks fit
+    in :data:`MEMORY_FRACTION` of the machine's memory (each task: the env's memory for its
+    trials plus its policy's per trial, :meth:`agents.Agent.memory_per_trial`). Says when it
+    lowers the shard size; raises :class:`HarnessError` with the estimate when one trial is
+    already too much."""
+    available = machine_memory() if available is None else available
+    if available is None:  # pragma: no cover - not POSIX
+        return shard_size
+    fixed, env_per_trial = memory_parts(scenario)
+    policy, agent = max(agent_per_trial.items(), key=lambda item: item[1])
+    per_trial = env_per_trial + agent
+    budget = MEMORY_FRACTION * available / workers
+    fits = int((budget - fixed) // per_trial)
+    gib = 2**30
+    if fits < 1:
+        raise HarnessError(
+            f"one trial of {policy!r} on {scenario.name!r} ({scenario.num_tx} x {scenario.num_rx} "
+            f"stations, {scenario.num_targets} targets) needs about {(fixed + per_trial) / gib:.2f} GiB "
+            f"per task; {workers} task(s) at once may use {budget * workers / gib:.1f} GiB of this "
+            f"machine's {available / gib:.1f} GiB: use fewer --workers, a smaller layout or fewer targets"
+        )
+    if fits < shard_size:
+        say(
+            f"shards of {fits} trials instead of {shard_size}: {policy!r} needs about "
+            f"{per_trial / 2**20:.0f} MiB per trial on {scenario.name!r}, and {workers} task(s) at "
+            f"once may use {budget * workers / gib:.1f} GiB of this machine's {available / gib:.1f} GiB"
+        )
+        return fits
+    return shard_size
 
 
 def _policy_files(policy: str) -> dict[str, str]:

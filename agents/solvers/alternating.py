@@ -42,6 +42,10 @@ class AlternatingSolver(SuperArmSolver):
         self.restarts = restarts
         self.max_rounds = max_rounds
 
+    def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
+        """Every start's masks and the index sums over the other side."""
+        return 8 * 4 * (self.restarts + 1) * (num_tx + num_rx) + super().memory_per_trial(num_tx, num_rx)
+
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:

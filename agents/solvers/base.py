@@ -42,6 +42,10 @@ class SuperArmSolver(ABC):
                 f"Ms={self.tx_count}, Ns={self.rx_count}"
             )
 
+    def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
+        """Bytes one trial's selection needs at its peak, roughly (an upper estimate)."""
+        return 8 * 4 * num_tx * num_rx
+
     def check(self, index: NDArray[np.float64]) -> NDArray[np.float64]:
         index = np.asarray(index, dtype=np.float64)
         if index.ndim != 3:

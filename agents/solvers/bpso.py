@@ -106,6 +106,10 @@ class BPSOSolver(SuperArmSolver):
         self.rule = rule
         self.use_numba = use_numba
 
+    def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
+        """The swarm: positions, velocities, personal bests and draws of every particle."""
+        return 8 * 8 * self.population * (num_tx + num_rx) + super().memory_per_trial(num_tx, num_rx)
+
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:

@@ -23,6 +23,11 @@ class ExactSolver(SuperArmSolver):
 
     name = "exact"
 
+    def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
+        """The smaller side's subsets, each with the other side's sums (a few float64 copies)."""
+        subsets = min(math.comb(num_tx, self.tx_count), math.comb(num_rx, self.rx_count))
+        return 8 * 4 * subsets * max(num_tx, num_rx) + super().memory_per_trial(num_tx, num_rx)
+
     def check_layout(self, num_tx: int, num_rx: int) -> None:
         super().check_layout(num_tx, num_rx)
         if not is_exact_affordable(num_tx, num_rx, self.tx_count, self.rx_count):

@@ -119,6 +119,9 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
             settings.shard_size,
             settings.agent_params if run.agent_params is None else run.agent_params,
             options=run.options or settings.options,
+            # tasks at once on this machine (a Ray task runs on a node: one at a time is checked)
+            workers=settings.workers if settings.backend == "local" else 1,
+            say=lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
         )
         for run in runs
     ]

@@ -8,6 +8,7 @@ transition matrices and the noise-free nominal trajectories.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -16,6 +17,7 @@ from numpy.typing import NDArray
 from ..scenarios import Scenario, ScenarioError, turn_rate_schedule
 from .geometry import squared_range_products
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
+from .superarm import AUTO_EXACT_SUBSETS
 
 #: eq32: the lower end of the measurement-quality factor lambda.
 LAMBDA_FLOOR = 0.2
@@ -170,21 +172,38 @@ def memory_estimate(scenario: Scenario, batch_size: int) -> int:
     The model keeps per-step matrices (K, T, 4, 4) and trajectories; each trial keeps channel
     arrays (K, M, N) and the tracker's per-target, per-model sigma points and covariances.
     """
+    model, per_trial = memory_parts(scenario)
+    return model + batch_size * per_trial
+
+
+def memory_parts(scenario: Scenario) -> tuple[int, int]:
+    """Bytes an env of ``scenario`` needs, roughly (upper estimates): once (the model's per-step
+    arrays) and per trial (channel arrays, the tracker's sigma points and covariances)."""
     sc = scenario
     K, M, N, T = sc.num_targets, sc.num_tx, sc.num_rx, sc.horizon
     channels = sc.tx_per_step * sc.rx_per_step
     model = 8 * K * (T + 1) * (16 + 4)
     per_trial = 8 * K * (12 * M * N + 3 * (9 * 4 + 4 * 4) * (channels + 2) * 4)
-    return model + batch_size * per_trial
+    subsets = min(math.comb(M, sc.tx_per_step), math.comb(N, sc.rx_per_step))
+    if subsets <= AUTO_EXACT_SUBSETS:  # the oracle's exact search of every step (info["optimal_reward"])
+        per_trial += 8 * 3 * subsets * max(M, N)
+    return model, per_trial
+
+
+def machine_memory() -> int | None:
+    """This machine's physical memory in bytes (None where the platform does not say)."""
+    import os
+
+    try:
+        return os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
+    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+        return None
 
 
 def check_memory(scenario: Scenario, batch_size: int, fraction: float = 0.5) -> None:
     """Refuse, before allocating, an env that needs more than ``fraction`` of this machine's memory."""
-    import os
-
-    try:
-        available = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")
-    except (ValueError, OSError, AttributeError):  # pragma: no cover - not POSIX
+    available = machine_memory()
+    if available is None:  # pragma: no cover - not POSIX
         return
     need = memory_estimate(scenario, batch_size)
     if need > fraction * available:

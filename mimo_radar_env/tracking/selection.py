@@ -58,6 +58,20 @@ if set(POSTERIORS) != set(FUSIONS):  # a new fusion must say what it does to the
     )
 
 
+def selection_memory_per_trial(
+    num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, starts: int = 8
+) -> int:
+    """Bytes :func:`select_for_tracking` needs per trial at its peak, roughly (an upper estimate):
+    every super arm's channel mask and posterior when it enumerates, the starts' row and column
+    sums and swap candidates when it searches greedily."""
+    count = super_arm_count(num_tx, num_rx, tx_count, rx_count)
+    channels = 8 * 4 * num_targets * num_tx * num_rx * 3  # information, single posteriors, scratch
+    if count <= MAX_ENUMERATED_SUPER_ARMS:
+        return channels + 8 * count * (num_tx * num_rx + 3 * 4 * num_targets)
+    swaps = 8 * 4 * num_targets * (num_tx**2 + num_rx**2 + num_tx + num_rx) * 4
+    return channels * (starts + 1) + starts * swaps
+
+
 def super_arm_criterion(
     position_cov: NDArray[np.float64],
     information: NDArray[np.float64],

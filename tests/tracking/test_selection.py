@@ -218,7 +218,7 @@ def _reference_greedy(pcov, info, weights, ms, ns, criterion, fusion, starts=8):
             tx, rx = all_tx[first].copy(), all_rx[first].copy()
             one = (pcov[b : b + 1], info[b : b + 1])
 
-            def score(t, r):
+            def score(t, r, one=one):
                 return super_arm_criterion(*one, t[None], r[None], weights, criterion, fusion)[0, 0]
 
             for _ in range(ms + ns - 2):

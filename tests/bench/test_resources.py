@@ -1,0 +1,87 @@
+"""Resources are known before a run starts: each policy declares its memory per trial, the
+harness lowers the shard size to what fits the machine (and says so) or refuses."""
+
+import json
+import tracemalloc
+
+import numpy as np
+import pytest
+
+import agents
+from benchmarks.cli import main
+from benchmarks.harness import HarnessError, fit_shard_size
+from mimo_radar_env import load_scenario, random_scenario
+from mimo_radar_env.core.model import memory_parts
+
+PAPER = load_scenario("paper-1-v1")
+
+
+def test_the_shard_size_is_lowered_to_fit_or_the_run_refused():
+    fixed, env = memory_parts(PAPER)
+    per_trial = env + 1000
+    said = []
+    room = int((fixed + 10 * per_trial) * 2 * 2)  # two workers, half the memory: ten trials each
+    assert fit_shard_size(PAPER, {"a": 1000, "b": 10}, 50, 2, said.append, available=room) == 10
+    assert "shards of 10 trials instead of 50: 'a' needs about" in said[0]
+    assert fit_shard_size(PAPER, {"a": 1000}, 5, 2, said.append, available=room) == 5 and len(said) == 1
+    with pytest.raises(HarnessError, match=r"one trial of 'a' on 'paper-1-v1' .* use fewer --workers"):
+        fit_shard_size(PAPER, {"a": 1000}, 50, 2, said.append, available=int(fixed + per_trial))
+
+
+def test_a_run_too_large_for_the_machine_is_refused_before_anything_is_written(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("benchmarks.harness.machine_memory", lambda: 2**18)  # a 256 KiB machine
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "mg-crb-cl", "--trials", "2", "--steps", "2"]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    assert "one trial of 'mg-crb-cl' on 'paper-1-v1'" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monkeypatch):
+    fixed, env = memory_parts(PAPER)
+    agent = agents.make_agent("ucb1", PAPER).memory_per_trial()
+    monkeypatch.setattr("benchmarks.harness.machine_memory", lambda: int((fixed + 3 * (env + agent)) * 2))
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "7", "--steps", "3"]
+    assert main([*argv, "--workers", "1", "--out", str(out), "--quiet", "--no-figures"]) == 0
+    assert "shards of 3 trials instead of 50" in capsys.readouterr().err
+    assert json.loads((out / "config.json").read_text())["shard_size"] == 3
+    assert len(list((out / "shards" / "ucb1").glob("*.npz"))) == 3  # 3 + 3 + 1 trials
+
+
+@pytest.mark.parametrize("policy", ["best-tracking", "tracking-ucb", "mg-crb-cl", "random"])
+def test_declared_memory_bounds_what_a_step_allocates(policy):
+    """The declared memory per trial is an upper estimate of what one step of the policy
+    allocates (tracemalloc), on a layout where the tracking search is greedy."""
+    import gymnasium as gym
+
+    scenario = random_scenario(24, 24, 2, 4, 4, horizon=5, seed=0)
+    trials = 3
+    params = {"solver": "alternating"} if policy == "mg-crb-cl" else {}
+    agent = agents.make_agent(policy, scenario, seed=0, **params)
+    env = gym.make_vec(
+        "MimoRadarSelect-v1",
+        num_envs=trials,
+        vectorization_mode="vector_entry_point",
+        scenario=scenario,
+        oracle_solver="alternating",
+        **agent.observation_options,
+    )
+    if agent.needs_oracle:
+        agent.attach(env)
+    obs, _ = env.reset(seed=0)
+    agent.reset(obs)
+    tracemalloc.start()
+    try:
+        action = agent.act(obs)
+        obs, reward, *_ = env.step(action)
+        agent.update(obs, reward)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    _, env_per_trial = memory_parts(scenario)
+    declared = trials * (agent.memory_per_trial() + env_per_trial)
+    assert peak <= declared, f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
+    assert np.isfinite(reward).all()
