@@ -21,12 +21,19 @@ Outputs (docs/benchmark.md): summary.json, curves.csv, table.md and PNG figures 
 An interrupted run started again with the same arguments and --out continues where it stopped."""
 
 
+class OneLineParser(argparse.ArgumentParser):
+    """argparse with its refusals on one line (the usage is one ``--help`` away)."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The parser of every registered command, in their order."""
     from . import commands, doctables, model_figures, studies  # noqa: F401  (importing them registers the commands)
     from .studies.base import COMMANDS
 
-    parser = argparse.ArgumentParser(
+    parser = OneLineParser(
         prog="mimo-radar-bench",
         description="Monte-Carlo benchmarks of transmitter/receiver selection for distributed MIMO radar.",
         epilog=EPILOG,

@@ -22,6 +22,8 @@ from mimo_radar_env.envs.options import option_choices, option_help, option_name
 from ..errors import BenchError
 
 DEFAULT_TRIALS = 500
+#: The most Monte-Carlo trials a study takes (a million trials of the paper study take days).
+MAX_TRIALS = 1_000_000
 DEFAULT_SHARD_SIZE = 50
 
 
@@ -113,8 +115,13 @@ class Settings:
 
 
 # ------------------------------------------------------------------ argument types
-def integer(low: int, why: str = "") -> Callable[[str], int]:
-    """An argparse type: an integer >= ``low`` (``why``: the reason for the bound, said on refusal)."""
+#: The largest integer an argument takes (seeds, counts): beyond, a run would never end.
+MAX_ARGUMENT = 2**31 - 1
+
+
+def integer(low: int, why: str = "", high: int = MAX_ARGUMENT) -> Callable[[str], int]:
+    """An argparse type: an integer in ``[low, high]`` (``why``: the reason for the lower bound,
+    said on refusal)."""
     reason = f" ({why})" if why else ""
 
     def parse(text: str) -> int:
@@ -124,6 +131,8 @@ def integer(low: int, why: str = "") -> Callable[[str], int]:
             raise argparse.ArgumentTypeError(f"must be an integer >= {low}, got {text!r}") from None
         if value < low:
             raise argparse.ArgumentTypeError(f"must be an integer >= {low}{reason}, got {value}")
+        if value > high:
+            raise argparse.ArgumentTypeError(f"must be an integer <= {high:,}, got {value:,}")
         return value
 
     parse.__name__ = f"integer >= {low}"
@@ -254,7 +263,7 @@ def add_run_arguments(
     why = "a paired 95 % interval needs two trials or more" if min_trials > 1 else ""
     parser.add_argument(
         "--trials",
-        type=integer(min_trials, why),
+        type=integer(min_trials, why, MAX_TRIALS),
         default=trials,
         help=f"Monte-Carlo trials, at least {min_trials} (default %(default)s)",
     )

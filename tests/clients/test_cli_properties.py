@@ -1,0 +1,158 @@
+"""No traceback reaches a user of the command line: hostile values in any argument of any
+subcommand, in agent parameters and in hyperparameter files give success, or one line on
+stderr with exit code 2 and nothing written (hypothesis)."""
+
+import contextlib
+import io
+import shutil
+import tempfile
+from pathlib import Path
+
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from benchmarks.cli import main
+
+HOSTILE = [
+    "-1", "0", "1", "2", "2.5", "1e309", "nan", "inf", "-inf", "", " ", "x", "\u00e9\u6f22\U0001f4a5",
+    "99999999999999999999", "/dev/null", "..", "{", "[1,2", "a=b", "null", "true", "1,1", "paper-9", "9",
+    "paper-1,paper-1", "average,average", "ucb1,ucb1", "-", "--", "{a: [1, 2}", "ppo:/etc",
+]  # fmt: skip
+VALUES = st.one_of(
+    st.sampled_from(HOSTILE), st.text(min_size=0, max_size=12), st.integers(-(10**12), 10**12).map(str)
+)
+
+#: Per command: arguments that make a quick valid invocation, and the flags hostile values go to.
+COMMANDS = {
+    "run": (
+        ["--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2",
+         "--workers", "1"],
+        ["--scenario", "--policies", "--trials", "--steps", "--seed", "--shard-size", "--workers",
+         "--fusion", "--lambda-scale", "--truth", "--env-version", "--invalid-action", "--horizon"],
+    ),
+    "paper": (
+        ["--scenario", "1", "--trials", "2", "--steps", "2", "--workers", "1"],
+        ["--scenario", "--trials", "--seed", "--env-version", "--fusion"],
+    ),
+    "demo": (["--steps", "3"], ["--scenario", "--seed", "--steps", "--fusion", "--env-version"]),
+    "model-figures": (["--only", "bpso-set-optimal"], ["--only"]),
+    "docs": (["--check"], ["--docs"]),
+}  # fmt: skip
+AGENT_PARAMS = [
+    "mg-crb-cl.alpha",
+    "mg-crb-cl.beta",
+    "mg-crb-cl.solver",
+    "mg-crb-cl.solver_params",
+    "ucb1.beta",
+]
+
+
+def _invoke(argv: list[str], out: Path) -> tuple[int, str]:
+    err = io.StringIO()
+    with contextlib.redirect_stderr(err), contextlib.redirect_stdout(io.StringIO()):
+        try:
+            code = main(argv)
+        except SystemExit as exc:
+            code = exc.code if isinstance(exc.code, int) else 2
+    return code, err.getvalue()
+
+
+def _check(argv: list[str], out: Path) -> None:
+    code, err = _invoke(argv, out)
+    lines = [line for line in err.strip().splitlines() if line.strip()]
+    assert code in (0, 2), (argv, code, err[-2000:])
+    if code == 2:
+        refusals = [line for line in lines if line.startswith("mimo-radar-bench") and "error" in line]
+        assert len(refusals) == 1, (argv, err[-2000:])
+        assert "Traceback" not in err, (argv, err[-2000:])
+        assert not out.exists() or argv[0] in ("docs", "model-figures"), (argv, "wrote before refusing")
+
+
+@st.composite
+def invocations(draw, commands=tuple(COMMANDS)):
+    command = draw(st.sampled_from(commands))
+    base, flags = COMMANDS[command]
+    flag = draw(st.sampled_from(flags))
+    argv = [command, *base]
+    if flag in argv:
+        i = argv.index(flag)
+        argv = argv[:i] + argv[i + 2 :]
+    return [*argv, flag, draw(VALUES)]
+
+
+def _with_out(argv: list[str], folder: Path) -> tuple[list[str], Path]:
+    out = folder / "out"
+    if argv[0] in ("run", "paper"):
+        return [*argv, "--out", str(out), "--quiet", "--no-figures"], out
+    if argv[0] == "model-figures":
+        return [*argv, "--out", str(out)], out
+    if argv[0] == "docs" and "--docs" not in argv:
+        return [*argv, "--docs", str(out)], out
+    return argv, out
+
+
+def _run_example(argv: list[str]) -> None:
+    folder = Path(tempfile.mkdtemp())
+    try:
+        argv, out = _with_out(argv, folder)
+        _check(argv, out)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(invocations())
+def test_hostile_arguments_give_success_or_one_line(argv):
+    _run_example(argv)
+
+
+@settings(max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(st.sampled_from(AGENT_PARAMS), VALUES)
+def test_hostile_agent_parameters_give_success_or_one_line(name, value):
+    policy = name.split(".")[0]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", policy, "--trials", "2", "--steps", "2"]
+    _run_example([*argv, "--workers", "1", "--agent-param", f"{name}={value}"])
+
+
+HYPERPARAMS = {
+    "n_envs": st.one_of(st.integers(-3, 3), st.sampled_from(["x", "2.5", "1e9"])),
+    "n_steps": st.one_of(st.integers(-3, 40), st.sampled_from(["x", "null"])),
+    "batch_size": st.one_of(st.integers(-3, 100), st.sampled_from(["[1]", "{}"])),
+    "learning_rate": st.one_of(
+        st.floats(allow_nan=True, allow_infinity=True), st.sampled_from(["lin_3e-4", "x"])
+    ),
+    "gamma": st.one_of(st.floats(-2, 2), st.just("nan")),
+    "normalize": st.sampled_from(["true", "false", "x", "'dict(a=1)'", "'dict(norm_obs=True'", "[1]"]),
+    "policy": st.sampled_from(["MlpPolicy", "CnnPolicy", "1", "null"]),
+    "policy_kwargs": st.sampled_from(
+        ["'dict(net_arch=[8])'", "'dict(net_arch=[0])'", "'x'", "'dict(net_arch=[8], a=b)'"]
+    ),
+    "nonsense": st.sampled_from(["1"]),
+}
+
+
+@settings(max_examples=12, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(
+    st.dictionaries(st.sampled_from(sorted(HYPERPARAMS)), st.just(None), min_size=1, max_size=3), st.data()
+)
+def test_hostile_hyperparameter_files_give_success_or_one_line(keys, data):
+    pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
+    lines = ["MimoRadarSelectFlat-v1:", "  n_envs: 1", "  n_steps: 16", "  batch_size: 16", "  n_epochs: 1"]
+    for key in keys:
+        lines = [line for line in lines if not line.startswith(f"  {key}:")]
+        lines.append(f"  {key}: {data.draw(HYPERPARAMS[key])}")
+    folder = Path(tempfile.mkdtemp())
+    try:
+        (folder / "hp.yml").write_text("\n".join(lines) + "\n")
+        argv = ["train-ppo", "--scenario", "paper-1-v1", "--timesteps", "16", "--quiet"]
+        _check([*argv, "--hyperparams", str(folder / "hp.yml"), "--out", str(folder / "out")], folder / "out")
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+
+
+@pytest.mark.slow
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(invocations())
+def test_hostile_arguments_give_success_or_one_line_many(argv):
+    _run_example(argv)
