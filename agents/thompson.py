@@ -58,6 +58,13 @@ class CombinatorialThompson(IndexPolicy):
         check_parameter("prior_rate", prior_rate, 0.0, low_open=True)
         self.count_discount, self.prior_shape, self.prior_rate = discount, prior_shape, prior_rate
 
+    def memory_per_trial(self) -> int:
+        """Its state, plus the Gamma sampler's scratch: its rejection rounds draw normals and
+        uniforms for every target and channel (``benchmarks.speed.policy_cost`` measured about
+        38 float64 per target and channel)."""
+        sc = self.scenario
+        return super().memory_per_trial() + 8 * 48 * sc.num_targets * sc.num_tx * sc.num_rx
+
     def posterior(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Shape and rate (B, K, M, N) of the Gamma posterior of every rate ``1/S``."""
         counts = self.counts[:, None]

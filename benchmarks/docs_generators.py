@@ -570,3 +570,38 @@ def model_figure(docs: Path, key: str) -> str:
     if key not in figures:
         raise BenchError(f"{FIGURES_FILE} has no figure {key!r}; it has: {', '.join(figures)}")
     return format_figure(figures[key])
+
+
+@generator("policy-cost")
+def policy_cost(docs: Path) -> str:
+    """``python -m benchmarks.speed.policy_cost``'s rows: every policy's time per trial-step and
+    measured / declared memory per trial, one column per layout and target count."""
+    record = read_json(docs, "perf/policy_cost.json")
+    rows = record["rows"]
+    configs = sorted(
+        {(r["M"], r["N"], r["Ms"], r["Ns"], r["K"]) for r in rows}, key=lambda c: (c[0] * c[1], c[4])
+    )
+    cells = {(r["policy"], (r["M"], r["N"], r["Ms"], r["Ns"], r["K"])): r for r in rows}
+    policies = sorted({r["policy"] for r in rows})
+    header = " | ".join(f"{m} x {n}, K = {k}" for m, n, _, _, k in configs)
+    lines = [f"| policy | {header} |", "|---|" + "---|" * len(configs)]
+    for policy in policies:
+        values = []
+        for config in configs:
+            r = cells.get((policy, config))
+            values.append(
+                "—"
+                if r is None
+                else f"{r['ms_per_trial_step']:.2f} ms, {r['measured_mib_per_trial']:.2f} / "
+                f"{r['declared_mib_per_trial']:.2f} MiB"
+            )
+        lines.append(f"| `{policy}` | " + " | ".join(values) + " |")
+    worst = max(r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows)
+    machine = record["machine"]
+    lines += [
+        "",
+        f"{record['trials']} trials, {record['steps']} steps after a warm-up step, on {machine['cores']} "
+        f"cores ({machine['machine']}, Python {machine['python']}); the largest measured / declared memory "
+        f"is {worst:.2f} (every declaration is an upper estimate).",
+    ]
+    return "\n".join(lines)

@@ -44,6 +44,7 @@ MODULE_TESTS = {
     "benchmarks/shards.py": ("tests/bench/test_shards.py", r"read_shard"),
     "benchmarks/uncertainty.py": ("tests/bench/test_uncertainty.py", r"uncertainty\.estimate"),
     "benchmarks/verdicts.py": ("tests/bench/test_verdicts.py", r"verdicts\.verdict"),
+    "benchmarks/speed/policy_cost.py": ("tests/bench/test_resources.py", r"measure_policy"),
     "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),
     "benchmarks/speed/perf.py": ("tests/bench/test_perf_quick.py", r'"perf"'),
     "benchmarks/speed/scaling.py": ("tests/bench/test_perf_quick.py", r"scaling\.measure"),

@@ -51,7 +51,9 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
     assert len(list((out / "shards" / "ucb1").glob("*.npz"))) == 3  # 3 + 3 + 1 trials
 
 
-@pytest.mark.parametrize("policy", ["best-tracking", "tracking-ucb", "mg-crb-cl", "random"])
+@pytest.mark.parametrize(
+    "policy", [p for p in agents.available_agents() if p not in ("ppo", "fixed", "fix1", "fix2")]
+)
 def test_declared_memory_bounds_what_a_step_allocates(policy):
     """The declared memory per trial is an upper estimate of what one step of the policy
     allocates (tracemalloc), on a layout where the tracking search is greedy."""
@@ -59,7 +61,7 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
 
     scenario = random_scenario(24, 24, 2, 4, 4, horizon=5, seed=0)
     trials = 3
-    params = {"solver": "alternating"} if policy == "mg-crb-cl" else {}
+    params = {"solver": "alternating"} if issubclass(agents.agent_class(policy), agents.IndexPolicy) else {}
     agent = agents.make_agent(policy, scenario, seed=0, **params)
     env = gym.make_vec(
         "MimoRadarSelect-v1",
@@ -83,5 +85,15 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
         tracemalloc.stop()
     _, env_per_trial = memory_parts(scenario)
     declared = trials * (agent.memory_per_trial() + env_per_trial)
-    assert peak <= declared, f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
+    assert peak <= declared, (
+        f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
+    )
     assert np.isfinite(reward).all()
+
+
+def test_the_policy_cost_benchmark_measures_within_the_declaration():
+    from benchmarks.speed.policy_cost import measure_policy
+
+    row = measure_policy("tracking-ucb", random_scenario(4, 6, 2, 2, 3, horizon=6, seed=0), trials=2, steps=2)
+    assert row["ms_per_trial_step"] > 0
+    assert 0 < row["measured_mib_per_trial"] <= row["declared_mib_per_trial"]

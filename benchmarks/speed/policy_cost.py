@@ -1,0 +1,135 @@
+"""Every policy's cost per trial-step: time, and peak memory beside what it declares.
+
+Run: ``python -m benchmarks.speed.policy_cost [--trials 4] [--steps 5] [--json FILE]``.
+
+For each registered policy (``ppo`` needs a trained model and is left out) on random layouts
+of 4 x 6 (``Ms, Ns = 2, 3``), 16 x 16 and 64 x 64 (``Ms = Ns = 4``) stations with K = 1 and
+5 targets (``mimo_radar_env.random_scenario``, seed 0; ``fix1`` and ``fix2`` name stations of
+the 4 x 6 paper layout, so there only), one vector env of ``--trials`` trials
+and the tracker runs ``--steps`` steps after a warm-up step; it records the time of
+``act`` + ``step`` + ``update`` per trial-step and the peak of numpy allocations
+(tracemalloc) per trial, beside the memory the env and the policy declare per trial
+(``memory_parts``, ``Agent.memory_per_trial``): the ratio ``measured / declared`` is at most
+1 when the declarations are upper estimates. Index policies use the exact solver where the
+smaller side has at most 200,000 subsets and ``alternating`` beyond (at 64 x 64).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+import tracemalloc
+import warnings
+from pathlib import Path
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+
+import agents
+from mimo_radar_env import random_scenario
+from mimo_radar_env.core.model import memory_parts
+from mimo_radar_env.core.superarm import is_exact_affordable
+
+#: (M, N, Ms, Ns) of the layouts measured.
+LAYOUTS = ((4, 6, 2, 3), (16, 16, 4, 4), (64, 64, 4, 4))
+TARGETS = (1, 5)
+SKIPPED = ("ppo", "fixed")  # a trained model; station lists of the layout's own (fix1, fix2: 4 x 6)
+
+
+def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[str, Any]:
+    """One policy on one scenario: seconds per trial-step, measured and declared MiB per trial."""
+    params: dict[str, Any] = {}
+    cls = agents.agent_class(policy)
+    if issubclass(cls, agents.IndexPolicy) and not is_exact_affordable(
+        scenario.num_tx, scenario.num_rx, scenario.tx_per_step, scenario.rx_per_step
+    ):
+        params["solver"] = "alternating"
+    agent = agents.make_agent(policy, scenario, seed=0, **params)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        env = gym.make_vec(
+            "MimoRadarSelect-v1",
+            num_envs=trials,
+            vectorization_mode="vector_entry_point",
+            scenario=scenario,
+            **agent.observation_options,
+        )
+    if agent.needs_oracle:
+        agent.attach(env)
+    obs, _ = env.reset(seed=0)
+    agent.reset(obs)
+
+    def one_step(obs):
+        action = agent.act(obs)
+        obs, reward, *_ = env.step(action)
+        agent.update(obs, reward)
+        return obs
+
+    obs = one_step(obs)  # warm-up: compilation and first allocations
+    tracemalloc.start()
+    try:
+        start = time.perf_counter()
+        for _ in range(steps):
+            obs = one_step(obs)
+        seconds = time.perf_counter() - start
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    env.close()
+    _, env_per_trial = memory_parts(scenario)
+    declared = env_per_trial + agent.memory_per_trial()
+    return {
+        "policy": policy,
+        "solver": params.get("solver", getattr(getattr(agent, "solver", None), "name", "-")),
+        "ms_per_trial_step": 1e3 * seconds / (steps * trials),
+        "measured_mib_per_trial": peak / trials / 2**20,
+        "declared_mib_per_trial": declared / 2**20,
+    }
+
+
+def measure(trials: int = 4, steps: int = 5, progress: Any = print) -> list[dict[str, Any]]:
+    rows = []
+    for num_tx, num_rx, ms, ns in LAYOUTS:
+        for k in TARGETS:
+            scenario = random_scenario(num_tx, num_rx, k, ms, ns, horizon=steps + 2, seed=0)
+            for policy in agents.available_agents():
+                if policy in SKIPPED or (policy in ("fix1", "fix2") and (num_tx, num_rx) != (4, 6)):
+                    continue
+                row = measure_policy(policy, scenario, trials, steps)
+                rows.append({"M": num_tx, "N": num_rx, "Ms": ms, "Ns": ns, "K": k, **row})
+                progress(
+                    f"{num_tx} x {num_rx} K={k} {policy:<20} {row['ms_per_trial_step']:9.2f} ms/trial-step "
+                    f"{row['measured_mib_per_trial']:8.2f} MiB (declared {row['declared_mib_per_trial']:.2f})"
+                )
+    return rows
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description="every policy's time and memory per trial-step")
+    parser.add_argument("--trials", type=int, default=4)
+    parser.add_argument("--steps", type=int, default=5)
+    parser.add_argument("--json", default=None, help="write the rows to this file")
+    args = parser.parse_args()
+    from ..studies.base import machine
+
+    start = time.perf_counter()
+    rows = measure(args.trials, args.steps)
+    worst = max(r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows)
+    print(f"largest measured / declared memory: {worst:.2f}")
+    if args.json:
+        record = {
+            "command": f"python -m benchmarks.speed.policy_cost --trials {args.trials} --steps {args.steps}",
+            "trials": args.trials,
+            "steps": args.steps,
+            "wall_s": round(time.perf_counter() - start, 1),
+            "machine": machine(),
+            "rows": rows,
+        }
+        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+    assert np.isfinite(worst)
+
+
+if __name__ == "__main__":
+    main()
