@@ -194,10 +194,11 @@ def measurement_residual(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDAr
 
 
 def _inverse_and_logdet(
-    matrix: NDArray[np.float64],
+    matrix: NDArray[np.float64], allow_indefinite: bool = False
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Inverse and log-determinant of symmetric positive definite matrices (..., d, d)."""
-    if matrix.shape[-1] == 2:  # closed form: the per-channel case of the paper's fusion
+    """Inverse and log-determinant of symmetric positive definite matrices (..., d, d)
+    (``allow_indefinite``: of any invertible symmetric matrix, ``log |det|``)."""
+    if matrix.shape[-1] == 2 and not allow_indefinite:  # closed form: the paper fusion's channels
         a, b, c = matrix[..., 0, 0], matrix[..., 0, 1], matrix[..., 1, 1]
         det = a * c - b * b
         inverse = np.stack([np.stack([c, -b], -1), np.stack([-b, a], -1)], -2) / det[..., None, None]
@@ -207,7 +208,7 @@ def _inverse_and_logdet(
         return np.linalg.inv(matrix), logdet
     except np.linalg.LinAlgError:  # singular in some trials: those get NaN, and the tracker
         pass  # keeps their prediction (IMMUKFTracker counts it as a repair)
-    singular = ~(sign > 0) | ~np.isfinite(logdet)
+    singular = ~((sign != 0) if allow_indefinite else (sign > 0)) | ~np.isfinite(logdet)
     inverse = np.linalg.inv(np.where(singular[..., None, None], np.eye(matrix.shape[-1]), matrix))
     return np.where(singular[..., None, None], np.nan, inverse), np.where(singular, np.nan, logdet)
 
@@ -258,17 +259,55 @@ def unscented_update(
     dz = measurement_residual(sigmas_h, z_pred[..., None, :])
     dx = sigmas - prior_mean[..., None, :]
     weighted_dz = dz * wc[:, None]
-    innovation_cov = np.swapaxes(weighted_dz, -1, -2) @ dz
     d = dz.shape[-1]
-    diag = np.arange(d)
-    innovation_cov[..., diag, diag] += noise_variance
     cross_cov = np.swapaxes(dx, -1, -2) @ weighted_dz
-    innovation_inv, logdet = _inverse_and_logdet(innovation_cov)
-    gain = cross_cov @ innovation_inv
     residual = measurement_residual(measurement, z_pred)
+    if d >= WOODBURY_MIN_DIMENSION and np.all(wc != 0):
+        gain, mahalanobis, logdet = _woodbury(dz, wc, noise_variance, cross_cov, residual)
+    else:
+        innovation_cov = np.swapaxes(weighted_dz, -1, -2) @ dz
+        diag = np.arange(d)
+        innovation_cov[..., diag, diag] += noise_variance
+        innovation_inv, logdet = _inverse_and_logdet(innovation_cov)
+        gain = cross_cov @ innovation_inv
+        mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
     mean = prior_mean + (gain @ residual[..., None])[..., 0]
     # K S K' = K Pxz' (as K S = Pxz); symmetric up to rounding: callers symmetrise what they keep
     cov = prior_cov - gain @ np.swapaxes(cross_cov, -1, -2) if with_covariance else None
-    mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
     log_likelihood = -0.5 * (mahalanobis + logdet + d * _LOG_2PI)
     return UpdateResult(mean, cov, log_likelihood, gain, cross_cov)
+
+
+#: From this stacked measurement dimension on (32 channels), the innovation covariance is
+#: inverted through the Woodbury identity: it is the diagonal ``R`` plus a rank-``S`` term
+#: (``S`` sigma points), so an ``S x S`` system replaces a ``d x d`` one. The paper's sizes (at
+#: most 12 dimensions) keep the direct inverse.
+WOODBURY_MIN_DIMENSION = 64
+
+
+def _woodbury(
+    dz: NDArray[np.float64],
+    wc: NDArray[np.float64],
+    noise_variance: NDArray[np.float64],
+    cross_cov: NDArray[np.float64],
+    residual: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """Gain, Mahalanobis distance and log-determinant of ``S = dz' Wc dz + R`` (``R`` diagonal)
+    by ``S^-1 = R^-1 - R^-1 dz' M^-1 dz R^-1`` with ``M = Wc^-1 + dz R^-1 dz'`` and
+    ``det S = det R det Wc det M``. A singular ``M`` gives NaN in that trial (the tracker keeps
+    its prediction there and counts it)."""
+    inv_noise = 1.0 / noise_variance  # (..., d)
+    scaled = dz * inv_noise[..., None, :]  # dz R^-1, (..., S, d)
+    inner = scaled @ np.swapaxes(dz, -1, -2)  # (..., S, S)
+    points = np.arange(wc.size)
+    inner[..., points, points] += 1.0 / wc
+    inner_inv, inner_logdet = _inverse_and_logdet(inner, allow_indefinite=True)
+    # K = Pxz R^-1 - (Pxz R^-1 dz') M^-1 (dz R^-1)
+    cross_scaled = cross_cov * inv_noise[..., None, :]  # (..., n, d)
+    gain = cross_scaled - ((cross_scaled @ np.swapaxes(dz, -1, -2)) @ inner_inv) @ scaled
+    projected = (scaled @ residual[..., None])[..., 0]  # dz R^-1 r, (..., S)
+    mahalanobis = np.einsum("...d,...d->...", residual * inv_noise, residual) - np.einsum(
+        "...s,...st,...t->...", projected, inner_inv, projected
+    )
+    logdet = np.log(noise_variance).sum(axis=-1) + np.log(np.abs(wc)).sum() + inner_logdet
+    return gain, mahalanobis, logdet

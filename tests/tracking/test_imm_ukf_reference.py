@@ -292,3 +292,33 @@ def test_compiled_average_fusion_equals_the_numpy_path(scenario):
         np.testing.assert_allclose(
             getattr(fast, name), getattr(slow, name), rtol=1e-10, atol=1e-10, err_msg=name
         )
+
+
+def test_a_large_stacked_measurement_is_solved_through_woodbury_as_directly(monkeypatch):
+    """From WOODBURY_MIN_DIMENSION on, the innovation covariance is inverted through the Woodbury
+    identity; the update equals the direct inverse's (here 40 channels, 80 dimensions)."""
+    from mimo_radar_env.tracking import unscented
+
+    rng = np.random.default_rng(4)
+    batch, n, d = 5, 4, 80
+    params = unscented.SigmaPointParameters()
+    wm, wc = params.weights(n)
+    mean = rng.normal(size=(batch, n)) * 100
+    root = rng.normal(size=(batch, n, n))
+    cov = root @ np.swapaxes(root, -1, -2) + 10 * np.eye(n)
+    chol, _ = unscented.robust_cholesky(params.scale(n) * cov)
+    sigmas = unscented.sigma_points(mean, chol)
+    lift = rng.normal(size=(n, d))
+    sigmas_h = sigmas @ lift + rng.normal(size=(batch, 1, d))
+    sigmas_h[..., 1::2] = np.arctan2(np.sin(sigmas_h[..., 1::2] / 100), np.cos(sigmas_h[..., 1::2] / 100))
+    measurement = sigmas_h[:, 0] + rng.normal(size=(batch, d)) * 0.1
+    noise = rng.uniform(0.5, 2.0, size=(batch, d))
+    args = (mean, cov, sigmas, sigmas_h, measurement, noise, wm, wc)
+    assert d >= unscented.WOODBURY_MIN_DIMENSION
+    woodbury = unscented.unscented_update(*args)
+    monkeypatch.setattr(unscented, "WOODBURY_MIN_DIMENSION", 10**9)
+    direct = unscented.unscented_update(*args)
+    for field in ("mean", "covariance", "log_likelihood", "gain"):
+        np.testing.assert_allclose(
+            getattr(woodbury, field), getattr(direct, field), rtol=1e-9, atol=1e-9, err_msg=field
+        )
