@@ -13,7 +13,15 @@ def check_parameter(
     bracket = "(" if low_open else "["
     upper = "inf)" if high == np.inf else f"{high:g}]"
     if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
-        raise ValueError(f"{name} must be a number in {bracket}{low:g}, {upper}, got {value!r}")
+        hint = ""
+        if isinstance(value, str):
+            try:
+                hint = f" (text: YAML reads an exponent without a dot as text; write {float(value):.1e})"
+            except ValueError:
+                pass
+        raise ValueError(f"{name} must be a number in {bracket}{low:g}, {upper}, got {value!r}{hint}")
+    if not np.isfinite(value):
+        raise ValueError(f"{name} must be a finite number in {bracket}{low:g}, {upper}, got {value}")
     inside = (value > low if low_open else value >= low) and value <= high
     if not inside:
         raise ValueError(f"{name} must be in {bracket}{low:g}, {upper}, got {value}")

@@ -176,6 +176,10 @@ def make_config(
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
+    try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
+        json.dumps(params, allow_nan=False)
+    except (TypeError, ValueError) as exc:
+        raise HarnessError(f"--agent-param: a value cannot be recorded in config.json ({exc})") from None
     return RunConfig(
         policy_files={p: files for p in policies if (files := _policy_files(p))},
         scenario=sc.to_dict(),

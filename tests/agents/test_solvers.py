@@ -134,7 +134,7 @@ def test_solver_errors():
         ({"population": 2.5}, "population must be an integer in [1, 10,000], got 2.5"),
         ({"population": True}, "population must be an integer"),
         ({"iterations": 0}, "iterations must be in [1, 20,000], got 0"),
-        ({"c1": float("nan")}, "c1 must be in [0, 10], got nan"),
+        ({"c1": float("nan")}, "c1 must be a finite number in [0, 10], got nan"),
         ({"velocity_clamp": -1}, "velocity_clamp must be in (0, 100], got -1"),
         ({"use_numba": "yes"}, "use_numba must be true or false"),
     ],

@@ -154,6 +154,8 @@ def test_subprocess_cli_scenario_errors_are_one_line(tmp_path):
             "policy 'mg-crb-cl': velocity_clamp must be in (0, 100], got 0",
         ),
         ("ucb1.beta=inf", "policy 'ucb1': beta must be a number in [0, inf), got 'inf'"),
+        ("ucb1.beta=.inf", "policy 'ucb1': beta must be a finite number in [0, inf), got inf"),
+        ("ucb1.beta=1e3", "got '1e3' (text: YAML reads an exponent without a dot as text; write 1.0e+03)"),
     ],
 )
 def test_solver_parameters_are_checked_when_the_agent_is_made(param, message, tmp_path, capsys):
