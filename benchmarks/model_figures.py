@@ -210,9 +210,10 @@ def oracle_exact_cost() -> dict[str, Figure]:
 
 
 # ---------------------------------------------------------------- the tracker
-def _nees(batch: int, steps: int, turn_rates: tuple, probabilities: tuple) -> NDArray[np.float64]:
-    """Per-trial time-averaged NEES on paper-1 (v0's per-trial NCV truth), centralised fusion,
-    the fixed selection {TX1,TX2; RX1,RX2,RX3}, after 20 steps of transient."""
+def nees_per_step(batch: int, steps: int, turn_rates: tuple, probabilities: tuple) -> NDArray[np.float64]:
+    """The NEES of every step after 20 steps of transient and every trial (steps - 20, batch), on
+    paper-1 (v0's per-trial NCV truth), centralised fusion, the fixed selection {TX1,TX2;
+    RX1,RX2,RX3} (tests/tracking/test_closed_loop.py asserts its consistency from it too)."""
     from mimo_radar_env.tracking import IMMUKFTracker
 
     model = RadarModel.from_scenario(load_scenario("paper-1"))
@@ -232,7 +233,7 @@ def _nees(batch: int, steps: int, turn_rates: tuple, probabilities: tuple) -> ND
         )
         error = tracker.estimate - sim.state
         out.append(np.einsum("bki,bkij,bkj->b", error, np.linalg.inv(tracker.covariance), error))
-    return np.array(out)[20:].mean(axis=0)
+    return np.array(out)[20:]
 
 
 @figure("nees-ncv", "nees-imm")
@@ -242,9 +243,12 @@ def consistency() -> dict[str, Figure]:
         "the fixed selection {TX1,TX2; RX1,RX2,RX3}"
     )
     return {
-        "nees-ncv": mean_over_trials(_nees(200, 200, (0.0,), (1.0,)), f"single-model NCV UKF: {where}"),
+        "nees-ncv": mean_over_trials(
+            nees_per_step(200, 200, (0.0,), (1.0,)).mean(axis=0), f"single-model NCV UKF: {where}"
+        ),
         "nees-imm": mean_over_trials(
-            _nees(200, 200, (0.0, 3.0, -3.0), (0.8, 0.1, 0.1)), f"the paper's three-model IMM: {where}"
+            nees_per_step(200, 200, (0.0, 3.0, -3.0), (0.8, 0.1, 0.1)).mean(axis=0),
+            f"the paper's three-model IMM: {where}",
         ),
     }
 
@@ -306,9 +310,9 @@ def maneuver_modes() -> dict[str, Figure]:
 
 
 # ---------------------------------------------------------------- the bound
-@figure("bound-ratio", "bound-rmse", "bound-value")
-def bound_tightness() -> dict[str, Figure]:
-    trials, steps = 200, 300
+def error_and_bound(trials: int, steps: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Squared position errors and squared bounds (steps, trials) of paper-1-v1, centralised
+    fusion, uniformly random selections, seed 0 (tests/tracking/test_bound.py reads them too)."""
     venv = gym.make_vec(
         "MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point", fusion="centralized"
     )
@@ -320,8 +324,15 @@ def bound_tightness() -> dict[str, Figure]:
         squared.append(info["position_error"][:, 0] ** 2)
         bounds.append(info["position_bound"][:, 0] ** 2)
     venv.close()
-    squared_error = np.array(squared)[50:].mean(axis=0)  # per trial, steps 51-300
-    bound = np.array(bounds)[50:].mean(axis=0)
+    return np.array(squared), np.array(bounds)
+
+
+@figure("bound-ratio", "bound-rmse", "bound-value")
+def bound_tightness() -> dict[str, Figure]:
+    trials = 200
+    squared, bounds = error_and_bound(trials, 300)
+    squared_error = squared[50:].mean(axis=0)  # per trial, steps 51-300
+    bound = bounds[50:].mean(axis=0)
     where = "paper-1-v1, centralised fusion, uniformly random selections, 200 trials, steps 51-300"
     return {
         "bound-ratio": ratio_over_trials(squared_error, bound, f"the IMM-UKF's RMSE over the bound; {where}"),

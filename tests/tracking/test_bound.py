@@ -52,21 +52,9 @@ def test_position_bound_equals_the_covariance_form_riccati_recursion():
 
 
 def test_the_bound_is_below_the_rmse_of_a_centralised_tracker_with_true_noise():
-    import gymnasium as gym
+    from benchmarks.model_figures import error_and_bound
 
-    from tests.helpers import random_valid_actions
-
-    trials, steps = 200, 300
-    venv = gym.make_vec(
-        "MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point", fusion="centralized"
-    )
-    venv.reset(seed=0)
-    rng = np.random.default_rng(0)
-    squared, bounds = [], []
-    for _ in range(steps):
-        _, _, _, _, info = venv.step(random_valid_actions(rng, trials, 4, 6, 2, 3))
-        squared.append(info["position_error"][:, 0] ** 2)
-        bounds.append(info["position_bound"][:, 0] ** 2)
+    squared, bounds = error_and_bound(200, 300)
     rmse = np.sqrt(np.mean(squared, axis=1))  # per step, over trials
     bound = np.sqrt(np.mean(bounds, axis=1))
     later = slice(50, None)  # past the start-up transient

@@ -5,44 +5,21 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from mimo_radar_env import RadarModel, load_scenario
-from mimo_radar_env.core.simulation import RadarSimulation
-from mimo_radar_env.core.streams import keys_from_generator
-from mimo_radar_env.tracking import IMMUKFTracker
+from benchmarks.model_figures import nees_per_step
+from mimo_radar_env import load_scenario
 from tests.helpers import large_scenario, random_valid_actions
-
-
-def _nees(batch, steps, turn_rates, probabilities, seed=0):
-    model = RadarModel.from_scenario(load_scenario("paper-1"))
-    sim = RadarSimulation(model, batch)
-    rng = np.random.default_rng(seed)
-    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
-    tracker = IMMUKFTracker(
-        model, batch, fusion="centralized", turn_rates_deg=turn_rates, initial_probabilities=probabilities
-    )
-    tx, rx, valid = np.tile([0, 1], (batch, 1)), np.tile([0, 1, 2], (batch, 1)), np.ones(batch, bool)
-    out = []
-    for _ in range(steps):
-        sim.advance()
-        obs = sim.observe(tx, rx, valid)
-        tracker.step(
-            model.tx[obs.tx_stations], model.rx[obs.rx_stations], obs.measurement, obs.noise_variance, valid
-        )
-        error = tracker.estimate - sim.state
-        out.append(np.einsum("bki,bkij,bkj->b", error, np.linalg.inv(tracker.covariance), error))
-    return np.array(out)[20:]  # after the initial transient
 
 
 def test_nees_is_consistent_on_ncv_trajectories():
     batch = 200
     low, high = stats.chi2.ppf([0.025, 0.975], 4 * batch) / batch
     # the UKF with the true (NCV) model: textbook consistent
-    nees = _nees(batch, 200, (0.0,), (1.0,))
+    nees = nees_per_step(batch, 200, (0.0,), (1.0,))
     per_step = nees.mean(axis=1)
     assert low < nees.mean() < high
     assert np.mean((per_step > low) & (per_step < high)) > 0.9
     # the paper's three-model IMM on the same trajectories is conservative, never overconfident
-    imm = _nees(batch, 200, (0.0, 3.0, -3.0), (0.8, 0.1, 0.1))
+    imm = nees_per_step(batch, 200, (0.0, 3.0, -3.0), (0.8, 0.1, 0.1))
     assert 2.5 < imm.mean() < high
 
 
