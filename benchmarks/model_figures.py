@@ -253,7 +253,10 @@ def consistency() -> dict[str, Figure]:
     }
 
 
-def _vector_run(scenario: str, batch: int, steps: int, fusion: str, fixed=None, **options) -> tuple:
+def vector_run(scenario: str, batch: int, steps: int, fusion: str, fixed=None, **options) -> tuple:
+    """Target 0's position errors (steps, batch) and model probabilities (steps, batch, R) of a
+    v0 vector env, with ``fixed`` selections or the oracle's (tests/tracking/test_closed_loop.py
+    asserts on them too)."""
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", DeprecationWarning)  # v0 on purpose: these facts are v0's
         venv = gym.make_vec(
@@ -282,7 +285,7 @@ def closed_loop() -> dict[str, Figure]:
     for fusion in ("average", "centralized"):
         squared = {}
         for quality in (0.2, 1.2):
-            errors, _ = _vector_run("paper-1", 100, 300, fusion, fixed, measurement_quality=quality)
+            errors, _ = vector_run("paper-1", 100, 300, fusion, fixed, measurement_quality=quality)
             squared[quality] = (errors[100:] ** 2).mean(axis=0)  # per trial, steps 101-300
         out[f"rmse-ratio-{fusion}"] = ratio_over_trials(
             squared[0.2],
@@ -298,7 +301,7 @@ def closed_loop() -> dict[str, Figure]:
 def maneuver_modes() -> dict[str, Figure]:
     out = {}
     for fusion in ("average", "centralized"):
-        _, modes = _vector_run("paper-2", 30, 660, fusion)
+        _, modes = vector_run("paper-2", 30, 660, fusion)
         for turn, (start, stop, model) in {"first": (405, 440, 1), "second": (605, 640, 2)}.items():
             out[f"mode-{turn}-{fusion}"] = mean_over_trials(
                 modes[start:stop, :, model].mean(axis=0),

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from benchmarks.model_figures import nees_per_step
+from benchmarks.model_figures import nees_per_step, vector_run
 from mimo_radar_env import load_scenario
 from tests.helpers import large_scenario, random_valid_actions
 
@@ -23,30 +23,10 @@ def test_nees_is_consistent_on_ncv_trajectories():
     assert 2.5 < imm.mean() < high
 
 
-def _vector_run(scenario, batch, fusion="average", fixed=None, steps=None, **kwargs):
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0",
-        num_envs=batch,
-        vectorization_mode="vector_entry_point",
-        scenario=scenario,
-        fusion=fusion,
-        **kwargs,
-    )
-    obs, _ = venv.reset(seed=0)
-    steps = steps or venv.unwrapped.scenario.horizon if hasattr(venv, "unwrapped") else steps
-    errors, modes = [], []
-    for _ in range(steps):
-        action = np.tile(fixed, (batch, 1)) if fixed is not None else venv.oracle_action()
-        obs, _, _, _, info = venv.step(action)
-        errors.append(info["position_error"])
-        modes.append(obs["mode_prob"])
-    return np.array(errors), np.array(modes)
-
-
 @pytest.mark.parametrize("fusion", ["average", "centralized"])
 def test_model_probabilities_follow_the_maneuvers(fusion):
-    _, modes = _vector_run("paper-2", 30, fusion=fusion, steps=660)
-    mean = modes[:, :, 0].mean(axis=1)  # over trials; step s+1 is at t = s + 1
+    _, modes = vector_run("paper-2", 30, 660, fusion)
+    mean = modes.mean(axis=1)  # over trials; step s+1 is at t = s + 1
     first_turn, second_turn = mean[405:440], mean[605:640]
     assert first_turn[:, 1].mean() > 0.5 and first_turn[:, 1].max() > 0.5
     assert second_turn[:, 2].mean() > 0.5
@@ -58,12 +38,10 @@ def test_the_loop_is_closed_measurement_quality_drives_rmse():
     rmse = {}
     for fusion in ("average", "centralized"):
         for quality in (0.2, 1.2):
-            errors, _ = _vector_run(
-                "paper-1", 40, fusion=fusion, fixed=fixed, steps=300, measurement_quality=quality
-            )
+            errors, _ = vector_run("paper-1", 40, 300, fusion, fixed, measurement_quality=quality)
             rmse[fusion, quality] = np.sqrt((errors[100:] ** 2).mean())
     for fusion in ("average", "centralized"):
-        # measured: 1.7x (average), 2.3x (centralized); noise variance ratio 6 bounds it by sqrt(6)
+        # docs/model.md quotes the ratios model-figures measures; the noise variance ratio 6 bounds them
         assert rmse[fusion, 0.2] > 1.4 * rmse[fusion, 1.2]
     assert rmse["centralized", 1.2] <= rmse["average", 1.2]
     assert rmse["centralized", 0.2] <= rmse["average", 0.2]
@@ -71,7 +49,7 @@ def test_the_loop_is_closed_measurement_quality_drives_rmse():
 
 def test_estimated_filter_noise_tracks_too():
     fixed = np.array([1, 1, 0, 0, 1, 1, 1, 0, 0, 0], dtype=np.int8)
-    errors, _ = _vector_run("paper-1", 20, fixed=fixed, steps=200, filter_noise="estimated")
+    errors, _ = vector_run("paper-1", 20, 200, "average", fixed, filter_noise="estimated")
     assert np.isfinite(errors).all() and np.sqrt((errors[50:] ** 2).mean()) < 10
 
 
