@@ -21,6 +21,7 @@ that.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,23 +35,29 @@ CRITERIA: tuple[str, ...] = ("trace", "logdet")
 MAX_ENUMERATED_SUPER_ARMS = 5_000
 
 
-def _centralized_posterior(prior_info: NDArray, information: NDArray, selected: NDArray) -> NDArray:
-    """The channels' information adds: ``(S^-1 + sum_A I_mn)^-1``, (B, K, A, 2, 2)."""
-    gained = np.einsum("bamn,bkmnij->bkaij", selected, information)
-    return inverse_2x2(prior_info[:, :, None] + gained)[0]
+@dataclass(frozen=True)
+class SuperArmPosterior:
+    """A fusion's predicted posterior position covariance of a super arm, as a function of a sum
+    over the super arm's channels: ``terms(prior_info, information)`` gives each channel's term
+    (B, K, M, N, 2, 2), ``from_sum(prior_info, total, count)`` the posterior of a super arm whose
+    terms sum to ``total`` over ``count`` channels (arguments broadcast against each other)."""
+
+    terms: Callable[[NDArray, NDArray], NDArray]
+    from_sum: Callable[[NDArray, NDArray, NDArray], NDArray]
 
 
-def _average_posterior(prior_info: NDArray, information: NDArray, selected: NDArray) -> NDArray:
-    """eq22: the mean over the super arm's channels of ``(S^-1 + I_mn)^-1``, (B, K, A, 2, 2)."""
-    single, _ = inverse_2x2(prior_info[:, :, None, None] + information)  # (B, K, M, N, 2, 2)
-    channels = selected.sum(axis=(2, 3))  # (B, A)
-    return np.einsum("bamn,bkmnij->bkaij", selected, single) / channels[:, None, :, None, None]
-
-
-#: The predicted posterior position covariance of a super arm under each fusion of the registry.
-POSTERIORS: dict[str, Callable[[NDArray, NDArray, NDArray], NDArray]] = {
-    "centralized": _centralized_posterior,
-    "average": _average_posterior,
+#: The predicted posterior of a super arm under each fusion of the registry: centralised, the
+#: channels' information adds, ``(S^-1 + sum_A I_mn)^-1``; eq22's average, the mean over the
+#: channels of their single-channel posteriors ``(S^-1 + I_mn)^-1``.
+POSTERIORS: dict[str, SuperArmPosterior] = {
+    "centralized": SuperArmPosterior(
+        terms=lambda prior_info, information: information,
+        from_sum=lambda prior_info, total, count: inverse_2x2(prior_info + total)[0],
+    ),
+    "average": SuperArmPosterior(
+        terms=lambda prior_info, information: inverse_2x2(prior_info[:, :, None, None] + information)[0],
+        from_sum=lambda prior_info, total, count: total / count,
+    ),
 }
 if set(POSTERIORS) != set(FUSIONS):  # a new fusion must say what it does to the posterior
     raise ImportError(
@@ -90,20 +97,30 @@ def super_arm_criterion(
     (:data:`POSTERIORS`: ``"centralized"``, the channels' information adds, or ``"average"``,
     eq22, their posteriors are averaged).
     """
-    if criterion not in CRITERIA:
-        raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
-    if fusion not in POSTERIORS:
-        raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {fusion!r}")
+    _check_choices(criterion, fusion)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
     selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # ([B,] A, M, N)
     if selected.ndim == 3:
         selected = np.broadcast_to(selected, (position_cov.shape[0], *selected.shape))
-    posterior = POSTERIORS[fusion](prior_info, information, selected)  # (B, K, A, 2, 2)
+    posterior = POSTERIORS[fusion]
+    total = np.einsum("bamn,bkmnij->bkaij", selected, posterior.terms(prior_info, information))
+    count = selected.sum(axis=(2, 3))[:, None, :, None, None]
+    covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
+    return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), _per_target(covariance, criterion))
+
+
+def _check_choices(criterion: str, fusion: str) -> None:
+    if criterion not in CRITERIA:
+        raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
+    if fusion not in POSTERIORS:
+        raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {fusion!r}")
+
+
+def _per_target(posterior: NDArray[np.float64], criterion: str) -> NDArray[np.float64]:
+    """The criterion of each target's posterior position covariance (..., 2, 2): trace or log det."""
     if criterion == "trace":
-        per_target = posterior[..., 0, 0] + posterior[..., 1, 1]
-    else:
-        per_target = np.log(det_2x2(posterior))
-    return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
+        return posterior[..., 0, 0] + posterior[..., 1, 1]
+    return np.log(det_2x2(posterior))
 
 
 def select_for_tracking(
@@ -217,16 +234,12 @@ class _Scorer:
     ``sum / count``)."""
 
     def __init__(self, position_cov, information, weights, criterion, fusion) -> None:
-        if criterion not in CRITERIA:
-            raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
-        if fusion not in POSTERIORS:
-            raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {fusion!r}")
+        _check_choices(criterion, fusion)
         self.prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
-        if fusion == "average":
-            information = inverse_2x2(self.prior_info[:, :, None, None] + information)[0]
-        self.terms = information  # (B, K, M, N, 2, 2)
+        self.posterior = POSTERIORS[fusion]
+        self.terms = self.posterior.terms(self.prior_info, information)  # (B, K, M, N, 2, 2)
         self.weights = np.asarray(weights, dtype=np.float64)
-        self.criterion, self.fusion = criterion, fusion
+        self.criterion = criterion
 
     def repeat(self, times: int) -> _Scorer:
         out = object.__new__(_Scorer)
@@ -245,21 +258,13 @@ class _Scorer:
 
     def score(self, total: NDArray[np.float64], count: NDArray[np.float64] | float) -> NDArray[np.float64]:
         """The criterion (B, ...) of sums ``total`` (B, ..., K, 2, 2) over ``count`` channels."""
-        if self.fusion == "centralized":
-            extra = total.ndim - self.prior_info.ndim  # candidate axes between trials and targets
-            prior = self.prior_info.reshape(
-                self.prior_info.shape[0], *([1] * extra), *self.prior_info.shape[1:]
-            )
-            posterior = inverse_2x2(prior + total)[0]
-        else:
-            count = np.asarray(count, dtype=np.float64)
-            posterior = total / count.reshape(*count.shape, *([1] * (total.ndim - count.ndim)))
-        if self.criterion == "trace":
-            per_target = posterior[..., 0, 0] + posterior[..., 1, 1]
-        else:
-            with np.errstate(invalid="ignore", divide="ignore"):  # disallowed swaps are masked later
-                per_target = np.log(det_2x2(posterior))
-        return per_target @ self.weights
+        extra = total.ndim - self.prior_info.ndim  # candidate axes between trials and targets
+        prior = self.prior_info.reshape(self.prior_info.shape[0], *([1] * extra), *self.prior_info.shape[1:])
+        count = np.asarray(count, dtype=np.float64)
+        count = count.reshape(*count.shape, *([1] * (total.ndim - count.ndim)))
+        posterior = self.posterior.from_sum(prior, total, count)
+        with np.errstate(invalid="ignore", divide="ignore"):  # disallowed swaps are masked later
+            return _per_target(posterior, self.criterion) @ self.weights
 
 
 def _swap_search(
