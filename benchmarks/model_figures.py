@@ -408,12 +408,17 @@ def bound_cost() -> dict[str, Figure]:
 
 
 # ---------------------------------------------------------------- the command
+def check_names(names: list[str]) -> None:
+    """Raise :class:`BenchError` unless ``names`` are registered figures (at least one)."""
+    unknown = sorted(set(names) - set(FIGURES))
+    if unknown or not names:
+        raise BenchError(f"unknown figure(s) {unknown}; known: {', '.join(FIGURES)}")
+
+
 def measure(names: list[str] | None = None, progress: Callable[[str], None] = print) -> dict[str, Figure]:
     """Run the measurements behind ``names`` (default: all), each once."""
     names = list(FIGURES) if names is None else names
-    unknown = sorted(set(names) - set(FIGURES))
-    if unknown:
-        raise BenchError(f"no model figure called {', '.join(unknown)}; known: {', '.join(FIGURES)}")
+    check_names(names)
     out: dict[str, Figure] = {}
     done: set[Callable] = set()
     for name in names:
@@ -459,9 +464,7 @@ class ModelFigures(Command):
             None if self.args.only is None else [n.strip() for n in self.args.only.split(",") if n.strip()]
         )
         if names is not None:
-            unknown = sorted(set(names) - set(FIGURES))
-            if unknown or not names:
-                raise BenchError(f"--only: unknown figure(s) {unknown}; known: {', '.join(FIGURES)}")
+            check_names(names)
         existing: dict[str, Any] = {}
         if names is not None and path.exists():
             try:
