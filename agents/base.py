@@ -135,6 +135,13 @@ class Agent(ABC):
         sc = self.scenario
         return 8 * 8 * sc.num_targets * sc.num_tx * sc.num_rx
 
+    def operations_per_trial_step(self) -> float:
+        """Arithmetic operations one trial of this agent does per step (act and update),
+        roughly (an upper estimate): its per-channel bookkeeping and its selection. The
+        harness adds it to the env's to estimate a run's time before it starts."""
+        sc = self.scenario
+        return 20.0 * sc.num_targets * sc.num_tx * sc.num_rx
+
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
         """Start an episode (default: nothing to remember)."""
@@ -217,6 +224,10 @@ class IndexPolicy(Agent):
 
     def memory_per_trial(self) -> int:
         return super().memory_per_trial() + self.solver.memory_per_trial(self.num_tx, self.num_rx)
+
+    def operations_per_trial_step(self) -> float:
+        solver = self.solver.operations_per_trial(self.num_tx, self.num_rx)
+        return super().operations_per_trial_step() + solver
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:

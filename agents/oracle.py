@@ -9,8 +9,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.core.superarm import search_operations
 
 from .base import Agent, Observation
+from .tracking import TrackingSearchCost
 
 
 class BestAgent(Agent):
@@ -38,6 +40,12 @@ class BestAgent(Agent):
             )
         self._oracle = target.oracle_action
 
+    def operations_per_trial_step(self) -> float:
+        """The env's search of the optimal super arm (its ``oracle_action()``)."""
+        sc = self.scenario
+        search = search_operations(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        return super().operations_per_trial_step() + search
+
     def _reset(self, obs: Observation) -> None:
         if self._oracle is None:
             raise RuntimeError("the best oracle needs the env: call agent.attach(env) first")
@@ -47,7 +55,7 @@ class BestAgent(Agent):
         return np.asarray(self._oracle(), dtype=np.int8).reshape(self.batch_size, -1)
 
 
-class BestTrackingAgent(BestAgent):
+class BestTrackingAgent(TrackingSearchCost, BestAgent):
     """The tracking oracle: the super arm with the smallest predicted posterior position error.
 
     Each step it minimises ``sum_k Omega_k trace`` (``criterion="trace"``, m^2) or ``log det``
@@ -68,15 +76,6 @@ class BestTrackingAgent(BestAgent):
             raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
         self.criterion = criterion
         super().__init__(scenario, seed, env)
-
-    def memory_per_trial(self) -> int:
-        from mimo_radar_env.tracking.selection import selection_memory_per_trial
-
-        sc = self.scenario
-        search = selection_memory_per_trial(
-            sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
-        )
-        return super().memory_per_trial() + search
 
     def attach(self, env: Any) -> None:
         """Read the super arm from ``env.tracking_oracle_action()`` (single or vector env)."""

@@ -65,6 +65,12 @@ class CombinatorialThompson(IndexPolicy):
         sc = self.scenario
         return super().memory_per_trial() + 8 * 48 * sc.num_targets * sc.num_tx * sc.num_rx
 
+    def operations_per_trial_step(self) -> float:
+        """Its bookkeeping and solver, plus a Gamma draw (a few rejection rounds) per target
+        and channel."""
+        sc = self.scenario
+        return super().operations_per_trial_step() + 150.0 * sc.num_targets * sc.num_tx * sc.num_rx
+
     def posterior(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Shape and rate (B, K, M, N) of the Gamma posterior of every rate ``1/S``."""
         counts = self.counts[:, None]

@@ -17,6 +17,7 @@ from mimo_radar_env.tracking.selection import (
     MAX_ENUMERATED_SUPER_ARMS,
     select_for_tracking,
     selection_memory_per_trial,
+    selection_operations_per_trial,
 )
 
 from .base import Agent, Observation, fuse_targets
@@ -25,6 +26,25 @@ from .parameters import check_parameter
 
 #: The observation key the policy scores super arms with (env option ``prediction_covariance``).
 PREDICTED_COVARIANCE = "track_pred_pos_cov"
+
+
+class TrackingSearchCost:
+    """The cost declarations of an agent whose selection is the tracking search
+    (:func:`~mimo_radar_env.tracking.selection.select_for_tracking`) on its scenario."""
+
+    scenario: Scenario
+
+    def _search_size(self) -> tuple[int, int, int, int, int]:
+        sc = self.scenario
+        return sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
+
+    def memory_per_trial(self) -> int:
+        return super().memory_per_trial() + selection_memory_per_trial(*self._search_size())  # type: ignore[misc]
+
+    def operations_per_trial_step(self) -> float:
+        # Agent's own, not a parent's selection: the tracking search replaces it
+        search = selection_operations_per_trial(*self._search_size())
+        return Agent.operations_per_trial_step(self) + search  # type: ignore[arg-type]
 
 
 class TrackingSelector:
@@ -92,7 +112,7 @@ class TrackingSelector:
         )
 
 
-class TrackingUCB(Agent):
+class TrackingUCB(TrackingSearchCost, Agent):
     """Tracking-UCB: learns the channels' SINR as MG-CRB-CL does and selects for tracking.
 
     It is composed of MG-CRB-CL's SINR learning (:class:`~agents.mg_crb_cl.MGCRBCLEstimator`:
@@ -170,13 +190,6 @@ class TrackingUCB(Agent):
     lambda_scale = property(lambda self: self.selector.lambda_scale)
     measurement_quality = property(lambda self: self.selector.measurement_quality)
     sinr_weight = property(lambda self: self.selector.sinr_weight)
-
-    def memory_per_trial(self) -> int:
-        sc = self.scenario
-        search = selection_memory_per_trial(
-            sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
-        )
-        return super().memory_per_trial() + search
 
     def _reset(self, obs: Observation) -> None:
         if PREDICTED_COVARIANCE not in obs:

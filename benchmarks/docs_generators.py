@@ -574,8 +574,9 @@ def model_figure(docs: Path, key: str) -> str:
 
 @generator("policy-cost")
 def policy_cost(docs: Path) -> str:
-    """``python -m benchmarks.speed.policy_cost``'s rows: every policy's time per trial-step and
-    measured / declared memory per trial, one column per layout and target count."""
+    """``python -m benchmarks.speed.policy_cost``'s rows: every policy's measured / estimated time
+    per trial-step and measured / declared memory per trial, one column per layout and target
+    count."""
     record = read_json(docs, "perf/policy_cost.json")
     rows = record["rows"]
     configs = sorted(
@@ -592,16 +593,18 @@ def policy_cost(docs: Path) -> str:
             values.append(
                 "—"
                 if r is None
-                else f"{r['ms_per_trial_step']:.2f} ms, {r['measured_mib_per_trial']:.2f} / "
-                f"{r['declared_mib_per_trial']:.2f} MiB"
+                else f"{r['ms_per_trial_step']:.2f} / {r['declared_ms_per_trial_step']:.2f} ms, "
+                f"{r['measured_mib_per_trial']:.2f} / {r['declared_mib_per_trial']:.2f} MiB"
             )
         lines.append(f"| `{policy}` | " + " | ".join(values) + " |")
     worst = max(r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows)
+    times = sorted(r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows)
     machine = record["machine"]
     lines += [
         "",
         f"{record['trials']} trials, {record['steps']} steps after a warm-up step, on {machine['cores']} "
         f"cores ({machine['machine']}, Python {machine['python']}); the largest measured / declared memory "
-        f"is {worst:.2f} (every declaration is an upper estimate).",
+        f"is {worst:.2f} (every declaration is an upper estimate); measured / estimated time ranges from "
+        f"{times[0]:.2f} to {times[-1]:.2f}, with a median of {times[len(times) // 2]:.2f}.",
     ]
     return "\n".join(lines)

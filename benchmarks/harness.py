@@ -34,7 +34,7 @@ from tqdm.auto import tqdm
 import agents
 from agents.ppo import model_file
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
-from mimo_radar_env.core.model import machine_memory, memory_parts
+from mimo_radar_env.core.model import machine_memory, memory_parts, operations_per_trial_step
 
 from . import backends
 from .errors import BenchError
@@ -120,6 +120,8 @@ def make_config(
     options: EnvOptions | None = None,
     workers: int = 1,
     say: Callable[[str], None] = print,
+    max_hours: float | None = None,
+    parallel: int | None = None,
 ) -> RunConfig:
     """Validate every piece of a run and build its configuration; nothing is written.
 
@@ -127,7 +129,9 @@ def make_config(
     parameter, a missing model or an agent that needs the tracker fails here, with a
     one-line :class:`HarnessError`, before any output exists. The memory a task needs
     (:func:`fit_shard_size`) is checked against the machine for ``workers`` tasks at once: the
-    shard size is lowered until it fits, and ``say`` says so, or the run is refused.
+    shard size is lowered until it fits, and ``say`` says so, or the run is refused. Its time
+    (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is said
+    when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
     """
     try:
         sc = load_scenario(scenario)
@@ -161,11 +165,12 @@ def make_config(
                 f"unknown policy {policy!r}; available policies are {available} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
             )
-    per_trial = {}
+    per_trial, operations = {}, {}
     for policy in policies:
         try:
             agent = make_policy(policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict())
             per_trial[policy] = agent.memory_per_trial()
+            operations[policy] = agent.operations_per_trial_step()
             probe = MimoRadarSelectVectorEnv(
                 num_envs=1, scenario=sc, **policy_env_options(agent, options.to_dict())
             )
@@ -176,6 +181,7 @@ def make_config(
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
+    check_time(sc, options, operations, trials, steps, shard_size, parallel or workers, max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
         json.dumps(params, allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -234,6 +240,80 @@ def fit_shard_size(
         )
         return fits
     return shard_size
+
+
+#: Seconds per declared arithmetic operation in the batch, and per step of a shard (Python's
+#: share: calls and small arrays), on the developers' machine: the scale of the declared costs
+#: (``benchmarks.speed.policy_cost`` prints measured / declared time for every policy).
+SECONDS_PER_OPERATION = 1e-9
+STEP_OVERHEAD_SECONDS = 2.5e-3
+#: The longest run ``run`` and the studies start without ``--max-hours`` (hours).
+DEFAULT_MAX_HOURS = 24.0
+
+
+def estimate_seconds(
+    scenario: Scenario,
+    options: EnvOptions,
+    agent_operations: dict[str, float],
+    trials: int,
+    steps: int,
+    shard_size: int,
+    parallel: int = 1,
+) -> float:
+    """A run's wall time, roughly: every (policy, shard) task takes, per step,
+    :data:`STEP_OVERHEAD_SECONDS` plus its trials' operations (the env's,
+    :func:`~mimo_radar_env.core.model.operations_per_trial_step`, and the policy's,
+    :meth:`agents.Agent.operations_per_trial_step`) at :data:`SECONDS_PER_OPERATION`;
+    ``parallel`` tasks run at once."""
+    env = operations_per_trial_step(scenario, options.tracking, options.fusion)
+    shards = -(-trials // shard_size)
+    total = sum(
+        steps * (shards * STEP_OVERHEAD_SECONDS + trials * (env + agent) * SECONDS_PER_OPERATION)
+        for agent in agent_operations.values()
+    )
+    return total / max(1, min(parallel, shards * len(agent_operations)))
+
+
+def duration(seconds: float) -> str:
+    """``"45 s"``, ``"12 min"``, ``"3.5 h"``, ``"4.2 days"``."""
+    if seconds < 90:
+        return f"{seconds:.0f} s"
+    if seconds < 5400:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 2 * 86400:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.1f} days"
+
+
+def check_time(
+    scenario: Scenario,
+    options: EnvOptions,
+    agent_operations: dict[str, float],
+    trials: int,
+    steps: int,
+    shard_size: int,
+    parallel: int,
+    max_hours: float | None,
+    say: Callable[[str], None] = print,
+) -> float:
+    """Says a run's estimated time (:func:`estimate_seconds`) when it is a minute or more;
+    raises :class:`HarnessError` with the estimate and what to change when it exceeds
+    ``max_hours`` (``None``: no limit). Returns the estimate in seconds."""
+    seconds = estimate_seconds(scenario, options, agent_operations, trials, steps, shard_size, parallel)
+    slowest = max(agent_operations, key=agent_operations.__getitem__)
+    where = (
+        f"{trials} trials x {steps} steps of {len(agent_operations)} polic"
+        f"{'y' if len(agent_operations) == 1 else 'ies'} on {scenario.name!r}, {parallel} task(s) at once"
+    )
+    if max_hours is not None and seconds > 3600 * max_hours:
+        raise HarnessError(
+            f"{where} would take about {duration(seconds)} (the slowest policy: {slowest!r}), more than "
+            f"--max-hours {max_hours:g}: use fewer --trials or --steps, more --workers, a smaller layout, "
+            "or a larger --max-hours"
+        )
+    if seconds >= 60:
+        say(f"{where}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
+    return seconds
 
 
 def _policy_files(policy: str) -> dict[str, str]:

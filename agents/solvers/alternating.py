@@ -6,7 +6,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env.core.counter_hash import Stream
-from mimo_radar_env.core.superarm import alternating_super_arm, top_mask
+from mimo_radar_env.core.superarm import alternating_operations, alternating_super_arm, top_mask
 
 from ..parameters import check_integer
 from ..random_streams import TrialRandom
@@ -45,6 +45,9 @@ class AlternatingSolver(SuperArmSolver):
     def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
         """Every start's masks and the index sums over the other side."""
         return 8 * 4 * (self.restarts + 1) * (num_tx + num_rx) + super().memory_per_trial(num_tx, num_rx)
+
+    def operations_per_trial(self, num_tx: int, num_rx: int) -> float:
+        return alternating_operations(num_tx, num_rx, self.restarts, rounds=min(self.max_rounds, 2))
 
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom

@@ -46,6 +46,10 @@ class SuperArmSolver(ABC):
         """Bytes one trial's selection needs at its peak, roughly (an upper estimate)."""
         return 8 * 4 * num_tx * num_rx
 
+    def operations_per_trial(self, num_tx: int, num_rx: int) -> float:
+        """Arithmetic operations of one trial's selection, roughly (an upper estimate)."""
+        return 4.0 * num_tx * num_rx
+
     def check(self, index: NDArray[np.float64]) -> NDArray[np.float64]:
         index = np.asarray(index, dtype=np.float64)
         if index.ndim != 3:

@@ -110,6 +110,12 @@ class BPSOSolver(SuperArmSolver):
         """The swarm: positions, velocities, personal bests and draws of every particle."""
         return 8 * 8 * self.population * (num_tx + num_rx) + super().memory_per_trial(num_tx, num_rx)
 
+    def operations_per_trial(self, num_tx: int, num_rx: int) -> float:
+        """Every particle's velocity, position and value at every iteration (a compiled,
+        vectorised kernel: about one operation per station and per selected channel)."""
+        per_particle = num_tx + num_rx + self.tx_count * self.rx_count
+        return float(self.population * self.iterations * per_particle)
+
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:

@@ -7,7 +7,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env.core.superarm import MAX_EXACT_SUBSETS, exact_super_arm, is_exact_affordable
+from mimo_radar_env.core.superarm import (
+    MAX_EXACT_SUBSETS,
+    exact_operations,
+    exact_super_arm,
+    is_exact_affordable,
+)
 
 from ..random_streams import TrialRandom
 from .base import SuperArmSolver
@@ -27,6 +32,9 @@ class ExactSolver(SuperArmSolver):
         """The smaller side's subsets, each with the other side's sums (a few float64 copies)."""
         subsets = min(math.comb(num_tx, self.tx_count), math.comb(num_rx, self.rx_count))
         return 8 * 4 * subsets * max(num_tx, num_rx) + super().memory_per_trial(num_tx, num_rx)
+
+    def operations_per_trial(self, num_tx: int, num_rx: int) -> float:
+        return exact_operations(num_tx, num_rx, self.tx_count, self.rx_count)
 
     def check_layout(self, num_tx: int, num_rx: int) -> None:
         super().check_layout(num_tx, num_rx)

@@ -6,17 +6,20 @@ For each registered policy (``ppo`` needs a trained model and is left out) on ra
 of 4 x 6 (``Ms, Ns = 2, 3``), 16 x 16 and 64 x 64 (``Ms = Ns = 4``) stations with K = 1 and
 5 targets (``mimo_radar_env.random_scenario``, seed 0; ``fix1`` and ``fix2`` name stations of
 the 4 x 6 paper layout, so there only), one vector env of ``--trials`` trials
-and the tracker runs ``--steps`` steps after a warm-up step; it records the time of
-``act`` + ``step`` + ``update`` per trial-step and the peak of numpy allocations
+and the tracker runs ``--steps`` steps after a warm-up step; it records the median time of
+``act`` + ``step`` + ``update`` over the steps, per trial and the peak of numpy allocations
 (tracemalloc) per trial, beside the memory the env and the policy declare per trial
 (``memory_parts``, ``Agent.memory_per_trial``): the ratio ``measured / declared`` is at most
-1 when the declarations are upper estimates. Index policies use the exact solver where the
+1 when the declarations are upper estimates. Beside the time, the time the harness estimates
+from the declared operations (``benchmarks.harness.estimate_seconds`` for one shard of
+``--trials`` trials). Index policies use the exact solver where the
 smaller side has at most 200,000 subsets and ``alternating`` beyond (at 64 x 64).
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 import tracemalloc
@@ -28,9 +31,11 @@ import gymnasium as gym
 import numpy as np
 
 import agents
-from mimo_radar_env import random_scenario
+from mimo_radar_env import VERSIONS, random_scenario
 from mimo_radar_env.core.model import memory_parts
 from mimo_radar_env.core.superarm import is_exact_affordable
+
+from ..harness import estimate_seconds
 
 #: (M, N, Ms, Ns) of the layouts measured.
 LAYOUTS = ((4, 6, 2, 3), (16, 16, 4, 4), (64, 64, 4, 4))
@@ -70,20 +75,27 @@ def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[
     obs = one_step(obs)  # warm-up: compilation and first allocations
     tracemalloc.start()
     try:
-        start = time.perf_counter()
+        times = []
         for _ in range(steps):
+            start = time.perf_counter()
             obs = one_step(obs)
-        seconds = time.perf_counter() - start
+            times.append(time.perf_counter() - start)
+        seconds = steps * float(np.median(times))  # a one-off pause (collection, compilation) left out
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
     env.close()
     _, env_per_trial = memory_parts(scenario)
     declared = env_per_trial + agent.memory_per_trial()
+    options = dataclasses.replace(VERSIONS["v1"].options(), **agent.observation_options)
+    estimate = estimate_seconds(
+        scenario, options, {policy: agent.operations_per_trial_step()}, trials, 1, trials
+    )
     return {
         "policy": policy,
         "solver": params.get("solver", getattr(getattr(agent, "solver", None), "name", "-")),
         "ms_per_trial_step": 1e3 * seconds / (steps * trials),
+        "declared_ms_per_trial_step": 1e3 * estimate / trials,
         "measured_mib_per_trial": peak / trials / 2**20,
         "declared_mib_per_trial": declared / 2**20,
     }
@@ -101,6 +113,7 @@ def measure(trials: int = 4, steps: int = 5, progress: Any = print) -> list[dict
                 rows.append({"M": num_tx, "N": num_rx, "Ms": ms, "Ns": ns, "K": k, **row})
                 progress(
                     f"{num_tx} x {num_rx} K={k} {policy:<20} {row['ms_per_trial_step']:9.2f} ms/trial-step "
+                    f"(declared {row['declared_ms_per_trial_step']:.2f}) "
                     f"{row['measured_mib_per_trial']:8.2f} MiB (declared {row['declared_mib_per_trial']:.2f})"
                 )
     return rows
@@ -118,6 +131,8 @@ def main() -> None:
     rows = measure(args.trials, args.steps)
     worst = max(r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows)
     print(f"largest measured / declared memory: {worst:.2f}")
+    times = [r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows]
+    print(f"measured / declared time: from {min(times):.2f} to {max(times):.2f}")
     if args.json:
         record = {
             "command": f"python -m benchmarks.speed.policy_cost --trials {args.trials} --steps {args.steps}",

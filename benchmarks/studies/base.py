@@ -122,6 +122,8 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
             # tasks at once on this machine (a Ray task runs on a node: one at a time is checked)
             workers=settings.workers if settings.backend == "local" else 1,
             say=lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
+            max_hours=settings.max_hours,
+            parallel=settings.workers,
         )
         for run in runs
     ]

@@ -20,6 +20,7 @@ from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
 
 from ..errors import BenchError
+from ..harness import DEFAULT_MAX_HOURS
 
 DEFAULT_TRIALS = 500
 #: The most Monte-Carlo trials a study takes (a million trials of the paper study take days).
@@ -63,6 +64,8 @@ class Settings:
         Local worker processes, ``"local"`` or ``"ray"``, and the Ray cluster's address.
     progress, figures : bool
         A progress bar; the PNG figures.
+    max_hours : float or None
+        Runs estimated to take longer are refused before they start (None: no limit).
     env_version : str
         The env version whose defaults ``options`` start from.
     options : EnvOptions
@@ -81,6 +84,7 @@ class Settings:
     address: str | None = None
     progress: bool = True
     figures: bool = True
+    max_hours: float | None = DEFAULT_MAX_HOURS
     env_version: str = DEFAULT_VERSION
     options: EnvOptions = field(default_factory=lambda: VERSIONS[DEFAULT_VERSION].options())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
@@ -104,6 +108,7 @@ class Settings:
             address=args.address,
             progress=not args.quiet,
             figures=not args.no_figures,
+            max_hours=args.max_hours,
             env_version=args.env_version,
             options=env_options_from(args),
             agent_params=params,
@@ -137,6 +142,19 @@ def integer(low: int, why: str = "", high: int = MAX_ARGUMENT) -> Callable[[str]
 
     parse.__name__ = f"integer >= {low}"
     return parse
+
+
+def hours(text: str) -> float | None:
+    """An argparse type: a positive number of hours, or ``none`` (no limit)."""
+    if text.lower() == "none":
+        return None
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"must be a number of hours > 0 or 'none', got {text!r}") from None
+    if not 0 < value < math.inf:
+        raise argparse.ArgumentTypeError(f"must be a number of hours > 0 or 'none', got {text!r}")
+    return value
 
 
 def _quality(text: str) -> float | None:
@@ -297,6 +315,14 @@ def add_run_arguments(
     )
     parser.add_argument(
         "--address", default=None, help="Ray cluster address (default: start a local Ray instance)"
+    )
+    parser.add_argument(
+        "--max-hours",
+        type=hours,
+        default=DEFAULT_MAX_HOURS,
+        metavar="H",
+        help="refuse a run estimated (from the policies' declared costs) to take longer; "
+        "'none': no limit (default %(default)s)",
     )
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

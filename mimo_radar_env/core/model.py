@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 from ..scenarios import Scenario, ScenarioError, turn_rate_schedule
 from .geometry import squared_range_products
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
-from .superarm import AUTO_EXACT_SUBSETS
+from .superarm import AUTO_EXACT_SUBSETS, search_operations
 
 #: eq32: the lower end of the measurement-quality factor lambda.
 LAMBDA_FLOOR = 0.2
@@ -188,6 +188,36 @@ def memory_parts(scenario: Scenario) -> tuple[int, int]:
     if subsets <= AUTO_EXACT_SUBSETS:  # the oracle's exact search of every step (info["optimal_reward"])
         per_trial += 8 * 3 * subsets * max(M, N)
     return model, per_trial
+
+
+#: Models of the IMM (constant velocity and the two coordinated turns), sigma points of a
+#: 4-state unscented transform, and the stacked measurement size beyond which the centralised
+#: update inverts through Woodbury's identity (as ``tracking.unscented`` does).
+_MODELS, _SIGMA_POINTS, _WOODBURY_FROM = 3, 9, 64
+
+
+def operations_per_trial_step(scenario: Scenario, tracking: bool = True, fusion: str = "average") -> float:
+    """Arithmetic operations one trial of an env of ``scenario`` does per step, roughly (an
+    upper estimate, to size runs in time as :func:`memory_parts` sizes them in memory): the
+    channel draws and SINR of all ``K M N`` target-channels, the oracle's search of the
+    optimal super arm, and, with ``tracking``, the IMM-UKF's update of the ``Ms Ns`` probed
+    channels by ``fusion`` and the bound's recursion."""
+    sc = scenario
+    K, M, N = sc.num_targets, sc.num_tx, sc.num_rx
+    channels = sc.tx_per_step * sc.rx_per_step
+    operations = 60.0 * K * M * N + search_operations(M, N, sc.tx_per_step, sc.rx_per_step)
+    if not tracking:
+        return operations
+    per_channel = _SIGMA_POINTS * 2 * 40 + 400  # measurement model, 2 x 2 innovation and gain
+    if fusion == "centralized":
+        size = 2 * channels  # range and azimuth of every probed channel, stacked
+        inverse = _SIGMA_POINTS**2 * size if size >= _WOODBURY_FROM else size**3 / 3
+        # twice the arithmetic: it runs as many small numpy calls (the average fusion is compiled)
+        update = 2 * (channels * per_channel + _SIGMA_POINTS * size**2 + 8 * size**2 + inverse)
+    else:
+        update = channels * (per_channel + 300)  # one update per channel, then eq22's average
+    bound = channels * 200 + 2000
+    return operations + K * (_MODELS * (update + 3000) + bound)
 
 
 def machine_memory() -> int | None:

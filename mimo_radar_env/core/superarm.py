@@ -188,6 +188,35 @@ def best_super_arm(
     raise ValueError(f"method must be one of {SUPER_ARM_METHODS}, got {method!r}")
 
 
+def exact_operations(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> float:
+    """Arithmetic operations of :func:`exact_super_arm` per trial, roughly: for each subset of
+    the smaller side, its sums over the other side and their top-k."""
+    tx_subsets, rx_subsets = math.comb(num_tx, tx_count), math.comb(num_rx, rx_count)
+    if tx_subsets <= rx_subsets:
+        return 4.0 * tx_subsets * (tx_count + 2) * num_rx
+    return 4.0 * rx_subsets * (rx_count + 2) * num_tx
+
+
+def alternating_operations(num_tx: int, num_rx: int, starts: int, rounds: int = 2) -> float:
+    """Arithmetic operations of :func:`alternating_super_arm` per trial, roughly: each of the
+    ``N + 2 + starts`` starts' ``rounds`` alternations (a few until nothing changes, typically)
+    of row and column sums."""
+    return 2.0 * (num_rx + 2 + starts) * rounds * num_tx * num_rx
+
+
+def search_operations(num_tx: int, num_rx: int, tx_count: int, rx_count: int, method: str = "auto") -> float:
+    """Arithmetic operations of :func:`best_super_arm` by ``method`` per trial, roughly."""
+    if method == "auto":
+        method = (
+            "exact"
+            if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
+            else "alternating"
+        )
+    if method == "exact":
+        return exact_operations(num_tx, num_rx, tx_count, rx_count)
+    return alternating_operations(num_tx, num_rx, starts=0)
+
+
 def is_exact_affordable(
     num_tx: int, num_rx: int, tx_count: int, rx_count: int, limit: int = MAX_EXACT_SUBSETS
 ) -> bool:

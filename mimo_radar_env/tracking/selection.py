@@ -79,6 +79,21 @@ def selection_memory_per_trial(
     return channels * (starts + 1) + starts * swaps
 
 
+def selection_operations_per_trial(
+    num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, starts: int = 8
+) -> float:
+    """Arithmetic operations of :func:`select_for_tracking` per trial, roughly (an upper
+    estimate): the channels' information, then every super arm's posterior when it
+    enumerates, or each start's greedy additions and swaps (each scoring every candidate
+    station through row and column sums) when it searches greedily."""
+    count = super_arm_count(num_tx, num_rx, tx_count, rx_count)
+    channels = 60.0 * num_targets * num_tx * num_rx
+    if count <= MAX_ENUMERATED_SUPER_ARMS:
+        return channels + count * num_targets * (8.0 * num_tx * num_rx + 60)
+    candidates = (tx_count + rx_count) * (num_tx + num_rx)
+    return channels * (starts + 1) + starts * num_targets * 3 * candidates * 200.0
+
+
 def super_arm_criterion(
     position_cov: NDArray[np.float64],
     information: NDArray[np.float64],

@@ -97,3 +97,88 @@ def test_the_policy_cost_benchmark_measures_within_the_declaration():
     row = measure_policy("tracking-ucb", random_scenario(4, 6, 2, 2, 3, horizon=6, seed=0), trials=2, steps=2)
     assert row["ms_per_trial_step"] > 0
     assert 0 < row["measured_mib_per_trial"] <= row["declared_mib_per_trial"]
+
+
+# ---------------------------------------------------------------- time
+def test_the_time_estimate_counts_every_task_and_the_tasks_at_once():
+    from benchmarks.harness import SECONDS_PER_OPERATION, STEP_OVERHEAD_SECONDS, estimate_seconds
+    from mimo_radar_env import VERSIONS
+    from mimo_radar_env.core.model import operations_per_trial_step
+
+    options = VERSIONS["v1"].options()
+    env = operations_per_trial_step(PAPER, options.tracking, options.fusion)
+    ops = {"a": 1e5, "b": 3e4}
+    # 120 trials in shards of 50: three shards per policy, six tasks, two at once
+    by_hand = sum(
+        10 * (3 * STEP_OVERHEAD_SECONDS + 120 * (env + o) * SECONDS_PER_OPERATION) for o in ops.values()
+    )
+    assert estimate_seconds(PAPER, options, ops, 120, 10, 50, parallel=2) == pytest.approx(by_hand / 2)
+    # one task: more workers do not make it faster
+    one = estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=1)
+    assert estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=4) == one
+
+
+def test_declared_operations_follow_the_work():
+    scenario = random_scenario(16, 16, 2, 4, 4, horizon=5, seed=0)
+    small = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 10})
+    large = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 20})
+    base = agents.Agent.operations_per_trial_step(small)
+    assert large.operations_per_trial_step() - base == pytest.approx(
+        2 * (small.operations_per_trial_step() - base)
+    )
+    # the tracking search: enumerated at 4 x 6, greedy at 64 x 64, more work for more targets
+    costs = {
+        (m, k): agents.make_agent(
+            "best-tracking", random_scenario(m, m, k, 4, 4, horizon=5, seed=0)
+        ).operations_per_trial_step()
+        for m in (8, 64)
+        for k in (1, 5)
+    }
+    assert costs[8, 1] < costs[8, 5] and costs[64, 1] < costs[64, 5] and costs[8, 5] < costs[64, 5]
+    from mimo_radar_env.core.model import operations_per_trial_step
+
+    assert (
+        operations_per_trial_step(scenario, True, "centralized")
+        > operations_per_trial_step(scenario, True, "average")
+        > operations_per_trial_step(scenario, False)
+    )
+
+
+def test_a_run_estimated_beyond_max_hours_is_refused_before_anything_is_written(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "mg-crb-cl", "--trials", "5000"]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--max-hours", "0.01", "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1
+    assert (
+        "5000 trials x 1000 steps of 1 policy on 'paper-1-v1'" in err and "more than --max-hours 0.01" in err
+    )
+    assert not out.exists()
+
+
+def test_a_long_run_says_its_estimate(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr("benchmarks.harness.SECONDS_PER_OPERATION", 1e-3)  # a very slow machine
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2"]
+    assert (
+        main([*argv, "--workers", "1", "--max-hours", "none", "--out", str(out), "--quiet", "--no-figures"])
+        == 0
+    )
+    assert (
+        "2 trials x 2 steps of 1 policy on 'paper-1-v1', 1 task(s) at once: about" in capsys.readouterr().err
+    )
+
+
+@pytest.mark.parametrize("value", ["0", "-1", "inf", "nan", "soon"])
+def test_max_hours_takes_a_positive_number_or_none(tmp_path, capsys, value):
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as exit_info:
+        main(
+            ["run", "--scenario", "paper-1", "--policies", "random", "--max-hours", value, "--out", str(out)]
+        )
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "--max-hours" in err and "number of hours > 0 or 'none'" in err
+    assert not out.exists()
