@@ -10,7 +10,10 @@ Figures (``perf.json``):
   actions (``benchmarks/speed/env_throughput.py``);
 * ``repro_wall_s_exact``: all three paper scenarios, six policies, 500 trials, T = 1000,
   every index policy with the exact solver, through the harness;
-* ``repro_wall_s_paper``: the same with MG-CRB-CL using BPSO, as in the paper.
+* ``repro_wall_s_paper``: the same with MG-CRB-CL using BPSO, as in the paper;
+* ``policy_*``: every policy's time per trial-step and peak memory per trial at 4 x 6, 16 x 16
+  and 64 x 64 stations, K = 1 and 5, against what it declares (``policy_cost.json`` beside
+  ``perf.json``; ``benchmarks/speed/policy_cost.py``; ``--quick``: 4 x 6 only).
 
 ``--quick`` measures the same things at small sizes (under a minute), for CI smoke tests.
 """
@@ -27,7 +30,7 @@ from typing import Any
 
 from ..harness import PAPER_POLICIES, make_config, run
 from ..studies.settings import default_workers
-from . import env_throughput, solver_speed, tracker_speed
+from . import env_throughput, policy_cost, solver_speed, tracker_speed
 
 FULL = {
     "trials": 500,
@@ -93,6 +96,11 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     )
     results["repro_wall_s_exact"] = repro_wall_s("exact", trials, sizes["repro_steps"], workers, shard_size)
     results["repro_wall_s_paper"] = repro_wall_s("bpso", trials, sizes["repro_steps"], workers, shard_size)
+    start = time.perf_counter()
+    layouts = policy_cost.LAYOUTS[:1] if quick else policy_cost.LAYOUTS
+    rows = policy_cost.measure(4, 7, progress=lambda line: None, layouts=layouts)
+    results["policy_cost"] = policy_cost.record(rows, 4, 7, time.perf_counter() - start)
+    results.update(policy_cost.ratios(rows))
     results["load_average_1min_after"] = round(os.getloadavg()[0], 2)
     return results
 
@@ -111,6 +119,13 @@ FIGURES = (
     ("repro_wall_s_exact", "s", "paper study, exact solvers"),
     ("repro_wall_s_paper", "s", "paper study, MG-CRB-CL with BPSO"),
 )
+#: The policies' costs against their declarations (their table in the docs is generated from
+#: ``policy_cost.json``).
+POLICY_FIGURES = (
+    ("policy_memory_measured_over_declared_max", "", "policies: largest measured / declared memory"),
+    ("policy_time_measured_over_estimated_min", "", "policies: least measured / estimated time"),
+    ("policy_time_measured_over_estimated_max", "", "policies: largest measured / estimated time"),
+)
 
 
 def format_value(value: float) -> str:
@@ -127,8 +142,8 @@ def target_met(key: str, value: float) -> bool | None:
 
 
 def format_table(results: dict[str, Any]) -> str:
-    rows = FIGURES
-    lines = [f"{'figure':<34}{'value':>14}  {'target':<10}what", "-" * 90]
+    rows = FIGURES + tuple(f for f in POLICY_FIGURES if f[0] in results)
+    lines = [f"{'figure':<44}{'value':>14}  {'target':<10}what", "-" * 100]
     for key, unit, what in rows:
         value = results[key]
         text = format_value(value)
@@ -136,7 +151,7 @@ def format_table(results: dict[str, Any]) -> str:
         if key in TARGETS and not results.get("quick"):
             op, bound = TARGETS[key]
             target = f"{op}{bound:g} {'ok' if target_met(key, value) else 'MISSED'}"
-        lines.append(f"{key:<34}{text + ' ' + unit:>14}  {target:<10}{what}")
+        lines.append(f"{key:<44}{text + ' ' + unit:>14}  {target:<10}{what}")
     return "\n".join(lines)
 
 
@@ -144,6 +159,7 @@ def main(out: str | Path, quick: bool = False, workers: int | None = None) -> di
     results = measure(quick, workers)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
+    (out / "policy_cost.json").write_text(json.dumps(results.pop("policy_cost"), indent=1) + "\n")
     (out / "perf.json").write_text(json.dumps(results, indent=2))
     print(format_table(results))
     return results

@@ -24,6 +24,16 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
         assert result[key] > 0, key
     assert 0 <= result["bpso_optimality_rate"] <= 1
     assert "tracker_speedup_vs_filterpy" in capsys.readouterr().out
+    # every policy's cost beside its declaration, at 4 x 6 (K = 1 and 5) in quick mode
+    cost = json.loads((tmp_path / "policy_cost.json").read_text())
+    assert {(r["M"], r["N"], r["K"]) for r in cost["rows"]} == {(4, 6, 1), (4, 6, 5)}
+    assert {r["policy"] for r in cost["rows"]} >= {"ucb1", "mg-crb-cl", "best-tracking", "tracking-ucb"}
+    assert 0 < result["policy_memory_measured_over_declared_max"] <= 1
+    assert (
+        0
+        < result["policy_time_measured_over_estimated_min"]
+        <= result["policy_time_measured_over_estimated_max"]
+    )
 
 
 def test_the_scaling_rows_measure_a_small_layout_and_the_growth_fit_is_a_slope():

@@ -39,6 +39,30 @@ COMMANDS = {
     "model-figures": (["--only", "bpso-set-optimal"], ["--only"]),
     "docs": (["--check"], ["--docs"]),
 }  # fmt: skip
+#: The studies, the comparison of scorecards and the perf suite (each valid invocation takes
+#: seconds); ``None`` sends the hostile value as a positional argument.
+SCORECARD = str(Path(__file__).parents[2] / "docs" / "results" / "claims" / "v1-centralized.json")
+STUDY_COMMANDS = {
+    "claims": (
+        ["--scenarios", "1", "--trials", "2", "--steps", "2", "--workers", "1"],
+        ["--scenarios", "--trials", "--steps", "--seed", "--env-version", "--fusion", "--shard-size",
+         "--max-hours", "--agent-param", "--backend"],
+    ),
+    "tracking": (
+        ["--scenarios", "1", "--fusions", "average", "--trials", "2", "--steps", "2", "--workers", "1"],
+        ["--scenarios", "--fusions", "--ppo", "--trials", "--steps", "--max-hours", "--env-version"],
+    ),
+    "calibrate-layout": (
+        ["--candidates", "2", "--screen", "1", "--screen-trials", "2", "--final", "1", "--trials", "2",
+         "--steps", "2", "--workers", "1"],
+        ["--candidates", "--screen", "--screen-trials", "--final", "--trials", "--steps"],
+    ),
+    "compare-claims": ([f"a={SCORECARD}"], [None]),
+    "perf": (["--quick", "--workers", "1"], ["--workers", None]),
+    "agents": ([], [None]),
+}  # fmt: skip
+COMMANDS.update(STUDY_COMMANDS)
+STUDIES_OUT = ("run", "paper", "claims", "tracking", "calibrate-layout")
 AGENT_PARAMS = [
     "mg-crb-cl.alpha",
     "mg-crb-cl.beta",
@@ -75,17 +99,20 @@ def invocations(draw, commands=tuple(COMMANDS)):
     base, flags = COMMANDS[command]
     flag = draw(st.sampled_from(flags))
     argv = [command, *base]
+    value = draw(VALUES)
+    if flag is None:  # a positional argument, or a LABEL=PATH of compare-claims
+        return [*argv, draw(st.sampled_from([value, f"b={value}"]))]
     if flag in argv:
         i = argv.index(flag)
         argv = argv[:i] + argv[i + 2 :]
-    return [*argv, flag, draw(VALUES)]
+    return [*argv, flag, value]
 
 
 def _with_out(argv: list[str], folder: Path) -> tuple[list[str], Path]:
     out = folder / "out"
-    if argv[0] in ("run", "paper"):
+    if argv[0] in STUDIES_OUT:
         return [*argv, "--out", str(out), "--quiet", "--no-figures"], out
-    if argv[0] == "model-figures":
+    if argv[0] in ("model-figures", "perf"):
         return [*argv, "--out", str(out)], out
     if argv[0] == "docs" and "--docs" not in argv:
         return [*argv, "--docs", str(out)], out
@@ -102,8 +129,14 @@ def _run_example(argv: list[str]) -> None:
 
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
-@given(invocations())
+@given(invocations(commands=tuple(c for c in COMMANDS if c not in STUDY_COMMANDS)))
 def test_hostile_arguments_give_success_or_one_line(argv):
+    _run_example(argv)
+
+
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(invocations(commands=tuple(STUDY_COMMANDS)))
+def test_hostile_arguments_to_studies_and_tools_give_success_or_one_line(argv):
     _run_example(argv)
 
 
