@@ -42,6 +42,7 @@ for _version in VERSIONS.values():
         register(
             id=_version.flat_env_id,
             entry_point="mimo_radar_env.wrappers:make_flat_env",
+            vector_entry_point="mimo_radar_env.wrappers:MimoRadarSelectFlatVectorEnv",
             kwargs=_version.registration_kwargs(),
         )
 

@@ -16,19 +16,19 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .envs import MimoRadarSelectVectorEnv
 from .envs.versions import ENV_IDS
 from .extras import require
 from .scenarios import Scenario
-from .wrappers import RadarFeatures, SuperArmDiscreteAction, SuperArmIndex, make_ppo_env, scores_to_action
+from .wrappers import MimoRadarSelectFlatVectorEnv, make_ppo_env
 
 VecEnv = require("stable_baselines3.common.vec_env.base_vec_env", "rl", "mimo_radar_env.sb3").VecEnv
 
 
 class NativeVecEnv(VecEnv):
-    """An SB3 ``VecEnv`` over :class:`~mimo_radar_env.MimoRadarSelectVectorEnv` with the PPO
-    features (:class:`~mimo_radar_env.wrappers.RadarFeatures`) and valid-by-construction
-    actions (one ``Discrete`` action per super arm, or station scores).
+    """An SB3 ``VecEnv`` over the Flat ids' vector env
+    (:class:`~mimo_radar_env.wrappers.MimoRadarSelectFlatVectorEnv`: the batch engine with the
+    PPO features and valid-by-construction actions, one ``Discrete`` action per super arm or
+    station scores).
 
     All envs end together after ``T`` steps; they are then reset at once and the last
     features are returned as ``terminal_observation`` (SB3's convention). Episode ``e``
@@ -60,40 +60,35 @@ class NativeVecEnv(VecEnv):
     ) -> None:
         probe = make_ppo_env(scenario, action=action, env_id=ENV_IDS[version], **options)
         options = {**probe.unwrapped.options.to_dict(), **options}  # the version's defaults, resolved
-        self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, scenario=probe.unwrapped.scenario, **options)
-        self.scenario = self.env.scenario
-        self.discrete = isinstance(probe.env, SuperArmDiscreteAction)
-        self.index = SuperArmIndex(self.scenario) if self.discrete else None
-        self.features = RadarFeatures(self.scenario)
+        self.flat = MimoRadarSelectFlatVectorEnv(
+            num_envs=num_envs, action=action, scenario=probe.unwrapped.scenario, **options
+        )
+        self.env = self.flat.env
+        self.scenario = self.flat.scenario
+        self.discrete = self.flat.action_form == "discrete"
         self.seed_value = seed
         self.episode = 0
         self._actions: NDArray | None = None
         super().__init__(num_envs, probe.observation_space, probe.action_space)
 
     def reset(self) -> NDArray[np.float32]:
-        obs, _ = self.env.reset(seed=self.seed_value + self.episode * self.num_envs)
+        features, _ = self.flat.reset(seed=self.seed_value + self.episode * self.num_envs)
         self.episode += 1
         self.returns = np.zeros(self.num_envs)
         self.lengths = 0
-        return self.features.reset(obs)
+        return features
 
     def step_async(self, actions: NDArray) -> None:
         self._actions = actions
 
     def step_wait(self) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.bool_], list[dict]]:
         assert self._actions is not None, "step_async() first"
-        sc = self.scenario
-        if self.discrete:
-            env_actions = self.index.to_action(np.asarray(self._actions).reshape(-1))
-        else:
-            env_actions = scores_to_action(self._actions, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
-        obs, reward, terminated, truncated, _ = self.env.step(env_actions)
-        features = self.features.step(obs)
+        features, reward, terminated, truncated, _ = self.flat.step(self._actions)
         self.returns += reward
         self.lengths += 1
         dones = terminated | truncated
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
-        if dones.all():
+        if dones.all():  # SB3 resets at once (the Flat vector env would on the next step)
             for i in range(self.num_envs):
                 infos[i] = {
                     "terminal_observation": features[i],
@@ -102,6 +97,10 @@ class NativeVecEnv(VecEnv):
                 }
             features = self.reset()
         return features, reward.astype(np.float32), dones, infos
+
+    def action_masks(self) -> NDArray[np.bool_]:
+        """The allowed Discrete actions of every env, (num_envs, A) (sb3-contrib's MaskablePPO)."""
+        return self.flat.action_masks()
 
     def close(self) -> None:
         return None

@@ -11,7 +11,8 @@
 All three keep every action valid by construction: a policy never has to learn the
 ``Ms``/``Ns`` constraint. :func:`make_flat_env` is the entry point of the registered
 ``MimoRadarSelectFlat-v0``/``-v1``: the env with a valid action and the feature observation,
-for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``).
+for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``);
+:class:`MimoRadarSelectFlatVectorEnv` is their vector entry point, B trials in one batch.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.vector import AutoresetMode, VectorEnv
+from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from .core.geometry import squared_range_products
@@ -235,16 +238,105 @@ def make_flat_env(action: str = "auto", render_mode: str | None = None, **kwargs
     return wrap_for_learning(MimoRadarSelectEnv(render_mode=render_mode, **kwargs), action)
 
 
+#: The action forms of the learning envs; ``"auto"`` is discrete up to this many super arms.
+ACTION_FORMS = ("auto", "discrete", "scores")
+AUTO_DISCRETE_SUPER_ARMS = 1000
+
+
+def action_form(action: str, scenario: Scenario) -> str:
+    """``"discrete"`` or ``"scores"``: ``action`` with ``"auto"`` resolved for ``scenario``."""
+    if action not in ACTION_FORMS:
+        raise ValueError(f"action must be one of {list(ACTION_FORMS)}, got {action!r}")
+    if action != "auto":
+        return action
+    sc = scenario
+    count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+    return "discrete" if count <= AUTO_DISCRETE_SUPER_ARMS else "scores"
+
+
 def wrap_for_learning(env: gym.Env, action: str = "auto") -> gym.Env:
     """``env`` with a valid action wrapper and the feature observation."""
-    sc = env.unwrapped.scenario
-    count = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-    if action == "auto":
-        action = "discrete" if count <= 1000 else "scores"
-    if action == "discrete":
+    if action_form(action, env.unwrapped.scenario) == "discrete":
         env = SuperArmDiscreteAction(env)
-    elif action == "scores":
-        env = StationScoreAction(env)
     else:
-        raise ValueError(f"action must be 'auto', 'discrete' or 'scores', got {action!r}")
+        env = StationScoreAction(env)
     return RadarFeatureObservation(env)
+
+
+class MimoRadarSelectFlatVectorEnv(VectorEnv):
+    """B trials of ``MimoRadarSelectFlat`` as one numpy computation: the vector entry point of
+    the Flat ids (``gym.make_vec("MimoRadarSelectFlat-v1", num_envs=B,
+    vectorization_mode="vector_entry_point")``).
+
+    The batch engine of :class:`~mimo_radar_env.MimoRadarSelectVectorEnv` with the Flat env's
+    valid action (one ``Discrete`` action per super arm, or station scores, as ``action``) and
+    its float32 features (:class:`RadarFeatures`, computed for the batch at once). Trial ``i``
+    of ``reset(seed=s)`` is the single Flat env reset with ``seed=s + i``, step for step. All
+    trials end together after ``T`` steps; the next step resets them all (Gymnasium's
+    next-step autoreset). :meth:`action_masks` gives the allowed Discrete actions, (B, A).
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+
+    def __init__(
+        self, num_envs: int = 1, action: str = "auto", render_mode: str | None = None, **kwargs: Any
+    ):
+        from .envs import MimoRadarSelectVectorEnv
+
+        self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, render_mode=render_mode, **kwargs)
+        self.num_envs = self.env.num_envs
+        self.scenario = sc = self.env.scenario
+        self.options = self.env.options
+        self.action_form = action_form(action, sc)
+        if self.action_form == "discrete":
+            self.index: SuperArmIndex | None = SuperArmIndex(sc)
+            self.single_action_space: spaces.Space = spaces.Discrete(self.index.size)
+        else:
+            self.index = None
+            self.single_action_space = spaces.Box(-1.0, 1.0, (sc.num_tx + sc.num_rx,), np.float32)
+        self.features = RadarFeatures(sc)
+        self.single_observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
+        self.action_space = batch_space(self.single_action_space, self.num_envs)
+        self.observation_space = batch_space(self.single_observation_space, self.num_envs)
+        self.render_mode = None
+        self._needs_reset = False
+
+    def reset(
+        self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
+    ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        obs, info = self.env.reset(seed=seed, options=options)
+        self._needs_reset = False
+        self._np_random, self._np_random_seed = self.env.np_random, self.env.np_random_seed
+        return self.features.reset(obs), info
+
+    def to_env_actions(self, actions: Any) -> NDArray[np.int8]:
+        """The env's actions (B, M + N) for the batch's Flat actions."""
+        if self.index is not None:
+            return self.index.to_action(np.asarray(actions).reshape(self.num_envs))
+        sc = self.scenario
+        scores = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
+        return scores_to_action(scores, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
+
+    def step(
+        self, actions: Any
+    ) -> tuple[
+        NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
+    ]:
+        if self._needs_reset:  # the inner env resets on this step; its action is not used
+            obs, reward, terminated, truncated, info = self.env.step(None)
+            self._needs_reset = False
+            return self.features.reset(obs), reward, terminated, truncated, info
+        obs, reward, terminated, truncated, info = self.env.step(self.to_env_actions(actions))
+        self._needs_reset = bool((terminated | truncated).all())
+        return self.features.step(obs), reward, terminated, truncated, info
+
+    def action_masks(self) -> NDArray[np.bool_]:
+        """The allowed Discrete actions of every trial, (B, A): all of them, since each is a
+        valid super arm (``ValueError`` for station scores, which have no mask)."""
+        if self.index is None:
+            raise ValueError("station-score actions have no mask; make the env with action='discrete'")
+        return np.ones((self.num_envs, self.index.size), dtype=bool)
+
+    def oracle_action(self) -> NDArray[np.int8]:
+        """The env's optimal super arms of the coming step, (B, M + N) (reads the truth)."""
+        return self.env.oracle_action()

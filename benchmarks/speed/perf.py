@@ -11,6 +11,10 @@ Figures (``perf.json``):
 * ``repro_wall_s_exact``: all three paper scenarios, six policies, 500 trials, T = 1000,
   every index policy with the exact solver, through the harness;
 * ``repro_wall_s_paper``: the same with MG-CRB-CL using BPSO, as in the paper;
+* ``flat_vector_trial_steps_per_s``, ``flat_sync_trial_steps_per_s``,
+  ``flat_vector_vs_sync_speedup``: ``MimoRadarSelectFlat-v1`` (paper-1-v1, random Discrete
+  actions) through its native vector entry point (``trials`` trials) against Gymnasium's sync
+  vector env of single Flat envs (``5 x reference_trials`` of them), in trial-steps per second;
 * ``policy_*``: every policy's time per trial-step and peak memory per trial at 4 x 6, 16 x 16
   and 64 x 64 stations, K = 1 and 5, against what it declares (``policy_cost.json`` beside
   ``perf.json``; ``benchmarks/speed/policy_cost.py``; ``--quick``: 4 x 6 only).
@@ -94,6 +98,16 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     results["env_trial_steps_per_s_no_tracker"] = env_throughput.measure(
         "paper-1", sizes["trials"], sizes["env_steps"], tracking=False
     )
+    flat_steps = min(sizes["env_steps"], 20)
+    results["flat_vector_trial_steps_per_s"] = env_throughput.flat_measure(
+        "paper-1-v1", sizes["trials"], flat_steps, "vector_entry_point"
+    )
+    results["flat_sync_trial_steps_per_s"] = env_throughput.flat_measure(
+        "paper-1-v1", sizes["reference_trials"] * 5, flat_steps, "sync"
+    )
+    results["flat_vector_vs_sync_speedup"] = (
+        results["flat_vector_trial_steps_per_s"] / results["flat_sync_trial_steps_per_s"]
+    )
     results["repro_wall_s_exact"] = repro_wall_s("exact", trials, sizes["repro_steps"], workers, shard_size)
     results["repro_wall_s_paper"] = repro_wall_s("bpso", trials, sizes["repro_steps"], workers, shard_size)
     start = time.perf_counter()
@@ -119,6 +133,13 @@ FIGURES = (
     ("repro_wall_s_exact", "s", "paper study, exact solvers"),
     ("repro_wall_s_paper", "s", "paper study, MG-CRB-CL with BPSO"),
 )
+#: Figures measured since the committed perf.json (shown by ``perf``; in the docs' table once
+#: perf.json is re-measured).
+NEW_FIGURES = (
+    ("flat_vector_trial_steps_per_s", "/s", "Flat-v1, native vector entry point"),
+    ("flat_sync_trial_steps_per_s", "/s", "Flat-v1, sync vector env of single envs"),
+    ("flat_vector_vs_sync_speedup", "x", "Flat-v1 native vector / sync"),
+)
 #: The policies' costs against their declarations (their table in the docs is generated from
 #: ``policy_cost.json``).
 POLICY_FIGURES = (
@@ -142,7 +163,7 @@ def target_met(key: str, value: float) -> bool | None:
 
 
 def format_table(results: dict[str, Any]) -> str:
-    rows = FIGURES + tuple(f for f in POLICY_FIGURES if f[0] in results)
+    rows = FIGURES + tuple(f for f in NEW_FIGURES + POLICY_FIGURES if f[0] in results)
     lines = [f"{'figure':<44}{'value':>14}  {'target':<10}what", "-" * 100]
     for key, unit, what in rows:
         value = results[key]

@@ -13,6 +13,9 @@ FIGURES = {
     "env_trial_steps_per_s",
     "repro_wall_s_exact",
     "repro_wall_s_paper",
+    "flat_vector_trial_steps_per_s",
+    "flat_sync_trial_steps_per_s",
+    "flat_vector_vs_sync_speedup",
 }
 
 
