@@ -272,15 +272,35 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     valid action (one ``Discrete`` action per super arm, or station scores, as ``action``) and
     its float32 features (:class:`RadarFeatures`, computed for the batch at once). Trial ``i``
     of ``reset(seed=s)`` is the single Flat env reset with ``seed=s + i``, step for step. All
-    trials end together after ``T`` steps; the next step resets them all (Gymnasium's
-    next-step autoreset). :meth:`action_masks` gives the allowed Discrete actions, (B, A).
+    trials end together after ``T`` steps; with ``autoreset_mode`` ``"next-step"`` (default,
+    Gymnasium's) the next step resets them all; with ``"disabled"`` (what torchrl's
+    ``GymWrapper`` takes) a step after the end raises and the caller resets, also through
+    ``reset(options={"reset_mask": mask})`` with every trial in the mask (they run in
+    lockstep). :meth:`action_masks` gives the allowed Discrete actions, (B, A).
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
     def __init__(
-        self, num_envs: int = 1, action: str = "auto", render_mode: str | None = None, **kwargs: Any
+        self,
+        num_envs: int = 1,
+        action: str = "auto",
+        render_mode: str | None = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        **kwargs: Any,
     ):
+        modes = {"next-step": AutoresetMode.NEXT_STEP, "disabled": AutoresetMode.DISABLED}
+        mode = (
+            modes.get(autoreset_mode, autoreset_mode) if isinstance(autoreset_mode, str) else autoreset_mode
+        )
+        if mode not in modes.values():
+            raise ValueError(
+                f"autoreset_mode must be one of {list(modes)} (or those AutoresetMode members), "
+                f"got {autoreset_mode!r}"
+            )
+        #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).
+        self.autoreset_mode = mode
+        self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         from .envs import MimoRadarSelectVectorEnv
 
         self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, render_mode=render_mode, **kwargs)
@@ -304,7 +324,13 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     def reset(
         self, *, seed: int | list[int] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
-        obs, info = self.env.reset(seed=seed, options=options)
+        options = dict(options or {})
+        mask = options.pop("reset_mask", None)
+        if mask is not None and not np.all(mask):
+            raise ValueError(
+                "reset_mask must select every trial: the trials run in lockstep and end together"
+            )
+        obs, info = self.env.reset(seed=seed, options=options or None)
         self._needs_reset = False
         self._np_random, self._np_random_seed = self.env.np_random, self.env.np_random_seed
         return self.features.reset(obs), info
@@ -322,6 +348,10 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     ) -> tuple[
         NDArray[np.float32], NDArray[np.float64], NDArray[np.bool_], NDArray[np.bool_], dict[str, Any]
     ]:
+        if self._needs_reset and self.autoreset_mode == AutoresetMode.DISABLED:
+            raise RuntimeError(
+                "the episode ended after the horizon; call reset() (autoreset_mode='disabled')"
+            )
         if self._needs_reset:  # the inner env resets on this step; its action is not used
             obs, reward, terminated, truncated, info = self.env.step(None)
             self._needs_reset = False

@@ -8,6 +8,7 @@ the B = 1 case and squeezes that axis; there is no second implementation.
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Sequence
 from typing import Any
 
@@ -88,6 +89,8 @@ class RadarEngine:
         self.step_index = 0
         self.last_action = np.zeros((batch_size, self.action_size), dtype=np.int8)
         self.last_valid = np.zeros(batch_size, dtype=bool)
+        self.invalid_steps = np.zeros(batch_size, dtype=np.int64)  # this episode's, per trial
+        self._warned_invalid = False
 
     @property
     def horizon(self) -> int:
@@ -107,6 +110,7 @@ class RadarEngine:
         self.step_index = 0
         self.last_action[:] = 0
         self.last_valid[:] = False
+        self.invalid_steps[:] = 0
         sinr = self.simulation.sinr_samples_all()  # Algorithm 1: every channel probed once
         probed = np.ones((self.batch_size, self.num_tx, self.num_rx), dtype=np.int8)
         obs = self._observation(sinr, probed)
@@ -150,6 +154,9 @@ class RadarEngine:
             self._advance_bound(channels)
         self.last_action = actions
         self.last_valid = valid
+        self.invalid_steps += ~valid
+        if self.step_index == self.horizon:
+            self._warn_if_invalid_dominated()
 
         info = self._truth_info()
         weights = self.model.channel_weights(self.simulation.mean_sinr())
@@ -174,6 +181,24 @@ class RadarEngine:
         terminated = np.zeros(self.batch_size, dtype=bool)
         truncated = np.full(self.batch_size, self.step_index >= self.horizon)
         return obs, reward, terminated, truncated, info
+
+    def _warn_if_invalid_dominated(self) -> None:
+        """Warns once per env when, in an episode just ended, most actions of a trial probed
+        nothing: a learner on the raw ``MultiBinary`` action that settled on invalid actions."""
+        worst = int(self.invalid_steps.max())
+        if self._warned_invalid or 2 * worst <= self.horizon:
+            return
+        self._warned_invalid = True
+        warnings.warn(
+            f"{worst} of the episode's {self.horizon} actions selected a number of stations other "
+            f"than tx_per_step={self.scenario.tx_per_step} and rx_per_step={self.scenario.rx_per_step} "
+            "and probed nothing (reward 0). A learner on the raw MultiBinary action rarely finds the "
+            "valid ones: train on the Flat id (MimoRadarSelectFlat-v1, every action a valid super arm), "
+            "or make the env with invalid_action='raise' to stop at the first invalid action "
+            "(this warning is given once per env)",
+            UserWarning,
+            stacklevel=4,
+        )
 
     def oracle_action(self) -> NDArray[np.int8]:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""

@@ -266,6 +266,14 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
             import matplotlib.pyplot as plt
 
             if self._figure is None:
+                backend = plt.get_backend().lower()
+                if backend in NON_INTERACTIVE_BACKENDS:
+                    gym.logger.warn(
+                        f"render_mode='human' shows nothing here: matplotlib's backend is {backend!r}, "
+                        "which draws no window (no display: DISPLAY unset, or a headless machine). "
+                        "Set a display or MPLBACKEND to an interactive backend, or make the env with "
+                        "render_mode='rgb_array' to get the frames as arrays"
+                    )
                 plt.ion()
                 self._figure = plt.figure(figsize=(6, 6), dpi=80)
             fig = self._figure
@@ -292,6 +300,10 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
             plt.close(self._figure)
             self._figure = None
+
+
+#: matplotlib backends that draw no window (``render_mode="human"`` warns on them).
+NON_INTERACTIVE_BACKENDS = frozenset({"agg", "cairo", "pdf", "pgf", "ps", "svg", "template"})
 
 
 def describe(kind: str, spec: EnvSpec | None, scenario: Scenario, options: EnvOptions) -> str:
@@ -337,6 +349,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
+    #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).
+    autoreset_mode = AutoresetMode.NEXT_STEP
 
     def __str__(self) -> str:
         text = describe(type(self).__name__, self.spec, self.scenario, self.options)

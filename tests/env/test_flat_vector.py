@@ -1,6 +1,9 @@
 """The Flat ids' vector entry point: the batch engine with the Flat env's action and features,
 equal to N single Flat envs trial for trial, across the next-step autoreset."""
 
+import warnings
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -57,3 +60,98 @@ def test_the_flat_vector_env_gives_masks_and_refuses_a_bad_action_form():
     venv.reset(seed=0)
     with pytest.raises(ValueError, match=r"super-arm index must be in \[0, 120\)"):
         venv.step(np.array([0, 120]))
+
+
+# ---------------------------------------------------------------- guard rails on the raw id
+def test_an_episode_of_mostly_invalid_actions_warns_once_naming_the_flat_id():
+    env = gym.make("MimoRadarSelect-v1", horizon=4)
+    nothing = np.zeros(env.action_space.shape, dtype=np.int8)
+    for episode in range(2):
+        env.reset(seed=episode)
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            for _ in range(4):
+                env.step(nothing)
+        messages = [str(w.message) for w in caught if "probed nothing" in str(w.message)]
+        assert len(messages) == (1 if episode == 0 else 0)  # once per env
+        if messages:
+            assert "4 of the episode's 4 actions" in messages[0]
+            assert "MimoRadarSelectFlat-v1" in messages[0] and "invalid_action='raise'" in messages[0]
+
+
+def test_an_episode_of_mostly_valid_actions_does_not_warn():
+    env = gym.make("MimoRadarSelect-v1", horizon=4)
+    nothing = np.zeros(env.action_space.shape, dtype=np.int8)
+    env.reset(seed=0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        for step in range(4):  # two of four invalid: not most of them
+            env.step(nothing if step < 2 else env.unwrapped.oracle_action())
+
+
+def test_render_human_without_a_display_says_so(monkeypatch):
+    import matplotlib.pyplot as plt
+
+    monkeypatch.setattr(plt, "get_backend", lambda: "agg")
+    env = gym.make("MimoRadarSelect-v1", horizon=4, render_mode="human")
+    with pytest.warns(
+        UserWarning, match=r"render_mode='human' shows nothing here: matplotlib's backend is 'agg'"
+    ):
+        env.reset(seed=0)
+    env.close()
+
+
+#: SB3's check_env warnings on the raw id, each explained in docs/clients.md: the Dict
+#: observation's entries of 2 or 3 axes look to SB3 like vectors of odd shape or like images.
+EXPLAINED = (
+    "has an unconventional shape (neither an image, nor a 1D vector)",
+    "is an image but its `dtype` is (float64)",
+    "is an image but the upper and lower bounds are not in [0, 255]",
+    "The minimal resolution for an image is 36x36",
+    "probed nothing (reward 0)",  # ours: check_env's random MultiBinary actions are mostly invalid
+)
+
+
+def test_check_env_warns_on_the_raw_id_only_as_the_docs_explain():
+    pytest.importorskip("stable_baselines3")
+    from stable_baselines3.common.env_checker import check_env
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(gym.make("MimoRadarSelect-v1", horizon=5).unwrapped, warn=True)
+    messages = {str(w.message) for w in caught if w.category is UserWarning}
+    assert messages, "check_env gave no warning: update docs/clients.md"
+    unexplained = [m for m in messages if not any(e in m for e in EXPLAINED)]
+    assert not unexplained
+    docs = (Path(__file__).parents[2] / "docs" / "clients.md").read_text()
+    for phrase in ("unconventional shape", "looks like an image", "probed nothing"):
+        assert phrase in docs
+    with warnings.catch_warnings(record=True) as caught:  # the Flat id: none at all
+        warnings.simplefilter("always")
+        check_env(gym.make("MimoRadarSelectFlat-v1", horizon=5), warn=True)
+    assert not caught
+
+
+def test_with_autoreset_disabled_the_caller_resets_every_trial_at_once():
+    venv = gym.make_vec(
+        "MimoRadarSelectFlat-v1",
+        num_envs=2,
+        vectorization_mode="vector_entry_point",
+        horizon=2,
+        autoreset_mode="disabled",
+    )
+    assert venv.unwrapped.autoreset_mode is gym.vector.AutoresetMode.DISABLED
+    first, _ = venv.reset(seed=3)
+    for _ in range(2):
+        *_, truncated, _ = venv.step(np.array([0, 1]))
+    assert truncated.all()
+    with pytest.raises(RuntimeError, match=r"call reset\(\) \(autoreset_mode='disabled'\)"):
+        venv.step(np.array([0, 1]))
+    with pytest.raises(ValueError, match="reset_mask must select every trial"):
+        venv.reset(options={"reset_mask": np.array([True, False])})
+    again, _ = venv.reset(seed=3, options={"reset_mask": np.array([True, True])})
+    np.testing.assert_array_equal(first, again)
+    with pytest.raises(ValueError, match=r"autoreset_mode must be one of \['next-step', 'disabled'\]"):
+        gym.make_vec(
+            "MimoRadarSelectFlat-v1", num_envs=2, vectorization_mode="vector_entry_point", autoreset_mode="x"
+        )
