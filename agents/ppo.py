@@ -18,7 +18,9 @@ from .base import Agent, Observation
 MODEL_FILE = "model.zip"
 #: Observation normalisation statistics, as plain arrays (``np.load`` without pickles).
 NORMALIZATION_FILE = "vecnormalize.npz"
-LEGACY_NORMALIZATION_FILE = "vecnormalize.pkl"
+#: The same statistics as SB3's ``VecNormalize.save`` writes them (a pickle), for SB3's
+#: ``VecNormalize.load``; loaded here only when asked (``allow_pickle=True``).
+SB3_NORMALIZATION_FILE = "vecnormalize.pkl"
 
 
 def require_sb3() -> Any:
@@ -56,6 +58,70 @@ def load_normalization(path: Path, probe: Any) -> Any:
         normalization.obs_rms.var = stats["var"]
         normalization.obs_rms.count = float(stats["count"])
     return normalization
+
+
+def load_pickled_normalization(path: Path, probe: Any) -> Any:
+    """SB3's ``VecNormalize.load`` of ``path`` over ``probe``, for evaluation: unpickling runs
+    code from the file, so it warns, and callers reach it only when the user allowed it."""
+    import warnings
+
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    warnings.warn(
+        f"unpickling {path} (allow_pickle=True): a pickle runs code from the file, so load only "
+        "statistics you trust",
+        UserWarning,
+        stacklevel=3,
+    )
+    try:
+        normalization = VecNormalize.load(str(path), probe)
+    except Exception as exc:  # anything unpickling can raise
+        raise ValueError(
+            f"{path} is not a VecNormalize file SB3 can load ({type(exc).__name__}: {exc})"
+        ) from exc
+    if not isinstance(normalization, VecNormalize):
+        raise ValueError(f"{path} does not hold SB3's VecNormalize statistics")
+    normalization.training = False
+    normalization.norm_reward = False
+    return normalization
+
+
+def normalization_file(model: Path, normalization: str | Path | None, allow_pickle: bool) -> Path | None:
+    """The statistics a model is evaluated with: the file the user names (``normalization``),
+    else the one beside the model (``vecnormalize.npz``, or with ``allow_pickle`` SB3's
+    ``vecnormalize.pkl``), else none. Never from elsewhere: statistics in a subfolder (rl-zoo3
+    keeps them in ``ENV_ID/vecnormalize.pkl`` beside the model) are refused by name, so that a
+    model never runs silently without its normalisation."""
+    if normalization is not None:
+        path = Path(normalization)
+        if not path.is_file():
+            raise ValueError(f"normalization file {path} does not exist")
+        if path.suffix not in (".npz", ".pkl"):
+            raise ValueError(f"normalization must be a .npz (train-ppo's) or .pkl (SB3's) file, got {path}")
+        if path.suffix == ".pkl" and not allow_pickle:
+            raise ValueError(
+                f"{path} is a pickle (SB3's VecNormalize.save), which runs code when loaded: "
+                "pass allow_pickle=true to load it if you trust the file"
+            )
+        return path
+    beside, pickled = model.parent / NORMALIZATION_FILE, model.parent / SB3_NORMALIZATION_FILE
+    if beside.is_file():
+        return beside
+    if pickled.is_file():
+        if allow_pickle:
+            return pickled
+        raise ValueError(
+            f"{pickled} holds the model's normalisation as a pickle, which is not loaded unless "
+            "asked (unpickling runs code): pass allow_pickle=true if you trust it"
+        )
+    elsewhere = sorted(model.parent.glob(f"*/{SB3_NORMALIZATION_FILE}"))
+    if elsewhere:
+        raise ValueError(
+            f"the model was saved with normalisation statistics in {elsewhere[0]} (rl-zoo3's layout), "
+            "which are not beside it: name them, normalization=PATH (with allow_pickle=true for a "
+            ".pkl), or the model would run without them"
+        )
+    return None
 
 
 def load_model(file: Path, observation_space: Any, num_stations: int) -> Any:
@@ -121,19 +187,36 @@ class PPOAgent(Agent):
         ``model.zip`` or the folder holding it.
     deterministic : bool
         Take the policy's most likely action (default) rather than sampling.
+    normalization : str or Path, optional
+        The observation statistics to apply (default: the file beside the model, see
+        :func:`normalization_file`): ``train-ppo``'s ``.npz`` or SB3's ``.pkl``.
+    allow_pickle : bool
+        Allow loading SB3's pickled ``vecnormalize.pkl`` (default False: a pickle runs code
+        from the file; it warns when it does).
     """
 
     name = "ppo"
     needs_tracking = True
 
     def __init__(
-        self, scenario: Scenario | str, path: str | Path, seed: int | None = None, deterministic: bool = True
+        self,
+        scenario: Scenario | str,
+        path: str | Path,
+        seed: int | None = None,
+        deterministic: bool = True,
+        normalization: str | Path | None = None,
+        allow_pickle: bool = False,
     ) -> None:
         super().__init__(scenario, seed)
         sb3 = require_sb3()
         file = model_file(path)
         if not file.is_file():
             raise ValueError(f"PPO model {file} does not exist (expected ppo:PATH/TO/model.zip)")
+        if not isinstance(allow_pickle, bool):
+            raise ValueError(f"allow_pickle must be true or false, got {allow_pickle!r}")
+        if normalization is not None and not isinstance(normalization, str | Path):
+            raise ValueError(f"normalization must be the path of a statistics file, got {normalization!r}")
+        stats = normalization_file(file, normalization, allow_pickle)
         self.features = RadarFeatures(self.scenario)
         from gymnasium import spaces
 
@@ -150,18 +233,21 @@ class PPOAgent(Agent):
         self.discrete = self.model.action_space.__class__.__name__ == "Discrete"
         self.index = SuperArmIndex(self.scenario) if self.discrete else None
         self.normalization = None
-        norm_file = file.parent / NORMALIZATION_FILE
-        if (file.parent / LEGACY_NORMALIZATION_FILE).exists() and not norm_file.exists():
-            raise ValueError(
-                f"{file.parent} holds {LEGACY_NORMALIZATION_FILE}, a pickle, which is not loaded (unpickling "
-                f"runs code); retrain with this version, which writes {NORMALIZATION_FILE}"
-            )
-        if norm_file.exists():
+        self.normalization_file = stats
+        if stats is not None:
             from stable_baselines3.common.vec_env import DummyVecEnv
 
             action = "discrete" if self.discrete else "scores"
             probe = DummyVecEnv([lambda: make_ppo_env(self.scenario, action=action)])
-            self.normalization = load_normalization(norm_file, probe)
+            if stats.suffix == ".pkl":
+                self.normalization = load_pickled_normalization(stats, probe)
+            else:
+                self.normalization = load_normalization(stats, probe)
+            if self.normalization.observation_space.shape != observation_space.shape:
+                raise ValueError(
+                    f"the statistics in {stats} are for {self.normalization.observation_space.shape} "
+                    f"features, the scenario has {observation_space.shape}"
+                )
         self._features: NDArray[np.float32] | None = None
 
     def _reset(self, obs: Observation) -> None:

@@ -608,3 +608,27 @@ def policy_cost(docs: Path) -> str:
         f"{times[0]:.2f} to {times[-1]:.2f}, with a median of {times[len(times) // 2]:.2f}.",
     ]
     return "\n".join(lines)
+
+
+def _recipe_costs(docs: Path, page: str) -> str:
+    """``python -m benchmarks.speed.recipes``' rows of ``page``: each Python recipe's wall time
+    when run alone in a fresh interpreter (the interpreter's start and imports included)."""
+    record = read_json(docs, "perf/recipes.json")
+    rows = [r for r in record["rows"] if r["page"] == page]
+    if not rows:
+        raise BenchError(f"perf/recipes.json has no recipe of {page}: run python -m benchmarks.speed.recipes")
+    lines = ["| recipe | section | wall time, run alone |", "|---|---|---|"]
+    for r in rows:
+        cost = f"{r['seconds']:.1f} s" if "seconds" in r else f"not run here ({r['not_run']})"
+        lines.append(f"| {r['index'] + 1} | {r['section']} | {cost} |")
+    machine = record["machine"]
+    lines += [
+        "",
+        f"Measured by `{record['command']}` on {machine['cores']} cores ({machine['machine']}, "
+        f"Python {machine['python']}), one recipe at a time.",
+    ]
+    return "\n".join(lines)
+
+
+for _page in ("clients.md", "ppo.md"):
+    generator(f"recipe-costs-{_page.removesuffix('.md')}")(lambda docs, page=_page: _recipe_costs(docs, page))

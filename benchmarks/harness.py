@@ -165,10 +165,12 @@ def make_config(
                 f"unknown policy {policy!r}; available policies are {available} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
             )
-    per_trial, operations = {}, {}
+    per_trial, operations, built = {}, {}, {}
     for policy in policies:
         try:
-            agent = make_policy(policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict())
+            agent = built[policy] = make_policy(
+                policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict()
+            )
             per_trial[policy] = agent.memory_per_trial()
             operations[policy] = agent.operations_per_trial_step()
             probe = MimoRadarSelectVectorEnv(
@@ -187,7 +189,7 @@ def make_config(
     except (TypeError, ValueError) as exc:
         raise HarnessError(f"--agent-param: a value cannot be recorded in config.json ({exc})") from None
     return RunConfig(
-        policy_files={p: files for p in policies if (files := _policy_files(p))},
+        policy_files={p: files for p in policies if (files := _policy_files(p, built[p]))},
         scenario=sc.to_dict(),
         policies=list(policies),
         trials=trials,
@@ -316,14 +318,16 @@ def check_time(
     return seconds
 
 
-def _policy_files(policy: str) -> dict[str, str]:
-    """``{path: sha256}`` of the files a ``NAME:PATH`` policy reads (model and statistics)."""
+def _policy_files(policy: str, agent: Any) -> dict[str, str]:
+    """``{path: sha256}`` of the files a ``NAME:PATH`` policy reads: its model and the
+    normalisation statistics the built agent applies (``agent.normalization_file``)."""
     name, argument = agents.split_policy(policy)
     if agents.agent_argument(name) != "path" or not argument:
         return {}
-    model = model_file(argument["path"])
-    files = [model, *sorted(model.parent.glob("vecnormalize.*"))]
-    return {str(f): hashlib.sha256(f.read_bytes()).hexdigest() for f in files if f.is_file()}
+    files = [model_file(argument["path"]), getattr(agent, "normalization_file", None)]
+    return {
+        str(f): hashlib.sha256(f.read_bytes()).hexdigest() for f in files if f is not None and f.is_file()
+    }
 
 
 # ------------------------------------------------------------------ one task

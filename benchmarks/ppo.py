@@ -14,9 +14,9 @@ from pathlib import Path
 from typing import Any
 
 from agents.ppo import (
-    LEGACY_NORMALIZATION_FILE,
     MODEL_FILE,
     NORMALIZATION_FILE,
+    SB3_NORMALIZATION_FILE,
     require_sb3,
     save_normalization,
 )
@@ -223,7 +223,7 @@ def train_ppo(
 
 
 #: The files a trained model leaves in its folder.
-MODEL_FILES = (MODEL_FILE, NORMALIZATION_FILE, LEGACY_NORMALIZATION_FILE, META_FILE)
+MODEL_FILES = (MODEL_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE)
 
 
 def _clear_model(out: Path, overwrite: bool) -> None:
@@ -263,7 +263,8 @@ def _train(
     wall = time.perf_counter() - start
     model.save(out / MODEL_FILE)
     if normalization is not None:
-        save_normalization(out / NORMALIZATION_FILE, venv)
+        save_normalization(out / NORMALIZATION_FILE, venv)  # plain arrays: what the harness reads
+        venv.save(str(out / SB3_NORMALIZATION_FILE))  # SB3's own format: VecNormalize.load reads it
     meta = {
         "scenario": sc.to_dict(),
         "env_options": options.to_dict(),

@@ -184,3 +184,66 @@ def test_native_training_vec_env_matches_the_checked_gym_wrapper():
             np.testing.assert_allclose(batch[i], obs, rtol=1e-6)
             assert rewards[i] == pytest.approx(reward, rel=1e-6)
         assert not dones.any()
+
+
+# ---------------------------------------------------------------- normalisation, the ecosystem's way
+@pytest.fixture(scope="module")
+def small_model(tmp_path_factory):
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
+    from benchmarks.ppo import train_ppo
+
+    folder = tmp_path_factory.mktemp("ppo") / "small"
+    train_ppo("paper-1-v1", 128, folder, seed=0, progress=False)
+    return folder
+
+
+def test_sb3s_own_vecnormalize_load_reads_what_train_ppo_saves(small_model):
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
+
+    venv = VecNormalize.load(
+        str(small_model / "vecnormalize.pkl"), DummyVecEnv([lambda: gym.make("MimoRadarSelectFlat-v1")])
+    )
+    with np.load(small_model / "vecnormalize.npz") as stats:
+        np.testing.assert_array_equal(venv.obs_rms.mean, stats["mean"])
+        np.testing.assert_array_equal(venv.obs_rms.var, stats["var"])
+    model = PPO.load(small_model / "model.zip", device="cpu")
+    actions, _ = model.predict(venv.reset(), deterministic=True)
+    assert venv.action_space.contains(int(actions[0]))
+
+
+def test_a_model_in_rl_zoo3s_layout_runs_with_its_statistics_or_is_refused(small_model, tmp_path):
+    import shutil
+
+    from agents import PPOAgent
+
+    # rl-zoo3: logs/ppo/ENV_1/ENV.zip, the statistics in logs/ppo/ENV_1/ENV/vecnormalize.pkl
+    run = tmp_path / "MimoRadarSelectFlat-v1_1"
+    (run / "MimoRadarSelectFlat-v1").mkdir(parents=True)
+    model = run / "MimoRadarSelectFlat-v1.zip"
+    shutil.copy(small_model / "model.zip", model)
+    stats = run / "MimoRadarSelectFlat-v1" / "vecnormalize.pkl"
+    shutil.copy(small_model / "vecnormalize.pkl", stats)
+    with pytest.raises(
+        ValueError, match=rf"statistics in {stats} \(rl-zoo3's layout\), which are not beside it"
+    ):
+        PPOAgent("paper-1-v1", model)
+    with pytest.raises(ValueError, match="is a pickle .* pass allow_pickle=true"):
+        PPOAgent("paper-1-v1", model, normalization=stats)
+    with pytest.warns(UserWarning, match="unpickling"):
+        agent = PPOAgent("paper-1-v1", model, normalization=stats, allow_pickle=True)
+    reference = PPOAgent("paper-1-v1", small_model)  # train-ppo's folder: the npz beside the model
+    np.testing.assert_array_equal(agent.normalization.obs_rms.mean, reference.normalization.obs_rms.mean)
+    assert reference.normalization_file == small_model / "vecnormalize.npz"
+    named = PPOAgent("paper-1-v1", model, normalization=small_model / "vecnormalize.npz")
+    assert named.normalization_file == small_model / "vecnormalize.npz"
+    with pytest.raises(ValueError, match="normalization file .* does not exist"):
+        PPOAgent("paper-1-v1", model, normalization=tmp_path / "none.npz")
+
+
+def test_the_harness_records_the_statistics_the_agent_applies(small_model, tmp_path):
+    from benchmarks.harness import make_config
+
+    config = make_config("paper-1-v1", [f"ppo:{small_model}"], trials=2, steps=2)
+    files = config.policy_files[f"ppo:{small_model}"]
+    assert set(files) == {str(small_model / "model.zip"), str(small_model / "vecnormalize.npz")}

@@ -187,12 +187,17 @@ def test_ppo_files_run_no_code(tmp_path):
             archive.writestr(name, content)
     agent = PPOAgent("paper-1", model)
     assert agent.normalization is not None and not marker.exists()
-    # a pickle beside the model is never loaded; without the npz the agent refuses clearly
+    # a pickle beside the model is not loaded unless asked; without the npz the agent refuses clearly
     (folder / "vecnormalize.npz").unlink()
     (folder / "vecnormalize.pkl").write_bytes(pickle.dumps(Payload()))
-    with pytest.raises(ValueError, match="vecnormalize.pkl, a pickle, which is not loaded"):
+    with pytest.raises(ValueError, match="normalisation as a pickle, which is not loaded unless asked"):
         PPOAgent("paper-1", model)
     assert not marker.exists()
+    # asked, it is unpickled, with a warning: which is why the flag exists
+    with pytest.warns(UserWarning, match="a pickle runs code from the file"):
+        with pytest.raises(ValueError, match="is not a VecNormalize file SB3 can load"):
+            PPOAgent("paper-1", model, allow_pickle=True)
+    assert marker.exists()
 
 
 def test_a_changed_model_file_is_a_different_run(tmp_path):

@@ -1,28 +1,30 @@
-"""The recipes of docs/clients.md run as written."""
-
-import re
-from pathlib import Path
+"""The recipes of docs/clients.md and docs/ppo.md run as written, each alone in a fresh
+interpreter with nothing imported beforehand (not under this suite's imports)."""
 
 import pytest
 
-DOC = Path(__file__).parents[2] / "docs" / "clients.md"
-BLOCKS = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
+from benchmarks.speed.recipes import OWN_ENVIRONMENT, recipes, run_recipe
+
+RECIPES = recipes()
 NEEDS = {
     "stable_baselines3": "rl extra",
     "sb3_contrib": "test extra",
-    "torchrl": "its own environment, .ci/wheel-check",
     "SMPyBandits": "test extra",
+    "stonesoup": "test extra",
 }
 
 
-def test_the_page_has_recipes():
-    assert len(BLOCKS) >= 4
+def test_the_pages_have_recipes():
+    assert {r.page for r in RECIPES} == {"clients.md", "ppo.md"} and len(RECIPES) >= 6
 
 
-@pytest.mark.parametrize("index", range(len(BLOCKS)))
-def test_recipe_runs(index):
-    code = BLOCKS[index]
+@pytest.mark.parametrize("recipe", RECIPES, ids=[r.key for r in RECIPES])
+def test_recipe_runs_alone(recipe):
+    for module, where in OWN_ENVIRONMENT.items():
+        if recipe.imports(module):
+            pytest.skip(f"the recipe needs {module}, which runs in {where}")
     for module, extra in NEEDS.items():
-        if f"from {module}" in code or f"import {module}" in code:
+        if recipe.imports(module):
             pytest.importorskip(module, reason=f"the recipe needs {module} ({extra})")
-    exec(compile(code, f"{DOC.name}[{index}]", "exec"), {"__name__": "__recipe__"})
+    result, _ = run_recipe(recipe)
+    assert result.returncode == 0, result.stderr[-3000:]
