@@ -10,7 +10,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
-from .ppo import PPOAgent
+from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
     agent_argument,
@@ -18,6 +18,7 @@ from .registry import (
     agent_parameters,
     agent_summary,
     available_agents,
+    learned_agents,
     make_agent,
     register_agent,
     split_policy,
@@ -46,13 +47,16 @@ __all__ = [
     "EpsilonGreedy",
     "FixedAgent",
     "IndexPolicy",
+    "MaskablePPOAgent",
     "PPOAgent",
+    "RecurrentPPOAgent",
     "RandomAgent",
     "RecencyBasedExploration",
     "SlidingWindowUCB",
     "SuperArmSolver",
     "TrackingUCB",
     "agent_argument",
+    "learned_agents",
     "agent_class",
     "agent_parameters",
     "agent_summary",

@@ -1,9 +1,17 @@
-"""A trained Stable-Baselines3 PPO policy as a batch-native agent (``ppo:PATH/model.zip``)."""
+"""Trained Stable-Baselines3 policies as batch-native agents: PPO (``ppo:PATH/model.zip``) and
+sb3-contrib's MaskablePPO (``maskable-ppo:PATH``) and RecurrentPPO (``recurrent-ppo:PATH``).
+
+:data:`LEARNERS` is the one home of what each learner is: its algorithm and policy classes,
+rl-zoo3's name for it and its hyperparameter file; ``train-ppo --algo`` trains them and the
+agents below evaluate them.
+"""
 
 from __future__ import annotations
 
+import importlib
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -26,6 +34,73 @@ SB3_NORMALIZATION_FILE = "vecnormalize.pkl"
 def require_sb3() -> Any:
     """The ``stable_baselines3`` module, or ``DependencyNotInstalled`` naming the ``rl`` extra."""
     return require("stable_baselines3", "rl", "PPO")
+
+
+@dataclass(frozen=True)
+class Learner:
+    """A deep-RL learner the project trains and evaluates.
+
+    Attributes
+    ----------
+    name : str
+        The agent's registered name and ``train-ppo --algo``'s choice.
+    zoo_name : str
+        rl-zoo3's ``--algo`` name (its hyperparameter file is ``hyperparams/ZOO_NAME.yml``).
+    algorithm, policy : str
+        ``module:Class`` of the algorithm and of its policy.
+    policies : tuple of str
+        The policy names an entry may give (``policy``).
+    extra : str
+        The optional dependency group that installs it.
+    """
+
+    name: str
+    zoo_name: str
+    algorithm: str
+    policy: str
+    policies: tuple[str, ...]
+    extra: str = "rl"
+
+    @property
+    def hyperparams(self) -> str:
+        return f"hyperparams/{self.zoo_name}.yml"
+
+    def _load(self, target: str) -> Any:
+        module, _, name = target.partition(":")
+        require(module.split(".")[0], self.extra, self.algorithm.partition(":")[2])
+        return getattr(importlib.import_module(module), name)
+
+    def algorithm_class(self) -> Any:
+        return self._load(self.algorithm)
+
+    def policy_class(self) -> Any:
+        return self._load(self.policy)
+
+
+LEARNERS = {
+    learner.name: learner
+    for learner in (
+        Learner(
+            "ppo", "ppo", "stable_baselines3:PPO", "stable_baselines3.common.policies:ActorCriticPolicy",
+            ("MlpPolicy",),
+        ),
+        Learner(
+            "maskable-ppo", "ppo_mask", "sb3_contrib:MaskablePPO",
+            "sb3_contrib.common.maskable.policies:MaskableActorCriticPolicy", ("MlpPolicy",),
+        ),
+        Learner(
+            "recurrent-ppo", "ppo_lstm", "sb3_contrib:RecurrentPPO",
+            "sb3_contrib.common.recurrent.policies:RecurrentActorCriticPolicy", ("MlpLstmPolicy",),
+        ),
+    )
+}  # fmt: skip
+
+
+def learner(name: str) -> Learner:
+    """The learner called ``name``; ``ValueError`` naming those there are."""
+    if name not in LEARNERS:
+        raise ValueError(f"algo must be one of {list(LEARNERS)}, got {name!r}")
+    return LEARNERS[name]
 
 
 def save_normalization(path: Path, venv: Any) -> None:
@@ -124,16 +199,16 @@ def normalization_file(model: Path, normalization: str | Path | None, allow_pick
     return None
 
 
-def load_model(file: Path, observation_space: Any, num_stations: int) -> Any:
-    """``PPO.load`` without unpickling anything: every cloudpickled entry of the model's data is
-    supplied here (policy class, spaces, schedules), and SB3 reads the weights with
-    ``torch.load(weights_only=True)``."""
+def load_model(
+    file: Path, observation_space: Any, num_stations: int, learner: Learner = LEARNERS["ppo"]
+) -> Any:
+    """``ALGORITHM.load`` of ``learner`` without unpickling anything: every cloudpickled entry of
+    the model's data is supplied here (policy class, spaces, schedules), and SB3 reads the
+    weights with ``torch.load(weights_only=True)``."""
     import json
     import zipfile
 
     from gymnasium import spaces
-    from stable_baselines3 import PPO
-    from stable_baselines3.common.policies import ActorCriticPolicy
 
     try:
         with zipfile.ZipFile(file) as archive:
@@ -149,7 +224,7 @@ def load_model(file: Path, observation_space: Any, num_stations: int) -> Any:
     else:
         raise ValueError(f"{file}: unsupported action space {kind or 'missing'}")
     supplied = {
-        "policy_class": ActorCriticPolicy,
+        "policy_class": learner.policy_class(),
         "observation_space": observation_space,
         "action_space": action_space,
         "lr_schedule": lambda _: 0.0,
@@ -159,7 +234,7 @@ def load_model(file: Path, observation_space: Any, num_stations: int) -> Any:
     }
     pickled = {key for key, value in data.items() if isinstance(value, dict) and ":serialized:" in value}
     custom = {key: supplied.get(key) for key in pickled} | {k: v for k, v in supplied.items() if k in data}
-    return PPO.load(file, device="cpu", custom_objects=custom)
+    return learner.algorithm_class().load(file, device="cpu", custom_objects=custom)
 
 
 def model_file(path: str | Path) -> Path:
@@ -197,6 +272,7 @@ class PPOAgent(Agent):
 
     name = "ppo"
     needs_tracking = True
+    learner: ClassVar[Learner] = LEARNERS["ppo"]
 
     def __init__(
         self,
@@ -208,7 +284,7 @@ class PPOAgent(Agent):
         allow_pickle: bool = False,
     ) -> None:
         super().__init__(scenario, seed)
-        sb3 = require_sb3()
+        self.learner.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
         file = model_file(path)
         if not file.is_file():
             raise ValueError(f"PPO model {file} does not exist (expected ppo:PATH/TO/model.zip)")
@@ -222,13 +298,12 @@ class PPOAgent(Agent):
 
         observation_space = spaces.Box(-np.inf, np.inf, (self.features.size,), np.float32)
         try:
-            self.model = load_model(file, observation_space, self.num_tx + self.num_rx)
+            self.model = load_model(file, observation_space, self.num_tx + self.num_rx, self.learner)
         except RuntimeError as exc:  # weights of another shape
             raise ValueError(
                 f"the model at {file} does not fit this scenario's {self.features.size} features: "
                 "train it on this layout"
             ) from exc
-        del sb3
         self.deterministic = deterministic
         self.discrete = self.model.action_space.__class__.__name__ == "Discrete"
         self.index = SuperArmIndex(self.scenario) if self.discrete else None
@@ -250,6 +325,11 @@ class PPOAgent(Agent):
                 )
         self._features: NDArray[np.float32] | None = None
 
+    def operations_per_trial_step(self) -> float:
+        """Its features, and a forward pass of its network: about two operations per weight."""
+        weights = sum(int(p.numel()) for p in self.model.policy.parameters())
+        return super().operations_per_trial_step() + 2.0 * weights + 10.0 * self.features.size
+
     def _reset(self, obs: Observation) -> None:
         self._features = self.features.reset(obs)
 
@@ -257,10 +337,56 @@ class PPOAgent(Agent):
         features = self._features
         if self.normalization is not None:
             features = self.normalization.normalize_obs(features)
-        actions, _ = self.model.predict(features, deterministic=self.deterministic)
+        actions = self._predict(features)
         if self.discrete:
             return self.index.to_action(actions)
         return scores_to_action(actions, self.num_tx, self.tx_count, self.rx_count)
 
+    def _predict(self, features: NDArray[np.float32]) -> NDArray:
+        """The policy's actions for the batch's (normalised) features."""
+        actions, _ = self.model.predict(features, deterministic=self.deterministic)
+        return actions
+
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
         self._features = self.features.step(obs)
+
+
+class MaskablePPOAgent(PPOAgent):
+    """A trained MaskablePPO policy (sb3-contrib), acting on B trials at once with the env's
+    action masks (every super arm of the Discrete action is valid, so the mask allows all).
+
+    Parameters as :class:`PPOAgent`.
+    """
+
+    name = "maskable-ppo"
+    learner = LEARNERS["maskable-ppo"]
+
+    def _predict(self, features: NDArray[np.float32]) -> NDArray:
+        if self.index is None:
+            raise ValueError("MaskablePPO needs the Discrete action; retrain with --action discrete")
+        masks = np.ones((features.shape[0], self.index.size), dtype=bool)
+        actions, _ = self.model.predict(features, action_masks=masks, deterministic=self.deterministic)
+        return actions
+
+
+class RecurrentPPOAgent(PPOAgent):
+    """A trained RecurrentPPO policy (sb3-contrib, an LSTM policy), acting on B trials at once;
+    it carries each trial's LSTM state from step to step and starts it afresh at reset.
+
+    Parameters as :class:`PPOAgent`.
+    """
+
+    name = "recurrent-ppo"
+    learner = LEARNERS["recurrent-ppo"]
+
+    def _reset(self, obs: Observation) -> None:
+        super()._reset(obs)
+        self._state: Any = None
+        self._starts = np.ones(self.batch_size, dtype=bool)
+
+    def _predict(self, features: NDArray[np.float32]) -> NDArray:
+        actions, self._state = self.model.predict(
+            features, state=self._state, episode_start=self._starts, deterministic=self.deterministic
+        )
+        self._starts = np.zeros(self.batch_size, dtype=bool)
+        return actions

@@ -19,7 +19,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
-from .ppo import PPOAgent
+from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
 from .tracking import TrackingUCB
@@ -75,7 +75,8 @@ for _cls in (
     FixedAgent,
 ):
     register_agent(_cls.name, _cls, _first_line(_cls))
-register_agent(PPOAgent.name, PPOAgent, _first_line(PPOAgent), argument="path")
+for _learned in (PPOAgent, MaskablePPOAgent, RecurrentPPOAgent):
+    register_agent(_learned.name, _learned, _first_line(_learned), argument="path")
 # tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run
 register_agent(
     TrackingUCB.name, TrackingUCB, _first_line(TrackingUCB), argument="sinr_weight", argument_type=float
@@ -120,6 +121,13 @@ def agent_summary(name: str) -> str:
 def agent_class(name: str) -> type[Agent]:
     """The class of a registered agent."""
     return _spec(name).cls
+
+
+def learned_agents() -> list[str]:
+    """The agents that evaluate a trained model (``NAME:PATH``): PPO and the sb3-contrib learners."""
+    from .ppo import PPOAgent
+
+    return [name for name in available_agents() if issubclass(_REGISTRY[name].cls, PPOAgent)]
 
 
 def agent_argument(name: str) -> str | None:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from agents.ppo import LEARNERS
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
 from .errors import BenchError
@@ -16,11 +17,12 @@ from .studies.settings import add_env_options, env_options_from, integer
 class TrainPPO(Command):
     name = "train-ppo"
     order = 6
-    help = "train a Stable-Baselines3 PPO policy (needs the rl extra)"
+    help = "train PPO, MaskablePPO or RecurrentPPO, one seed or several (needs the rl extra)"
     description = (
-        "Train PPO on vectorised training envs; saves DIR/model.zip, the observation normalisation "
-        "DIR/vecnormalize.npz and DIR/ppo.json. Evaluate it with "
-        "'mimo-radar-bench run --policies ppo:DIR/model.zip,...'."
+        "Train a learner (--algo) on the native vector env; saves DIR/model.zip, the observation "
+        "normalisation (DIR/vecnormalize.npz, and SB3's DIR/vecnormalize.pkl), the learning curve "
+        "DIR/curve.csv and DIR/ppo.json; with --seeds N, each seed in DIR/seed-S, resumably. "
+        "Evaluate it with 'mimo-radar-bench run --policies ALGO:DIR/model.zip,...'."
     )
 
     @classmethod
@@ -37,11 +39,30 @@ class TrainPPO(Command):
             help="environment steps to train for (default: n_timesteps of the hyperparameters)",
         )
         parser.add_argument("--out", required=True, help="output directory for the model")
+        parser.add_argument(
+            "--algo",
+            choices=list(LEARNERS),
+            default="ppo",
+            help="the learner: PPO (SB3), MaskablePPO or RecurrentPPO (sb3-contrib) (default ppo)",
+        )
         parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
+        parser.add_argument(
+            "--seeds",
+            type=integer(1, high=100),
+            default=1,
+            help="train seeds --seed, --seed + 1, ... each into DIR/seed-S (default 1: DIR itself)",
+        )
+        parser.add_argument(
+            "--workers",
+            type=integer(1),
+            default=1,
+            help="seeds trained at once, one process each (capped at the cores; default 1)",
+        )
         parser.add_argument(
             "--hyperparams",
             default=None,
-            help="rl-zoo3-style YAML file (default: the shipped benchmarks/hyperparams/ppo.yml)",
+            help="rl-zoo3-style YAML file (default: the shipped benchmarks/hyperparams/ALGO.yml, "
+            "rl-zoo3's name: ppo.yml, ppo_mask.yml, ppo_lstm.yml)",
         )
         parser.add_argument(
             "--hyperparams-key",
@@ -67,7 +88,8 @@ class TrainPPO(Command):
         add_env_options(parser)
 
     def main(self) -> int:
-        from .ppo import train_ppo
+        from .ppo import seed_folder, train_ppo
+        from .studies.settings import local_workers
 
         args = self.args
         version = VERSIONS[args.env_version]
@@ -84,13 +106,22 @@ class TrainPPO(Command):
                 progress=not args.quiet,
                 options=env_options_from(args),
                 overwrite=args.overwrite,
+                algo=args.algo,
+                seeds=args.seeds,
+                workers=local_workers(args.workers),
             )
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc
-        print(
-            f"trained PPO for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
-            f"saved {Path(args.out, 'model.zip')}"
-        )
+        if args.seeds == 1:
+            print(
+                f"trained {args.algo} for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
+                f"saved {Path(args.out, 'model.zip')}"
+            )
+        else:
+            folder = seed_folder(args.out, args.seed).parent
+            print(
+                f"trained {args.algo}, {args.seeds} seeds of {meta['timesteps']} steps; saved {folder}/seed-*"
+            )
         return 0
 
 

@@ -1,5 +1,6 @@
-"""Training PPO (Stable-Baselines3) as a learned baseline; the trained policy is the registered
-agent ``ppo`` (``agents.PPOAgent``, ``ppo:PATH/model.zip`` in a benchmark run).
+"""Training the learned baselines: PPO (Stable-Baselines3), MaskablePPO and RecurrentPPO
+(sb3-contrib), one seed or several; each trained policy is the registered agent of its learner
+(``agents.ppo.LEARNERS``: ``ppo:PATH/model.zip`` in a benchmark run).
 
 Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-env[rl]'``).
 """
@@ -7,6 +8,7 @@ Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-e
 from __future__ import annotations
 
 import ast
+import csv
 import json
 import time
 from importlib import resources
@@ -14,35 +16,44 @@ from pathlib import Path
 from typing import Any
 
 from agents.ppo import (
+    LEARNERS,
     MODEL_FILE,
     NORMALIZATION_FILE,
     SB3_NORMALIZATION_FILE,
-    require_sb3,
+    Learner,
+    learner,
     save_normalization,
 )
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, Scenario, load_scenario
 
 from .harness import output_lock
 
-#: The hyperparameter file shipped with the package (rl-zoo3 style).
-DEFAULT_HYPERPARAMS = "hyperparams/ppo.yml"
+#: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
+#: ``Learner.hyperparams``.
+DEFAULT_HYPERPARAMS = LEARNERS["ppo"].hyperparams
 META_FILE = "ppo.json"
+#: The learning curve of a training: per rollout, the mean return and ARMSE of its episodes.
+CURVE_FILE = "curve.csv"
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
 def load_hyperparams(
-    path: str | Path | None = None, key: str = VERSIONS[DEFAULT_VERSION].flat_env_id
+    path: str | Path | None = None,
+    key: str = VERSIONS[DEFAULT_VERSION].flat_env_id,
+    algo: str = "ppo",
 ) -> dict[str, Any]:
-    """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped ``hyperparams/ppo.yml``).
+    """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped file of learner ``algo``,
+    ``hyperparams/ppo.yml`` for PPO).
 
     ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads
     them (without eval); ``normalize: true`` means observations and rewards, as in rl-zoo3.
     """
     import yaml
 
+    spec = learner(algo)
     if path is None:
-        text = (resources.files(__package__) / DEFAULT_HYPERPARAMS).read_text()
-        path = DEFAULT_HYPERPARAMS
+        text = (resources.files(__package__) / spec.hyperparams).read_text()
+        path = spec.hyperparams
     else:
         text = Path(path).read_text()
     try:
@@ -59,7 +70,7 @@ def load_hyperparams(
     for name in ("policy_kwargs", "normalize"):
         if isinstance(params.get(name), str):
             params[name] = _parse_dict_call(params[name], name)
-    check_hyperparams(params, f"{path}: entry {key!r}")
+    check_hyperparams(params, f"{path}: entry {key!r}", spec)
     return params
 
 
@@ -82,15 +93,14 @@ NUMBER_HYPERPARAMS = {
 }
 #: VecNormalize's keywords an entry's ``normalize`` may give.
 NORMALIZE_KEYS = ("norm_obs", "norm_reward", "clip_obs", "clip_reward", "gamma", "epsilon")
-POLICIES = ("MlpPolicy",)
 
 
-def check_hyperparams(params: dict[str, Any], where: str) -> None:
-    """Refuse, naming the entry, a key train-ppo does not know and a value outside its range,
-    before anything is trained or written."""
+def check_hyperparams(params: dict[str, Any], where: str, spec: Learner = LEARNERS["ppo"]) -> None:
+    """Refuse, naming the entry, a key train-ppo does not know for learner ``spec`` and a value
+    outside its range, before anything is trained or written."""
     from agents.parameters import check_integer, check_parameter
 
-    known = _ppo_keywords() | _NOT_FOR_PPO | {"policy"}
+    known = _ppo_keywords(spec) | _NOT_FOR_PPO | {"policy"}
     unknown = sorted(set(params) - known)
     if unknown:
         raise ValueError(f"{where}: unknown hyperparameter(s) {unknown}; known: {sorted(known)}")
@@ -108,8 +118,10 @@ def check_hyperparams(params: dict[str, Any], where: str) -> None:
             else ""
         )
         raise ValueError(f"{where}: {exc}{hint}") from None
-    if params.get("policy", POLICIES[0]) not in POLICIES:
-        raise ValueError(f"{where}: policy must be one of {list(POLICIES)}, got {params['policy']!r}")
+    if params.get("policy", spec.policies[0]) not in spec.policies:
+        raise ValueError(
+            f"{where}: policy must be one of {list(spec.policies)} for {spec.name}, got {params['policy']!r}"
+        )
     normalize = params.get("normalize", False)
     if not isinstance(normalize, bool | dict):
         raise ValueError(f"{where}: normalize must be true, false or dict(...), got {normalize!r}")
@@ -134,14 +146,16 @@ def check_hyperparams(params: dict[str, Any], where: str) -> None:
         )
 
 
-def _ppo_keywords() -> set[str]:
-    """The keywords of ``stable_baselines3.PPO`` an entry may set (those train-ppo sets itself
-    excluded), or the usual ones when SB3 is not installed."""
-    try:
-        import inspect
+def _ppo_keywords(spec: Learner = LEARNERS["ppo"]) -> set[str]:
+    """The keywords of the learner's algorithm (``stable_baselines3.PPO``...) an entry may set
+    (those train-ppo sets itself excluded), or PPO's usual ones when it is not installed."""
+    import inspect
 
-        from stable_baselines3 import PPO
-    except ImportError:
+    from gymnasium.error import DependencyNotInstalled
+
+    try:
+        algorithm = spec.algorithm_class()
+    except (ImportError, DependencyNotInstalled):
         return {
             "n_steps",
             "batch_size",
@@ -162,7 +176,7 @@ def _ppo_keywords() -> set[str]:
             "stats_window_size",
         }
     own = {"self", "policy", "env", "seed", "verbose", "tensorboard_log", "device", "_init_setup_model"}
-    return set(inspect.signature(PPO.__init__).parameters) - own
+    return set(inspect.signature(algorithm.__init__).parameters) - own
 
 
 def normalize_kwargs(params: dict[str, Any]) -> dict[str, Any] | None:
@@ -201,25 +215,133 @@ def train_ppo(
     progress: bool = True,
     options: EnvOptions | None = None,
     overwrite: bool = False,
+    algo: str = "ppo",
+    seeds: int = 1,
+    workers: int = 1,
+    record: dict[str, Any] | None = None,
+    seed_folders: bool = False,
 ) -> dict[str, Any]:
-    """Train PPO on the native vectorised env and save ``model.zip`` + normalisation stats in ``out``.
+    """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO) on the native vectorised env and
+    save ``model.zip``, the normalisation statistics, the learning curve and ``ppo.json`` in
+    ``out``; with ``seeds`` > 1, seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``,
+    ``workers`` at a time, resumably (a seed whose folder holds its finished training is kept);
+    ``seed_folders`` uses that layout for a single seed too.
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
     (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that
     already holds a model is refused unless ``overwrite``, which first removes every file of the
-    old model (so that no stale normalisation outlives it)."""
-    sb3 = require_sb3()
+    old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
+    (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
+    spec = learner(algo)
+    spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
     options = options or EnvOptions()
     sc = load_scenario(scenario)
-    params = load_hyperparams(hyperparams, hyperparams_key or VERSIONS[DEFAULT_VERSION].flat_env_id)
+    params = load_hyperparams(hyperparams, hyperparams_key or VERSIONS[DEFAULT_VERSION].flat_env_id, algo)
+    if spec.name == "maskable-ppo" and action == "scores":
+        raise ValueError("maskable-ppo masks a Discrete action: use --action discrete or auto")
     n_envs = int(params.get("n_envs", 8))
     if timesteps is not None and timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
+    for name, value in (("seeds", seeds), ("workers", workers)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
     out = Path(out)
+    job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
+    if seeds == 1 and not seed_folders:
+        with output_lock(out):
+            _clear_model(out, overwrite)
+            meta = _train(
+                spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
+            )
+            if record:
+                meta.update(record)
+                (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
+            return meta
     with output_lock(out):
-        _clear_model(out, overwrite)
-        return _train(sb3, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs)
+        done = train_jobs([(job, out, s) for s in range(seed, seed + seeds)], workers, overwrite, progress)
+    return {
+        "seeds": {s: done[out, s] for s in range(seed, seed + seeds)},
+        "timesteps": timesteps,
+        "algo": algo,
+    }
+
+
+def seed_folder(out: str | Path, seed: int) -> Path:
+    """Where seed ``seed`` of a several-seed training is saved."""
+    return Path(out) / f"seed-{seed}"
+
+
+def training_job(
+    scenario: Scenario,
+    timesteps: int,
+    algo: str = "ppo",
+    options: EnvOptions | None = None,
+    hyperparams: str | Path | None = None,
+    hyperparams_key: str | None = None,
+    action: str = "auto",
+) -> dict[str, Any]:
+    """What a training is, as recorded in each seed's ``ppo.json`` (a finished seed is kept only
+    when its job is the same)."""
+    return {
+        "scenario": scenario.to_dict(), "timesteps": timesteps, "hyperparams": hyperparams,
+        "hyperparams_key": hyperparams_key, "action": action,
+        "options": (options or EnvOptions()).to_dict(), "algo": algo,
+    }  # fmt: skip
+
+
+def train_jobs(
+    tasks: list[tuple[dict[str, Any], Path, int]],
+    workers: int,
+    overwrite: bool = False,
+    progress: bool = True,
+) -> dict[tuple[Path, int], dict[str, Any]]:
+    """Every ``(job, out, seed)`` trained into ``seed_folder(out, seed)``, ``workers`` processes at
+    once, resumably: a seed whose ``ppo.json`` records the same job is kept, one that records
+    another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
+    task's ``ppo.json`` by ``(out, seed)``."""
+    import concurrent.futures
+    import multiprocessing
+
+    done, todo = {}, []
+    for job, out, seed in tasks:
+        meta_file = seed_folder(out, seed) / META_FILE
+        meta = json.loads(meta_file.read_text()) if meta_file.is_file() else {}
+        if "job" in meta and not overwrite:  # finished (the job is written last)
+            if json.loads(json.dumps(meta["job"], default=str)) != json.loads(json.dumps(job, default=str)):
+                raise ValueError(
+                    f"{meta_file.parent} holds another training (a different scenario, budget or "
+                    "hyperparameters); pass --overwrite to replace it, or choose another --out"
+                )
+            done[Path(out), seed] = meta
+        else:
+            todo.append((job, Path(out), seed))
+    if done and progress:
+        print(f"train-ppo: {len(done)} of {len(tasks)} trainings already done; training {len(todo)}")
+    if todo:
+        context = multiprocessing.get_context("spawn")
+        with concurrent.futures.ProcessPoolExecutor(min(workers, len(todo)), mp_context=context) as pool:
+            futures = {
+                pool.submit(_train_one_seed, job, str(out), seed): (out, seed) for job, out, seed in todo
+            }
+            for future in concurrent.futures.as_completed(futures):
+                done[futures[future]] = future.result()
+                if progress:
+                    out, seed = futures[future]
+                    print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{len(tasks)})")
+    return done
+
+
+def _train_one_seed(job: dict[str, Any], out: str, seed: int) -> dict[str, Any]:
+    import torch
+
+    torch.set_num_threads(1)  # one compute thread per worker, as the harness's
+    options = EnvOptions(**job["options"])
+    return train_ppo(
+        Scenario.from_dict(job["scenario"]), job["timesteps"], seed_folder(out, seed), seed=seed,
+        hyperparams=job["hyperparams"], hyperparams_key=job["hyperparams_key"], action=job["action"],
+        progress=False, options=options, overwrite=True, algo=job["algo"], record={"job": job},
+    )  # fmt: skip
 
 
 #: The files a trained model leaves in its folder.
@@ -238,7 +360,7 @@ def _clear_model(out: Path, overwrite: bool) -> None:
 
 
 def _train(
-    sb3, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
+    spec: Learner, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
 ) -> dict[str, Any]:
     from stable_baselines3.common.vec_env import VecNormalize
 
@@ -246,11 +368,11 @@ def _train(
 
     normalization = normalize_kwargs(params)
     ppo_kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
-    policy = ppo_kwargs.pop("policy", "MlpPolicy")
+    policy = ppo_kwargs.pop("policy", spec.policies[0])
     venv = NativeVecEnv(sc, n_envs, seed, action=action, **options.to_dict())
     if normalization is not None:
         venv = VecNormalize(venv, **normalization)
-    model = sb3.PPO(
+    model = spec.algorithm_class()(
         policy,
         venv,
         seed=seed,
@@ -258,14 +380,18 @@ def _train(
         tensorboard_log=str(out / "tensorboard") if tensorboard else None,
         **ppo_kwargs,
     )
+    curve = LearningCurve()
     start = time.perf_counter()
-    model.learn(total_timesteps=timesteps, progress_bar=progress)
+    model.learn(total_timesteps=timesteps, progress_bar=progress, callback=curve.callback())
     wall = time.perf_counter() - start
+    out.mkdir(parents=True, exist_ok=True)
     model.save(out / MODEL_FILE)
     if normalization is not None:
         save_normalization(out / NORMALIZATION_FILE, venv)  # plain arrays: what the harness reads
         venv.save(str(out / SB3_NORMALIZATION_FILE))  # SB3's own format: VecNormalize.load reads it
+    curve.write(out / CURVE_FILE)
     meta = {
+        "algo": spec.name,
         "scenario": sc.to_dict(),
         "env_options": options.to_dict(),
         "timesteps": timesteps,
@@ -278,3 +404,54 @@ def _train(
     }
     (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
     return meta
+
+
+class LearningCurve:
+    """The learning curve of a training: after each rollout, the timesteps so far and the mean
+    return and ARMSE (m) of the training episodes that ended in it (``NativeVecEnv``'s episode
+    info: eq17's or the information reward summed over the episode, and the root of the mean
+    over its steps and targets of the tracker's squared position error)."""
+
+    FIELDS = ("timesteps", "episodes", "return", "armse")
+
+    def __init__(self) -> None:
+        self.rows: list[dict[str, float]] = []
+        self._returns: list[float] = []
+        self._armse: list[float] = []
+
+    def callback(self) -> Any:
+        from stable_baselines3.common.callbacks import BaseCallback
+
+        curve = self
+
+        class _Callback(BaseCallback):
+            def _on_step(self) -> bool:
+                for info in self.locals.get("infos", []):
+                    episode = info.get("episode")
+                    if episode is not None:
+                        curve._returns.append(float(episode["r"]))
+                        curve._armse.append(float(episode.get("armse", float("nan"))))
+                return True
+
+            def _on_rollout_end(self) -> None:
+                curve.close_rollout(self.num_timesteps)
+
+        return _Callback()
+
+    def close_rollout(self, timesteps: int) -> None:
+        if self._returns:
+            self.rows.append(
+                {
+                    "timesteps": timesteps,
+                    "episodes": len(self._returns),
+                    "return": sum(self._returns) / len(self._returns),
+                    "armse": sum(self._armse) / len(self._armse),
+                }
+            )
+        self._returns, self._armse = [], []
+
+    def write(self, path: Path) -> None:
+        with path.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=self.FIELDS)
+            writer.writeheader()
+            writer.writerows(self.rows)

@@ -141,3 +141,71 @@ def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -
             pair[name] = estimate(difference, all_metrics[a].num_trials, seed)
         out[f"{a} - {b}"] = pair
     return out
+
+
+# ------------------------------------------------------------------ across training seeds
+#: How results of learned policies across training seeds are summarised, as rliable does
+#: (Agarwal et al., 2021): the mean and the interquartile mean, with stratified bootstrap
+#: intervals (the runs of each task resampled within that task).
+SEED_METHOD = (
+    f"across training seeds: mean and interquartile mean (IQM), {CONFIDENCE:.0%} stratified "
+    f"percentile bootstrap over seeds within each scenario (scipy.stats.bootstrap, {RESAMPLES} "
+    "resamples), as rliable computes them"
+)
+
+
+def iqm(values: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
+    """The interquartile mean: the mean of the middle 50 % of ``values`` along ``axis``
+    (``scipy.stats.trim_mean`` cutting 25 % at each end, as rliable's ``aggregate_iqm``)."""
+    return stats.trim_mean(values, 0.25, axis=axis)
+
+
+SEED_STATISTICS: dict[str, Callable[..., NDArray[np.float64]]] = {
+    "mean": lambda values, axis=-1: np.mean(values, axis=axis),
+    "iqm": iqm,
+}
+
+
+def across_seeds(groups: list[NDArray[np.float64]], statistic: str = "iqm", seed: int = 0) -> dict[str, Any]:
+    """``statistic`` (``"mean"`` or ``"iqm"``) of every score of ``groups`` pooled, with its
+    stratified bootstrap interval: one group per task (scenario), one score per run (training
+    seed) in it; each resample draws every group's runs from that group alone.
+
+    ``scipy.stats.bootstrap`` with one sample per group and ``paired=False`` resamples each
+    sample independently, which is the stratified bootstrap; a single run per group has no
+    spread, and the interval is then the value itself."""
+    if statistic not in SEED_STATISTICS:
+        raise ValueError(f"statistic must be one of {list(SEED_STATISTICS)}, got {statistic!r}")
+    groups = [np.asarray(g, dtype=np.float64).ravel() for g in groups]
+    if not groups or any(g.size == 0 for g in groups):
+        raise ValueError("every group needs at least one score")
+    function = SEED_STATISTICS[statistic]
+    value = float(function(np.concatenate(groups)))
+    if all(g.size == 1 for g in groups) or all(np.ptp(g) == 0 for g in groups):
+        return {
+            "value": value,
+            "ci": [value, value],
+            "method": SEED_METHOD,
+            "runs": int(sum(g.size for g in groups)),
+        }
+
+    def pooled(*samples: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
+        return function(np.concatenate(samples, axis=axis), axis=axis)
+
+    result = stats.bootstrap(
+        tuple(groups),
+        pooled,
+        n_resamples=RESAMPLES,
+        confidence_level=CONFIDENCE,
+        method="percentile",
+        vectorized=True,
+        paired=False,
+        random_state=np.random.default_rng(seed),
+    )
+    low, high = float(result.confidence_interval.low), float(result.confidence_interval.high)
+    return {
+        "value": value,
+        "ci": [min(low, value), max(high, value)],
+        "method": SEED_METHOD,
+        "runs": int(sum(g.size for g in groups)),
+    }

@@ -75,6 +75,7 @@ class NativeVecEnv(VecEnv):
         features, _ = self.flat.reset(seed=self.seed_value + self.episode * self.num_envs)
         self.episode += 1
         self.returns = np.zeros(self.num_envs)
+        self.squared_errors = np.zeros(self.num_envs)  # summed over steps, mean over targets
         self.lengths = 0
         return features
 
@@ -83,8 +84,10 @@ class NativeVecEnv(VecEnv):
 
     def step_wait(self) -> tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.bool_], list[dict]]:
         assert self._actions is not None, "step_async() first"
-        features, reward, terminated, truncated, _ = self.flat.step(self._actions)
+        features, reward, terminated, truncated, info = self.flat.step(self._actions)
         self.returns += reward
+        if "position_error" in info:
+            self.squared_errors += np.mean(np.asarray(info["position_error"]) ** 2, axis=1)
         self.lengths += 1
         dones = terminated | truncated
         infos: list[dict[str, Any]] = [{} for _ in range(self.num_envs)]
@@ -93,7 +96,15 @@ class NativeVecEnv(VecEnv):
                 infos[i] = {
                     "terminal_observation": features[i],
                     "TimeLimit.truncated": bool(truncated[i]),
-                    "episode": {"r": float(self.returns[i]), "l": self.lengths, "t": 0.0},
+                    "episode": {
+                        "r": float(self.returns[i]),
+                        "l": self.lengths,
+                        "t": 0.0,
+                        # the tracker's ARMSE over the episode (m; NaN without tracking)
+                        "armse": float(np.sqrt(self.squared_errors[i] / self.lengths))
+                        if "position_error" in info
+                        else float("nan"),
+                    },
                 }
             features = self.reset()
         return features, reward.astype(np.float32), dones, infos
@@ -112,7 +123,13 @@ class NativeVecEnv(VecEnv):
         setattr(self, attr_name, value)
 
     def env_method(self, method_name: str, *args: Any, indices: Any = None, **kwargs: Any) -> list[Any]:
-        raise NotImplementedError("NativeVecEnv runs all envs as one batch: it has no per-env methods")
+        """Only ``action_masks`` (what sb3-contrib's MaskablePPO calls): one mask per env."""
+        if method_name != "action_masks":
+            raise NotImplementedError(
+                f"NativeVecEnv runs all envs as one batch: it has no per-env method {method_name!r}"
+            )
+        masks = self.flat.action_masks()
+        return [masks[i] for i in self._indices(indices)]
 
     def env_is_wrapped(self, wrapper_class: Any, indices: Any = None) -> list[bool]:
         return [False] * len(self._indices(indices))

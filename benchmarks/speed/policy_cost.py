@@ -40,7 +40,8 @@ from ..harness import estimate_seconds
 #: (M, N, Ms, Ns) of the layouts measured.
 LAYOUTS = ((4, 6, 2, 3), (16, 16, 4, 4), (64, 64, 4, 4))
 TARGETS = (1, 5)
-SKIPPED = ("ppo", "fixed")  # a trained model; station lists of the layout's own (fix1, fix2: 4 x 6)
+# trained models; station lists of the layout's own (fix1, fix2: 4 x 6)
+SKIPPED = (*agents.learned_agents(), "fixed")
 
 
 def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[str, Any]:

@@ -2,12 +2,13 @@
 
 Importing this package registers the built-in studies: ``paper`` and ``run``
 (:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`),
-``tracking`` (:mod:`~benchmarks.studies.tracking`) and ``calibrate-layout``
+``tracking`` (:mod:`~benchmarks.studies.tracking`), ``rl`` (:mod:`~benchmarks.studies.rl`)
+and ``calibrate-layout``
 (:mod:`~benchmarks.studies.calibration`). A new study is one module defining a
 :class:`~benchmarks.studies.base.Study` subclass with a ``name``.
 """
 
-from . import calibration, claims, paper, tracking
+from . import calibration, claims, paper, rl, tracking
 from .base import COMMANDS, Command, Finished, Run, Study, configure, execute
 from .settings import Settings
 
@@ -23,5 +24,6 @@ __all__ = [
     "configure",
     "execute",
     "paper",
+    "rl",
     "tracking",
 ]

@@ -177,7 +177,8 @@ def _episode(agent_name, scenario, vector, steps):
         env = gym.make("MimoRadarSelect-v0", **kwargs)
         sc = env.unwrapped.scenario
     params = {"seed": 0}
-    if agent_name in ("fix1", "fix2") and sc.num_tx != 4 or agent_name == "ppo":  # ppo: tests/test_ppo.py
+    if agent_name in ("fix1", "fix2") and sc.num_tx != 4 or agent_name in agents.learned_agents():
+        # the learned agents need a trained model: tests/agents/test_ppo.py, test_learners.py
         return
     if agent_name == "fixed":
         params.update(tx=list(range(sc.tx_per_step)), rx=list(range(sc.rx_per_step)))

@@ -38,7 +38,7 @@ def _train(tmp_path: Path, extra: str, *more: str) -> list[str]:
         ("  n_envs: 0", "n_envs must be in [1, 256], got 0"),
         ("  n_envs: 2.5", "n_envs must be an integer in [1, 256], got 2.5"),
         ("  batch_size: 1000", "batch_size 1000 is more than a rollout's n_steps x n_envs = 128"),
-        ("  policy: CnnPolicy", "policy must be one of ['MlpPolicy'], got 'CnnPolicy'"),
+        ("  policy: CnnPolicy", "policy must be one of ['MlpPolicy'] for ppo, got 'CnnPolicy'"),
         ("  normalize: 'dict(norm_obs=True, clip=3)'", "normalize has unknown key(s) ['clip']"),
         ("  normalize: 'dict(norm_obs=True'", "normalize must look like dict(key=value, ...)"),
         ("  policy_kwargs: 'dict(net_arch=[0])'", "net_arch must be a list of layer sizes in [1, 4096]"),

@@ -52,7 +52,8 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
 
 
 @pytest.mark.parametrize(
-    "policy", [p for p in agents.available_agents() if p not in ("ppo", "fixed", "fix1", "fix2")]
+    "policy",
+    [p for p in agents.available_agents() if p not in ("fixed", "fix1", "fix2", *agents.learned_agents())],
 )
 def test_declared_memory_bounds_what_a_step_allocates(policy):
     """The declared memory per trial is an upper estimate of what one step of the policy

@@ -150,3 +150,42 @@ def test_the_estimate_is_the_metric_at_equal_weights_and_a_constant_has_a_point_
     assert uncertainty.estimate(lambda w: w @ x[:1], 1)["ci"] is None
     wide = uncertainty.estimate(lambda w: w @ np.random.default_rng(0).normal(size=40), 40)
     assert wide["method"] == "BCa" and wide["ci"][0] < wide["estimate"] < wide["ci"][1]
+
+
+# ---------------------------------------------------------------- across training seeds (rliable's way)
+def test_the_interquartile_mean_is_the_mean_of_the_middle_half():
+    from benchmarks.uncertainty import iqm
+
+    values = np.array([9.0, 1.0, 5.0, 3.0, 7.0, 2.0, 8.0, 4.0])  # sorted: 1..5, 7..9
+    assert iqm(values) == pytest.approx(np.mean(np.sort(values)[2:6]))
+    assert iqm(np.arange(12.0)) == pytest.approx(np.mean(np.arange(3.0, 9.0)))
+
+
+def test_the_stratified_interval_covers_a_known_iqm_at_about_its_nominal_rate():
+    from benchmarks.uncertainty import across_seeds, iqm
+
+    rng = np.random.default_rng(1)
+    locations = (0.0, 1.0, 3.0)  # three tasks of different difficulty, ten runs each
+    population = np.concatenate([rng.normal(loc, 1.0, 400_000) for loc in locations])
+    truth = {"iqm": iqm(population), "mean": population.mean()}
+    repeats = 300
+    covered = {"iqm": 0, "mean": 0}
+    for r in range(repeats):
+        groups = [rng.normal(loc, 1.0, 10) for loc in locations]
+        for statistic in covered:
+            low, high = across_seeds(groups, statistic, seed=r)["ci"]
+            covered[statistic] += low <= truth[statistic] <= high
+    for statistic, count in covered.items():  # percentile bootstrap: near 95 %, a little under
+        assert 0.89 <= count / repeats <= 0.985, (statistic, count / repeats)
+
+
+def test_the_stratified_bootstrap_resamples_within_each_task():
+    from benchmarks.uncertainty import across_seeds
+
+    # one task's runs never stand in for another's: two constant tasks have no spread at all
+    result = across_seeds([np.full(5, 1.0), np.full(5, 3.0)], "mean")
+    assert result["value"] == 2.0 and result["ci"] == [2.0, 2.0]
+    with pytest.raises(ValueError, match="statistic must be one of"):
+        across_seeds([np.ones(3)], "median")
+    with pytest.raises(ValueError, match="every group needs at least one score"):
+        across_seeds([np.ones(3), np.array([])])

@@ -137,8 +137,8 @@ def _bad_parameter_values():
     cases = []
     for name in agents.available_agents():
         for parameter in agents.agent_parameters(name):
-            if name == "ppo" and parameter != "path":  # needs a trained model: tests/test_ppo.py
-                continue
+            if name in agents.learned_agents() and parameter != "path":
+                continue  # needs a trained model: tests/agents/test_ppo.py, test_learners.py
             bad = {"solver": "nosuch", "path": "/nonexistent/model.zip", "tx": "a", "rx": "a"}
             cases.append((name, parameter, bad.get(parameter, -1 if parameter == "seed" else "x")))
     return cases
@@ -151,9 +151,10 @@ def test_a_bad_agent_parameter_is_refused_before_anything_is_written(
     out = tmp_path / "run"
     params = {"fixed": ["fixed.tx=[0, 1]", "fixed.rx=[0, 1, 2]"]}.get(agent, [])
     params = [p for p in params if not p.startswith(f"{agent}.{parameter}=")]
-    policy = "ppo:/nonexistent/model.zip" if agent == "ppo" else agent
+    learned = agent in agents.learned_agents()
+    policy = f"{agent}:/nonexistent/model.zip" if learned else agent
     argv = ["run", "--scenario", "paper-1", "--policies", policy, "--out", str(out), "--quiet"]
-    if agent != "ppo":
+    if not learned:
         params.append(f"{agent}.{parameter}={json.dumps(value)}")
     for item in params:
         argv += ["--agent-param", item]

@@ -1,0 +1,109 @@
+"""The RL study: across-seed statistics of learned policies beside the bandits, learning curves,
+and a reduced run of the whole study (slow)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from benchmarks.studies.rl import COMPARED, flattened, judge_learners, rl_markdown
+
+
+def _summary(armse: dict[str, float], trials: int = 4) -> dict:
+    """A summary.json with the entries the study reads; paired differences equal the
+    differences of the estimates (as they do for a mean over the same trials)."""
+    policies = {
+        p: {"armse": a, "final_regret": 10.0 * a, "ci": {"armse": [a - 0.1, a + 0.1], "final_regret": [0, 1]}}
+        for p, a in armse.items()
+    }
+    names = list(armse)
+    pairs = {
+        f"{a} - {b}": {"armse": {"estimate": armse[a] - armse[b], "ci": [0, 0]}}
+        for i, a in enumerate(names)
+        for b in names[i + 1 :]
+    }
+    return {"trials": trials, "policies": policies, "paired_differences": pairs}
+
+
+def test_learners_are_summarised_across_their_seeds_against_the_compared_policies():
+    seeds = {0: 3.0, 1: 4.0, 2: 5.0}
+    learned = {f"ppo:out/train/paper-1-v1/ppo-information/seed-{s}/model.zip": a for s, a in seeds.items()}
+    other = {"ppo:out/train/paper-1-v1/ppo-sinr/seed-0/model.zip": 9.0}
+    base = {"mg-crb-cl": 4.5, "best-tracking": 2.0, "tracking-ucb": 2.5}
+    summaries = {1: _summary({**base, **learned, **other}), 2: _summary({**base, **learned})}
+    judged = judge_learners(summaries, [("ppo", "information"), ("ppo", "sinr")])
+    first = judged["scenarios"][0]["learners"]["ppo-information"]
+    assert first["seeds"] == 3 and first["armse"]["mean"]["value"] == pytest.approx(4.0)
+    assert first["armse"]["iqm"]["value"] == pytest.approx(4.0)  # the middle of 3, 4, 5 (trimmed)
+    for name, value in base.items():  # mean over seeds of the paired differences
+        assert first["minus"][name]["value"] == pytest.approx(4.0 - value)
+    low, high = first["minus"]["best-tracking"]["ci"]
+    assert 1.0 <= low < 2.0 < high <= 3.0  # over seeds: within the seeds' range
+    assert judged["scenarios"][0]["learners"]["ppo-sinr"]["seeds"] == 1
+    assert "ppo-sinr" not in judged["scenarios"][1]["learners"]
+    # over scenarios: the IQM of ARMSE / best-tracking's, seeds of each scenario pooled
+    ratio = judged["over_scenarios"]["ppo-information"]
+    assert ratio["value"] == pytest.approx(2.0) and ratio["runs"] == 6
+    assert set(judged["scenarios"][0]["compared"]) == set(COMPARED)
+    text = rl_markdown(judged)
+    assert "| `ppo-information` | 3 | 4.000 [" in text and "IQM of ARMSE / best-tracking's ARMSE" in text
+
+
+def test_a_curve_is_flat_when_its_last_two_fifths_agree():
+    steps = np.arange(1, 51, dtype=float)
+    falling = {"timesteps": steps, "return": steps, "armse": 10.0 / steps}
+    settled = {"timesteps": steps, "return": steps, "armse": 2.0 + np.exp(-steps / 3)}
+    assert flattened([falling, falling])["flat"] is False
+    result = flattened([settled, settled])
+    assert result["flat"] is True and abs(result["change"]) < 0.02 and result["rollouts"] == 50
+    assert flattened([{k: v[:3] for k, v in settled.items()}])["flat"] is None  # too short to tell
+
+
+@pytest.mark.slow
+def test_a_reduced_rl_study_trains_evaluates_and_reports(tmp_path):
+    pytest.importorskip("sb3_contrib", reason="the RL study needs the rl extra")
+    from benchmarks.cli import main
+
+    out = tmp_path / "rl"
+    argv = ["rl", "--scenarios", "1", "--timesteps", "16384", "--ppo-seeds", "2", "--contrib-seeds", "2"]
+    argv += ["--trials", "2", "--steps", "20", "--workers", "2", "--quiet", "--out", str(out)]
+    assert main(argv) == 0
+    judged = json.loads((out / "rl.json").read_text())
+    learners = judged["scenarios"][0]["learners"]
+    assert set(learners) == {
+        "ppo-sinr",
+        "ppo-information",
+        "maskable-ppo-information",
+        "recurrent-ppo-information",
+    }
+    assert all(row["seeds"] == 2 for row in learners.values())
+    assert (out / "rl.md").read_text().startswith("# The RL study")
+    assert (out / "curves_paper-1.png").stat().st_size > 0
+    for key in learners:
+        assert len(list((out / "train" / "paper-1-v1" / key).glob("seed-*/model.zip"))) == 2
+        assert len(list((out / "train" / "paper-1-v1" / key).glob("seed-*/curve.csv"))) == 2
+    # started again: every training and the run are kept, the report is the same
+    first = (out / "rl.md").read_text()
+    assert main(argv) == 0
+    assert (out / "rl.md").read_text() == first
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--timesteps", "0"], "--timesteps: must be an integer >= 1"),
+        (["--ppo-seeds", "0"], "--ppo-seeds: must be an integer >= 1"),
+        (["--scenarios", "4"], "--scenarios must list paper scenarios 1, 2, 3"),
+        (["--backend", "ray"], "the RL study trains in local worker processes"),
+    ],
+)
+def test_the_rl_study_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, message):
+    from benchmarks.cli import main
+
+    out = tmp_path / "rl"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["rl", *argv, "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err
+    assert not out.exists()
