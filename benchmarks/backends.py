@@ -9,12 +9,13 @@ exit by themselves when their parent dies.
 
 from __future__ import annotations
 
+import contextlib
 import os
 import signal
 import socket
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
@@ -50,31 +51,37 @@ def run_inline(runner: Runner, payload: dict[str, Any], todo: list[Task], finish
         finished(policy, shard, runner(payload, policy, shard))
 
 
-def run_processes(
-    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, workers: int
-) -> None:
+@contextlib.contextmanager
+def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
+    """Spawned worker processes (:func:`worker_init`: one compute thread each, exiting when this
+    process dies); on an error or an interrupt the running ones are terminated at once, their
+    results not wanted."""
     import multiprocessing
 
     context = multiprocessing.get_context("spawn")  # no inherited threads or state
     pool = ProcessPoolExecutor(
         max_workers=workers, mp_context=context, initializer=worker_init, initargs=(os.getpid(),)
     )
-    pending: dict[Any, Task] = {}
     try:
+        yield pool
+    except BaseException:
+        for process in list(getattr(pool, "_processes", {}).values()):
+            process.terminate()  # do not wait for running tasks: their results are not wanted
+        pool.shutdown(wait=False, cancel_futures=True)
+        raise
+    pool.shutdown()
+
+
+def run_processes(
+    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, workers: int
+) -> None:
+    with worker_pool(workers) as pool:
         pending = {pool.submit(runner, payload, policy, shard): (policy, shard) for policy, shard in todo}
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in done:
                 policy, shard = pending.pop(future)
                 finished(policy, shard, future.result())
-    except BaseException:
-        for future in pending:
-            future.cancel()
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()  # do not wait for running tasks: their results are not wanted
-        pool.shutdown(wait=False, cancel_futures=True)
-        raise
-    pool.shutdown()
 
 
 def check_ray_address(address: str | None, timeout: float = 3.0) -> None:

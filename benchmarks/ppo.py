@@ -301,7 +301,6 @@ def train_jobs(
     another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
     task's ``ppo.json`` by ``(out, seed)``."""
     import concurrent.futures
-    import multiprocessing
 
     done, todo = {}, []
     for job, out, seed in tasks:
@@ -319,8 +318,9 @@ def train_jobs(
     if done and progress:
         print(f"train-ppo: {len(done)} of {len(tasks)} trainings already done; training {len(todo)}")
     if todo:
-        context = multiprocessing.get_context("spawn")
-        with concurrent.futures.ProcessPoolExecutor(min(workers, len(todo)), mp_context=context) as pool:
+        from .backends import worker_pool
+
+        with worker_pool(min(workers, len(todo))) as pool:
             futures = {
                 pool.submit(_train_one_seed, job, str(out), seed): (out, seed) for job, out, seed in todo
             }

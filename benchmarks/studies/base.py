@@ -205,7 +205,9 @@ def machine() -> dict[str, Any]:
     }
 
 
-def write_timing(out: Path, study: str, wall_s: float, before: dict[str, Any]) -> Path:
+def write_timing(
+    out: Path, study: str, wall_s: float, before: dict[str, Any], parts: dict[str, float] | None = None
+) -> Path:
     """``out/timing.json``: the study's wall time in this invocation (a resumed study counts only
     what it ran), the command and the machine, with its load before and after."""
     after = machine()
@@ -213,6 +215,7 @@ def write_timing(out: Path, study: str, wall_s: float, before: dict[str, Any]) -
         "study": study,
         "command": ["mimo-radar-bench", *sys.argv[1:]] if sys.argv else [],
         "wall_s": round(wall_s, 3),
+        **({"parts_s": {k: round(v, 3) for k, v in parts.items()}} if parts else {}),
         "finished": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
         "machine": {**before, "load_average_1min_after": after["load_average_1min"]},
     }

@@ -166,10 +166,12 @@ class RLStudy(Study):
 
     def main(self) -> int:
         import sys
+        import time
 
         from ..harness import HarnessError, duration
-        from .base import configure
+        from .base import configure, execute, machine, write_timing
 
+        start, load_before = time.perf_counter(), machine()
         if self.settings.backend != "local":
             raise BenchError("the RL study trains in local worker processes: use --backend local")
         # everything but the models is checked before hours of training
@@ -185,7 +187,15 @@ class RLStudy(Study):
             file=sys.stderr,
         )
         self.train()
-        return super().main()
+        trained = time.perf_counter()
+        finished = execute(self.runs(), self.settings)
+        evaluated = time.perf_counter()
+        text = self.report(finished, self.judge(finished))
+        # the whole study in this invocation, training included (a resumed study counts what it ran)
+        parts = {"training": trained - start, "evaluation": evaluated - trained}
+        write_timing(self.settings.out, self.name, time.perf_counter() - start, load_before, parts)
+        print(text)
+        return 0
 
     def judge(self, finished: dict[Hashable, Finished]) -> dict[str, Any]:
         return judge_learners(
