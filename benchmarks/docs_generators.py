@@ -632,3 +632,67 @@ def _recipe_costs(docs: Path, page: str) -> str:
 
 for _page in ("clients.md", "ppo.md"):
     generator(f"recipe-costs-{_page.removesuffix('.md')}")(lambda docs, page=_page: _recipe_costs(docs, page))
+
+
+@generator("rl-tables")
+def rl_tables(docs: Path) -> str:
+    """The RL study's tables (``mimo-radar-bench rl``'s rl.md), from its committed rl.json."""
+    from .studies.rl import rl_markdown
+
+    text = rl_markdown(read_json(docs, "rl/rl.json"))
+    body = text.split("\n", 2)[2].lstrip("\n")  # the page has its own heading
+    return body.replace("\n## ", "\n### ").rstrip("\n")
+
+
+def _against(stat: dict) -> str:
+    """``better``/``worse``/``no difference shown`` for a learner-minus-X ARMSE interval."""
+    verdict = verdicts.verdict(stat["ci"], -1)
+    return {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse"}.get(verdict, "no difference shown")
+
+
+@generator("rl-findings")
+def rl_findings(docs: Path) -> str:
+    """What the RL study shows, every number from rl.json and timing.json."""
+    from .harness import duration
+    from .studies.rl import FLAT_CHANGE, MINUS_ORDER
+
+    judged = read_json(docs, "rl/rl.json")
+    timing = read_json(docs, "rl/timing.json")
+    parts = timing.get("parts_s", {})
+    machine = timing["machine"]
+    split = (
+        f"training {duration(parts['training'])}, evaluation {duration(parts['evaluation'])}; "
+        if {"training", "evaluation"} <= set(parts)
+        else ""
+    )
+    lines = [
+        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores ({split}`timing.json`)."
+    ]
+    for other in MINUS_ORDER:
+        counts: dict[str, list[str]] = {}
+        for entry in judged["scenarios"]:
+            for key, row in entry["learners"].items():
+                counts.setdefault(_against(row["minus"][other]), []).append(
+                    f"`{key}` in Scenario {entry['scenario']}"
+                )
+        total = sum(len(v) for v in counts.values())
+        said = "; ".join(
+            f"{label} in {len(where)} ({', '.join(where)})" for label, where in sorted(counts.items())
+        )
+        lines.append(
+            f"- Against `{other}` (ARMSE paired on the same trials, interval over seeds), of {total} learner "
+            f"and scenario pairs: {said}."
+        )
+    curves = [(n, k, c) for n, group in judged.get("curves", {}).items() for k, c in group.items()]
+    flat = [f"`{k}` (Scenario {n})" for n, k, c in curves if c["flat"]]
+    moving = [f"`{k}` (Scenario {n}, {100 * c['change']:+.1f} %)" for n, k, c in curves if c["flat"] is False]
+    lines.append(
+        f"- Learning curves at this budget (flat: the mean training ARMSE moves by at most "
+        f"{100 * FLAT_CHANGE:.0f} % between the last two fifths of training): flat for "
+        f"{len(flat)} of {len(curves)}"
+        + (f" ({', '.join(flat)})" if flat else "")
+        + "; still moving for "
+        + (", ".join(moving) if moving else "none")
+        + "."
+    )
+    return "\n".join(lines)

@@ -107,3 +107,47 @@ def test_the_rl_study_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, 
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and message in err
     assert not out.exists()
+
+
+def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
+    from benchmarks.docs_generators import rl_findings, rl_tables
+
+    learned = {
+        f"ppo:t/paper-1-v1/ppo-information/seed-{s}/model.zip": a for s, a in enumerate((1.0, 1.2, 1.1))
+    }
+    worse = {
+        f"recurrent-ppo:t/paper-1-v1/recurrent-ppo-information/seed-{s}/model.zip": 5.0 + s for s in range(3)
+    }
+    base = {"mg-crb-cl": 4.0, "best-tracking": 2.0, "tracking-ucb": 1.1}
+    judged = judge_learners(
+        {1: _summary({**base, **learned, **worse})},
+        [("ppo", "information"), ("recurrent-ppo", "information")],
+    )
+    steps = np.arange(1.0, 51.0)
+    judged["curves"] = {
+        "1": {
+            "ppo-information": flattened(
+                [{"timesteps": steps, "return": steps, "armse": 2.0 + np.exp(-steps)}]
+            ),
+            "recurrent-ppo-information": flattened(
+                [{"timesteps": steps, "return": steps, "armse": 10 / steps}]
+            ),
+        }
+    }
+    folder = tmp_path / "results" / "rl"
+    folder.mkdir(parents=True)
+    (folder / "rl.json").write_text(json.dumps(judged, default=float))
+    timing = {"wall_s": 7200.0, "parts_s": {"training": 6600.0, "evaluation": 500.0}, "machine": {"cores": 2}}
+    (folder / "timing.json").write_text(json.dumps(timing))
+    text = rl_findings(tmp_path)
+    assert "The study took 2.0 h on 2 cores (training 1.8 h, evaluation 8 min" in text
+    assert "Against `best-tracking`" in text and "better in 1 (`ppo-information` in Scenario 1)" in text
+    assert "worse in 1 (`recurrent-ppo-information` in Scenario 1)" in text
+    # against tracking-ucb (1.1): ppo's seeds 1.0, 1.2, 1.1 straddle it
+    assert "Against `tracking-ucb`" in text and "no difference shown in 1 (`ppo-information`" in text
+    assert (
+        "flat for 1 of 2 (`ppo-information` (Scenario 1))" in text
+        and "`recurrent-ppo-information` (Scenario 1, -" in text
+    )
+    tables = rl_tables(tmp_path)
+    assert tables.startswith("Learned policies across their training seeds") and "### paper-1" in tables
