@@ -67,6 +67,33 @@ def flat_measure(scenario: str, trials: int, steps: int, mode: str) -> float:
     return trials * (steps - 1) / elapsed
 
 
+def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int = 8) -> float:
+    """Environment steps per second of SB3 PPO training (the shipped hyperparameters, one thread)
+    on ``n_envs`` envs of ``scenario``: through the native vector env (``NativeVecEnv``, what
+    ``train-ppo`` uses) or through SB3's ``DummyVecEnv`` of single Flat envs (``make_vec_env``)."""
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.env_util import make_vec_env
+
+    from mimo_radar_env.sb3 import NativeVecEnv
+
+    from ..ppo import _NOT_FOR_PPO, load_hyperparams
+
+    torch.set_num_threads(1)
+    params = {k: v for k, v in load_hyperparams().items() if k not in _NOT_FOR_PPO}
+    params.pop("policy", None)
+    if native:
+        venv = NativeVecEnv(scenario, n_envs, seed=0, action="discrete")
+    else:
+        venv = make_vec_env(
+            "MimoRadarSelectFlat-v1", n_envs=n_envs, seed=0, env_kwargs={"scenario": scenario}
+        )
+    model = PPO("MlpPolicy", venv, seed=0, verbose=0, **params)
+    start = time.perf_counter()
+    model.learn(total_timesteps=timesteps)
+    return model.num_timesteps / (time.perf_counter() - start)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", default="paper-1")

@@ -15,6 +15,10 @@ Figures (``perf.json``):
   ``flat_vector_vs_sync_speedup``: ``MimoRadarSelectFlat-v1`` (paper-1-v1, random Discrete
   actions) through its native vector entry point (``trials`` trials) against Gymnasium's sync
   vector env of single Flat envs (``5 x reference_trials`` of them), in trial-steps per second;
+* ``ppo_training_steps_per_s_native``, ``ppo_training_steps_per_s_sync``,
+  ``ppo_training_native_vs_sync_speedup``: SB3 PPO training (the shipped hyperparameters, 8
+  envs, one thread) through ``NativeVecEnv`` against SB3's ``DummyVecEnv`` of single Flat envs,
+  in environment steps per second (8,192 steps each; ``--quick``: 2,048);
 * ``policy_*``: every policy's time per trial-step and peak memory per trial at 4 x 6, 16 x 16
   and 64 x 64 stations, K = 1 and 5, against what it declares (``policy_cost.json`` beside
   ``perf.json``; ``benchmarks/speed/policy_cost.py``; ``--quick``: 4 x 6 only).
@@ -108,6 +112,16 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     results["flat_vector_vs_sync_speedup"] = (
         results["flat_vector_trial_steps_per_s"] / results["flat_sync_trial_steps_per_s"]
     )
+    training_steps = 2048 if quick else 8192
+    results["ppo_training_steps_per_s_native"] = env_throughput.ppo_training_rate(
+        "paper-1-v1", training_steps, native=True
+    )
+    results["ppo_training_steps_per_s_sync"] = env_throughput.ppo_training_rate(
+        "paper-1-v1", training_steps, native=False
+    )
+    results["ppo_training_native_vs_sync_speedup"] = (
+        results["ppo_training_steps_per_s_native"] / results["ppo_training_steps_per_s_sync"]
+    )
     results["repro_wall_s_exact"] = repro_wall_s("exact", trials, sizes["repro_steps"], workers, shard_size)
     results["repro_wall_s_paper"] = repro_wall_s("bpso", trials, sizes["repro_steps"], workers, shard_size)
     start = time.perf_counter()
@@ -139,6 +153,9 @@ NEW_FIGURES = (
     ("flat_vector_trial_steps_per_s", "/s", "Flat-v1, native vector entry point"),
     ("flat_sync_trial_steps_per_s", "/s", "Flat-v1, sync vector env of single envs"),
     ("flat_vector_vs_sync_speedup", "x", "Flat-v1 native vector / sync"),
+    ("ppo_training_steps_per_s_native", "/s", "PPO training env steps, native vector env"),
+    ("ppo_training_steps_per_s_sync", "/s", "PPO training env steps, SB3 DummyVecEnv"),
+    ("ppo_training_native_vs_sync_speedup", "x", "PPO training, native / DummyVecEnv"),
 )
 #: The policies' costs against their declarations (their table in the docs is generated from
 #: ``policy_cost.json``).

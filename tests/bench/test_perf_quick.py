@@ -16,6 +16,7 @@ FIGURES = {
     "flat_vector_trial_steps_per_s",
     "flat_sync_trial_steps_per_s",
     "flat_vector_vs_sync_speedup",
+    "ppo_training_native_vs_sync_speedup",
 }
 
 
