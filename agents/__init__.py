@@ -10,6 +10,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
+from .planning import PlanTrackingAgent
 from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
@@ -41,6 +42,7 @@ __all__ = [
     "Agent",
     "BestAgent",
     "BestTrackingAgent",
+    "PlanTrackingAgent",
     "CombinatorialThompson",
     "DiscountedThompson",
     "DiscountedUCB",

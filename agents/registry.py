@@ -19,6 +19,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
+from .planning import PlanTrackingAgent
 from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
@@ -77,6 +78,14 @@ for _cls in (
     register_agent(_cls.name, _cls, _first_line(_cls))
 for _learned in (PPOAgent, MaskablePPOAgent, RecurrentPPOAgent):
     register_agent(_learned.name, _learned, _first_line(_learned), argument="path")
+# plan-tracking:10 plans 10 steps ahead: several horizons in one run
+register_agent(
+    PlanTrackingAgent.name,
+    PlanTrackingAgent,
+    _first_line(PlanTrackingAgent),
+    argument="horizon",
+    argument_type=int,
+)
 # tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run
 register_agent(
     TrackingUCB.name, TrackingUCB, _first_line(TrackingUCB), argument="sinr_weight", argument_type=float

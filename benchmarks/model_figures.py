@@ -183,6 +183,47 @@ def greedy_tracking_search() -> dict[str, Figure]:
     return out
 
 
+def plan_instances(
+    fusion: str, layouts: int = 6, steps: int = 12, trials: int = 10, width: int = 3, horizon: int = 3
+) -> dict[str, NDArray[np.float64]]:
+    """Small planning instances (3 x 3 stations, 1 TX and 2 RX: 9 super arms; ``horizon``-step
+    plans, 729 sequences at H = 3): the closed loop of best-tracking on ``layouts`` random layouts
+    (seeds 0, 1, ...), its forecasts at ``steps`` steps of ``trials`` trials each, and the cost of
+    the best plan found by every search, the exhaustive one's the reference."""
+    from mimo_radar_env import MimoRadarSelectVectorEnv, random_scenario
+    from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Planner
+
+    costs: dict[str, list] = {search: [] for search in PLAN_SEARCHES}
+    for seed in range(layouts):
+        scenario = random_scenario(3, 3, 2, 1, 2, horizon=steps + 2, seed=seed)
+        env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, fusion=fusion)
+        env.reset(seed=seed)
+        planners = {s: Planner(3, 3, 1, 2, search=s, width=width, fusion=fusion) for s in PLAN_SEARCHES}
+        for _ in range(steps):
+            forecast = env.tracking_forecast(horizon)
+            for search, planner in planners.items():
+                costs[search].append(planner.plan(forecast)[1])
+            env.step(env.tracking_oracle_action())
+    return {search: np.concatenate(values) for search, values in costs.items()}
+
+
+@figure(*(f"plan-{s}-optimal-{f}" for s in ("beam", "rollout") for f in ("centralized", "average")))
+def plan_optimality() -> dict[str, Figure]:
+    out = {}
+    for fusion in ("centralized", "average"):
+        costs = plan_instances(fusion)
+        for search in ("beam", "rollout"):
+            found = costs[search] <= costs["exhaustive"] * (1 + 1e-9)
+            what = "a beam of width 3" if search == "beam" else "the rollout of every first super arm"
+            out[f"plan-{search}-optimal-{fusion}"] = rate(
+                found,
+                f"{what} finds the exhaustive optimum of 3-step plans (9 super arms: 3 x 3 stations, 1 TX "
+                f"and 2 RX, 2 targets), {fusion} fusion; 720 forecasts: 6 random layouts x 12 steps x 10 "
+                "trials of best-tracking's closed loop",
+            )
+    return out
+
+
 @figure("oracle-exact-32x32-step-s")
 def oracle_exact_cost() -> dict[str, Figure]:
     scenario = random_scenario(32, 32, 1, 4, 4, horizon=5, seed=0)

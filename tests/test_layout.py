@@ -47,6 +47,8 @@ MODULE_TESTS = {
     "benchmarks/speed/policy_cost.py": ("tests/bench/test_resources.py", r"measure_policy"),
     "benchmarks/speed/recipes.py": ("tests/clients/test_docs_recipes.py", r"run_recipe"),
     "benchmarks/studies/rl.py": ("tests/bench/test_rl_study.py", r"judge_learners"),
+    "mimo_radar_env/tracking/planning.py": ("tests/tracking/test_planning.py", r"Planner\("),
+    "agents/planning.py": ("tests/tracking/test_planning.py", r"plan-tracking"),
     "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),
     "benchmarks/speed/perf.py": ("tests/bench/test_perf_quick.py", r'"perf"'),
     "benchmarks/speed/scaling.py": ("tests/bench/test_perf_quick.py", r"scaling\.measure"),

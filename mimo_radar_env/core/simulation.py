@@ -148,19 +148,32 @@ class RadarSimulation:
         one step ahead; steps past the horizon continue with NCV.
         """
         if self._upcoming is None:
-            model = self.model
-            t = self.step_index
-            if t < model.transitions.shape[1]:
-                F = model.transitions[:, t]
-            else:
-                F = np.broadcast_to(
-                    transition_matrix(0.0, model.scenario.sample_time), (model.num_targets, 4, 4)
-                )
-            noise = self._process_std * self.streams.normal(
-                Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
-            )
-            self._upcoming = np.einsum("kij,bkj->bki", F, self.state) + noise @ model.noise_gain.T
+            self._upcoming = self._next_state(self.state, self.step_index)
         return self._upcoming
+
+    def _next_state(self, state: NDArray[np.float64], t: int) -> NDArray[np.float64]:
+        """The true state after step ``t`` from ``state`` (the step's transition and its draw of
+        the process noise)."""
+        model = self.model
+        if t < model.transitions.shape[1]:
+            F = model.transitions[:, t]
+        else:
+            F = np.broadcast_to(transition_matrix(0.0, model.scenario.sample_time), (model.num_targets, 4, 4))
+        noise = self._process_std * self.streams.normal(
+            Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
+        )
+        return np.einsum("kij,bkj->bki", F, state) + noise @ model.noise_gain.T
+
+    def future_states(self, horizon: int) -> NDArray[np.float64]:
+        """The true states at steps ``t + 1 .. t + horizon`` (B, H, K, 4), without advancing:
+        each step's process noise comes from the counter-based stream of that step, so these
+        are the states :meth:`advance` will reach (planning oracles read them)."""
+        if horizon < 1:
+            raise ValueError(f"horizon must be >= 1, got {horizon}")
+        states = [self.upcoming_state()]
+        for h in range(1, horizon):
+            states.append(self._next_state(states[-1], self.step_index + h))
+        return np.stack(states, axis=1)
 
     def advance(self) -> None:
         """Move every trial's targets from step ``t`` to ``t + 1``."""

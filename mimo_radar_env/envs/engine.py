@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel, check_memory
+from ..core.motion import transition_matrix
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, super_arm_value
@@ -24,6 +25,7 @@ from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
 from ..tracking.bound import bound_step, position_bound
 from ..tracking.information import channel_information, jacobian_information, position_determinant
+from ..tracking.planning import Forecast
 from ..tracking.selection import select_for_tracking
 from .options import EnvOptions
 
@@ -227,6 +229,31 @@ class RadarEngine:
             position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
         )
         return np.concatenate([tx, rx], axis=1).astype(np.int8)
+
+    def tracking_forecast(self, horizon: int) -> Forecast:
+        """What a receding-horizon tracking oracle scores plans of the next ``horizon`` steps on
+        (:class:`~mimo_radar_env.tracking.planning.Forecast`): the tracker's predicted covariance,
+        and each channel's position information at step ``t + h`` at the tracker's prediction
+        carried by the constant-velocity model, with the channel's true ``lambda`` along the
+        truth (reads the truth: oracle only). Its first step is best-tracking's."""
+        if self.tracker is None:
+            raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
+        if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
+            raise ValueError(f"horizon must be an integer >= 1, got {horizon!r}")
+        truth = self.simulation.future_states(horizon)[..., [0, 2]]  # (B, H, K, 2)
+        variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(truth)))
+        F = transition_matrix(0.0, self.scenario.sample_time)
+        predicted = [self.tracker.predicted_state()]
+        for _ in range(1, horizon):
+            predicted.append(predicted[-1] @ F.T)
+        positions = np.stack(predicted, axis=1)[..., [0, 2]]
+        return Forecast(
+            covariance=self.tracker.predicted_covariance(),
+            information=channel_information(positions, self.model.tx, self.model.rx, variance),
+            transition=F,
+            process_cov=self.model.process_cov,
+            weights=np.asarray(self.scenario.weights, dtype=np.float64),
+        )
 
     # ----------------------------------------------------------- helpers
     def _advance_bound(self, channels: ChannelObservations) -> None:

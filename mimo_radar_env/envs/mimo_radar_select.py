@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
+from ..tracking.planning import Forecast
 from .engine import RadarEngine
 from .options import EnvOptions, options_markdown, resolve
 from .versions import versions_markdown
@@ -246,6 +247,11 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         channels' true ``lambda`` (reads the truth: oracle only)."""
         return self.engine.tracking_oracle_action(criterion)[0]
 
+    def tracking_forecast(self, horizon: int) -> Forecast:
+        """The forecast a receding-horizon tracking oracle plans the next ``horizon`` steps on,
+        as a batch of one trial (reads the truth: oracle only)."""
+        return self.engine.tracking_forecast(horizon)
+
     def render(self) -> NDArray[np.uint8] | None:
         """Draw the stations, the true and estimated tracks and the current selection: an RGB
         array with ``render_mode="rgb_array"``, a matplotlib window with ``"human"`` (None);
@@ -419,3 +425,8 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         """Super arms of the coming step with the smallest predicted posterior position error,
         (B, M + N) (reads the truth: oracle only)."""
         return self.engine.tracking_oracle_action(criterion)
+
+    def tracking_forecast(self, horizon: int) -> Forecast:
+        """The forecast a receding-horizon tracking oracle plans the next ``horizon`` steps of
+        every trial on (reads the truth: oracle only)."""
+        return self.engine.tracking_forecast(horizon)

@@ -1,0 +1,245 @@
+"""Receding-horizon selection for tracking: sequences of super arms over the next H steps.
+
+A plan is a sequence ``(A_1, ..., A_H)`` of super arms for steps ``t + 1 .. t + H``; its cost
+is the summed criterion of the predicted posterior position covariances,
+``sum_h sum_k Omega_k c(P_k(t + h | t + h))`` (``c``: trace, m^2, or log det). The covariance
+is carried from step to step in the information form of the tracker's model:
+
+* step ``t + 1`` starts from the tracker's predicted covariance ``P_bar`` (the IMM mixture);
+* a super arm adds its channels' position information ``H' R^-1 H`` (at the forecast's
+  predicted positions, with its variances) as the fusion does: centralised, the information
+  of the channels adds; eq22's average, the channels' posteriors are averaged;
+* between steps the posterior is predicted with the constant-velocity model,
+  ``P' = F P F' + Q``.
+
+The cost of a step is the myopic criterion of :func:`~.selection.super_arm_criterion` on the
+position block of the prior, which is what the position block of the full posterior is
+(the measurements see only the position), so ``H = 1`` is best-tracking's selection exactly.
+Plans are searched per trial, batched over trials:
+
+* ``"beam"``: the ``width`` cheapest partial plans are kept at each depth and extended by every
+  super arm (``width`` at least ``A^(H-1)`` is exhaustive);
+* ``"rollout"``: every first super arm, each continued greedily (the one-step best at each
+  later step);
+* ``"exhaustive"``: every sequence, up to :data:`MAX_EXHAUSTIVE_SEQUENCES` (tests' reference).
+
+The first super arm of the cheapest plan is played (receding horizon).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ..core.superarm import all_super_arms, super_arm_count
+from .selection import MAX_ENUMERATED_SUPER_ARMS, _check_choices, super_arm_criterion
+
+PLAN_SEARCHES = ("beam", "rollout", "exhaustive")
+#: The most sequences the exhaustive search scores per trial.
+MAX_EXHAUSTIVE_SEQUENCES = 200_000
+
+
+@dataclass(frozen=True)
+class Forecast:
+    """What a plan of a batch of trials is scored on.
+
+    Attributes
+    ----------
+    covariance : array (B, K, 4, 4)
+        The predicted covariance of step ``t + 1``.
+    information : array (B, H, K, M, N, 2, 2)
+        Each channel's position information at step ``t + h``.
+    transition, process_cov : arrays (4, 4)
+        The model that predicts the covariance from one planned step to the next.
+    weights : array (K,)
+        ``Omega``.
+    """
+
+    covariance: NDArray[np.float64]
+    information: NDArray[np.float64]
+    transition: NDArray[np.float64]
+    process_cov: NDArray[np.float64]
+    weights: NDArray[np.float64]
+
+    @property
+    def horizon(self) -> int:
+        return self.information.shape[1]
+
+
+def _position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
+    return covariance[..., [[0], [2]], [0, 2]]
+
+
+def posterior_covariance(
+    covariance: NDArray[np.float64],
+    information: NDArray[np.float64],
+    tx_mask: NDArray[np.bool_],
+    rx_mask: NDArray[np.bool_],
+    fusion: str,
+) -> NDArray[np.float64]:
+    """The full posterior covariance (S, K, 4, 4) after the channels ``tx_mask x rx_mask``
+    ((S, M), (S, N)) with position information ``information`` (S, K, M, N, 2, 2), from the
+    prior ``covariance`` (S, K, 4, 4), fused as ``fusion`` fuses."""
+    prior_info = np.linalg.inv(covariance)  # (S, K, 4, 4)
+    selected = tx_mask[:, :, None] & rx_mask[:, None, :]  # (S, M, N)
+    if fusion == "centralized":
+        added = np.einsum("smn,skmnij->skij", selected.astype(float), information)
+        total = prior_info.copy()
+        total[..., 0::2, 0::2] += added
+        return np.linalg.inv(total)
+    # eq22: each channel's posterior, averaged over the selected channels
+    per_channel = np.broadcast_to(prior_info[:, :, None, None], (*information.shape[:4], 4, 4)).copy()
+    per_channel[..., 0::2, 0::2] += information
+    posteriors = np.linalg.inv(per_channel)  # (S, K, M, N, 4, 4)
+    count = selected.sum(axis=(1, 2))[:, None, None, None]
+    return np.einsum("smn,skmnij->skij", selected.astype(float), posteriors) / count
+
+
+class Planner:
+    """The receding-horizon search of one layout (see the module's docstring).
+
+    Parameters
+    ----------
+    num_tx, num_rx, tx_count, rx_count : int
+        ``M``, ``N``, ``Ms``, ``Ns``: the super arms are all valid selections (at most
+        :data:`~.selection.MAX_ENUMERATED_SUPER_ARMS` of them).
+    search : str
+        One of :data:`PLAN_SEARCHES`.
+    width : int
+        The beam's width.
+    criterion, fusion : str
+        As :func:`~.selection.select_for_tracking`.
+    """
+
+    def __init__(
+        self,
+        num_tx: int,
+        num_rx: int,
+        tx_count: int,
+        rx_count: int,
+        search: str = "beam",
+        width: int = 5,
+        criterion: str = "trace",
+        fusion: str = "centralized",
+    ) -> None:
+        _check_choices(criterion, fusion)
+        if search not in PLAN_SEARCHES:
+            raise ValueError(f"search must be one of {list(PLAN_SEARCHES)}, got {search!r}")
+        if isinstance(width, bool) or not isinstance(width, int) or not 1 <= width <= 10_000:
+            raise ValueError(f"width must be an integer in [1, 10000], got {width!r}")
+        count = super_arm_count(num_tx, num_rx, tx_count, rx_count)
+        if count > MAX_ENUMERATED_SUPER_ARMS:
+            raise ValueError(
+                f"planning scores every super arm at every step: at most {MAX_ENUMERATED_SUPER_ARMS:,} of "
+                f"them, this layout has {count:,}"
+            )
+        self.tx_masks, self.rx_masks = all_super_arms(num_tx, num_rx, tx_count, rx_count)
+        self.search, self.width, self.criterion, self.fusion = search, width, criterion, fusion
+
+    @property
+    def arms(self) -> int:
+        return len(self.tx_masks)
+
+    def check_horizon(self, horizon: int) -> None:
+        if self.search == "exhaustive" and self.arms**horizon > MAX_EXHAUSTIVE_SEQUENCES:
+            raise ValueError(
+                f"the exhaustive search scores {self.arms}^{horizon} sequences, more than "
+                f"{MAX_EXHAUSTIVE_SEQUENCES:,}: use search='beam' or 'rollout', or a shorter horizon"
+            )
+
+    def _costs(self, covariance: NDArray[np.float64], information: NDArray[np.float64], weights) -> NDArray:
+        """The step's cost of every super arm from each state: (S, A) for priors (S, K, 4, 4)."""
+        return super_arm_criterion(
+            _position_block(covariance),
+            information,
+            self.tx_masks,
+            self.rx_masks,
+            weights,
+            self.criterion,
+            self.fusion,
+        )
+
+    def _advance(
+        self,
+        covariance: NDArray[np.float64],
+        information: NDArray[np.float64],
+        arms: NDArray[np.int64],
+        forecast,
+    ) -> NDArray[np.float64]:
+        """The next step's prior of each state (S, K, 4, 4) after playing ``arms`` (S,)."""
+        posterior = posterior_covariance(
+            covariance, information, self.tx_masks[arms], self.rx_masks[arms], self.fusion
+        )
+        F = forecast.transition
+        return F @ posterior @ F.T + forecast.process_cov
+
+    def plan(self, forecast: Forecast) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """The cheapest plan of each trial: its super arms' indices (B, H) into
+        :attr:`tx_masks`/:attr:`rx_masks` and its cost (B,)."""
+        horizon = forecast.horizon
+        self.check_horizon(horizon)
+        batch = forecast.covariance.shape[0]
+        width = {"beam": self.width, "exhaustive": self.arms ** max(horizon - 1, 0), "rollout": self.arms}[
+            self.search
+        ]
+        # the states: (B, S) partial plans with their prior for the next step and their cost
+        covariance = forecast.covariance[:, None]
+        cost = np.zeros((batch, 1))
+        plans = np.zeros((batch, 1, 0), dtype=np.int64)
+        for h in range(horizon):
+            S = covariance.shape[1]
+            info = np.repeat(forecast.information[:, h], S, axis=0)  # (B*S, K, M, N, 2, 2)
+            step = self._costs(covariance.reshape(batch * S, *covariance.shape[2:]), info, forecast.weights)
+            total = cost[:, :, None] + step.reshape(batch, S, self.arms)  # (B, S, A)
+            if self.search == "rollout" and h > 0:  # each plan continues with its one-step best
+                arm = np.argmin(total, axis=2)  # (B, S)
+                parent = np.broadcast_to(np.arange(S), (batch, S))
+            else:
+                flat = total.reshape(batch, S * self.arms)
+                keep = min(width, flat.shape[1])
+                order = np.argsort(flat, axis=1, kind="stable")[:, :keep]  # first occurrence on ties
+                parent, arm = np.divmod(order, self.arms)
+            rows = np.arange(batch)[:, None]
+            cost = total[rows, parent, arm]
+            plans = np.concatenate([plans[rows, parent], arm[..., None]], axis=2)
+            if h + 1 < horizon:
+                kept = covariance[rows, parent]  # (B, S', K, 4, 4)
+                S2 = kept.shape[1]
+                covariance = self._advance(
+                    kept.reshape(batch * S2, *kept.shape[2:]),
+                    np.repeat(forecast.information[:, h], S2, axis=0),
+                    arm.reshape(-1),
+                    forecast,
+                ).reshape(kept.shape)
+        best = np.argmin(cost, axis=1)
+        rows = np.arange(batch)
+        return plans[rows, best], cost[rows, best]
+
+    def first_arm(self, forecast: Forecast) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """The super arm to play now, masks (B, M), (B, N): the first of the cheapest plan."""
+        plans, _ = self.plan(forecast)
+        return self.tx_masks[plans[:, 0]], self.rx_masks[plans[:, 0]]
+
+
+def sequences(arms: int, horizon: int) -> NDArray[np.int64]:
+    """Every sequence of ``horizon`` arms out of ``arms``, (arms^horizon, horizon), in
+    lexicographic order."""
+    grids = np.indices((arms,) * horizon).reshape(horizon, -1).T
+    return grids.astype(np.int64)
+
+
+def plan_cost(planner: Planner, forecast: Forecast, plans: NDArray[np.int64]) -> NDArray[np.float64]:
+    """The cost of given plans (B, P, H) of every trial, (B, P): the reference the searches are
+    tested against (every plan scored on its own)."""
+    batch, count, horizon = plans.shape
+    covariance = np.repeat(forecast.covariance, count, axis=0)
+    cost = np.zeros(batch * count)
+    flat = plans.reshape(batch * count, horizon)
+    rows = np.arange(batch * count)
+    for h in range(horizon):
+        info = np.repeat(forecast.information[:, h], count, axis=0)
+        cost += planner._costs(covariance, info, forecast.weights)[rows, flat[:, h]]
+        covariance = planner._advance(covariance, info, flat[:, h], forecast)
+    return cost.reshape(batch, count)
