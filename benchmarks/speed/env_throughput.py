@@ -34,13 +34,18 @@ def measure(scenario: str, trials: int, steps: int, tracking: bool, fusion: str 
         random_super_arms(rng, trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
         for _ in range(steps)
     ]
+    return _trial_steps_per_s(venv, actions, trials)
+
+
+def _trial_steps_per_s(venv, actions: list, trials: int) -> float:
+    """Trial-steps per second of stepping ``venv`` through ``actions`` after a warm-up step."""
     venv.reset(seed=0)
     venv.step(actions[0])  # warm-up
     start = time.perf_counter()
     for action in actions[1:]:
         venv.step(action)
     elapsed = time.perf_counter() - start
-    return trials * (steps - 1) / elapsed
+    return trials * (len(actions) - 1) / elapsed
 
 
 def flat_measure(scenario: str, trials: int, steps: int, mode: str) -> float:
@@ -57,14 +62,9 @@ def flat_measure(scenario: str, trials: int, steps: int, mode: str) -> float:
     rng = np.random.default_rng(0)
     count = int(venv.single_action_space.n)
     actions = [rng.integers(0, count, trials) for _ in range(steps)]
-    venv.reset(seed=0)
-    venv.step(actions[0])  # warm-up
-    start = time.perf_counter()
-    for action in actions[1:]:
-        venv.step(action)
-    elapsed = time.perf_counter() - start
+    rate = _trial_steps_per_s(venv, actions, trials)
     venv.close()
-    return trials * (steps - 1) / elapsed
+    return rate
 
 
 def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int = 8) -> float:

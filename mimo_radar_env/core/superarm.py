@@ -175,17 +175,21 @@ def best_super_arm(
 ) -> tuple[NDArray[np.bool_], NDArray[np.bool_], NDArray[np.float64]]:
     """The optimal super arm by ``method``, one of :data:`SUPER_ARM_METHODS`."""
     num_tx, num_rx = weights.shape[-2:]
-    if method == "auto":
-        method = (
-            "exact"
-            if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
-            else "alternating"
-        )
+    method = resolve_method(num_tx, num_rx, tx_count, rx_count, method)
     if method == "exact":
         return exact_super_arm(weights, tx_count, rx_count)
     if method == "alternating":
         return alternating_super_arm(weights, tx_count, rx_count)
     raise ValueError(f"method must be one of {SUPER_ARM_METHODS}, got {method!r}")
+
+
+def resolve_method(num_tx: int, num_rx: int, tx_count: int, rx_count: int, method: str) -> str:
+    """``method``, with ``"auto"`` resolved: exact up to ``AUTO_EXACT_SUBSETS`` subsets on the
+    smaller side, alternating beyond."""
+    if method != "auto":
+        return method
+    affordable = is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
+    return "exact" if affordable else "alternating"
 
 
 def exact_operations(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> float:
@@ -206,13 +210,7 @@ def alternating_operations(num_tx: int, num_rx: int, starts: int, rounds: int = 
 
 def search_operations(num_tx: int, num_rx: int, tx_count: int, rx_count: int, method: str = "auto") -> float:
     """Arithmetic operations of :func:`best_super_arm` by ``method`` per trial, roughly."""
-    if method == "auto":
-        method = (
-            "exact"
-            if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
-            else "alternating"
-        )
-    if method == "exact":
+    if resolve_method(num_tx, num_rx, tx_count, rx_count, method) == "exact":
         return exact_operations(num_tx, num_rx, tx_count, rx_count)
     return alternating_operations(num_tx, num_rx, starts=0)
 
