@@ -112,15 +112,16 @@ class TrainPPO(Command):
             )
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc
+        algorithm = LEARNERS[args.algo].algorithm.partition(":")[2]  # PPO, MaskablePPO, RecurrentPPO
         if args.seeds == 1:
             print(
-                f"trained {args.algo} for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
+                f"trained {algorithm} for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
                 f"saved {Path(args.out, 'model.zip')}"
             )
         else:
             folder = seed_folder(args.out, args.seed).parent
             print(
-                f"trained {args.algo}, {args.seeds} seeds of {meta['timesteps']} steps; saved {folder}/seed-*"
+                f"trained {algorithm}, {args.seeds} seeds of {meta['timesteps']} steps; saved {folder}/seed-*"
             )
         return 0
 
