@@ -666,7 +666,9 @@ def rl_findings(docs: Path) -> str:
         else ""
     )
     lines = [
-        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores ({split}`timing.json`)."
+        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores ({split}`timing.json`); "
+        f"its trainings took {duration(judged['training_worker_s'])} of worker time (the sum of every "
+        "seed's training wall time)."
     ]
     for other in MINUS_ORDER:
         counts: dict[str, list[str]] = {}

@@ -216,6 +216,7 @@ class RLStudy(Study):
             str(number): {key: flattened(curve) for key, curve in group.items()}
             for number, group in curves.items()
         }
+        judged["training_worker_s"] = training_seconds(out)
         (out / RESULTS_FILE).write_text(json.dumps(judged, indent=1, default=float) + "\n")
         text = rl_markdown(judged)
         (out / "rl.md").write_text(text)
@@ -276,6 +277,15 @@ def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[st
         "scenarios": scenarios,
         "over_scenarios": {key: across_seeds(groups, "iqm") for key, groups in ratios.items()},
     }
+
+
+def training_seconds(out: Path) -> float:
+    """The trainings' compute: the sum of every seed's training wall time (``ppo.json``'s
+    ``train_wall_s``), whichever invocation of the study trained it."""
+    from ..ppo import META_FILE
+
+    metas = sorted(out.glob(f"train/*/*/seed-*/{META_FILE}"))
+    return float(sum(json.loads(path.read_text())["train_wall_s"] for path in metas))
 
 
 def read_curves(folder: Path) -> list[dict[str, np.ndarray]]:

@@ -77,6 +77,7 @@ def test_a_reduced_rl_study_trains_evaluates_and_reports(tmp_path):
         "recurrent-ppo-information",
     }
     assert all(row["seeds"] == 2 for row in learners.values())
+    assert judged["training_worker_s"] > 0
     assert (out / "rl.md").read_text().startswith("# The RL study")
     assert (out / "curves_paper-1.png").stat().st_size > 0
     for key in learners:
@@ -134,6 +135,7 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
             ),
         }
     }
+    judged["training_worker_s"] = 13000.0
     folder = tmp_path / "results" / "rl"
     folder.mkdir(parents=True)
     (folder / "rl.json").write_text(json.dumps(judged, default=float))
@@ -141,6 +143,7 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     (folder / "timing.json").write_text(json.dumps(timing))
     text = rl_findings(tmp_path)
     assert "The study took 2.0 h on 2 cores (training 1.8 h, evaluation 8 min" in text
+    assert "its trainings took 3.6 h of worker time" in text
     assert "Against `best-tracking`" in text and "better in 1 (`ppo-information` in Scenario 1)" in text
     assert "worse in 1 (`recurrent-ppo-information` in Scenario 1)" in text
     # against tracking-ucb (1.1): ppo's seeds 1.0, 1.2, 1.1 straddle it
