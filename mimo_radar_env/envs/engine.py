@@ -255,6 +255,33 @@ class RadarEngine:
             weights=np.asarray(self.scenario.weights, dtype=np.float64),
         )
 
+    def bound_forecast(self) -> Forecast:
+        """The rest of the episode as the PCRB sees it, for the offline bound on selection
+        (:func:`~mimo_radar_env.tracking.planning.best_achievable_bound`): the bound's prior of
+        the coming step, every channel's information at the true positions of each remaining
+        step with its true variances, and each target's true motion after each step (reads the
+        truth)."""
+        if self.tracker is None:
+            raise RuntimeError("the bound needs the tracker: make the env with tracking=True")
+        horizon = self.horizon - self.step_index
+        if horizon < 1:
+            raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
+        truth = self.simulation.future_states(horizon)[..., [0, 2]]
+        variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(truth)))
+        transitions = np.moveaxis(self.model.transitions, 1, 0)  # (T, K, 4, 4): step t -> t + 1
+        F = transitions[self.step_index]
+        prior = F @ self._bound_covariance @ np.swapaxes(F, -1, -2) + self.model.process_cov
+        after = transitions[self.step_index + 1 : self.step_index + horizon]
+        # the motion after the last step is never used; the last one stands in for it
+        after = np.concatenate([after, transitions[-1:]])
+        return Forecast(
+            covariance=prior,
+            information=channel_information(truth, self.model.tx, self.model.rx, variance),
+            transition=after,
+            process_cov=self.model.process_cov,
+            weights=np.asarray(self.scenario.weights, dtype=np.float64),
+        )
+
     # ----------------------------------------------------------- helpers
     def _advance_bound(self, channels: ChannelObservations) -> None:
         """The PCRB of the step: the true motion, then the probed channels at the true

@@ -51,8 +51,10 @@ class Forecast:
         The predicted covariance of step ``t + 1``.
     information : array (B, H, K, M, N, 2, 2)
         Each channel's position information at step ``t + h``.
-    transition, process_cov : arrays (4, 4)
-        The model that predicts the covariance from one planned step to the next.
+    transition : array (4, 4) or (H, K, 4, 4)
+        The motion that predicts the covariance from one planned step to the next: one for all
+        steps and targets, or (the bound's) each target's true motion after each step.
+    process_cov : array (4, 4)
     weights : array (K,)
         ``Omega``.
     """
@@ -66,6 +68,10 @@ class Forecast:
     @property
     def horizon(self) -> int:
         return self.information.shape[1]
+
+    def transition_after(self, h: int) -> NDArray[np.float64]:
+        """The transition from planned step ``h`` (0-based) to the next: (4, 4) or (K, 4, 4)."""
+        return self.transition if self.transition.ndim == 2 else self.transition[h]
 
 
 def _position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -166,14 +172,16 @@ class Planner:
         covariance: NDArray[np.float64],
         information: NDArray[np.float64],
         arms: NDArray[np.int64],
-        forecast,
+        forecast: Forecast,
+        h: int,
     ) -> NDArray[np.float64]:
-        """The next step's prior of each state (S, K, 4, 4) after playing ``arms`` (S,)."""
+        """The prior of step ``h + 1`` of each state (S, K, 4, 4) after playing ``arms`` (S,) at
+        step ``h``."""
         posterior = posterior_covariance(
             covariance, information, self.tx_masks[arms], self.rx_masks[arms], self.fusion
         )
-        F = forecast.transition
-        return F @ posterior @ F.T + forecast.process_cov
+        F = forecast.transition_after(h)
+        return F @ posterior @ np.swapaxes(F, -1, -2) + forecast.process_cov
 
     def plan(self, forecast: Forecast) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
         """The cheapest plan of each trial: its super arms' indices (B, H) into
@@ -212,6 +220,7 @@ class Planner:
                     np.repeat(forecast.information[:, h], S2, axis=0),
                     arm.reshape(-1),
                     forecast,
+                    h,
                 ).reshape(kept.shape)
         best = np.argmin(cost, axis=1)
         rows = np.arange(batch)
@@ -241,5 +250,40 @@ def plan_cost(planner: Planner, forecast: Forecast, plans: NDArray[np.int64]) ->
     for h in range(horizon):
         info = np.repeat(forecast.information[:, h], count, axis=0)
         cost += planner._costs(covariance, info, forecast.weights)[rows, flat[:, h]]
-        covariance = planner._advance(covariance, info, flat[:, h], forecast)
+        covariance = planner._advance(covariance, info, flat[:, h], forecast, h)
     return cost.reshape(batch, count)
+
+
+def position_traces(planner: Planner, forecast: Forecast, plan: NDArray[np.int64]) -> NDArray[np.float64]:
+    """The trace of each target's posterior position covariance (m^2) at every step of one plan
+    per trial (B, H): (B, H, K)."""
+    covariance = forecast.covariance
+    traces = []
+    for h in range(plan.shape[1]):
+        arms = plan[:, h]
+        posterior = posterior_covariance(
+            covariance,
+            forecast.information[:, h],
+            planner.tx_masks[arms],
+            planner.rx_masks[arms],
+            planner.fusion,
+        )
+        traces.append(posterior[..., 0, 0] + posterior[..., 2, 2])
+        F = forecast.transition_after(h)
+        covariance = F @ posterior @ np.swapaxes(F, -1, -2) + forecast.process_cov
+    return np.stack(traces, axis=1)
+
+
+def best_achievable_bound(
+    forecast: Forecast, num_tx: int, num_rx: int, tx_count: int, rx_count: int, width: int = 5
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """The offline bound on selection: given the whole truth (``forecast``: the PCRB's prior of
+    the first step, every channel's information at the true positions with the true variances,
+    each target's true motion), the selection sequence with the smallest time-averaged
+    ``sum_k Omega_k`` PCRB position MSE that a beam of ``width`` finds over the whole horizon
+    (the PCRB is a centralised bound: the channels' information adds). Returns each target's
+    bound over the episode, ``sqrt(mean_t trace)`` (m), (B, K), as runs report theirs, and the
+    sequence (B, H)."""
+    planner = Planner(num_tx, num_rx, tx_count, rx_count, search="beam", width=width, fusion="centralized")
+    plan, _ = planner.plan(forecast)
+    return np.sqrt(position_traces(planner, forecast, plan).mean(axis=1)), plan

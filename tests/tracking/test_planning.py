@@ -94,3 +94,46 @@ def test_bad_planning_parameters_are_refused_naming_the_range():
         Planner(16, 16, 4, 4)
     with pytest.raises(ValueError, match="width must be an integer"):
         Planner(4, 6, 2, 3, width=0)
+
+
+# ---------------------------------------------------------------- the offline bound on selection
+def _bound_run(env, policy, trials):
+    """Run ``policy`` on ``env`` for the episode: its super arms' indices (B, T) and the env's
+    PCRB position MSE of each step and target (B, T, K)."""
+    from mimo_radar_env.tracking.planning import Planner
+
+    sc = env.scenario
+    arms = Planner(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, fusion="centralized")
+    obs, _ = env.reset(seed=7)
+    agent = agents.make_agent(policy, sc, seed=0)
+    if agent.needs_oracle:
+        agent.attach(env)
+    agent.reset(obs)
+    forecast = env.engine.bound_forecast()
+    played, bound = [], []
+    for _ in range(sc.horizon):
+        action = agent.act(obs)
+        tx, rx = action[:, : sc.num_tx].astype(bool), action[:, sc.num_tx :].astype(bool)
+        match = (arms.tx_masks[None] == tx[:, None]).all(-1) & (arms.rx_masks[None] == rx[:, None]).all(-1)
+        played.append(np.argmax(match, axis=1))
+        obs, reward, _, _, info = env.step(action)
+        agent.update(obs, reward)
+        bound.append(info["position_bound"] ** 2)
+    return forecast, arms, np.stack(played, axis=1), np.stack(bound, axis=1)
+
+
+@pytest.mark.parametrize("policy", ["random", "best-tracking", "ucb1"])
+def test_the_best_achievable_bound_is_at_most_every_policys_own(policy):
+    from mimo_radar_env.tracking.planning import best_achievable_bound, position_traces
+
+    scenario = random_scenario(3, 3, 2, 1, 2, horizon=12, seed=3)
+    env = MimoRadarSelectVectorEnv(num_envs=4, scenario=scenario)
+    forecast, arms, played, bound = _bound_run(env, policy, trials=4)
+    # the forecast's recursion is the env's PCRB: the policy's own sequence scored offline
+    np.testing.assert_allclose(position_traces(arms, forecast, played), bound, rtol=1e-9)
+    best, plan = best_achievable_bound(forecast, 3, 3, 1, 2, width=10)
+    weights = np.asarray(scenario.weights)
+    own = (bound.mean(axis=1) * weights).sum(axis=1)
+    offline = (best**2 * weights).sum(axis=1)
+    assert (offline <= own * (1 + 1e-9)).all(), (offline, own)
+    assert plan.shape == (4, 12)
