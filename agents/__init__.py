@@ -10,7 +10,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
-from .planning import PlanTrackingAgent
+from .planning import PlanTrackingAgent, PlanTrackingUCB
 from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
@@ -43,6 +43,7 @@ __all__ = [
     "BestAgent",
     "BestTrackingAgent",
     "PlanTrackingAgent",
+    "PlanTrackingUCB",
     "CombinatorialThompson",
     "DiscountedThompson",
     "DiscountedUCB",

@@ -8,13 +8,43 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
-from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Planner
+from mimo_radar_env.core.geometry import path_gain
+from mimo_radar_env.core.motion import transition_matrix
+from mimo_radar_env.core.superarm import super_arm_count
+from mimo_radar_env.tracking.information import channel_information
+from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
 
-from .base import Agent, Observation
+from .base import Agent, Observation, ucb_bonus
 from .parameters import check_integer
+from .tracking import TrackingUCB
 
 #: The longest plan the oracle looks at.
 MAX_HORIZON = 50
+
+
+def _plan_states(scenario: Scenario, search: str, width: int, horizon: int) -> tuple[int, int]:
+    """The super arms, and the plans a search keeps (the beam, or one per super arm)."""
+    sc = scenario
+    arms = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+    return arms, arms if search == "rollout" else min(width, arms ** max(horizon - 1, 0))
+
+
+def _plan_memory(scenario: Scenario, search: str, width: int, horizon: int) -> int:
+    """Bytes per trial of a plan's search: each kept plan scores every super arm of a step (its
+    2 x 2 posteriors and their criterion: ``benchmarks.speed.policy_cost`` measured about 14
+    float64 per plan, super arm and target), with its prior and the channels' information; and
+    the horizon's information."""
+    sc = scenario
+    arms, states = _plan_states(sc, search, width, horizon)
+    channels = sc.num_targets * sc.num_tx * sc.num_rx
+    return 8 * states * (arms * (8 + 16 * sc.num_targets) + channels * 4 * 4) + 8 * horizon * channels * 4 * 3
+
+
+def _plan_operations(scenario: Scenario, search: str, width: int, horizon: int) -> float:
+    """Every kept plan extended by every super arm at every planned step."""
+    sc = scenario
+    arms, states = _plan_states(sc, search, width, horizon)
+    return horizon * states * arms * sc.num_targets * (8.0 * sc.num_tx * sc.num_rx + 60)
 
 
 class PlanTrackingAgent(Agent):
@@ -85,27 +115,12 @@ class PlanTrackingAgent(Agent):
         self._forecast = target.tracking_forecast
 
     def memory_per_trial(self) -> int:
-        """The plans kept (the beam, or one per super arm for the rollout), each scoring every
-        super arm of a step (its 2 x 2 posteriors and their criterion: ``benchmarks.speed.
-        policy_cost`` measured about 14 float64 per plan, super arm and target), with its prior and
-        the channels' information."""
-        sc = self.scenario
-        from mimo_radar_env.core.superarm import super_arm_count
-
-        arms = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        states = arms if self.search == "rollout" else min(self.width, arms ** max(self.horizon - 1, 0))
-        channels = sc.num_targets * sc.num_tx * sc.num_rx
-        return super().memory_per_trial() + 8 * states * (arms * (8 + 16 * sc.num_targets) + channels * 4 * 4)
+        return super().memory_per_trial() + _plan_memory(self.scenario, self.search, self.width, self.horizon)
 
     def operations_per_trial_step(self) -> float:
-        """Every kept plan extended by every super arm at every planned step."""
-        sc = self.scenario
-        from mimo_radar_env.core.superarm import super_arm_count
-
-        arms = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        states = arms if self.search == "rollout" else min(self.width, arms ** max(self.horizon - 1, 0))
-        per_arm = sc.num_targets * (8.0 * sc.num_tx * sc.num_rx + 60)
-        return super().operations_per_trial_step() + self.horizon * states * arms * per_arm
+        return super().operations_per_trial_step() + _plan_operations(
+            self.scenario, self.search, self.width, self.horizon
+        )
 
     def _reset(self, obs: Observation) -> None:
         if self.planner is None:
@@ -114,4 +129,107 @@ class PlanTrackingAgent(Agent):
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         assert self.planner is not None
         tx, rx = self.planner.first_arm(self._forecast(self.horizon))
+        return self.actions_from_masks(tx, rx)
+
+
+class PlanTrackingUCB(TrackingUCB):
+    """The learning planner: tracking-ucb's estimates, planned ``horizon`` steps ahead; it reads
+    no truth.
+
+    Each step it carries MG-CRB-CL's eq16 along the tracker's prediction, extended by the
+    constant-velocity model (``Y_bar(t + h) = alpha L(X_bar(t + h)) / L(X_hat) Y_hat +
+    (1 - alpha) Y_hat``), adds eq18's optimism, maps it with eq32 to ``lambda_hat`` and plans the
+    next ``horizon`` steps from the tracker's predicted covariance (observation
+    ``track_pred_cov``) as :class:`PlanTrackingAgent` does with the truth; it plays the first
+    super arm of the cheapest plan. ``horizon=1`` is tracking-ucb (``sinr_weight`` 0).
+
+    Parameters
+    ----------
+    horizon, search, width : int, str, int
+        As :class:`PlanTrackingAgent` (default 5, ``"beam"``, 5).
+    alpha, alpha_bar, beta, criterion, fusion, lambda_scale, measurement_quality
+        As :class:`~agents.tracking.TrackingUCB` (the harness passes the env's fusion, scale
+        and quality).
+    """
+
+    name = "plan-tracking-ucb"
+
+    def __init__(
+        self,
+        scenario: Scenario | str,
+        seed: int | None = None,
+        horizon: int = 5,
+        search: str = "beam",
+        width: int = 5,
+        alpha: float = 0.998,
+        alpha_bar: float = 0.2,
+        beta: float = 2.0,
+        criterion: str = "trace",
+        fusion: str = "average",
+        lambda_scale: str = "db",
+        measurement_quality: float | None = None,
+    ) -> None:
+        super().__init__(
+            scenario, seed, alpha, alpha_bar, beta, criterion, fusion, lambda_scale, 0.0, measurement_quality
+        )
+        check_integer("horizon", horizon, 1, MAX_HORIZON)
+        sc = self.scenario
+        self.horizon = horizon
+        self.planner = Planner(
+            sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, search, width, criterion, fusion
+        )
+        self.planner.check_horizon(horizon)
+        self.transition = transition_matrix(0.0, sc.sample_time)
+
+    def operations_per_trial_step(self) -> float:
+        planner = self.planner
+        return super().operations_per_trial_step() + _plan_operations(
+            self.scenario, planner.search, planner.width, self.horizon
+        )
+
+    def memory_per_trial(self) -> int:
+        planner = self.planner
+        return super().memory_per_trial() + _plan_memory(
+            self.scenario, planner.search, planner.width, self.horizon
+        )
+
+    def forecast(self, obs: Observation) -> Forecast:
+        """The plan's inputs from the observation and the learnt estimates alone."""
+        model = self.selector.model
+        sc = self.scenario
+        predicted = [np.asarray(obs["track_pred"], dtype=np.float64)]
+        for _ in range(1, self.horizon):
+            predicted.append(predicted[-1] @ self.transition.T)
+        positions = np.stack(predicted, axis=1)[..., [0, 2]]  # (B, H, K, 2)
+        estimate = self.learning.estimate[:, None]  # Y_hat(t-1), (B, 1, K, M, N)
+        now = path_gain(np.asarray(obs["track"])[..., [0, 2]], sc.tx_positions, sc.rx_positions)[:, None]
+        ahead = path_gain(positions, sc.tx_positions, sc.rx_positions)
+        alpha = self.learning.alpha
+        sinr = alpha * ahead / now * estimate + (1.0 - alpha) * estimate  # eq16 along the plan
+        optimistic = sinr + ucb_bonus(self.learning.beta, self.t, self.learning.counts)[:, None, None]  # eq18
+        if self.measurement_quality is None:
+            quality = model.quality(optimistic, scale=self.lambda_scale)  # eq32
+        else:
+            quality = np.full(optimistic.shape, float(self.measurement_quality))
+        return Forecast(
+            covariance=np.asarray(obs["track_pred_cov"], dtype=np.float64),
+            information=channel_information(
+                positions, sc.tx_positions, sc.rx_positions, model.measurement_variance(quality)
+            ),
+            transition=self.transition,
+            process_cov=model.process_cov,
+            weights=np.asarray(sc.weights, dtype=np.float64),
+        )
+
+    def _reset(self, obs: Observation) -> None:
+        if "track_pred_cov" not in obs:
+            raise ValueError(
+                f"{self.name} plans from the tracker's predicted covariance: make the env with "
+                "prediction_covariance=True"
+            )
+        super()._reset(obs)
+
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        self.learning.predict(obs)  # eq16 for the coming step, kept for the update
+        tx, rx = self.planner.first_arm(self.forecast(obs))
         return self.actions_from_masks(tx, rx)

@@ -19,7 +19,7 @@ from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
-from .planning import PlanTrackingAgent
+from .planning import PlanTrackingAgent, PlanTrackingUCB
 from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
@@ -85,6 +85,9 @@ register_agent(
     _first_line(PlanTrackingAgent),
     argument="horizon",
     argument_type=int,
+)
+register_agent(
+    PlanTrackingUCB.name, PlanTrackingUCB, _first_line(PlanTrackingUCB), argument="horizon", argument_type=int
 )
 # tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run
 register_agent(

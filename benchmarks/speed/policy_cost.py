@@ -113,7 +113,13 @@ def measure(
             for policy in agents.available_agents():
                 if policy in SKIPPED or (policy in ("fix1", "fix2") and (num_tx, num_rx) != (4, 6)):
                     continue
-                row = measure_policy(policy, scenario, trials, steps)
+                try:
+                    row = measure_policy(policy, scenario, trials, steps)
+                except (
+                    ValueError
+                ) as exc:  # a policy that refuses the layout (the planners: too many super arms)
+                    progress(f"{num_tx} x {num_rx} K={k} {policy:<20} refused: {exc}")
+                    continue
                 rows.append({"M": num_tx, "N": num_rx, "Ms": ms, "Ns": ns, "K": k, **row})
                 progress(
                     f"{num_tx} x {num_rx} K={k} {policy:<20} {row['ms_per_trial_step']:9.2f} ms/trial-step "

@@ -344,7 +344,9 @@ class RadarEngine:
             "mode_prob": tracker.model_probabilities,
         }
         if self.options.prediction_covariance:
-            obs["track_pred_pos_cov"] = self._predicted_position_covariance()
+            predicted = tracker.predicted_covariance()
+            obs["track_pred_pos_cov"] = predicted[..., [[0], [2]], [0, 2]]
+            obs["track_pred_cov"] = predicted
         return obs
 
     def _predicted_position_covariance(self) -> NDArray[np.float64]:

@@ -32,7 +32,7 @@ def observation_space(
     """The observation space of one trial (see :class:`MimoRadarSelectEnv`).
 
     ``num_models=None`` is the space without a tracker (``tracking=False``);
-    ``prediction_covariance=True`` adds ``track_pred_pos_cov``.
+    ``prediction_covariance=True`` adds ``track_pred_pos_cov`` and ``track_pred_cov``.
     """
     K, M, N = scenario.num_targets, scenario.num_tx, scenario.num_rx
     big = np.finfo(np.float64).max  # unbounded in principle; finite so that Box samples are finite
@@ -51,7 +51,10 @@ def observation_space(
             "mode_prob": spaces.Box(0.0, 1.0, (K, num_models), np.float64),
         }
         | (
-            {"track_pred_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64)}
+            {
+                "track_pred_pos_cov": spaces.Box(-big, big, (K, 2, 2), np.float64),
+                "track_pred_cov": spaces.Box(-big, big, (K, 4, 4), np.float64),
+            }
             if prediction_covariance
             else {}
         )
@@ -105,6 +108,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     | ``track_pos_cov`` | (K, 2, 2) | position covariance of ``track`` (m^2) |
     | ``mode_prob`` | (K, 3) | model probabilities: NCV, NCT(+3 deg/s), NCT(-3 deg/s) |
     | ``track_pred_pos_cov`` | (K, 2, 2) | predicted position covariance of ``track_pred`` (m^2) [1] |
+    | ``track_pred_cov`` | (K, 4, 4) | the whole predicted covariance of ``track_pred`` [1] |
 
     [1] only with ``prediction_covariance=True`` (Arguments).
 

@@ -117,11 +117,12 @@ class EnvOptions:
     )
     prediction_covariance: bool = _option(
         False,
-        "add the tracker's predicted position covariance 'track_pred_pos_cov' to the observation",
+        "add the tracker's predicted covariance ('track_pred_pos_cov', 'track_pred_cov') to the observation",
         """``False`` or ``True``: the observation also carries ``track_pred_pos_cov``, the
         position block of the tracker's predicted (IMM mixture) covariance for the coming step,
-        which tracking-aware policies score super arms with (needs ``tracking=True``; no number
-        of the env changes)""",
+        which tracking-aware policies score super arms with, and ``track_pred_cov``, the whole
+        4 x 4 covariance, which planning policies carry over several steps (needs
+        ``tracking=True``; no number of the env changes)""",
     )
 
     @classmethod

@@ -57,7 +57,7 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
     [
         p
         for p in agents.available_agents()
-        if p not in ("fixed", "fix1", "fix2", "plan-tracking", *agents.learned_agents())
+        if p not in ("fixed", "fix1", "fix2", "plan-tracking", "plan-tracking-ucb", *agents.learned_agents())
     ],
 )
 def test_declared_memory_bounds_what_a_step_allocates(policy):
@@ -198,6 +198,8 @@ def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
     agent = agents.make_agent("plan-tracking", "paper-1-v1", seed=0, horizon=3, search=search)
     env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point")
     agent.attach(env)
+    learner = agents.make_agent("plan-tracking-ucb", "paper-1-v1", horizon=3, search=search)
+    assert learner.memory_per_trial() >= agent.memory_per_trial()  # the same plans, and its estimates
     obs, _ = env.reset(seed=0)
     agent.reset(obs)
     obs, *_ = env.step(agent.act(obs))  # warm-up: first-call caches and imports

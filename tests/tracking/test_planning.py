@@ -137,3 +137,27 @@ def test_the_best_achievable_bound_is_at_most_every_policys_own(policy):
     offline = (best**2 * weights).sum(axis=1)
     assert (offline <= own * (1 + 1e-9)).all(), (offline, own)
     assert plan.shape == (4, 12)
+
+
+@pytest.mark.parametrize("fusion", ["centralized", "average"])
+def test_the_learning_planner_one_step_ahead_is_tracking_ucb(fusion):
+    """plan-tracking-ucb reads no truth: its H = 1 plays tracking-ucb's super arms exactly, and
+    a longer horizon plays valid ones from the same estimates."""
+    env = MimoRadarSelectVectorEnv(
+        num_envs=5, scenario="paper-2-v1", fusion=fusion, prediction_covariance=True
+    )
+    obs, _ = env.reset(seed=4)
+    learner = agents.make_agent("tracking-ucb", "paper-2-v1", fusion=fusion)
+    planner = agents.make_agent("plan-tracking-ucb", "paper-2-v1", horizon=1, fusion=fusion)
+    ahead = agents.make_agent("plan-tracking-ucb", "paper-2-v1", horizon=4, fusion=fusion)
+    for agent in (learner, planner, ahead):
+        agent.reset(obs)
+    for _ in range(20):
+        action = learner.act(obs)
+        np.testing.assert_array_equal(planner.act(obs), action)
+        longer = ahead.act(obs)
+        assert (longer[:, :4].sum(1) == 2).all() and (longer[:, 4:].sum(1) == 3).all()
+        obs, reward, *_ = env.step(action)
+        for agent in (learner, planner, ahead):
+            agent.update(obs, reward)
+    assert not hasattr(ahead, "_forecast")  # no truth: it was never attached to an env
