@@ -87,6 +87,14 @@ register_agent(
     argument_type=int,
 )
 register_agent(
+    "plan-tracking-rollout",
+    PlanTrackingAgent,
+    "plan-tracking searching by rollout (every first super arm continued greedily)",
+    argument="horizon",
+    argument_type=int,
+    search="rollout",
+)
+register_agent(
     PlanTrackingUCB.name, PlanTrackingUCB, _first_line(PlanTrackingUCB), argument="horizon", argument_type=int
 )
 # tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run

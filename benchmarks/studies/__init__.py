@@ -2,13 +2,14 @@
 
 Importing this package registers the built-in studies: ``paper`` and ``run``
 (:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`),
-``tracking`` (:mod:`~benchmarks.studies.tracking`), ``rl`` (:mod:`~benchmarks.studies.rl`)
-and ``calibrate-layout``
+``tracking`` (:mod:`~benchmarks.studies.tracking`), ``planning``
+(:mod:`~benchmarks.studies.planning`), ``rl`` (:mod:`~benchmarks.studies.rl`) and
+``calibrate-layout``
 (:mod:`~benchmarks.studies.calibration`). A new study is one module defining a
 :class:`~benchmarks.studies.base.Study` subclass with a ``name``.
 """
 
-from . import calibration, claims, paper, rl, tracking
+from . import calibration, claims, paper, planning, rl, tracking
 from .base import COMMANDS, Command, Finished, Run, Study, configure, execute
 from .settings import Settings
 
@@ -24,6 +25,7 @@ __all__ = [
     "configure",
     "execute",
     "paper",
+    "planning",
     "rl",
     "tracking",
 ]

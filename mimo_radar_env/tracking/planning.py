@@ -69,6 +69,13 @@ class Forecast:
     def horizon(self) -> int:
         return self.information.shape[1]
 
+    def first(self, steps: int) -> Forecast:
+        """The forecast of the first ``steps`` steps only."""
+        transition = self.transition if self.transition.ndim == 2 else self.transition[:steps]
+        return Forecast(
+            self.covariance, self.information[:, :steps], transition, self.process_cov, self.weights
+        )
+
     def transition_after(self, h: int) -> NDArray[np.float64]:
         """The transition from planned step ``h`` (0-based) to the next: (4, 4) or (K, 4, 4)."""
         return self.transition if self.transition.ndim == 2 else self.transition[h]

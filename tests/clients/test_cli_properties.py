@@ -57,12 +57,16 @@ STUDY_COMMANDS = {
          "--steps", "2", "--workers", "1"],
         ["--candidates", "--screen", "--screen-trials", "--final", "--trials", "--steps"],
     ),
+    "planning": (
+        ["--scenarios", "1", "--fusions", "centralized", "--trials", "2", "--steps", "3", "--workers", "1"],
+        ["--scenarios", "--fusions", "--ppo", "--trials", "--steps", "--max-hours"],
+    ),
     "compare-claims": ([f"a={SCORECARD}"], [None]),
     "perf": (["--quick", "--workers", "1"], ["--workers", None]),
     "agents": ([], [None]),
 }  # fmt: skip
 COMMANDS.update(STUDY_COMMANDS)
-STUDIES_OUT = ("run", "paper", "claims", "tracking", "calibrate-layout")
+STUDIES_OUT = ("run", "paper", "claims", "tracking", "calibrate-layout", "planning")
 AGENT_PARAMS = [
     "mg-crb-cl.alpha",
     "mg-crb-cl.beta",

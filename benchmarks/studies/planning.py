@@ -1,0 +1,210 @@
+"""The planning study: what looking ahead buys in tracking, where, and at what cost.
+
+``mimo-radar-bench planning --out DIR`` runs, on each v1 paper scenario under both fusions and
+on the same trials as the tracking study (same seed, 200 trials by default), into
+``DIR/<scenario>-<fusion>`` (resumable):
+
+* best-tracking and tracking-ucb (the one-step policies);
+* the receding-horizon oracle ``plan-tracking:H`` (beam search) at each H of :data:`HORIZONS`,
+  and its rollout search at :data:`SEARCH_HORIZON`;
+* the learning planner ``plan-tracking-ucb:H`` at each H of :data:`LEARNER_HORIZONS`;
+* optionally a trained PPO (``--ppo PATTERN``, as the tracking study's).
+
+Beside them it computes the best achievable bound of the same trials
+(:func:`mimo_radar_env.tracking.planning.best_achievable_bound`: the selection sequence with
+the smallest time-averaged PCRB that a beam finds knowing the whole truth), averaged as the
+runs average their bounds. It writes ``DIR/planning.md`` and ``DIR/planning.json``: ARMSE
+against H, each policy's compute time per trial-step, the paired ARMSE differences against
+best-tracking and tracking-ucb (and PPO), and every policy's ARMSE beside its own bound, the
+best achievable bound and the oracles'.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+from collections.abc import Hashable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from mimo_radar_env import MimoRadarSelectVectorEnv, env_version
+from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
+
+from ..errors import BenchError
+from ..report import format_estimate, paired_difference
+from .base import Finished, Run, Study
+from .settings import paper_numbers
+from .tracking import ppo_policy
+
+HORIZONS = (1, 2, 5, 10)
+SEARCH_HORIZON = 5
+LEARNER_HORIZONS = (2, 5)
+#: The beam of the best achievable bound (over the whole episode).
+BOUND_WIDTH = 10
+FUSIONS = tuple(FUSION_REGISTRY)
+DEFAULT_TRIALS = 200
+RESULTS_FILE = "planning.json"
+
+
+def planning_policies() -> tuple[str, ...]:
+    return (
+        "best-tracking",
+        "tracking-ucb",
+        *(f"plan-tracking:{h}" for h in HORIZONS),
+        f"plan-tracking-rollout:{SEARCH_HORIZON}",
+        *(f"plan-tracking-ucb:{h}" for h in LEARNER_HORIZONS),
+    )
+
+
+class PlanningStudy(Study):
+    name = "planning"
+    min_trials = 2
+    order = 5
+    default_trials = DEFAULT_TRIALS
+    help = "the planning study: looking ahead in tracking, against the one-step policies and the best bound"
+    description = (
+        f"Run {', '.join(planning_policies())} on the v1 paper scenarios under both fusions (into "
+        "OUT/<scenario>-<fusion>, resumable), compute the best achievable bound of the same trials, "
+        "and write OUT/planning.md and OUT/planning.json."
+    )
+
+    @classmethod
+    def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
+        parser.add_argument(
+            "--fusions", default=",".join(FUSIONS), help=f"fusions to run (default {','.join(FUSIONS)})"
+        )
+        parser.add_argument(
+            "--ppo",
+            default=None,
+            metavar="PATTERN",
+            help="also run a trained PPO: its model path with {scenario} and {fusion} filled in",
+        )
+
+    def runs(self) -> list[Run]:
+        fusions = [f.strip() for f in self.args.fusions.split(",") if f.strip()]
+        if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
+            raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {self.args.fusions!r}")
+        version = env_version(self.settings.env_version)
+        runs = []
+        for number in paper_numbers(self.args.scenarios):
+            name = version.paper_scenario(number)
+            for fusion in fusions:
+                ppo = [ppo_policy(self.args.ppo, number, fusion)] if self.args.ppo else []
+                options = dataclasses.replace(self.settings.options, fusion=fusion)
+                folder = Path(self.settings.out) / f"{name}-{fusion}"
+                runs.append(Run((number, fusion), name, (*planning_policies(), *ppo), folder, options))
+        return runs
+
+    def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
+        return [judge_run(key, f.summary, best_bound(f, self.settings.seed)) for key, f in finished.items()]
+
+    def report(self, finished: dict[Hashable, Finished], judged: list[dict[str, Any]]) -> str:
+        out = Path(self.settings.out)
+        (out / RESULTS_FILE).write_text(json.dumps(judged, indent=1) + "\n")
+        text = planning_markdown(judged)
+        (out / "planning.md").write_text(text)
+        return text
+
+
+def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
+    """The best achievable bound of a finished run's trials, averaged as its policies' bounds
+    are (``TrialMetrics.bound``, with its interval over trials)."""
+    from mimo_radar_env.metrics import TrialMetrics
+    from mimo_radar_env.tracking.planning import Planner, position_traces
+
+    from .. import uncertainty
+
+    config = finished.config
+    scenario = config.scenario_object
+    env = MimoRadarSelectVectorEnv(num_envs=config.trials, scenario=scenario, **config.env_options)
+    env.reset(seed=seed)
+    forecast = env.engine.bound_forecast().first(config.steps)
+    sc = scenario
+    planner = Planner(
+        sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, "beam", BOUND_WIDTH, fusion="centralized"
+    )
+    plan, _ = planner.plan(forecast)
+    traces = position_traces(planner, forecast, plan)  # (N, T, K)
+    zeros = np.zeros(traces.shape[:2])
+    metrics = TrialMetrics(
+        {
+            "trial_expected": zeros,
+            "trial_optimal": zeros,
+            "trial_matches": zeros,
+            "trial_squared_error": traces,
+            "trial_bound_squared": traces,
+        },
+        sc.tx_per_step * sc.rx_per_step,
+    )
+    result = uncertainty.estimate(metrics.bound, config.trials, seed)
+    return {"value": result["estimate"], "ci": result["ci"], "width": BOUND_WIDTH}
+
+
+def judge_run(key: tuple[int, str], summary: dict[str, Any], bound: dict[str, Any]) -> dict[str, Any]:
+    """One run's findings: every policy's ARMSE, bound and compute time per trial-step, the
+    paired ARMSE differences against the one-step policies (and PPO), and the best bound."""
+    number, fusion = key
+    rows = summary["policies"]
+    per_step = summary["trials"] * summary["steps"]
+    references = ["best-tracking", "tracking-ucb", *(p for p in rows if p.startswith("ppo:"))]
+    return {
+        "scenario": number,
+        "fusion": fusion,
+        "trials": summary["trials"],
+        "best_bound": bound,
+        "policies": {
+            p: {
+                "armse": {"value": r["armse"], "ci": r["ci"]["armse"]},
+                "bound": {"value": r["bound"], "ci": r["ci"]["bound"]},
+                "ms_per_trial_step": 1e3 * r["wall_s"] / per_step,
+            }
+            for p, r in rows.items()
+        },
+        "minus": {
+            p: {ref: paired_difference(summary, p, ref, "armse") for ref in references if ref != p}
+            for p in rows
+            if p.startswith("plan-")
+        },
+    }
+
+
+def planning_markdown(judged: list[dict[str, Any]]) -> str:
+    """The study's tables, one per run."""
+    lines = [
+        "# The planning study",
+        "",
+        "ARMSE and bound (m) with 95 % intervals over trials; `- X`: the policy's ARMSE minus X's on the "
+        "same trials (an interval below 0: it tracks better than X); time per trial-step from the "
+        "runs' compute time. The best achievable bound is the smallest time-averaged PCRB a beam of "
+        f"width {BOUND_WIDTH} finds over the whole episode knowing the truth, averaged as the bounds are.",
+    ]
+    for r in judged:
+        best = format_estimate(r["best_bound"]["value"], r["best_bound"]["ci"], "{:.3f}")
+        refs = sorted(
+            {ref for diffs in r["minus"].values() for ref in diffs}, key=lambda x: (x.startswith("ppo"), x)
+        )
+        lines += [
+            "",
+            f"## paper-{r['scenario']}, {r['fusion']} ({r['trials']} trials)",
+            "",
+            f"Best achievable bound: {best} m.",
+            "",
+            "| policy | ARMSE | bound | ms / trial-step | " + " | ".join(f"- {ref}" for ref in refs) + " |",
+            "|---|---|---|---|" + "---|" * len(refs),
+        ]
+        for p, row in r["policies"].items():
+            diffs = r["minus"].get(p, {})
+            cells = [
+                format_estimate(diffs[ref]["estimate"], diffs[ref]["ci"], "{:.3f}") if ref in diffs else "-"
+                for ref in refs
+            ]
+            lines.append(
+                f"| `{p}` | {format_estimate(row['armse']['value'], row['armse']['ci'], '{:.3f}')} | "
+                f"{format_estimate(row['bound']['value'], row['bound']['ci'], '{:.3f}')} | "
+                f"{row['ms_per_trial_step']:.2f} | " + " | ".join(cells) + " |"
+            )
+    return "\n".join(lines) + "\n"

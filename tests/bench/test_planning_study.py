@@ -1,0 +1,36 @@
+"""The planning study on a few trials and steps: its runs, the best achievable bound beside
+them, and its tables."""
+
+import json
+
+import pytest
+
+from benchmarks.cli import main
+
+
+def test_a_short_planning_study_reports_the_horizons_against_the_one_step_policies(tmp_path):
+    out = tmp_path / "planning"
+    argv = ["planning", "--scenarios", "1", "--fusions", "centralized", "--trials", "3", "--steps", "12"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]) == 0
+    (run,) = json.loads((out / "planning.json").read_text())
+    assert (run["scenario"], run["fusion"], run["trials"]) == (1, "centralized", 3)
+    policies = run["policies"]
+    assert {"best-tracking", "tracking-ucb", "plan-tracking:10", "plan-tracking-ucb:5"} <= set(policies)
+    # H = 1 is best-tracking on the same trials: a difference of exactly zero
+    same = run["minus"]["plan-tracking:1"]["best-tracking"]
+    assert same["estimate"] == 0.0 and same["ci"] == [0.0, 0.0]
+    # the best achievable bound is below every policy's own bound (a beam over the truth)
+    best = run["best_bound"]["value"]
+    assert all(best <= row["bound"]["value"] * (1 + 1e-9) for row in policies.values())
+    text = (out / "planning.md").read_text()
+    assert text.startswith("# The planning study") and "Best achievable bound:" in text
+    assert all(row["ms_per_trial_step"] > 0 for row in policies.values())
+
+
+def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, capsys):
+    out = tmp_path / "planning"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["planning", "--fusions", "median", "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    assert "fusions must be among ['average', 'centralized']" in capsys.readouterr().err
+    assert not out.exists()
