@@ -22,29 +22,46 @@ from .tracking import TrackingUCB
 MAX_HORIZON = 50
 
 
-def _plan_states(scenario: Scenario, search: str, width: int, horizon: int) -> tuple[int, int]:
-    """The super arms, and the plans a search keeps (the beam, or one per super arm)."""
+def _plan_states(
+    scenario: Scenario, search: str, width: int, horizon: int, simulations: int
+) -> tuple[int, int]:
+    """The super arms, and the plans a search scores at once (the beam, one per super arm for
+    the rollout, one node at a time for MCTS) and how often (MCTS: each simulation's steps)."""
     sc = scenario
     arms = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-    return arms, arms if search == "rollout" else min(width, arms ** max(horizon - 1, 0))
+    if search == "rollout":
+        return arms, arms
+    if search == "mcts":
+        return arms, 1
+    return arms, min(width, arms ** max(horizon - 1, 0))
 
 
-def _plan_memory(scenario: Scenario, search: str, width: int, horizon: int) -> int:
-    """Bytes per trial of a plan's search: each kept plan scores every super arm of a step (its
-    2 x 2 posteriors and their criterion: ``benchmarks.speed.policy_cost`` measured about 14
-    float64 per plan, super arm and target), with its prior and the channels' information; and
-    the horizon's information."""
+def _plan_memory(scenario: Scenario, search: str, width: int, horizon: int, simulations: int = 64) -> int:
+    """Bytes per trial of a plan's search: each plan scored at once scores every super arm of a
+    step (its 2 x 2 posteriors and their criterion: ``benchmarks.speed.policy_cost`` measured
+    about 14 float64 per plan, super arm and target), with its prior and the channels'
+    information; the horizon's information; MCTS's tree (a covariance and the candidates' costs
+    and counts per node)."""
     sc = scenario
-    arms, states = _plan_states(sc, search, width, horizon)
+    arms, states = _plan_states(sc, search, width, horizon, simulations)
     channels = sc.num_targets * sc.num_tx * sc.num_rx
-    return 8 * states * (arms * (8 + 16 * sc.num_targets) + channels * 4 * 4) + 8 * horizon * channels * 4 * 3
+    tree = 8 * (1 + simulations) * (16 * sc.num_targets + 5 * arms) if search == "mcts" else 0
+    return (
+        8 * states * (arms * (8 + 16 * sc.num_targets) + channels * 4 * 4)
+        + 8 * horizon * channels * 12
+        + tree
+    )
 
 
-def _plan_operations(scenario: Scenario, search: str, width: int, horizon: int) -> float:
-    """Every kept plan extended by every super arm at every planned step."""
+def _plan_operations(
+    scenario: Scenario, search: str, width: int, horizon: int, simulations: int = 64
+) -> float:
+    """Every scored plan extended by every super arm at every planned step (MCTS: at every step
+    of every simulation)."""
     sc = scenario
-    arms, states = _plan_states(sc, search, width, horizon)
-    return horizon * states * arms * sc.num_targets * (8.0 * sc.num_tx * sc.num_rx + 60)
+    arms, states = _plan_states(sc, search, width, horizon, simulations)
+    repeats = simulations if search == "mcts" else 1
+    return repeats * horizon * states * arms * sc.num_targets * (8.0 * sc.num_tx * sc.num_rx + 60)
 
 
 class PlanTrackingAgent(Agent):
@@ -63,11 +80,13 @@ class PlanTrackingAgent(Agent):
     horizon : int
         H, the steps planned (default 5).
     search : str
-        ``"beam"`` (default), ``"rollout"`` or ``"exhaustive"``.
+        ``"beam"`` (default), ``"rollout"``, ``"mcts"`` or ``"exhaustive"``.
     width : int
         The beam's width (default 5).
     criterion : str
         ``"trace"`` (m^2) or ``"logdet"``.
+    simulations, candidates : int
+        MCTS's budget per step (default 64) and the children of each node (default 8).
     """
 
     name = "plan-tracking"
@@ -83,6 +102,8 @@ class PlanTrackingAgent(Agent):
         search: str = "beam",
         width: int = 5,
         criterion: str = "trace",
+        simulations: int = 64,
+        candidates: int = 8,
     ) -> None:
         super().__init__(scenario, seed)
         check_integer("horizon", horizon, 1, MAX_HORIZON)
@@ -90,11 +111,9 @@ class PlanTrackingAgent(Agent):
             raise ValueError(f"search must be one of {list(PLAN_SEARCHES)}, got {search!r}")
         check_integer("width", width, 1, 10_000)
         self.horizon, self.search, self.width, self.criterion = horizon, search, width, criterion
-        sc = self.scenario
-        # checks the layout, the search and the criterion now (the fusion is the env's, at attach)
-        Planner(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, search, width, criterion).check_horizon(
-            horizon
-        )
+        self.simulations, self.candidates = simulations, candidates
+        # checks the layout, the search and its parameters now (the fusion is the env's, at attach)
+        self._planner("centralized").check_horizon(horizon)
         self.planner: Planner | None = None
         self._forecast: Any = None
         if env is not None:
@@ -107,19 +126,24 @@ class PlanTrackingAgent(Agent):
             raise ValueError(
                 f"env must be a MimoRadarSelect env (it has tracking_forecast()), got {type(env).__name__}"
             )
-        sc = self.scenario
-        self.planner = Planner(
-            sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, self.search, self.width, self.criterion,
-            target.options.fusion,
-        )  # fmt: skip
+        self.planner = self._planner(target.options.fusion)
         self._forecast = target.tracking_forecast
 
+    def _planner(self, fusion: str) -> Planner:
+        sc = self.scenario
+        return Planner(
+            sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, self.search, self.width, self.criterion,
+            fusion, self.simulations, self.candidates,
+        )  # fmt: skip
+
     def memory_per_trial(self) -> int:
-        return super().memory_per_trial() + _plan_memory(self.scenario, self.search, self.width, self.horizon)
+        return super().memory_per_trial() + _plan_memory(
+            self.scenario, self.search, self.width, self.horizon, self.simulations
+        )
 
     def operations_per_trial_step(self) -> float:
         return super().operations_per_trial_step() + _plan_operations(
-            self.scenario, self.search, self.width, self.horizon
+            self.scenario, self.search, self.width, self.horizon, self.simulations
         )
 
     def _reset(self, obs: Observation) -> None:
@@ -145,8 +169,8 @@ class PlanTrackingUCB(TrackingUCB):
 
     Parameters
     ----------
-    horizon, search, width : int, str, int
-        As :class:`PlanTrackingAgent` (default 5, ``"beam"``, 5).
+    horizon, search, width, simulations, candidates
+        As :class:`PlanTrackingAgent` (default 5, ``"beam"``, 5, 64, 8).
     alpha, alpha_bar, beta, criterion, fusion, lambda_scale, measurement_quality
         As :class:`~agents.tracking.TrackingUCB` (the harness passes the env's fusion, scale
         and quality).
@@ -161,6 +185,8 @@ class PlanTrackingUCB(TrackingUCB):
         horizon: int = 5,
         search: str = "beam",
         width: int = 5,
+        simulations: int = 64,
+        candidates: int = 8,
         alpha: float = 0.998,
         alpha_bar: float = 0.2,
         beta: float = 2.0,
@@ -176,15 +202,16 @@ class PlanTrackingUCB(TrackingUCB):
         sc = self.scenario
         self.horizon = horizon
         self.planner = Planner(
-            sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, search, width, criterion, fusion
-        )
+            sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, search, width, criterion, fusion,
+            simulations, candidates,
+        )  # fmt: skip
         self.planner.check_horizon(horizon)
         self.transition = transition_matrix(0.0, sc.sample_time)
 
     def operations_per_trial_step(self) -> float:
         planner = self.planner
         return super().operations_per_trial_step() + _plan_operations(
-            self.scenario, planner.search, planner.width, self.horizon
+            self.scenario, planner.search, planner.width, self.horizon, planner.simulations
         )
 
     def memory_per_trial(self) -> int:

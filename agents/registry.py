@@ -95,6 +95,14 @@ register_agent(
     search="rollout",
 )
 register_agent(
+    "plan-tracking-mcts",
+    PlanTrackingAgent,
+    "plan-tracking searching by Monte-Carlo tree search (64 simulations over 8 candidates per node)",
+    argument="horizon",
+    argument_type=int,
+    search="mcts",
+)
+register_agent(
     PlanTrackingUCB.name, PlanTrackingUCB, _first_line(PlanTrackingUCB), argument="horizon", argument_type=int
 )
 # tracking-ucb:0.5 is tracking-ucb with sinr_weight=0.5: points of its trade-off in one run

@@ -207,14 +207,18 @@ def plan_instances(
     return {search: np.concatenate(values) for search, values in costs.items()}
 
 
-@figure(*(f"plan-{s}-optimal-{f}" for s in ("beam", "rollout") for f in ("centralized", "average")))
+@figure(*(f"plan-{s}-optimal-{f}" for s in ("beam", "rollout", "mcts") for f in ("centralized", "average")))
 def plan_optimality() -> dict[str, Figure]:
     out = {}
     for fusion in ("centralized", "average"):
         costs = plan_instances(fusion)
-        for search in ("beam", "rollout"):
+        for search in ("beam", "rollout", "mcts"):
             found = costs[search] <= costs["exhaustive"] * (1 + 1e-9)
-            what = "a beam of width 3" if search == "beam" else "the rollout of every first super arm"
+            what = {
+                "beam": "a beam of width 3",
+                "rollout": "the rollout of every first super arm",
+                "mcts": "MCTS with 64 simulations over 8 candidates per node",
+            }[search]
             out[f"plan-{search}-optimal-{fusion}"] = rate(
                 found,
                 f"{what} finds the exhaustive optimum of 3-step plans (9 super arms: 3 x 3 stations, 1 TX "

@@ -6,7 +6,7 @@ on the same trials as the tracking study (same seed, 200 trials by default), int
 
 * best-tracking and tracking-ucb (the one-step policies);
 * the receding-horizon oracle ``plan-tracking:H`` (beam search) at each H of :data:`HORIZONS`,
-  and its rollout search at :data:`SEARCH_HORIZON`;
+  and its rollout and MCTS searches at :data:`SEARCH_HORIZON`;
 * the learning planner ``plan-tracking-ucb:H`` at each H of :data:`LEARNER_HORIZONS`;
 * optionally a trained PPO (``--ppo PATTERN``, as the tracking study's).
 
@@ -55,6 +55,7 @@ def planning_policies() -> tuple[str, ...]:
         "tracking-ucb",
         *(f"plan-tracking:{h}" for h in HORIZONS),
         f"plan-tracking-rollout:{SEARCH_HORIZON}",
+        f"plan-tracking-mcts:{SEARCH_HORIZON}",
         *(f"plan-tracking-ucb:{h}" for h in LEARNER_HORIZONS),
     )
 

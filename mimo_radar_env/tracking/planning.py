@@ -21,6 +21,9 @@ Plans are searched per trial, batched over trials:
   super arm (``width`` at least ``A^(H-1)`` is exhaustive);
 * ``"rollout"``: every first super arm, each continued greedily (the one-step best at each
   later step);
+* ``"mcts"``: Monte-Carlo tree search (UCT) with a budget of ``simulations`` per step over the
+  ``candidates`` super arms of each node with the smallest one-step cost, each new node valued
+  by the greedy continuation to the horizon; the plan follows the most visited children;
 * ``"exhaustive"``: every sequence, up to :data:`MAX_EXHAUSTIVE_SEQUENCES` (tests' reference).
 
 The first super arm of the cheapest plan is played (receding horizon).
@@ -36,7 +39,7 @@ from numpy.typing import NDArray
 from ..core.superarm import all_super_arms, super_arm_count
 from .selection import MAX_ENUMERATED_SUPER_ARMS, _check_choices, super_arm_criterion
 
-PLAN_SEARCHES = ("beam", "rollout", "exhaustive")
+PLAN_SEARCHES = ("beam", "rollout", "mcts", "exhaustive")
 #: The most sequences the exhaustive search scores per trial.
 MAX_EXHAUSTIVE_SEQUENCES = 200_000
 
@@ -124,6 +127,8 @@ class Planner:
         The beam's width.
     criterion, fusion : str
         As :func:`~.selection.select_for_tracking`.
+    simulations, candidates : int
+        MCTS's budget per step and the children of each node.
     """
 
     def __init__(
@@ -136,8 +141,14 @@ class Planner:
         width: int = 5,
         criterion: str = "trace",
         fusion: str = "centralized",
+        simulations: int = 64,
+        candidates: int = 8,
     ) -> None:
         _check_choices(criterion, fusion)
+        for name, value, high in (("simulations", simulations, 100_000), ("candidates", candidates, 10_000)):
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= high:
+                raise ValueError(f"{name} must be an integer in [1, {high}], got {value!r}")
+        self.simulations, self.candidates = simulations, candidates
         if search not in PLAN_SEARCHES:
             raise ValueError(f"search must be one of {list(PLAN_SEARCHES)}, got {search!r}")
         if isinstance(width, bool) or not isinstance(width, int) or not 1 <= width <= 10_000:
@@ -195,6 +206,8 @@ class Planner:
         :attr:`tx_masks`/:attr:`rx_masks` and its cost (B,)."""
         horizon = forecast.horizon
         self.check_horizon(horizon)
+        if self.search == "mcts":
+            return self._mcts(forecast)
         batch = forecast.covariance.shape[0]
         width = {"beam": self.width, "exhaustive": self.arms ** max(horizon - 1, 0), "rollout": self.arms}[
             self.search
@@ -232,6 +245,136 @@ class Planner:
         best = np.argmin(cost, axis=1)
         rows = np.arange(batch)
         return plans[rows, best], cost[rows, best]
+
+    def _step(self, covariance, forecast: Forecast, depth: NDArray[np.int64], rows: NDArray[np.int64]):
+        """The one-step cost of every super arm (n, A) from priors ``covariance`` (n, K, 4, 4) of
+        trials ``rows`` at steps ``depth`` (n,)."""
+        return self._costs(covariance, forecast.information[rows, depth], forecast.weights)
+
+    def _greedy_to_end(self, covariance, forecast: Forecast, depth, rows) -> NDArray[np.float64]:
+        """The cost of continuing greedily from steps ``depth`` (n,) to the horizon, (n,)."""
+        horizon = forecast.horizon
+        total = np.zeros(len(rows))
+        depth = depth.copy()
+        live = depth < horizon
+        while live.any():
+            idx = np.flatnonzero(live)
+            costs = self._step(covariance[idx], forecast, depth[idx], rows[idx])
+            arm = np.argmin(costs, axis=1)
+            total[idx] += costs[np.arange(len(idx)), arm]
+            ahead = depth[idx] + 1 < horizon
+            if ahead.any():
+                sub = idx[ahead]
+                covariance[sub] = self._advance_rows(
+                    covariance[sub], forecast, depth[sub], rows[sub], arm[ahead]
+                )
+            depth[idx] += 1
+            live = depth < horizon
+        return total
+
+    def _advance_rows(self, covariance, forecast: Forecast, depth, rows, arms) -> NDArray[np.float64]:
+        """The next step's priors of states at different steps ``depth`` after ``arms``."""
+        posterior = posterior_covariance(
+            covariance,
+            forecast.information[rows, depth],
+            self.tx_masks[arms],
+            self.rx_masks[arms],
+            self.fusion,
+        )
+        if forecast.transition.ndim == 2:
+            F = forecast.transition
+        else:
+            F = forecast.transition[depth]  # (n, K, 4, 4)
+        return F @ posterior @ np.swapaxes(F, -1, -2) + forecast.process_cov
+
+    def _mcts(self, forecast: Forecast) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """UCT over each trial's tree of partial plans, batched over trials (see the module)."""
+        batch, horizon = forecast.covariance.shape[0], forecast.horizon
+        k = min(self.candidates, self.arms)
+        nodes = 1 + self.simulations
+        every = np.arange(batch)
+        cov = np.zeros((batch, nodes, *forecast.covariance.shape[1:]))
+        cov[:, 0] = forecast.covariance
+        depth = np.zeros((batch, nodes), dtype=np.int64)
+        arms = np.zeros((batch, nodes, k), dtype=np.int64)  # each node's candidates, cheapest first
+        step_cost = np.zeros((batch, nodes, k))
+        child = np.full((batch, nodes, k), -1, dtype=np.int64)
+        edge_visits = np.zeros((batch, nodes, k))
+        edge_cost = np.zeros((batch, nodes, k))  # summed cost-to-go through the edge
+        used = np.ones(batch, dtype=np.int64)
+
+        def expand(rows, node):
+            costs = self._step(cov[rows, node], forecast, depth[rows, node], rows)
+            order = np.argsort(costs, axis=1, kind="stable")[:, :k]
+            arms[rows, node] = order
+            step_cost[rows, node] = np.take_along_axis(costs, order, axis=1)
+
+        expand(every, np.zeros(batch, dtype=np.int64))
+        scale = np.maximum(step_cost[:, 0, 0] * horizon, 1e-300)  # the exploration's unit: a plan's cost
+        for _ in range(self.simulations):
+            node = np.zeros(batch, dtype=np.int64)
+            path_node = np.zeros((batch, horizon), dtype=np.int64)
+            path_edge = np.zeros((batch, horizon), dtype=np.int64)
+            length = np.zeros(batch, dtype=np.int64)
+            tail = np.zeros(batch)  # the cost below the path's last edge
+            active = np.ones(batch, dtype=bool)
+            for d in range(horizon):
+                idx = np.flatnonzero(active)
+                if not len(idx):
+                    break
+                visits = edge_visits[idx, node[idx]]  # (n, k)
+                mean = edge_cost[idx, node[idx]] / np.maximum(visits, 1)
+                bonus = np.sqrt(2.0 * np.log(visits.sum(axis=1, keepdims=True) + 1.0) / np.maximum(visits, 1))
+                score = np.where(visits > 0, -mean / scale[idx, None] + bonus, np.inf)
+                edge = np.argmax(score, axis=1)  # unvisited first, cheapest first among them
+                path_node[idx, d], path_edge[idx, d] = node[idx], edge
+                length[idx] += 1
+                nxt = child[idx, node[idx], edge]
+                if d + 1 == horizon:
+                    break
+                new = nxt < 0
+                if new.any():  # one new node per trial per simulation, valued by the greedy continuation
+                    rows, parent, e = idx[new], node[idx[new]], edge[new]
+                    created = used[rows]
+                    used[rows] += 1
+                    child[rows, parent, e] = created
+                    depth[rows, created] = d + 1
+                    cov[rows, created] = self._advance_rows(
+                        cov[rows, parent], forecast, np.full(len(rows), d), rows, arms[rows, parent, e]
+                    )
+                    expand(rows, created)
+                    tail[rows] = self._greedy_to_end(
+                        cov[rows, created].copy(), forecast, depth[rows, created], rows
+                    )
+                    active[rows] = False
+                keep = idx[~new]
+                node[keep] = nxt[~new]
+            # back up: each edge of the path gets its step's cost plus everything below it
+            costs = step_cost[every[:, None], path_node, path_edge] * (np.arange(horizon) < length[:, None])
+            below = np.cumsum(costs[:, ::-1], axis=1)[:, ::-1] + tail[:, None]
+            for d in range(horizon):
+                on = length > d
+                rows = every[on]
+                edge_visits[rows, path_node[on, d], path_edge[on, d]] += 1
+                edge_cost[rows, path_node[on, d], path_edge[on, d]] += below[on, d]
+        # the plan: the most visited child at each depth, greedy where the tree ends
+        plans = np.zeros((batch, horizon), dtype=np.int64)
+        node = np.zeros(batch, dtype=np.int64)
+        in_tree = np.ones(batch, dtype=bool)
+        state = forecast.covariance.copy()
+        for d in range(horizon):
+            costs = self._step(state, forecast, np.full(batch, d), every)
+            greedy = np.argmin(costs, axis=1)
+            best = np.argmax(edge_visits[every, node], axis=1)
+            visited = edge_visits[every, node, best] > 0
+            use_tree = in_tree & visited
+            plans[:, d] = np.where(use_tree, arms[every, node, best], greedy)
+            nxt = child[every, node, best]
+            in_tree = use_tree & (nxt >= 0)
+            node = np.where(in_tree, nxt, 0)
+            if d + 1 < horizon:
+                state = self._advance_rows(state, forecast, np.full(batch, d), every, plans[:, d])
+        return plans, plan_cost(self, forecast, plans[:, None])[:, 0]
 
     def first_arm(self, forecast: Forecast) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """The super arm to play now, masks (B, M), (B, N): the first of the cheapest plan."""

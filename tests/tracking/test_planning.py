@@ -14,13 +14,18 @@ from mimo_radar_env.tracking.planning import Planner, plan_cost, posterior_covar
 def test_planning_one_step_ahead_is_best_tracking(fusion):
     env = MimoRadarSelectVectorEnv(num_envs=6, scenario="paper-1-v1", fusion=fusion)
     obs, _ = env.reset(seed=2)
-    planner = agents.make_agent("plan-tracking", "paper-1-v1", horizon=1, search="beam", width=2)
-    planner.attach(env)
-    planner.reset(obs)
+    planners = [
+        agents.make_agent(name, "paper-1-v1", horizon=1)
+        for name in ("plan-tracking", "plan-tracking-rollout", "plan-tracking-mcts")
+    ]
+    for planner in planners:
+        planner.attach(env)
+        planner.reset(obs)
     for _ in range(25):
-        action = planner.act(obs)
-        np.testing.assert_array_equal(action, env.tracking_oracle_action())
-        obs, *_ = env.step(action)
+        expected = env.tracking_oracle_action()
+        for planner in planners:
+            np.testing.assert_array_equal(planner.act(obs), expected)
+        obs, *_ = env.step(expected)
 
 
 @pytest.mark.parametrize("fusion", ["centralized", "average"])
@@ -45,7 +50,7 @@ def test_beam_and_rollout_find_the_exhaustive_optimum_of_small_instances(fusion)
     never below the optimum, and within a few per mille of it when they miss."""
     costs = plan_instances(fusion, layouts=3, steps=8, trials=8)
     best = costs["exhaustive"]
-    for search, least in (("beam", 0.75), ("rollout", 0.65)):
+    for search, least in (("beam", 0.75), ("rollout", 0.65), ("mcts", 0.3)):
         assert (costs[search] >= best * (1 - 1e-12)).all()
         found = np.mean(costs[search] <= best * (1 + 1e-9))
         assert found >= least, (search, found)
@@ -84,8 +89,12 @@ def test_the_forecast_reads_the_truth_the_env_will_reach():
 
 
 def test_bad_planning_parameters_are_refused_naming_the_range():
-    with pytest.raises(ValueError, match=r"search must be one of \['beam', 'rollout', 'exhaustive'\]"):
-        agents.make_agent("plan-tracking", "paper-1-v1", search="mcts")
+    with pytest.raises(
+        ValueError, match=r"search must be one of \['beam', 'rollout', 'mcts', 'exhaustive'\]"
+    ):
+        agents.make_agent("plan-tracking", "paper-1-v1", search="dp")
+    with pytest.raises(ValueError, match=r"simulations must be an integer in \[1, 100000\]"):
+        agents.make_agent("plan-tracking-mcts", "paper-1-v1", simulations=0)
     with pytest.raises(ValueError, match="horizon must be"):
         agents.make_agent("plan-tracking", "paper-1-v1", horizon=0)
     with pytest.raises(ValueError, match="exhaustive search scores 120\\^4 sequences"):
