@@ -57,7 +57,7 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
     [
         p
         for p in agents.available_agents()
-        if p not in ("fixed", "fix1", "fix2", "plan-tracking", "plan-tracking-ucb", *agents.learned_agents())
+        if p not in ("fixed", "fix1", "fix2", *agents.learned_agents()) and not p.startswith("plan-")
     ],
 )
 def test_declared_memory_bounds_what_a_step_allocates(policy):
@@ -190,7 +190,7 @@ def test_max_hours_takes_a_positive_number_or_none(tmp_path, capsys, value):
     assert not out.exists()
 
 
-@pytest.mark.parametrize("search", ["beam", "rollout"])
+@pytest.mark.parametrize("search", ["beam", "rollout", "mcts"])
 def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
     import gymnasium as gym
 
