@@ -513,15 +513,29 @@ class ModelFigures(Command):
         existing: dict[str, Any] = {}
         if names is not None and path.exists():
             try:
-                existing = json.loads(path.read_text())["figures"]
+                old = json.loads(path.read_text())
+                # each kept figure keeps the command and the load it was measured with
+                existing = {
+                    name: {
+                        "command": old["command"],
+                        "load_average_1min": old["machine"]["load_average_1min"],
+                        **figure,
+                    }
+                    for name, figure in old["figures"].items()
+                }
             except (OSError, ValueError, KeyError, TypeError) as exc:
                 raise BenchError(f"{path} is not a figures file ({exc}); rerun without --only") from None
         before = machine()
         start = time.perf_counter()
         print(f"measuring {len(names or FIGURES)} figure(s) into {path}")
-        figures = {**existing, **measure(names)}
+        command = "mimo-radar-bench model-figures" + (f" --only {self.args.only}" if names else "")
+        measured = {
+            name: {"command": command, "load_average_1min": before["load_average_1min"], **figure}
+            for name, figure in measure(names).items()
+        }
+        figures = {**existing, **measured}
         record = {
-            "command": "mimo-radar-bench model-figures" + (f" --only {self.args.only}" if names else ""),
+            "command": command,
             "wall_s": round(time.perf_counter() - start, 3),
             "machine": before,
             "figures": {name: figures[name] for name in FIGURES if name in figures},

@@ -57,6 +57,9 @@ def test_the_command_merges_only_what_it_remeasures(tmp_path, capsys):
     assert main(["model-figures", "--out", str(out), "--only", "greedy-optimal-average"]) == 0
     second = json.loads((out / "figures.json").read_text())["figures"]
     assert second["bpso-set-optimal"] == first["figures"]["bpso-set-optimal"]
+    # each figure says the command it was measured with, whichever run wrote the file last
+    assert second["bpso-set-optimal"]["command"].endswith("--only bpso-set-optimal")
+    assert second["greedy-optimal-average"]["command"].endswith("--only greedy-optimal-average")
     assert list(second) == [name for name in FIGURES if name in second]  # the registry's order
     for figure in second.values():
         assert figure["ci"][0] <= figure["value"] <= figure["ci"][1]
