@@ -34,3 +34,14 @@ def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, caps
     assert exit_info.value.code == 2
     assert "fusions must be among ['average', 'centralized']" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_the_planning_cost_benchmark_measures_each_search_against_best_tracking():
+    from benchmarks.speed.planning_cost import measure
+
+    ratios = measure(trials=2, steps=1)
+    assert ratios["best-tracking_ms_per_step"] > 0
+    assert {k for k in ratios if k.endswith("_over_best_tracking")} == {
+        f"plan-tracking:10-{s}_over_best_tracking" for s in ("beam", "rollout", "mcts")
+    }
+    assert all(v > 0 for v in ratios.values())

@@ -1,0 +1,70 @@
+"""What looking ahead costs: the planners' time per step against best-tracking's, side by side.
+
+Run: ``python -m benchmarks.speed.planning_cost [--trials 500] [--steps 5]``.
+
+On ``paper-1-v1`` (120 super arms) with ``--trials`` trials in one vector env (the tracker on,
+the v1 defaults), it times ``act`` per step of best-tracking and of ``plan-tracking`` at H = 10
+with each search, after a warm-up step, and prints each planner's time as a multiple of
+best-tracking's (the planning issue's target: at most 10 at H = 10).
+"""
+
+from __future__ import annotations
+
+import argparse
+import time
+from typing import Any
+
+import numpy as np
+
+import agents
+from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv
+
+#: (policy, parameters) measured against best-tracking.
+PLANNERS = (
+    ("plan-tracking", {"horizon": 10, "search": "beam"}),
+    ("plan-tracking", {"horizon": 10, "search": "rollout"}),
+    ("plan-tracking", {"horizon": 10, "search": "mcts"}),
+)
+
+
+def act_seconds(
+    policy: str, params: dict[str, Any], trials: int, steps: int, scenario: str = "paper-1-v1"
+) -> float:
+    """The median time of one ``act`` of ``policy`` on ``trials`` trials (s)."""
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **VERSIONS["v1"].options().to_dict())
+    agent = agents.make_agent(policy, scenario, seed=0, **params)
+    agent.attach(env)
+    obs, _ = env.reset(seed=0)
+    agent.reset(obs)
+    times = []
+    for step in range(steps + 1):
+        start = time.perf_counter()
+        action = agent.act(obs)
+        if step:  # the first step warms up
+            times.append(time.perf_counter() - start)
+        obs, reward, *_ = env.step(action)
+        agent.update(obs, reward)
+    return float(np.median(times))
+
+
+def measure(trials: int = 500, steps: int = 5) -> dict[str, float]:
+    """Each planner's act time as a multiple of best-tracking's, measured in the same run."""
+    reference = act_seconds("best-tracking", {}, trials, steps)
+    ratios = {"best-tracking_ms_per_step": 1e3 * reference}
+    for policy, params in PLANNERS:
+        seconds = act_seconds(policy, params, trials, steps)
+        ratios[f"{policy}:{params['horizon']}-{params['search']}_over_best_tracking"] = seconds / reference
+    return ratios
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=500)
+    parser.add_argument("--steps", type=int, default=5)
+    args = parser.parse_args()
+    for key, value in measure(args.trials, args.steps).items():
+        print(f"{key:<50} {value:10.2f}")
+
+
+if __name__ == "__main__":
+    main()
