@@ -31,9 +31,11 @@ def act_seconds(
     policy: str, params: dict[str, Any], trials: int, steps: int, scenario: str = "paper-1-v1"
 ) -> float:
     """The median time of one ``act`` of ``policy`` on ``trials`` trials (s)."""
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **VERSIONS["v1"].options().to_dict())
     agent = agents.make_agent(policy, scenario, seed=0, **params)
-    agent.attach(env)
+    options = VERSIONS["v1"].options(**agent.observation_options).to_dict()
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **options)
+    if agent.needs_oracle:
+        agent.attach(env)
     obs, _ = env.reset(seed=0)
     agent.reset(obs)
     times = []
