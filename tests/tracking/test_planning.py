@@ -170,3 +170,17 @@ def test_the_learning_planner_one_step_ahead_is_tracking_ucb(fusion):
         for agent in (learner, planner, ahead):
             agent.update(obs, reward)
     assert not hasattr(ahead, "_forecast")  # no truth: it was never attached to an env
+
+
+@pytest.mark.parametrize("fusion", ["centralized", "average"])
+@pytest.mark.parametrize("criterion", ["trace", "logdet"])
+def test_later_steps_score_as_the_myopic_criterion_to_rounding(fusion, criterion):
+    env = MimoRadarSelectVectorEnv(num_envs=6, scenario="paper-3-v1", fusion=fusion)
+    env.reset(seed=3)
+    for _ in range(4):
+        env.step(env.tracking_oracle_action())
+    forecast = env.tracking_forecast(2)
+    planner = Planner(4, 6, 2, 3, criterion=criterion, fusion=fusion)
+    exact = planner._costs(forecast.covariance, forecast.information[:, 1], forecast.weights, first=True)
+    fast = planner._costs(forecast.covariance, forecast.information[:, 1], forecast.weights, first=False)
+    np.testing.assert_allclose(fast, exact, rtol=1e-10, atol=1e-12)
