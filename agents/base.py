@@ -142,6 +142,12 @@ class Agent(ABC):
         sc = self.scenario
         return 20.0 * sc.num_targets * sc.num_tx * sc.num_rx
 
+    def seconds_per_step(self) -> float:
+        """Time per step of a whole batch that does not grow with its trials (Python's share of a
+        search that loops over steps or simulations), roughly; 0 for most agents, whose per-step
+        calls are part of the harness's fixed cost per step."""
+        return 0.0
+
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
         """Start an episode (default: nothing to remember)."""

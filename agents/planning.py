@@ -61,7 +61,16 @@ def _plan_operations(
     sc = scenario
     arms, states = _plan_states(sc, search, width, horizon, simulations)
     repeats = simulations if search == "mcts" else 1
-    return repeats * horizon * states * arms * sc.num_targets * (8.0 * sc.num_tx * sc.num_rx + 60)
+    return repeats * horizon * states * arms * sc.num_targets * (2.0 * sc.num_tx * sc.num_rx + 60)
+
+
+#: Python's time per planned step of a batch, and per step of an MCTS simulation (s): the
+#: searches loop over them (``benchmarks.speed.policy_cost`` measures them at a few trials).
+PLAN_STEP_SECONDS = 1e-3
+
+
+def _plan_seconds(search: str, horizon: int, simulations: int) -> float:
+    return PLAN_STEP_SECONDS * horizon * (simulations if search == "mcts" else 1)
 
 
 class PlanTrackingAgent(Agent):
@@ -146,6 +155,9 @@ class PlanTrackingAgent(Agent):
             self.scenario, self.search, self.width, self.horizon, self.simulations
         )
 
+    def seconds_per_step(self) -> float:
+        return _plan_seconds(self.search, self.horizon, self.simulations)
+
     def _reset(self, obs: Observation) -> None:
         if self.planner is None:
             raise RuntimeError("the planning oracle needs the env: call agent.attach(env) first")
@@ -219,6 +231,9 @@ class PlanTrackingUCB(TrackingUCB):
         return super().memory_per_trial() + _plan_memory(
             self.scenario, planner.search, planner.width, self.horizon
         )
+
+    def seconds_per_step(self) -> float:
+        return _plan_seconds(self.planner.search, self.horizon, self.planner.simulations)
 
     def forecast(self, obs: Observation) -> Forecast:
         """The plan's inputs from the observation and the learnt estimates alone."""

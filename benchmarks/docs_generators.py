@@ -613,10 +613,14 @@ def policy_cost(docs: Path) -> str:
 def _recipe_costs(docs: Path, page: str) -> str:
     """``python -m benchmarks.speed.recipes``' rows of ``page``: each Python recipe's wall time
     when run alone in a fresh interpreter (the interpreter's start and imports included)."""
+    from .speed.recipes import recipes
+
     record = read_json(docs, "perf/recipes.json")
     rows = [r for r in record["rows"] if r["page"] == page]
-    if not rows:
-        raise BenchError(f"perf/recipes.json has no recipe of {page}: run python -m benchmarks.speed.recipes")
+    current = [r for r in recipes(docs) if r.page == page]
+    rerun = "run python -m benchmarks.speed.recipes --json docs/results/perf/recipes.json"
+    if [(r["section"], r.get("sha256")) for r in rows] != [(r.section, r.digest) for r in current]:
+        raise BenchError(f"the Python recipes of {page} changed since perf/recipes.json timed them: {rerun}")
     lines = ["| recipe | section | wall time, run alone |", "|---|---|---|"]
     for r in rows:
         cost = f"{r['seconds']:.1f} s" if "seconds" in r else f"not run here ({r['not_run']})"

@@ -165,7 +165,7 @@ def make_config(
                 f"unknown policy {policy!r}; available policies are {available} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
             )
-    per_trial, operations, built = {}, {}, {}
+    per_trial, operations, fixed, built = {}, {}, {}, {}
     for policy in policies:
         try:
             agent = built[policy] = make_policy(
@@ -173,6 +173,7 @@ def make_config(
             )
             per_trial[policy] = agent.memory_per_trial()
             operations[policy] = agent.operations_per_trial_step()
+            fixed[policy] = agent.seconds_per_step()
             probe = MimoRadarSelectVectorEnv(
                 num_envs=1, scenario=sc, **policy_env_options(agent, options.to_dict())
             )
@@ -183,7 +184,7 @@ def make_config(
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
-    check_time(sc, options, operations, trials, steps, shard_size, parallel or workers, max_hours, say)
+    check_time(sc, options, operations, trials, steps, shard_size, parallel or workers, max_hours, say, fixed)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
         json.dumps(params, allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -261,17 +262,24 @@ def estimate_seconds(
     steps: int,
     shard_size: int,
     parallel: int = 1,
+    agent_seconds: dict[str, float] | None = None,
 ) -> float:
     """A run's wall time, roughly: every (policy, shard) task takes, per step,
-    :data:`STEP_OVERHEAD_SECONDS` plus its trials' operations (the env's,
-    :func:`~mimo_radar_env.core.model.operations_per_trial_step`, and the policy's,
+    :data:`STEP_OVERHEAD_SECONDS` and the policy's own fixed time
+    (:meth:`agents.Agent.seconds_per_step`, ``agent_seconds``) plus its trials' operations (the
+    env's, :func:`~mimo_radar_env.core.model.operations_per_trial_step`, and the policy's,
     :meth:`agents.Agent.operations_per_trial_step`) at :data:`SECONDS_PER_OPERATION`;
     ``parallel`` tasks run at once."""
     env = operations_per_trial_step(scenario, options.tracking, options.fusion)
     shards = -(-trials // shard_size)
+    fixed = agent_seconds or {}
     total = sum(
-        steps * (shards * STEP_OVERHEAD_SECONDS + trials * (env + agent) * SECONDS_PER_OPERATION)
-        for agent in agent_operations.values()
+        steps
+        * (
+            shards * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0))
+            + trials * (env + agent) * SECONDS_PER_OPERATION
+        )
+        for policy, agent in agent_operations.items()
     )
     return total / max(1, min(parallel, shards * len(agent_operations)))
 
@@ -297,11 +305,14 @@ def check_time(
     parallel: int,
     max_hours: float | None,
     say: Callable[[str], None] = print,
+    agent_seconds: dict[str, float] | None = None,
 ) -> float:
     """Says a run's estimated time (:func:`estimate_seconds`) when it is a minute or more;
     raises :class:`HarnessError` with the estimate and what to change when it exceeds
     ``max_hours`` (``None``: no limit). Returns the estimate in seconds."""
-    seconds = estimate_seconds(scenario, options, agent_operations, trials, steps, shard_size, parallel)
+    seconds = estimate_seconds(
+        scenario, options, agent_operations, trials, steps, shard_size, parallel, agent_seconds
+    )
     slowest = max(agent_operations, key=agent_operations.__getitem__)
     where = (
         f"{trials} trials x {steps} steps of {len(agent_operations)} polic"

@@ -90,7 +90,13 @@ def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[
     declared = env_per_trial + agent.memory_per_trial()
     options = dataclasses.replace(VERSIONS["v1"].options(), **agent.observation_options)
     estimate = estimate_seconds(
-        scenario, options, {policy: agent.operations_per_trial_step()}, trials, 1, trials
+        scenario,
+        options,
+        {policy: agent.operations_per_trial_step()},
+        trials,
+        1,
+        trials,
+        agent_seconds={policy: agent.seconds_per_step()},
     )
     return {
         "policy": policy,

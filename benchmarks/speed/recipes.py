@@ -44,6 +44,13 @@ class Recipe:
     def key(self) -> str:
         return f"{self.page}[{self.index}]"
 
+    @property
+    def digest(self) -> str:
+        """The SHA-256 of the code: a timing is of this code only."""
+        import hashlib
+
+        return hashlib.sha256(self.code.encode()).hexdigest()
+
     def imports(self, module: str) -> bool:
         return re.search(rf"^\s*(from|import) {re.escape(module)}\b", self.code, flags=re.M) is not None
 
@@ -78,7 +85,12 @@ def run_recipe(recipe: Recipe, timeout: float = 900) -> tuple[subprocess.Complet
 def measure(progress: Any = print) -> list[dict[str, Any]]:
     rows = []
     for recipe in recipes():
-        row: dict[str, Any] = {"page": recipe.page, "index": recipe.index, "section": recipe.section}
+        row: dict[str, Any] = {
+            "page": recipe.page,
+            "index": recipe.index,
+            "section": recipe.section,
+            "sha256": recipe.digest,
+        }
         own = [module for module in OWN_ENVIRONMENT if recipe.imports(module)]
         if own:
             row["not_run"] = OWN_ENVIRONMENT[own[0]]

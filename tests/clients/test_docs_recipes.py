@@ -28,3 +28,22 @@ def test_recipe_runs_alone(recipe):
             pytest.importorskip(module, reason=f"the recipe needs {module} ({extra})")
     result, _ = run_recipe(recipe)
     assert result.returncode == 0, result.stderr[-3000:]
+
+
+def test_a_recipe_changed_since_it_was_timed_fails_the_docs_check(tmp_path):
+    import shutil
+
+    from benchmarks.docs_generators import _recipe_costs
+    from benchmarks.errors import BenchError
+    from benchmarks.speed.recipes import DOCS
+
+    docs = tmp_path / "docs"
+    (docs / "results" / "perf").mkdir(parents=True)
+    shutil.copy(DOCS / "results" / "perf" / "recipes.json", docs / "results" / "perf")
+    for page in ("clients.md", "ppo.md"):
+        shutil.copy(DOCS / page, docs / page)
+    assert "| 1 |" in _recipe_costs(docs, "clients.md")  # as committed: timed as written
+    text = (docs / "clients.md").read_text().replace("num_envs=64", "num_envs=65", 1)
+    (docs / "clients.md").write_text(text)
+    with pytest.raises(BenchError, match="the Python recipes of clients.md changed since"):
+        _recipe_costs(docs, "clients.md")
