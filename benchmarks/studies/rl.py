@@ -157,12 +157,18 @@ class RLStudy(Study):
             raise BenchError(str(exc)) from exc
 
     def estimate_training_seconds(self) -> float:
-        """The trainings' wall time, roughly: their timesteps at :data:`TRAINING_STEPS_PER_S`,
-        ``--workers`` at once."""
-        steps = sum(
-            seeds * self.args.timesteps / TRAINING_STEPS_PER_S[algo] for _, algo, _, seeds in self.trainings()
-        )
-        return steps / self.settings.workers
+        """The wall time of the trainings still to do (a resumed study keeps its finished
+        seeds), roughly: their timesteps at :data:`TRAINING_STEPS_PER_S`, ``--workers`` at once."""
+        from ..ppo import META_FILE, seed_folder
+
+        seconds = 0.0
+        for scenario, algo, reward, seeds in self.trainings():
+            folder = training_folder(self.settings.out, scenario, algo, reward)
+            for seed in range(seeds):
+                meta = seed_folder(folder, seed) / META_FILE
+                if not (meta.is_file() and "job" in json.loads(meta.read_text())):
+                    seconds += self.args.timesteps / TRAINING_STEPS_PER_S[algo]
+        return seconds / self.settings.workers
 
     def main(self) -> int:
         import sys
@@ -183,7 +189,7 @@ class RLStudy(Study):
                 f"{self.settings.max_hours:g}: use fewer --timesteps or seeds, or a larger --max-hours"
             )
         print(
-            f"mimo-radar-bench: training takes about {duration(seconds)} (finished seeds are kept)",
+            f"mimo-radar-bench: the trainings still to do take about {duration(seconds)} (finished kept)",
             file=sys.stderr,
         )
         self.train()

@@ -154,3 +154,24 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     )
     tables = rl_tables(tmp_path)
     assert tables.startswith("Learned policies across their training seeds") and "### paper-1" in tables
+
+
+def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
+    import argparse
+
+    from benchmarks.ppo import seed_folder
+    from benchmarks.studies.rl import RLStudy, training_folder
+
+    parser = argparse.ArgumentParser()
+    RLStudy.add_arguments(parser)
+    args = parser.parse_args(
+        ["--scenarios", "1", "--timesteps", "3000", "--out", str(tmp_path), "--workers", "1"]
+    )
+    args.command = "rl"
+    study = RLStudy(args)
+    before = study.estimate_training_seconds()  # 10 PPO and 3 MaskablePPO at 3000/s, 3 RecurrentPPO at 1280/s
+    assert before == pytest.approx(13 * 1.0 + 3 * 3000 / 1280)
+    finished = seed_folder(training_folder(tmp_path, "paper-1-v1", "ppo", "sinr"), 0)
+    finished.mkdir(parents=True)
+    (finished / "ppo.json").write_text(json.dumps({"job": {}, "train_wall_s": 1.0}))
+    assert study.estimate_training_seconds() == pytest.approx(before - 1.0)
