@@ -184,7 +184,17 @@ def make_config(
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
-    check_time(sc, options, operations, trials, steps, shard_size, parallel or workers, max_hours, say, fixed)
+    parallel = parallel or workers
+    alone = {
+        p: estimate_seconds(sc, options, {p: operations[p]}, trials, steps, shard_size, 1, fixed)
+        for p in policies
+    }
+    where = (
+        f"{trials} trials x {steps} steps of {len(policies)} polic{'y' if len(policies) == 1 else 'ies'} "
+        f"on {sc.name!r}, {parallel} task(s) at once"
+    )
+    seconds = estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
+    check_time(seconds, where, max(alone, key=alone.__getitem__), max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
         json.dumps(params, allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -296,28 +306,11 @@ def duration(seconds: float) -> str:
 
 
 def check_time(
-    scenario: Scenario,
-    options: EnvOptions,
-    agent_operations: dict[str, float],
-    trials: int,
-    steps: int,
-    shard_size: int,
-    parallel: int,
-    max_hours: float | None,
-    say: Callable[[str], None] = print,
-    agent_seconds: dict[str, float] | None = None,
-) -> float:
-    """Says a run's estimated time (:func:`estimate_seconds`) when it is a minute or more;
-    raises :class:`HarnessError` with the estimate and what to change when it exceeds
-    ``max_hours`` (``None``: no limit). Returns the estimate in seconds."""
-    seconds = estimate_seconds(
-        scenario, options, agent_operations, trials, steps, shard_size, parallel, agent_seconds
-    )
-    slowest = max(agent_operations, key=agent_operations.__getitem__)
-    where = (
-        f"{trials} trials x {steps} steps of {len(agent_operations)} polic"
-        f"{'y' if len(agent_operations) == 1 else 'ies'} on {scenario.name!r}, {parallel} task(s) at once"
-    )
+    seconds: float, where: str, slowest: str, max_hours: float | None, say: Callable[[str], None] = print
+) -> None:
+    """Says a run's estimated time ``seconds`` (:func:`estimate_seconds`; ``where`` describes the
+    run) when it is a minute or more; raises :class:`HarnessError` with the estimate and what to
+    change when it exceeds ``max_hours`` (``None``: no limit)."""
     if max_hours is not None and seconds > 3600 * max_hours:
         raise HarnessError(
             f"{where} would take about {duration(seconds)} (the slowest policy: {slowest!r}), more than "
@@ -326,7 +319,6 @@ def check_time(
         )
     if seconds >= 60:
         say(f"{where}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
-    return seconds
 
 
 def _policy_files(policy: str, agent: Any) -> dict[str, str]:

@@ -22,7 +22,6 @@ best achievable bound and the oracles'.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 from collections.abc import Hashable
 from pathlib import Path
@@ -30,14 +29,12 @@ from typing import Any
 
 import numpy as np
 
-from mimo_radar_env import MimoRadarSelectVectorEnv, env_version
+from mimo_radar_env import MimoRadarSelectVectorEnv
 from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 
-from ..errors import BenchError
 from ..report import format_estimate, paired_difference
 from .base import Finished, Run, Study
-from .settings import paper_numbers
-from .tracking import ppo_policy
+from .tracking import fusion_runs
 
 HORIZONS = (1, 2, 5, 10)
 SEARCH_HORIZON = 5
@@ -86,19 +83,7 @@ class PlanningStudy(Study):
         )
 
     def runs(self) -> list[Run]:
-        fusions = [f.strip() for f in self.args.fusions.split(",") if f.strip()]
-        if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
-            raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {self.args.fusions!r}")
-        version = env_version(self.settings.env_version)
-        runs = []
-        for number in paper_numbers(self.args.scenarios):
-            name = version.paper_scenario(number)
-            for fusion in fusions:
-                ppo = [ppo_policy(self.args.ppo, number, fusion)] if self.args.ppo else []
-                options = dataclasses.replace(self.settings.options, fusion=fusion)
-                folder = Path(self.settings.out) / f"{name}-{fusion}"
-                runs.append(Run((number, fusion), name, (*planning_policies(), *ppo), folder, options))
-        return runs
+        return fusion_runs(self, planning_policies())
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
         return [judge_run(key, f.summary, best_bound(f, self.settings.seed)) for key, f in finished.items()]

@@ -74,6 +74,28 @@ def ppo_policy(pattern: str, number: int, fusion: str) -> str:
         ) from None
 
 
+def fusion_runs(study: Study, policies: tuple[str, ...]) -> list[Run]:
+    """The runs of a study over paper scenarios (``--scenarios``) and fusions (``--fusions``):
+    ``policies`` and, with ``--ppo PATTERN``, a trained PPO in each, into
+    ``OUT/<scenario>-<fusion>``."""
+    args, settings = study.args, study.settings
+    if hasattr(args, "fusion"):
+        raise BenchError(f"the {study.name} study runs each of --fusions; --fusion does not apply")
+    fusions = [f.strip() for f in args.fusions.split(",") if f.strip()]
+    if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
+        raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {args.fusions!r}")
+    version = env_version(settings.env_version)
+    runs = []
+    for number in paper_numbers(args.scenarios):
+        name = version.paper_scenario(number)
+        for fusion in fusions:
+            ppo = [ppo_policy(args.ppo, number, fusion)] if args.ppo else []
+            options = dataclasses.replace(settings.options, fusion=fusion)
+            folder = study_folder(settings.out, name, fusion)
+            runs.append(Run((number, fusion), name, (*policies, *ppo), folder, options))
+    return runs
+
+
 class TrackingStudy(Study):
     name = "tracking"
     min_trials = 2
@@ -107,21 +129,7 @@ class TrackingStudy(Study):
         )
 
     def runs(self) -> list[Run]:
-        if hasattr(self.args, "fusion"):
-            raise BenchError("the tracking study runs each of --fusions; --fusion does not apply")
-        fusions = [f.strip() for f in self.args.fusions.split(",") if f.strip()]
-        if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
-            raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {self.args.fusions!r}")
-        version = env_version(self.settings.env_version)
-        runs = []
-        for number in paper_numbers(self.args.scenarios):
-            name = version.paper_scenario(number)
-            for fusion in fusions:
-                ppo = [ppo_policy(self.args.ppo, number, fusion)] if self.args.ppo else []
-                options = dataclasses.replace(self.settings.options, fusion=fusion)
-                folder = study_folder(self.settings.out, name, fusion)
-                runs.append(Run((number, fusion), name, (*TRACKING_POLICIES, *ppo), folder, options))
-        return runs
+        return fusion_runs(self, TRACKING_POLICIES)
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
         return judge_targets({key: f.summary for key, f in finished.items()})
