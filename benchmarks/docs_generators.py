@@ -702,3 +702,46 @@ def rl_findings(docs: Path) -> str:
         + "."
     )
     return "\n".join(lines)
+
+
+@generator("step-stages")
+def step_stages(docs: Path) -> str:
+    """``python -m benchmarks.speed.stages``' rows: each stage's time per step, its share, the
+    arithmetic it declares and the rate that makes, and the floor the same arithmetic would take
+    at an assumed accelerator rate."""
+    from .speed.stages import ASSUMED_ACCELERATOR_OPS
+
+    record = read_json(docs, "perf/stages.json")
+    rows = record["rows"]
+    totals = {f: sum(r["ms_per_step"] for r in rows if r["fusion"] == f) for f in ("average", "centralized")}
+    lines = [
+        "| fusion | stage | ms per step | share of the env step | declared operations per trial | "
+        "achieved rate (operations/s) | arithmetic alone at the assumed accelerator rate (ms) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in rows:
+        share = f"{100 * r['ms_per_step'] / totals[r['fusion']]:.0f} %" if r["fusion"] in totals else "—"
+        ops = r.get("declared_operations_per_trial")
+        rate = r.get("achieved_operations_per_s")
+        floor = "—" if ops is None else f"{1e3 * ops * record['trials'] / ASSUMED_ACCELERATOR_OPS:.3f}"
+        lines.append(
+            f"| {r['fusion']} | {r['stage']} | {r['ms_per_step']:.2f} | {share} | "
+            f"{'—' if ops is None else f'{ops:,.0f}'} | {'—' if rate is None else f'{rate:.2e}'} | {floor} |"
+        )
+    machine = record["machine"]
+    largest = {
+        f: max((r for r in rows if r["fusion"] == f), key=lambda r: r["ms_per_step"])
+        for f in ("average", "centralized")
+    }
+    lines += [
+        "",
+        f"{record['scenario']}, {record['trials']} trials, {record['steps']} steps after a warm-up, on "
+        f"{machine['cores']} cores ({machine['machine']}, Python {machine['python']}); "
+        "the env step's largest stage is, "
+        + "; ".join(
+            f"with {f} fusion, the {r['stage']} ({100 * r['ms_per_step'] / totals[f]:.0f} % of the step)"
+            for f, r in largest.items()
+        )
+        + f"; the assumed accelerator rate is {ASSUMED_ACCELERATOR_OPS:.0e} float64 operations per second.",
+    ]
+    return "\n".join(lines)

@@ -51,6 +51,7 @@ MODULE_TESTS = {
     "agents/planning.py": ("tests/tracking/test_planning.py", r"plan-tracking"),
     "benchmarks/studies/planning.py": ("tests/bench/test_planning_study.py", r"planning"),
     "benchmarks/speed/planning_cost.py": ("tests/bench/test_planning_study.py", r"planning_cost"),
+    "benchmarks/speed/stages.py": ("tests/bench/test_perf_quick.py", r"stages\.measure"),
     "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),
     "benchmarks/speed/perf.py": ("tests/bench/test_perf_quick.py", r'"perf"'),
     "benchmarks/speed/scaling.py": ("tests/bench/test_perf_quick.py", r"scaling\.measure"),
