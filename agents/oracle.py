@@ -15,6 +15,16 @@ from .base import Agent, Observation
 from .tracking import TrackingSearchCost
 
 
+def oracle_env(env: Any, method: str) -> Any:
+    """The MimoRadarSelect env (single or vector) behind ``env`` that has the truth-reading
+    ``method`` (``oracle_action``, ``tracking_oracle_action``, ``tracking_forecast``);
+    ``ValueError`` naming it otherwise."""
+    target = env if hasattr(env, method) else getattr(env, "unwrapped", env)
+    if not hasattr(target, method):
+        raise ValueError(f"env must be a MimoRadarSelect env (it has {method}()), got {type(env).__name__}")
+    return target
+
+
 class BestAgent(Agent):
     """The Best oracle: the optimal super arm for the true mean SINR of each step.
 
@@ -33,12 +43,7 @@ class BestAgent(Agent):
 
     def attach(self, env: Any) -> None:
         """Read the optimal super arm from ``env.oracle_action()`` (single or vector env)."""
-        target = env if hasattr(env, "oracle_action") else getattr(env, "unwrapped", env)
-        if not hasattr(target, "oracle_action"):
-            raise ValueError(
-                f"env must be a MimoRadarSelect env (it has oracle_action()), got {type(env).__name__}"
-            )
-        self._oracle = target.oracle_action
+        self._oracle = oracle_env(env, "oracle_action").oracle_action
 
     def operations_per_trial_step(self) -> float:
         """The env's search of the optimal super arm (its ``oracle_action()``)."""
@@ -79,12 +84,7 @@ class BestTrackingAgent(TrackingSearchCost, BestAgent):
 
     def attach(self, env: Any) -> None:
         """Read the super arm from ``env.tracking_oracle_action()`` (single or vector env)."""
-        target = env if hasattr(env, "tracking_oracle_action") else getattr(env, "unwrapped", env)
-        if not hasattr(target, "tracking_oracle_action"):
-            raise ValueError(
-                "env must be a MimoRadarSelect env (it has tracking_oracle_action()), "
-                f"got {type(env).__name__}"
-            )
+        target = oracle_env(env, "tracking_oracle_action")
         if getattr(target, "options", None) is not None and not target.options.tracking:
             raise ValueError("best-tracking needs the tracker: the env was made with tracking=False")
         criterion = self.criterion

@@ -15,6 +15,7 @@ from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
 
 from .base import Agent, Observation, ucb_bonus
+from .oracle import oracle_env
 from .parameters import check_integer
 from .tracking import TrackingUCB
 
@@ -130,11 +131,7 @@ class PlanTrackingAgent(Agent):
 
     def attach(self, env: Any) -> None:
         """Plan on ``env.tracking_forecast`` (single or vector env), with the env's fusion."""
-        target = env if hasattr(env, "tracking_forecast") else getattr(env, "unwrapped", env)
-        if not hasattr(target, "tracking_forecast"):
-            raise ValueError(
-                f"env must be a MimoRadarSelect env (it has tracking_forecast()), got {type(env).__name__}"
-            )
+        target = oracle_env(env, "tracking_forecast")
         self.planner = self._planner(target.options.fusion)
         self._forecast = target.tracking_forecast
 

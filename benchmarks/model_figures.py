@@ -18,7 +18,6 @@ import re
 import time
 import warnings
 from collections.abc import Callable
-from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
@@ -399,50 +398,16 @@ def bound_tightness() -> dict[str, Figure]:
     }
 
 
-@contextmanager
-def _timed(target: Any, attribute: str, spent: list[float]):
-    original = getattr(target, attribute)
-
-    def wrapper(*args: Any, **kwargs: Any) -> Any:
-        start = time.perf_counter()
-        try:
-            return original(*args, **kwargs)
-        finally:
-            spent[0] += time.perf_counter() - start
-
-    setattr(target, attribute, wrapper)
-    try:
-        yield
-    finally:
-        setattr(target, attribute, original)
-
-
 @figure("bound-share-paper-1-v1", "bound-share-paper-3-v1")
 def bound_cost() -> dict[str, Figure]:
-    from mimo_radar_env.envs import engine as engine_module
+    from .speed.stages import env_stages
 
     out = {}
     for name in ("paper-1-v1", "paper-3-v1"):
         trials, steps = 500, 60
-        venv = gym.make_vec(
-            "MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point", scenario=name
-        )
-        venv.reset(seed=0)
-        engine = venv.unwrapped.engine
-        sc = engine.scenario
-        actions = random_super_arms(
-            np.random.default_rng(0), trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step
-        )
-        venv.step(actions)  # compile and warm up
-        spent = [0.0]
-        with _timed(engine, "_advance_bound", spent), _timed(engine_module, "position_bound", spent):
-            start = time.perf_counter()
-            for _ in range(steps):
-                venv.step(actions)
-            total = time.perf_counter() - start
-        venv.close()
+        stages = env_stages("average", trials, steps, scenario=name)
         out[f"bound-share-{name}"] = {
-            "value": spent[0] / total,
+            "value": stages["bound"] / sum(stages.values()),
             "ci": None,
             "method": "wall time",
             "kind": "share",

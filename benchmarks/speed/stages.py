@@ -56,10 +56,10 @@ def timed(target: Any, attribute: str, spent: dict[str, float], stage: str):
         setattr(target, attribute, original)
 
 
-def env_stages(fusion: str, trials: int, steps: int) -> dict[str, float]:
-    """Seconds per step of each stage of the env's step."""
+def env_stages(fusion: str, trials: int, steps: int, scenario: str = SCENARIO) -> dict[str, float]:
+    """Seconds per step of each stage of the env's step (v1 defaults, random valid actions)."""
     options = VERSIONS["v1"].options(fusion=fusion).to_dict()
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=SCENARIO, **options)
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **options)
     env.reset(seed=0)
     sc = env.scenario
     actions = random_super_arms(
