@@ -95,6 +95,22 @@ def _position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     return covariance[..., [[0], [2]], [0, 2]]
 
 
+def _gain(information: NDArray[np.float64], position_cov: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(I + J P)^-1 J`` of position information ``J`` and the prior's position block ``P``
+    (..., 2, 2): what Woodbury's identity subtracts, ``(P^-1 + E J E')^-1 = P - P E G E' P``
+    (``E`` picks the position), symmetrised; no inverse of a 4 x 4 matrix, and ``J`` may be
+    singular."""
+    j00, j01, j10, j11 = (information[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
+    p00, p01, p10, p11 = (position_cov[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
+    # M = I + J P, written out (products of 2 x 2 matrices by matmul are slower than this)
+    m00, m01 = 1.0 + j00 * p00 + j01 * p10, j00 * p01 + j01 * p11
+    m10, m11 = j10 * p00 + j11 * p10, 1.0 + j10 * p01 + j11 * p11
+    det = m00 * m11 - m01 * m10
+    g00, g11 = (m11 * j00 - m01 * j10) / det, (m00 * j11 - m10 * j01) / det
+    g01 = 0.5 * ((m11 * j01 - m01 * j11) + (m00 * j10 - m10 * j00)) / det
+    return np.stack([np.stack([g00, g01], -1), np.stack([g01, g11], -1)], -2)
+
+
 def posterior_covariance(
     covariance: NDArray[np.float64],
     information: NDArray[np.float64],
@@ -104,26 +120,39 @@ def posterior_covariance(
 ) -> NDArray[np.float64]:
     """The full posterior covariance (S, K, 4, 4) after the channels ``tx_mask x rx_mask``
     ((S, M), (S, N)) with position information ``information`` (S, K, M, N, 2, 2), from the
-    prior ``covariance`` (S, K, 4, 4), fused as ``fusion`` fuses."""
-    prior_info = np.linalg.inv(covariance)  # (S, K, 4, 4)
-    selected = tx_mask[:, :, None] & rx_mask[:, None, :]  # (S, M, N)
+    prior ``covariance`` (S, K, 4, 4), fused as ``fusion`` fuses: centralised, the channels'
+    information adds to the prior's; eq22's average, each selected channel's posterior is
+    averaged. Both are ``P - P E G E' P`` (Woodbury's identity): centralised, ``G`` is the gain
+    of the summed information; averaged, the mean of each channel's gain."""
+    selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(np.float64)  # (S, M, N)
+    position_cov = _position_block(covariance)  # (S, K, 2, 2)
     if fusion == "centralized":
-        added = np.einsum("smn,skmnij->skij", selected.astype(float), information)
-        total = prior_info.copy()
-        total[..., 0::2, 0::2] += added
-        return np.linalg.inv(total)
-    # eq22: each selected channel's posterior, averaged (a super arm selects the same number of
-    # channels in every state, so they are gathered as (S, C))
-    S, K = information.shape[:2]
-    flat = selected.reshape(S, -1)
-    channels = int(flat[0].sum()) if S else 0
-    if S and not (flat.sum(axis=1) == channels).all():
-        raise ValueError("every state's super arm must select the same number of channels")
-    index = np.nonzero(flat)[1].reshape(S, channels)  # (S, C)
-    chosen = information.reshape(S, K, -1, 2, 2)[np.arange(S)[:, None], :, index]  # (S, C, K, 2, 2)
-    per_channel = np.broadcast_to(prior_info[:, None], (S, channels, K, 4, 4)).copy()
-    per_channel[..., 0::2, 0::2] += chosen
-    return np.linalg.inv(per_channel).mean(axis=1)
+        gain = _gain(np.einsum("smn,skmnij->skij", selected, information), position_cov)
+    else:
+        count = selected.sum(axis=(1, 2))
+        if (count == 0).any():
+            raise ValueError("the average fusion needs at least one selected channel in every state")
+        each = _gain(information, position_cov[:, :, None, None])  # (S, K, M, N, 2, 2)
+        gain = np.einsum("smn,skmnij->skij", selected / count[:, None, None], each)
+    cross = covariance[..., :, 0::2]  # P E: (S, K, 4, 2)
+    return covariance - cross @ gain @ np.swapaxes(cross, -1, -2)
+
+
+def smallest(values: NDArray[np.float64], keep: int) -> NDArray[np.int64]:
+    """The indices of the ``keep`` smallest values of each row (B, n), smallest first and the
+    first occurrence on ties: ``np.argsort(values, axis=1, kind="stable")[:, :keep]``, found by a
+    partition (linear in ``n``) and a sort of the kept ones only."""
+    n = values.shape[1]
+    if keep >= n:
+        return np.argsort(values, axis=1, kind="stable")
+    threshold = np.take_along_axis(values, np.argpartition(values, keep - 1, axis=1)[:, keep - 1 : keep], 1)
+    below = values < threshold
+    tied = values == threshold
+    room = keep - below.sum(axis=1, keepdims=True)
+    chosen = below | (tied & (np.cumsum(tied, axis=1) <= room))  # exactly ``keep`` per row
+    index = np.nonzero(chosen)[1].reshape(len(values), keep)  # ascending index in each row
+    order = np.argsort(np.take_along_axis(values, index, 1), axis=1, kind="stable")
+    return np.take_along_axis(index, order, 1)
 
 
 class Planner:
@@ -268,7 +297,7 @@ class Planner:
             else:
                 flat = total.reshape(batch, S * self.arms)
                 keep = min(width, flat.shape[1])
-                order = np.argsort(flat, axis=1, kind="stable")[:, :keep]  # first occurrence on ties
+                order = smallest(flat, keep)
                 parent, arm = np.divmod(order, self.arms)
             rows = np.arange(batch)[:, None]
             cost = total[rows, parent, arm]

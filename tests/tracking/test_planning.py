@@ -7,7 +7,7 @@ import pytest
 import agents
 from benchmarks.model_figures import plan_instances
 from mimo_radar_env import MimoRadarSelectVectorEnv, random_scenario
-from mimo_radar_env.tracking.planning import Planner, plan_cost, posterior_covariance, sequences
+from mimo_radar_env.tracking.planning import Planner, plan_cost, posterior_covariance, sequences, smallest
 
 
 @pytest.mark.parametrize("fusion", ["centralized", "average"])
@@ -184,3 +184,14 @@ def test_later_steps_score_as_the_myopic_criterion_to_rounding(fusion, criterion
     exact = planner._costs(forecast.covariance, forecast.information[:, 1], forecast.weights, first=True)
     fast = planner._costs(forecast.covariance, forecast.information[:, 1], forecast.weights, first=False)
     np.testing.assert_allclose(fast, exact, rtol=1e-10, atol=1e-12)
+
+
+def test_the_beams_selection_is_a_stable_sort_found_by_partition():
+    """``smallest`` keeps the plans a stable argsort would, ties included (many ties: integers)."""
+    rng = np.random.default_rng(0)
+    for t in range(500):
+        rows, n = rng.integers(1, 5), rng.integers(1, 40)
+        keep = int(rng.integers(1, n + 3))
+        values = rng.integers(0, 5, size=(rows, n)).astype(float) if t % 2 else rng.normal(size=(rows, n))
+        expected = np.argsort(values, axis=1, kind="stable")[:, :keep]
+        np.testing.assert_array_equal(smallest(values, keep), expected)
