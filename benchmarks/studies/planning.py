@@ -10,6 +10,10 @@ on the same trials as the tracking study (same seed, 200 trials by default), int
 * the learning planner ``plan-tracking-ucb:H`` at each H of :data:`LEARNER_HORIZONS`;
 * optionally a trained PPO (``--ppo PATTERN``, as the tracking study's).
 
+With ``--rl DIR`` (an RL study's output, same seed), the planners are also paired against each
+of its learners, the mean over its seeds, on the trials both studies ran (trial ``i`` is seeded
+``seed + i`` in both; :func:`cross_run_differences` checks that best-tracking's errors agree).
+
 Beside them it computes the best achievable bound of the same trials
 (:func:`mimo_radar_env.tracking.planning.best_achievable_bound`: the selection sequence with
 the smallest time-averaged PCRB that a beam finds knowing the whole truth), averaged as the
@@ -81,12 +85,27 @@ class PlanningStudy(Study):
             metavar="PATTERN",
             help="also run a trained PPO: its model path with {scenario} and {fusion} filled in",
         )
+        parser.add_argument(
+            "--rl",
+            default=None,
+            metavar="DIR",
+            help="an RL study's output (mimo-radar-bench rl --out DIR, same --seed): pair the planners "
+            "against each of its learners on the trials both ran (the fusions it ran)",
+        )
 
     def runs(self) -> list[Run]:
         return fusion_runs(self, planning_policies())
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
-        return [judge_run(key, f.summary, best_bound(f, self.settings.seed)) for key, f in finished.items()]
+        judged = []
+        for key, f in finished.items():
+            row = judge_run(key, f.summary, best_bound(f, self.settings.seed))
+            if self.args.rl:
+                learners = against_learners(f, Path(self.args.rl), self.settings.seed)
+                if learners is not None:
+                    row["learners"] = learners
+            judged.append(row)
+        return judged
 
     def report(self, finished: dict[Hashable, Finished], judged: list[dict[str, Any]]) -> str:
         out = Path(self.settings.out)
@@ -128,6 +147,99 @@ def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
     )
     result = uncertainty.estimate(metrics.bound, config.trials, seed)
     return {"value": result["estimate"], "ci": result["ci"], "width": BOUND_WIDTH}
+
+
+def _first_trials(per_trial: dict[str, np.ndarray], trials: int) -> dict[str, np.ndarray]:
+    from mimo_radar_env.metrics import TRIAL_FIELDS
+
+    return {key: per_trial[key][:trials] for key in TRIAL_FIELDS}
+
+
+def cross_run_differences(
+    finished: Finished,
+    folder: Path,
+    references: dict[str, list[str]],
+    seed: int,
+    witness: str = "best-tracking",
+) -> dict[str, Any]:
+    """ARMSE differences of this run's planners (``plan-*``) against policies of another run
+    (``folder``) on the trials both ran, paired trial by trial: ``{"trials", "minus": {planner:
+    {name: estimate}}}``, each reference group ``references[name]`` (e.g. a learner's seeds)
+    taken as the mean of its policies' ARMSE. The runs must share their trials: the same
+    scenario, seed, steps and fusion, and ``witness``'s squared errors identical on the trials
+    both ran (checked), so that trial ``i`` is the same truth, observed and tracked alike, in
+    both."""
+    from mimo_radar_env.metrics import TrialMetrics
+
+    from .. import harness, uncertainty
+    from ..errors import BenchError
+
+    try:
+        other = harness.RunConfig(**json.loads((folder / harness.CONFIG_FILE).read_text()))
+    except (OSError, json.JSONDecodeError, TypeError) as exc:
+        raise BenchError(f"cannot read the run in {folder}: {exc}") from None
+    mine = finished.config
+    for name in ("scenario", "seed", "steps"):
+        if getattr(other, name) != getattr(mine, name):
+            raise BenchError(
+                f"the run in {folder} has another {name} than {finished.folder}: they share no trials"
+            )
+    if other.env_options.get("fusion") != mine.env_options.get("fusion"):
+        raise BenchError(f"the run in {folder} fuses otherwise than {finished.folder}")
+    trials = min(other.trials, mine.trials)
+    theirs = harness.load_per_trial(folder, other)
+    ours = harness.load_per_trial(finished.folder, mine)
+    if witness not in theirs or witness not in ours:
+        raise BenchError(f"both runs must hold {witness!r} to check that they share their trials")
+    if not np.array_equal(
+        ours[witness]["trial_squared_error"][:trials], theirs[witness]["trial_squared_error"][:trials]
+    ):
+        raise BenchError(
+            f"{witness!r}'s errors differ between {finished.folder} and {folder} on the same trial numbers: "
+            "the runs do not share their trials"
+        )
+    channels = mine.scenario_object.num_channels_per_step
+
+    def armse(per_trial: dict[str, dict[str, np.ndarray]], policy: str):
+        return TrialMetrics(_first_trials(per_trial[policy], trials), channels).armse
+
+    minus: dict[str, dict[str, Any]] = {}
+    for planner in (p for p in mine.policies if p.startswith("plan-")):
+        mine_armse = armse(ours, planner)
+        minus[planner] = {}
+        for name, policies in references.items():
+            group = [armse(theirs, p) for p in policies]
+
+            def difference(w: np.ndarray, a=mine_armse, group=group) -> np.ndarray:
+                return a(w) - np.mean([g(w) for g in group], axis=0)
+
+            minus[planner][name] = uncertainty.estimate(difference, trials, seed)
+    return {"trials": trials, "minus": minus}
+
+
+def against_learners(finished: Finished, rl_out: Path, seed: int) -> dict[str, Any] | None:
+    """The planners against each learner of an RL study (``mimo-radar-bench rl --out``), the
+    mean over its seeds, on the trials both ran; None where the RL study has no run of this
+    scenario and fusion."""
+    from .. import harness
+    from .rl import TRAININGS, learner_policies
+
+    folder = rl_out / str(finished.run.scenario)
+    config_file = folder / harness.CONFIG_FILE
+    if not config_file.is_file():
+        return None
+    other = json.loads(config_file.read_text())
+    if other["env_options"].get("fusion") != finished.config.env_options.get("fusion"):
+        return None
+    policies = dict.fromkeys(other["policies"])
+    references = {
+        f"{algo}-{reward}": learner_policies(policies, algo, reward)
+        for algo, reward, _ in TRAININGS
+        if learner_policies(policies, algo, reward)
+    }
+    result = cross_run_differences(finished, folder, references, seed)
+    result["seeds"] = {name: len(p) for name, p in references.items()}
+    return result
 
 
 def judge_run(key: tuple[int, str], summary: dict[str, Any], bound: dict[str, Any]) -> dict[str, Any]:
@@ -193,4 +305,18 @@ def planning_markdown(judged: list[dict[str, Any]]) -> str:
                 f"{format_estimate(row['bound']['value'], row['bound']['ci'], '{:.3f}')} | "
                 f"{row['ms_per_trial_step']:.2f} | " + " | ".join(cells) + " |"
             )
+        learners = r.get("learners")
+        if learners:
+            names = list(learners["seeds"])
+            lines += [
+                "",
+                f"Against the RL study's learners (each the mean ARMSE of its seeds), paired on the first "
+                f"{learners['trials']} trials, which both studies ran:",
+                "",
+                "| policy | " + " | ".join(f"- {n} ({learners['seeds'][n]} seeds)" for n in names) + " |",
+                "|---|" + "---|" * len(names),
+            ]
+            for p, diffs in learners["minus"].items():
+                cells = [format_estimate(diffs[n]["estimate"], diffs[n]["ci"], "{:.3f}") for n in names]
+                lines.append(f"| `{p}` | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"

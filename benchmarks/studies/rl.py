@@ -232,7 +232,7 @@ class RLStudy(Study):
         return text
 
 
-def _learned(rows: dict[str, Any], algo: str, reward: str) -> list[str]:
+def learner_policies(rows: dict[str, Any], algo: str, reward: str) -> list[str]:
     return sorted(p for p in rows if p.startswith(f"{algo}:") and f"/{algo}-{reward}/" in p)
 
 
@@ -254,7 +254,7 @@ def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[st
             "learners": {},
         }
         for algo, reward in learners:
-            policies = _learned(rows, algo, reward)
+            policies = learner_policies(rows, algo, reward)
             if not policies:
                 continue
             armse = np.array([rows[p]["armse"] for p in policies])

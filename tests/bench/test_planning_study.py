@@ -45,3 +45,50 @@ def test_the_planning_cost_benchmark_measures_each_search_against_best_tracking(
         f"plan-tracking:10-{s}_over_best_tracking" for s in ("beam", "rollout", "mcts")
     }
     assert all(v > 0 for v in ratios.values())
+
+
+def _run(folder, policies, trials, seed=0, **changes):
+    from benchmarks import harness
+    from benchmarks.studies.base import Finished, Run
+    from mimo_radar_env import VERSIONS
+
+    options = VERSIONS["v1"].options(**changes)
+    config = harness.make_config(
+        "paper-1-v1", policies, trials, 10, seed, options=options, say=lambda _: None
+    )
+    harness.run(config, folder, progress=False)
+    return Finished(Run(1, "paper-1-v1", tuple(policies), folder, options), config, {})
+
+
+def test_planners_are_paired_with_another_runs_policies_on_the_trials_both_ran(tmp_path):
+    """Against a group of another run's policies, the difference is the planner's ARMSE minus
+    the group's mean ARMSE on the shared trials (computed here from a run of those trials
+    alone); runs that do not share their trials are refused."""
+    from benchmarks.errors import BenchError
+    from benchmarks.studies.planning import cross_run_differences
+
+    plan = _run(tmp_path / "plan", ["best-tracking", "plan-tracking:2"], trials=4)
+    other = _run(tmp_path / "other", ["best-tracking", "random", "fix1"], trials=6)
+    alone = _run(tmp_path / "alone", ["best-tracking", "plan-tracking:2", "random", "fix1"], trials=4)
+    result = cross_run_differences(plan, other.folder, {"pair": ["random", "fix1"]}, seed=0)
+    assert result["trials"] == 4
+    d = result["minus"]["plan-tracking:2"]["pair"]
+
+    from benchmarks import harness
+    from benchmarks.report import trial_metrics
+
+    metrics = trial_metrics(alone.config, harness.load_per_trial(alone.folder, alone.config))
+    w = metrics["random"].equal()
+    expected = (
+        metrics["plan-tracking:2"].armse(w) - (metrics["random"].armse(w) + metrics["fix1"].armse(w)) / 2
+    )
+    assert abs(d["estimate"] - expected) < 1e-12
+    assert d["ci"][0] <= d["estimate"] <= d["ci"][1]
+    shifted = _run(tmp_path / "shifted", ["best-tracking", "random"], trials=4, seed=1)
+    with pytest.raises(BenchError, match="another seed"):
+        cross_run_differences(plan, shifted.folder, {"one": ["random"]}, seed=0)
+    tracked_otherwise = _run(
+        tmp_path / "otherwise", ["best-tracking", "random"], trials=4, filter_noise="estimated"
+    )
+    with pytest.raises(BenchError, match="do not share their trials"):
+        cross_run_differences(plan, tracked_otherwise.folder, {"one": ["random"]}, seed=0)
