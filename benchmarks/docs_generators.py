@@ -352,6 +352,8 @@ TIMINGS = {
     "v1 claims, centralised": "claims/v1-centralized.timing.json",
     "v0 claims": "claims/v0.timing.json",
     "tracking study": "tracking/timing.json",
+    "RL study": "rl/timing.json",
+    "planning study": "planning/timing.json",
 }
 
 
@@ -744,4 +746,142 @@ def step_stages(docs: Path) -> str:
         )
         + f"; the assumed accelerator rate is {ASSUMED_ACCELERATOR_OPS:.0e} float64 operations per second.",
     ]
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ the planning study
+#: The planners the planning targets judge, chosen before the study ran: the oracle and the
+#: learning planner at their default horizon and search.
+PLANNING_ORACLE = "plan-tracking:5"
+PLANNING_LEARNERS = ("plan-tracking-ucb:2", "plan-tracking-ucb:5")
+#: The target: the best policy's ARMSE within this fraction of the best achievable bound.
+BEST_BOUND_MARGIN = 0.10
+
+
+@generator("planning-cost")
+def planning_cost(docs: Path) -> str:
+    """``python -m benchmarks.speed.planning_cost``' ratios: each search's act time at H = 10
+    against best-tracking's, measured in the same run."""
+    record = read_json(docs, "perf/planning_cost.json")
+    figures = record["figures"]
+    lines = [
+        "| policy | act time per step, as a multiple of best-tracking's | target |",
+        "|---|---|---|",
+    ]
+    for key, value in figures.items():
+        if not key.endswith("_over_best_tracking"):
+            continue
+        policy = key.removesuffix("_over_best_tracking")
+        verdict = "holds" if value <= record["target_ratio"] else "missed"
+        target = f"<= {record['target_ratio']:g}: {verdict}" if policy.endswith("-beam") else "-"
+        lines.append(f"| `{policy}` | {value:.2f} | {target} |")
+    machine = record["machine"]
+    lines += [
+        "",
+        f"best-tracking takes {figures['best-tracking_ms_per_step']:.1f} ms per step on {record['trials']} "
+        f"trials of `{record['scenario']}` (median of {record['steps']} steps after a warm-up); "
+        f"`{record['command']}` on "
+        f"{machine['cores']} cores ({machine['machine']}, Python {machine['python']}), load average "
+        f"{machine['load_average_1min']} before and {record['load_average_1min_after']} after.",
+    ]
+    return "\n".join(lines)
+
+
+@generator("planning-tables")
+def planning_tables(docs: Path) -> str:
+    """The planning study's tables (``mimo-radar-bench planning``'s planning.md), from its
+    committed planning.json."""
+    from .studies.planning import planning_markdown
+
+    text = planning_markdown(read_json(docs, "planning/planning.json"))
+    body = text.split("\n", 2)[2].lstrip("\n")
+    return body.replace("\n## ", "\n### ").rstrip("\n")
+
+
+def _run_where(run: dict) -> str:
+    return _where((run["scenario"], run["fusion"]))
+
+
+def _signed(stat: dict) -> str:
+    return format_estimate(stat["estimate"], stat["ci"], "{:.3f}")
+
+
+@generator("planning-findings")
+def planning_findings(docs: Path) -> str:
+    """The planning targets, judged from planning.json (and rl.json for the learners that beat
+    best-tracking), with the study's wall time from its timing.json."""
+    from .harness import duration
+
+    runs = read_json(docs, "planning/planning.json")
+    timing = read_json(docs, "planning/timing.json")
+    rl = read_json(docs, "rl/rl.json") if (docs / "results" / "rl" / "rl.json").is_file() else None
+    machine = timing["machine"]
+    lines = [
+        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores (the timings table "
+        f"above; load average {machine['load_average_1min']:.2f} before and "
+        f"{machine['load_average_1min_after']:.2f} after)."
+    ]
+    # target 1: the oracle against best-tracking, where anything beat it and elsewhere
+    beaten, judged_runs = [], []
+    for run in runs:
+        winners = [
+            p
+            for p, d in run["minus_best_tracking"].items()
+            if not p.startswith("plan-tracking:") and verdicts.verdict(d["ci"], -1) == verdicts.HOLDS
+        ]
+        if rl is not None and run["fusion"] == "average":
+            for entry in rl["scenarios"]:
+                if entry["scenario"] == run["scenario"]:
+                    winners += [
+                        f"{key} (RL study)"
+                        for key, row in entry["learners"].items()
+                        if verdicts.verdict(row["minus"]["best-tracking"]["ci"], -1) == verdicts.HOLDS
+                    ]
+        oracle = run["minus"][PLANNING_ORACLE]["best-tracking"]
+        verdict = {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse"}.get(
+            verdicts.verdict(oracle["ci"], -1), "no difference shown"
+        )
+        judged_runs.append((run, verdict, oracle, winners))
+        beaten += [run] if winners else []
+    where_beaten = [
+        f"{_run_where(r)}: {verdict}, {_signed(o)} m (beaten there by {', '.join(f'`{w}`' for w in winners)})"
+        for r, verdict, o, winners in judged_runs
+        if winners
+    ]
+    elsewhere = [
+        f"{_run_where(r)}: {verdict}, {_signed(o)} m" for r, verdict, o, winners in judged_runs if not winners
+    ]
+    lines.append(
+        f"- **The oracle against best-tracking** (`{PLANNING_ORACLE}` minus `best-tracking`, ARMSE): "
+        f"where another policy beat best-tracking, {'; '.join(where_beaten) or 'none did'}; "
+        f"elsewhere, {'; '.join(elsewhere) or 'none'}."
+    )
+    # target 2: the learning planner against tracking-ucb
+    for learner in PLANNING_LEARNERS:
+        outcomes = []
+        for run in runs:
+            d = run["minus"][learner]["tracking-ucb"]
+            outcomes.append((verdicts.verdict(d["ci"], -1), f"{_run_where(run)} {_signed(d)} m"))
+        better = sum(v == verdicts.HOLDS for v, _ in outcomes)
+        lines.append(
+            f"- **`{learner}` against tracking-ucb**: better in {better} of {len(outcomes)} studies "
+            "(target: 4 of 6); " + "; ".join(text for _, text in outcomes) + "."
+        )
+    # target 3: the best policy against the best achievable bound, centralised
+    for run in runs:
+        if run["fusion"] != "centralized":
+            continue
+        best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
+        ratio = run["policies"][best]["armse_over_best_bound"]
+        within = ratio["ci"][1] <= 1 + BEST_BOUND_MARGIN
+        lines.append(
+            f"- **{_run_where(run)}: the best policy against the best achievable bound**: `{best}`'s "
+            "ARMSE is "
+            f"{format_estimate(ratio['estimate'], ratio['ci'], '{:.3f}')} times it, "
+            + (
+                f"within {100 * BEST_BOUND_MARGIN:.0f} %."
+                if within
+                else f"not shown within {100 * BEST_BOUND_MARGIN:.0f} % (the target is missed here)."
+            )
+        )
     return "\n".join(lines)

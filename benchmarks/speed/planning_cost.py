@@ -1,6 +1,7 @@
 """What looking ahead costs: the planners' time per step against best-tracking's, side by side.
 
-Run: ``python -m benchmarks.speed.planning_cost [--trials 500] [--steps 5]``.
+Run: ``python -m benchmarks.speed.planning_cost [--trials 500] [--steps 5] [--json PATH]``
+(``docs/results/perf/planning_cost.json``, which docs/performance.md's table is generated from).
 
 On ``paper-1-v1`` (120 super arms) with ``--trials`` trials in one vector env (the tracker on,
 the v1 defaults), it times ``act`` per step of best-tracking and of ``plan-tracking`` at H = 10
@@ -11,7 +12,9 @@ best-tracking's (the planning issue's target: at most 10 at H = 10).
 from __future__ import annotations
 
 import argparse
+import json
 import time
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -59,13 +62,36 @@ def measure(trials: int = 500, steps: int = 5) -> dict[str, float]:
     return ratios
 
 
+#: The planning issue's target: planning at H = 10 costs at most this many times best-tracking.
+TARGET_RATIO = 10.0
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=5)
+    parser.add_argument("--json", default=None, help="also write the figures and the machine to this file")
     args = parser.parse_args()
-    for key, value in measure(args.trials, args.steps).items():
+    from ..studies.base import machine
+
+    before = machine()
+    ratios = measure(args.trials, args.steps)
+    for key, value in ratios.items():
         print(f"{key:<50} {value:10.2f}")
+    if args.json:
+        record = {
+            "command": (
+                f"python -m benchmarks.speed.planning_cost --trials {args.trials} --steps {args.steps}"
+            ),
+            "machine": before,
+            "load_average_1min_after": machine()["load_average_1min"],
+            "scenario": "paper-1-v1",
+            "trials": args.trials,
+            "steps": args.steps,
+            "target_ratio": TARGET_RATIO,
+            "figures": ratios,
+        }
+        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
 
 
 if __name__ == "__main__":

@@ -117,11 +117,13 @@ class PlanningStudy(Study):
 
 def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
     """The best achievable bound of a finished run's trials, averaged as its policies' bounds
-    are (``TrialMetrics.bound``, with its interval over trials)."""
+    are (``TrialMetrics.bound``, with its interval over trials), and every policy's ARMSE as a
+    ratio to it, paired on the trials (``armse_over_best``)."""
     from mimo_radar_env.metrics import TrialMetrics
     from mimo_radar_env.tracking.planning import Planner, position_traces
 
-    from .. import uncertainty
+    from .. import harness, uncertainty
+    from ..report import trial_metrics
 
     config = finished.config
     scenario = config.scenario_object
@@ -135,7 +137,7 @@ def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
     plan, _ = planner.plan(forecast)
     traces = position_traces(planner, forecast, plan)  # (N, T, K)
     zeros = np.zeros(traces.shape[:2])
-    metrics = TrialMetrics(
+    best = TrialMetrics(
         {
             "trial_expected": zeros,
             "trial_optimal": zeros,
@@ -145,8 +147,13 @@ def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
         },
         sc.tx_per_step * sc.rx_per_step,
     )
-    result = uncertainty.estimate(metrics.bound, config.trials, seed)
-    return {"value": result["estimate"], "ci": result["ci"], "width": BOUND_WIDTH}
+    result = uncertainty.estimate(best.bound, config.trials, seed)
+    policies = trial_metrics(config, harness.load_per_trial(finished.folder, config))
+    ratios = {
+        p: uncertainty.estimate(lambda w, m=m: m.armse(w) / best.bound(w), config.trials, seed)
+        for p, m in policies.items()
+    }
+    return {"value": result["estimate"], "ci": result["ci"], "width": BOUND_WIDTH, "armse_over_best": ratios}
 
 
 def _first_trials(per_trial: dict[str, np.ndarray], trials: int) -> dict[str, np.ndarray]:
@@ -253,14 +260,18 @@ def judge_run(key: tuple[int, str], summary: dict[str, Any], bound: dict[str, An
         "scenario": number,
         "fusion": fusion,
         "trials": summary["trials"],
-        "best_bound": bound,
+        "best_bound": {k: v for k, v in bound.items() if k != "armse_over_best"},
         "policies": {
             p: {
                 "armse": {"value": r["armse"], "ci": r["ci"]["armse"]},
                 "bound": {"value": r["bound"], "ci": r["ci"]["bound"]},
+                "armse_over_best_bound": bound["armse_over_best"][p],
                 "ms_per_trial_step": 1e3 * r["wall_s"] / per_step,
             }
             for p, r in rows.items()
+        },
+        "minus_best_tracking": {
+            p: paired_difference(summary, p, "best-tracking", "armse") for p in rows if p != "best-tracking"
         },
         "minus": {
             p: {ref: paired_difference(summary, p, ref, "armse") for ref in references if ref != p}
@@ -278,7 +289,8 @@ def planning_markdown(judged: list[dict[str, Any]]) -> str:
         "ARMSE and bound (m) with 95 % intervals over trials; `- X`: the policy's ARMSE minus X's on the "
         "same trials (an interval below 0: it tracks better than X); time per trial-step from the "
         "runs' compute time. The best achievable bound is the smallest time-averaged PCRB a beam of "
-        f"width {BOUND_WIDTH} finds over the whole episode knowing the truth, averaged as the bounds are.",
+        f"width {BOUND_WIDTH} finds over the whole episode knowing the truth, averaged as the bounds are; "
+        "ARMSE / best bound is paired on the trials.",
     ]
     for r in judged:
         best = format_estimate(r["best_bound"]["value"], r["best_bound"]["ci"], "{:.3f}")
@@ -291,10 +303,13 @@ def planning_markdown(judged: list[dict[str, Any]]) -> str:
             "",
             f"Best achievable bound: {best} m.",
             "",
-            "| policy | ARMSE | bound | ms / trial-step | " + " | ".join(f"- {ref}" for ref in refs) + " |",
-            "|---|---|---|---|" + "---|" * len(refs),
+            "| policy | ARMSE | bound | ARMSE / best bound | ms / trial-step | "
+            + " | ".join(f"- {ref}" for ref in refs)
+            + " |",
+            "|---|---|---|---|---|" + "---|" * len(refs),
         ]
         for p, row in r["policies"].items():
+            ratio = row["armse_over_best_bound"]
             diffs = r["minus"].get(p, {})
             cells = [
                 format_estimate(diffs[ref]["estimate"], diffs[ref]["ci"], "{:.3f}") if ref in diffs else "-"
@@ -303,6 +318,7 @@ def planning_markdown(judged: list[dict[str, Any]]) -> str:
             lines.append(
                 f"| `{p}` | {format_estimate(row['armse']['value'], row['armse']['ci'], '{:.3f}')} | "
                 f"{format_estimate(row['bound']['value'], row['bound']['ci'], '{:.3f}')} | "
+                f"{format_estimate(ratio['estimate'], ratio['ci'], '{:.3f}')} | "
                 f"{row['ms_per_trial_step']:.2f} | " + " | ".join(cells) + " |"
             )
         learners = r.get("learners")

@@ -22,9 +22,36 @@ def test_a_short_planning_study_reports_the_horizons_against_the_one_step_polici
     # the best achievable bound is below every policy's own bound (a beam over the truth)
     best = run["best_bound"]["value"]
     assert all(best <= row["bound"]["value"] * (1 + 1e-9) for row in policies.values())
+    for row in policies.values():  # ARMSE over the best bound, paired on trials, at equal weights
+        ratio = row["armse_over_best_bound"]
+        assert abs(ratio["estimate"] - row["armse"]["value"] / best) < 1e-9 * ratio["estimate"]
+        assert ratio["ci"][0] <= ratio["estimate"] <= ratio["ci"][1]
+    assert run["minus_best_tracking"]["plan-tracking:1"]["estimate"] == 0.0
     text = (out / "planning.md").read_text()
     assert text.startswith("# The planning study") and "Best achievable bound:" in text
     assert all(row["ms_per_trial_step"] > 0 for row in policies.values())
+    _the_docs_say_what_the_planning_json_shows(tmp_path, out, run)
+
+
+def _the_docs_say_what_the_planning_json_shows(tmp_path, out, run):
+    """The generated findings count and judge from planning.json alone."""
+    import shutil
+
+    from benchmarks import verdicts
+    from benchmarks.docs_generators import PLANNING_LEARNERS, planning_findings, planning_tables
+
+    docs = tmp_path / "docs"
+    (docs / "results" / "planning").mkdir(parents=True)
+    for name in ("planning.json", "timing.json"):
+        shutil.copy(out / name, docs / "results" / "planning" / name)
+    findings = planning_findings(docs)
+    for learner in PLANNING_LEARNERS:
+        better = verdicts.verdict(run["minus"][learner]["tracking-ucb"]["ci"], -1) == verdicts.HOLDS
+        assert f"`{learner}` against tracking-ucb**: better in {int(better)} of 1 studies" in findings
+    best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
+    assert f"`{best}`'s ARMSE is" in findings  # the centralised run's best policy, against the best bound
+    tables = planning_tables(docs)
+    assert "### paper-1, centralized (3 trials)" in tables and "ARMSE / best bound" in tables
 
 
 def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, capsys):
