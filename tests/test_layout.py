@@ -88,6 +88,10 @@ MODULE_TESTS = {
         "tests/tracking/test_average_kernels.py",
         r"kernels\.",
     ),
+    "mimo_radar_env/tracking/fusion/_centralized_kernels.py": (
+        "tests/tracking/test_centralized_kernels.py",
+        r"kernels\.",
+    ),
     "mimo_radar_env/tracking/fusion/average.py": (
         "tests/tracking/test_average_kernels.py",
         r"average_channels",

@@ -262,8 +262,11 @@ def test_predict_only_trials_and_eq24():
     np.testing.assert_allclose(tracker.predicted_state()[0, 0], expected, rtol=1e-12)
 
 
+@pytest.mark.parametrize("fusion", ["average", "centralized"])
 @pytest.mark.parametrize("scenario", ["paper-3", "large"])
-def test_compiled_average_fusion_equals_the_numpy_path(scenario):
+def test_compiled_fusion_equals_the_numpy_path(scenario, fusion):
+    """Each fusion's numba kernel against its numpy twin (the large layout's 16 channels stack
+    a 32-dimensional measurement: below the Woodbury switch, so the kernel runs)."""
     from mimo_radar_env.core.compiled import HAVE_NUMBA
     from tests.helpers import large_scenario
 
@@ -278,7 +281,7 @@ def test_compiled_average_fusion_equals_the_numpy_path(scenario):
     sim = RadarSimulation(model, batch)
     rng = np.random.default_rng(5)
     sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
-    trackers = [IMMUKFTracker(model, batch, use_numba=flag) for flag in (True, False)]
+    trackers = [IMMUKFTracker(model, batch, fusion=fusion, use_numba=flag) for flag in (True, False)]
     for _ in range(40):
         sim.advance()
         tx = np.sort(np.argsort(rng.random((batch, sc.num_tx)), axis=1)[:, : sc.tx_per_step], axis=1)
