@@ -6,7 +6,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from .unscented import repair_covariance
+from ..core.compiled import HAVE_NUMBA
+from .unscented import MAX_CONDITION, repair_covariance
 
 
 def bound_step(
@@ -14,6 +15,7 @@ def bound_step(
     transition: NDArray[np.float64],
     process_cov: NDArray[np.float64],
     measured: NDArray[np.float64],
+    use_numba: bool = True,
 ) -> NDArray[np.float64]:
     """One step of the posterior Cramer-Rao bound's information recursion (linear Gaussian
     motion, Tichavsky et al. 1998): ``J' = (Q + F J^-1 F')^-1 + E' I E``; returns ``J'^-1``.
@@ -25,8 +27,21 @@ def bound_step(
     information form is kept for its numerical robustness: channel information can be huge
     near a station. Both covariances pass the tracker's condition-number guard
     (:func:`~mimo_radar_env.tracking.unscented.repair_covariance`), which changes nothing unless
-    a prior is many orders of magnitude wider than the measurements.
+    a prior is many orders of magnitude wider than the measurements. With numba
+    (``use_numba``) a compiled twin (:mod:`._bound_kernels`: closed-form 4 x 4 inverses where
+    this path calls LAPACK, agreeing to round-off) runs while every matrix passes the guard's
+    closed-form test, and this numpy path otherwise.
     """
+    if use_numba and HAVE_NUMBA:
+        out, healthy = _compiled_step(
+            np.ascontiguousarray(covariance, dtype=np.float64),
+            np.ascontiguousarray(transition, dtype=np.float64),
+            np.ascontiguousarray(process_cov, dtype=np.float64),
+            np.ascontiguousarray(measured, dtype=np.float64),
+            MAX_CONDITION,
+        )
+        if healthy:
+            return out
     prior, _ = repair_covariance(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
     information = np.linalg.inv(prior)
     information[..., 0::2, 0::2] += measured
@@ -36,3 +51,7 @@ def bound_step(
 def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     """``sqrt(trace)`` of the position block of the bound's ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
     return np.sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
+
+
+if HAVE_NUMBA:  # pragma: no branch
+    from ._bound_kernels import bound_step as _compiled_step

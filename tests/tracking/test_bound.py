@@ -84,3 +84,43 @@ def test_bound_of_a_static_target_is_the_closed_form_posterior():
         np.testing.assert_allclose(
             position_bound(covariance), np.sqrt(np.trace(expected, axis1=-2, axis2=-1)), rtol=1e-9
         )
+
+
+@pytest.mark.parametrize("scenario", ["paper-1-v1", "paper-3-v1"])
+def test_the_compiled_bound_step_is_the_numpy_paths(scenario, monkeypatch):
+    """Over a whole episode (best-tracking's selections), the compiled step's position bound
+    equals the numpy path's to round-off; the numpy path is LAPACK's, unchanged."""
+    from mimo_radar_env import MimoRadarSelectVectorEnv
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
+    from mimo_radar_env.envs import engine
+    from mimo_radar_env.tracking import bound
+
+    if not HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy path exists")
+    bounds = {}
+    for flag in (True, False):
+        monkeypatch.setattr(engine, "bound_step", lambda *a, flag=flag: bound.bound_step(*a, use_numba=flag))
+        env = MimoRadarSelectVectorEnv(num_envs=6, scenario=scenario)
+        env.reset(seed=3)
+        out = []
+        for _ in range(1000):
+            *_, terminated, truncated, info = env.step(env.tracking_oracle_action())
+            out.append(info["position_bound"])
+            if (terminated | truncated).any():
+                break
+        bounds[flag] = np.array(out)
+    np.testing.assert_allclose(bounds[True], bounds[False], rtol=1e-12)
+
+
+def test_a_matrix_the_compiled_check_refuses_takes_the_numpy_path_and_its_repair():
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
+    from mimo_radar_env.tracking import bound
+
+    if not HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy path exists")
+    covariance = np.broadcast_to(np.diag([1e14, 1.0, 1.0, 1.0]), (2, 1, 4, 4)).copy()  # condition 1e14
+    args = (covariance, np.eye(4)[None], np.zeros((4, 4)), np.zeros((2, 1, 2, 2)))
+    _, healthy = bound._compiled_step(*args, 1e12)
+    assert not healthy
+    np.testing.assert_array_equal(bound.bound_step(*args), bound.bound_step(*args, use_numba=False))
+    assert np.linalg.cond(bound.bound_step(*args)[0, 0]) < 1.01e12  # repaired
