@@ -11,7 +11,8 @@ from benchmarks.cli import main
 def test_a_short_planning_study_reports_the_horizons_against_the_one_step_policies(tmp_path):
     out = tmp_path / "planning"
     argv = ["planning", "--scenarios", "1", "--fusions", "centralized", "--trials", "3", "--steps", "12"]
-    assert main([*argv, "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]) == 0
+    assert main([*argv, "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    assert (out / "horizons.png").stat().st_size > 10_000  # ARMSE against H
     (run,) = json.loads((out / "planning.json").read_text())
     assert (run["scenario"], run["fusion"], run["trials"]) == (1, "centralized", 3)
     policies = run["policies"]
