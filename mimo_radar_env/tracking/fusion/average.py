@@ -38,20 +38,7 @@ class AverageFusion(Fusion):
         noise_variance: NDArray[np.float64],
     ) -> Posterior:
         path = _update_numba if self.use_numba else _update_numpy
-        return Posterior(
-            *path(
-                prior.sigmas,
-                prior.means,
-                prior.covs,
-                prior.log_c,
-                prior.wm,
-                prior.wc,
-                tx_positions,
-                rx_positions,
-                measurement,
-                noise_variance,
-            )
-        )
+        return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
 def _update_numpy(

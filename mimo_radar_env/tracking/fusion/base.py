@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import ClassVar
 
@@ -79,3 +80,29 @@ class Fusion(ABC):
         ``noise_variance`` (B, K, Ms * Ns, 2) hold each channel's range sum and azimuth and the
         diagonal of its measurement covariance.
         """
+
+    @staticmethod
+    def run_path(
+        path: Callable[..., tuple[NDArray[np.float64], ...]],
+        prior: Prior,
+        tx_positions: NDArray[np.float64],
+        rx_positions: NDArray[np.float64],
+        measurement: NDArray[np.float64],
+        noise_variance: NDArray[np.float64],
+    ) -> Posterior:
+        """The posterior of a numpy or compiled path taking the prior's arrays one by one (the
+        layout both a fusion's paths share)."""
+        return Posterior(
+            *path(
+                prior.sigmas,
+                prior.means,
+                prior.covs,
+                prior.log_c,
+                prior.wm,
+                prior.wc,
+                tx_positions,
+                rx_positions,
+                measurement,
+                noise_variance,
+            )
+        )

@@ -39,20 +39,7 @@ class CentralizedFusion(Fusion):
         dimension = 2 * tx_positions.shape[1] * rx_positions.shape[1]
         compiled = self.use_numba and dimension < unscented.WOODBURY_MIN_DIMENSION
         path = _update_numba if compiled else _update_numpy
-        return Posterior(
-            *path(
-                prior.sigmas,
-                prior.means,
-                prior.covs,
-                prior.log_c,
-                prior.wm,
-                prior.wc,
-                tx_positions,
-                rx_positions,
-                measurement,
-                noise_variance,
-            )
-        )
+        return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
 def _update_numpy(
