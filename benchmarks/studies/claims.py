@@ -30,7 +30,7 @@ from ..errors import BenchError
 from ..harness import PAPER_POLICIES, RunConfig, load_per_trial
 from ..report import PAPER_ARMSE, PAPER_ASR, paper_armse, trial_metrics
 from .base import Finished, Run, Study, execute
-from .settings import Settings, paper_numbers
+from .settings import Settings, add_scenarios_argument, paper_numbers
 
 PAPER_KEYS = ("paper-1", "paper-2", "paper-3")
 
@@ -422,7 +422,7 @@ class ClaimsStudy(Study):
         parser.add_argument(
             "runs", nargs="*", help="finished paper-study folders (default: run them into --out)"
         )
-        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
+        add_scenarios_argument(parser)
 
     def runs(self) -> list[Run]:
         if self.args.runs:

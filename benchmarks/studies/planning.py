@@ -35,18 +35,16 @@ from typing import Any
 import numpy as np
 
 from mimo_radar_env import MimoRadarSelectVectorEnv
-from mimo_radar_env.tracking import FUSIONS as FUSION_REGISTRY
 
 from ..report import format_estimate, paired_difference
 from .base import Finished, Run, Study
-from .tracking import fusion_runs
+from .tracking import add_fusion_run_arguments, fusion_runs
 
 HORIZONS = (1, 2, 5, 10)
 SEARCH_HORIZON = 5
 LEARNER_HORIZONS = (2, 5)
 #: The beam of the best achievable bound (over the whole episode).
 BOUND_WIDTH = 10
-FUSIONS = tuple(FUSION_REGISTRY)
 #: 50 trials keep the whole study (6 runs of 10 policies over 1000 steps) within about half an
 #: hour of a 2-core machine: the rollout and MCTS searches score thousands of plans per trial
 #: and step; the tracking study's 200 would take about four times as long.
@@ -80,10 +78,7 @@ class PlanningStudy(Study):
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
-        parser.add_argument(
-            "--fusions", default=",".join(FUSIONS), help=f"fusions to run (default {','.join(FUSIONS)})"
-        )
+        add_fusion_run_arguments(parser)
         parser.add_argument(
             "--ppo",
             default=None,

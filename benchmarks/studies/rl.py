@@ -44,7 +44,7 @@ from ..errors import BenchError
 from ..report import format_estimate, paired_difference
 from ..uncertainty import across_seeds
 from .base import Finished, Run, Study
-from .settings import integer, paper_numbers
+from .settings import add_scenarios_argument, integer, paper_numbers
 
 #: (learner, reward, seeds option) of the study's trainings.
 TRAININGS = (
@@ -99,7 +99,7 @@ class RLStudy(Study):
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
+        add_scenarios_argument(parser)
         parser.add_argument(
             "--timesteps",
             type=integer(1, high=10**9),

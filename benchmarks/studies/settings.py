@@ -169,6 +169,11 @@ def _quality(text: str) -> float | None:
     return value
 
 
+def add_scenarios_argument(parser: argparse.ArgumentParser) -> None:
+    """``--scenarios``, read by :func:`paper_numbers`."""
+    parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
+
+
 def paper_numbers(text: str) -> list[int]:
     """``"1,3"`` -> ``[1, 3]``: paper scenarios."""
     try:

@@ -36,7 +36,7 @@ from ..errors import BenchError
 from ..harness import PAPER_POLICIES
 from ..report import format_estimate, paired_difference
 from .base import Finished, Run, Study
-from .settings import paper_numbers
+from .settings import add_scenarios_argument, paper_numbers
 
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
 TRADEOFF_WEIGHTS = (0.25, 0.5, 0.75)
@@ -72,6 +72,16 @@ def ppo_policy(pattern: str, number: int, fusion: str) -> str:
             f"--ppo {pattern!r}: a pattern may hold {{scenario}} and {{fusion}} only "
             f"({type(exc).__name__}: {exc})"
         ) from None
+
+
+def add_fusion_run_arguments(parser: argparse.ArgumentParser) -> None:
+    """``--scenarios`` and ``--fusions``, which :func:`fusion_runs` reads."""
+    add_scenarios_argument(parser)
+    parser.add_argument(
+        "--fusions",
+        default=",".join(FUSIONS),
+        help=f"fusions to run (default {','.join(FUSIONS)})",
+    )
 
 
 def fusion_runs(study: Study, policies: tuple[str, ...]) -> list[Run]:
@@ -114,12 +124,7 @@ class TrackingStudy(Study):
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios (default 1,2,3)")
-        parser.add_argument(
-            "--fusions",
-            default=",".join(FUSIONS),
-            help=f"fusions to run (default {','.join(FUSIONS)})",
-        )
+        add_fusion_run_arguments(parser)
         parser.add_argument(
             "--ppo",
             default=None,
