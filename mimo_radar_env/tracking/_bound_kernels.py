@@ -20,21 +20,22 @@ njit = numba.njit(cache=True)
 
 
 @njit
-def certainly_conditioned(a, max_condition):
-    """``unscented._certainly_conditioned`` of one symmetric 4 x 4 matrix."""
+def certainly_conditioned(a, det, max_condition):
+    """``unscented._certainly_conditioned`` of one symmetric 4 x 4 matrix of determinant
+    ``det`` (:func:`determinant`'s)."""
     minor2 = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
     cof0 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
     cof1 = a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0]
     cof2 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
     minor3 = a[0, 0] * cof0 - a[0, 1] * cof1 + a[0, 2] * cof2
-    det = determinant(a)
     trace = a[0, 0] + a[1, 1] + a[2, 2] + a[3, 3]
     return a[0, 0] > 0 and minor2 > 0 and minor3 > 0 and det > 0 and trace**4 <= max_condition * det
 
 
 @njit
-def determinant(a):
-    """``unscented._det4``: the Laplace expansion in 2 x 2 minors."""
+def minors(a):
+    """The 2 x 2 minors of rows 0-1 (``s0 .. s5``) and rows 2-3 (``c0 .. c5``) of ``a``, as
+    ``unscented._det4`` forms them."""
     s0 = a[0, 0] * a[1, 1] - a[1, 0] * a[0, 1]
     s1 = a[0, 0] * a[1, 2] - a[1, 0] * a[0, 2]
     s2 = a[0, 0] * a[1, 3] - a[1, 0] * a[0, 3]
@@ -47,22 +48,27 @@ def determinant(a):
     c2 = a[2, 0] * a[3, 3] - a[3, 0] * a[2, 3]
     c1 = a[2, 0] * a[3, 2] - a[3, 0] * a[2, 2]
     c0 = a[2, 0] * a[3, 1] - a[3, 0] * a[2, 1]
+    return s0, s1, s2, s3, s4, s5, c0, c1, c2, c3, c4, c5
+
+
+@njit
+def determinant(a):
+    """``unscented._det4``: the Laplace expansion in 2 x 2 minors."""
+    s0, s1, s2, s3, s4, s5, c0, c1, c2, c3, c4, c5 = minors(a)
     return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
 
 
 @njit
 def inverse(a, out):
     """The inverse of one 4 x 4 matrix in closed form (its adjugate over its determinant), into
-    ``out``; for the guard's well-conditioned matrices it agrees with LAPACK's to round-off."""
+    ``out``; returns the determinant (:func:`determinant`'s, from the same minors). For the
+    guard's well-conditioned matrices it agrees with LAPACK's to round-off."""
+    s0, s1, s2, s3, s4, s5, c0, c1, c2, c3, c4, c5 = minors(a)
+    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
     a00, a01, a02, a03 = a[0, 0], a[0, 1], a[0, 2], a[0, 3]
     a10, a11, a12, a13 = a[1, 0], a[1, 1], a[1, 2], a[1, 3]
     a20, a21, a22, a23 = a[2, 0], a[2, 1], a[2, 2], a[2, 3]
     a30, a31, a32, a33 = a[3, 0], a[3, 1], a[3, 2], a[3, 3]
-    s0, s1, s2 = a00 * a11 - a10 * a01, a00 * a12 - a10 * a02, a00 * a13 - a10 * a03
-    s3, s4, s5 = a01 * a12 - a11 * a02, a01 * a13 - a11 * a03, a02 * a13 - a12 * a03
-    c5, c4, c3 = a22 * a33 - a32 * a23, a21 * a33 - a31 * a23, a21 * a32 - a31 * a22
-    c2, c1, c0 = a20 * a33 - a30 * a23, a20 * a32 - a30 * a22, a20 * a31 - a30 * a21
-    det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
     out[0, 0] = (a11 * c5 - a12 * c4 + a13 * c3) / det
     out[0, 1] = (-a01 * c5 + a02 * c4 - a03 * c3) / det
     out[0, 2] = (a31 * s5 - a32 * s4 + a33 * s3) / det
@@ -79,6 +85,7 @@ def inverse(a, out):
     out[3, 1] = (a00 * c3 - a01 * c1 + a02 * c0) / det
     out[3, 2] = (-a30 * s3 + a31 * s1 - a32 * s0) / det
     out[3, 3] = (a20 * s3 - a21 * s1 + a22 * s0) / det
+    return det
 
 
 @njit
@@ -107,13 +114,13 @@ def bound_step(covariance, transition, process_cov, measured, max_condition):
                     for p in range(4):
                         acc += temp[i, p] * F[j, p]
                     prior[i, j] = acc + process_cov[i, j]
-            if not certainly_conditioned(prior, max_condition):
+            det = inverse(prior, information)  # used only if the prior passes the check
+            if not certainly_conditioned(prior, det, max_condition):
                 return out, False
-            inverse(prior, information)
             for i in range(2):
                 for j in range(2):
                     information[2 * i, 2 * j] += measured[b, k, i, j]
             inverse(information, out[b, k])
-            if not certainly_conditioned(out[b, k], max_condition):
+            if not certainly_conditioned(out[b, k], determinant(out[b, k]), max_condition):
                 return out, False
     return out, True
