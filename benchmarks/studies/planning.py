@@ -97,11 +97,14 @@ class PlanningStudy(Study):
         return fusion_runs(self, planning_policies())
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:
+        from .. import harness
+
         judged = []
         for key, f in finished.items():
-            row = judge_run(key, f.summary, best_bound(f, self.settings.seed))
+            per_trial = harness.load_per_trial(f.folder, f.config)  # read once, for both below
+            row = judge_run(key, f.summary, best_bound(f, self.settings.seed, per_trial))
             if self.args.rl:
-                learners = against_learners(f, Path(self.args.rl), self.settings.seed)
+                learners = against_learners(f, Path(self.args.rl), self.settings.seed, per_trial)
                 if learners is not None:
                     row["learners"] = learners
             judged.append(row)
@@ -117,10 +120,13 @@ class PlanningStudy(Study):
         return text
 
 
-def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
+def best_bound(
+    finished: Finished, seed: int, per_trial: dict[str, dict[str, np.ndarray]] | None = None
+) -> dict[str, Any]:
     """The best achievable bound of a finished run's trials, averaged as its policies' bounds
     are (``TrialMetrics.bound``, with its interval over trials), and every policy's ARMSE as a
-    ratio to it, paired on the trials (``armse_over_best``)."""
+    ratio to it, paired on the trials (``armse_over_best``); ``per_trial``: the run's
+    (:func:`~benchmarks.harness.load_per_trial`), read from its folder when not given."""
     from mimo_radar_env.metrics import TrialMetrics
     from mimo_radar_env.tracking.planning import Planner, position_traces
 
@@ -150,7 +156,9 @@ def best_bound(finished: Finished, seed: int) -> dict[str, Any]:
         sc.tx_per_step * sc.rx_per_step,
     )
     result = uncertainty.estimate(best.bound, config.trials, seed)
-    policies = trial_metrics(config, harness.load_per_trial(finished.folder, config))
+    if per_trial is None:
+        per_trial = harness.load_per_trial(finished.folder, config)
+    policies = trial_metrics(config, per_trial)
     ratios = {
         p: uncertainty.estimate(lambda w, m=m: m.armse(w) / best.bound(w), config.trials, seed)
         for p, m in policies.items()
@@ -170,6 +178,7 @@ def cross_run_differences(
     references: dict[str, list[str]],
     seed: int,
     witness: str = "best-tracking",
+    ours: dict[str, dict[str, np.ndarray]] | None = None,
 ) -> dict[str, Any]:
     """ARMSE differences of this run's planners (``plan-*``) against policies of another run
     (``folder``) on the trials both ran, paired trial by trial: ``{"trials", "minus": {planner:
@@ -177,7 +186,7 @@ def cross_run_differences(
     taken as the mean of its policies' ARMSE. The runs must share their trials: the same
     scenario, seed, steps and fusion, and ``witness``'s squared errors identical on the trials
     both ran (checked), so that trial ``i`` is the same truth, observed and tracked alike, in
-    both."""
+    both. ``ours``: this run's per-trial data, read from its folder when not given."""
     from mimo_radar_env.metrics import TrialMetrics
 
     from .. import harness, uncertainty
@@ -197,7 +206,8 @@ def cross_run_differences(
         raise BenchError(f"the run in {folder} fuses otherwise than {finished.folder}")
     trials = min(other.trials, mine.trials)
     theirs = harness.load_per_trial(folder, other)
-    ours = harness.load_per_trial(finished.folder, mine)
+    if ours is None:
+        ours = harness.load_per_trial(finished.folder, mine)
     if witness not in theirs or witness not in ours:
         raise BenchError(f"both runs must hold {witness!r} to check that they share their trials")
     if not np.array_equal(
@@ -226,7 +236,9 @@ def cross_run_differences(
     return {"trials": trials, "minus": minus}
 
 
-def against_learners(finished: Finished, rl_out: Path, seed: int) -> dict[str, Any] | None:
+def against_learners(
+    finished: Finished, rl_out: Path, seed: int, per_trial: dict[str, dict[str, np.ndarray]] | None = None
+) -> dict[str, Any] | None:
     """The planners against each learner of an RL study (``mimo-radar-bench rl --out``), the
     mean over its seeds, on the trials both ran; None where the RL study has no run of this
     scenario and fusion."""
@@ -246,7 +258,7 @@ def against_learners(finished: Finished, rl_out: Path, seed: int) -> dict[str, A
         for algo, reward, _ in TRAININGS
         if learner_policies(policies, algo, reward)
     }
-    result = cross_run_differences(finished, folder, references, seed)
+    result = cross_run_differences(finished, folder, references, seed, ours=per_trial)
     result["seeds"] = {name: len(p) for name, p in references.items()}
     return result
 
