@@ -4,7 +4,9 @@ Run: ``python -m benchmarks.speed.solver_speed [--trials 500] [--repeats 5]``.
 Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
-against ``exact``, and the alternating solver's gap on a 10 x 12 layout.
+against ``exact``, and the alternating solver's gap on a 10 x 12 layout. With numba, it also
+times the candidate SIMD kernel (``benchmarks.speed.bpso_simd``) against the agents' kernel in
+one thread, side by side.
 """
 
 from __future__ import annotations
@@ -16,7 +18,10 @@ import numpy as np
 
 from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
-from mimo_radar_env.core.compiled import HAVE_NUMBA
+from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
+from mimo_radar_env.core.counter_hash import Stream
+
+from . import bpso_simd
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:
@@ -34,6 +39,38 @@ def optimality(index, tx, rx, etx, erx) -> tuple[float, float]:
     value = np.einsum("bm,bmn,bn->b", tx, index, rx)
     best = np.einsum("bm,bmn,bn->b", etx, index, erx)
     return float(same.mean()), float(np.mean(1 - value / best))
+
+
+def candidate_kernel(index, repeats: int, rule: str = "xor") -> dict[str, float]:
+    """One thread: the agents' BPSO against the SIMD candidate, the paper's swarm, same index;
+    each one's best of ``repeats`` and its optimality rate against ``exact``."""
+    reference = BPSOSolver(2, 3, rule=rule)
+    etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
+
+    def candidate(random: TrialRandom) -> tuple:
+        keys = random.keys_for(Stream.BPSO_KEYS)
+        best = bpso_simd.run_numba(index, 2, 3, keys, 50, 100, 2.0, 2.0, 0.9, 0.4, 6.0, rule == "set")
+        return best[:, :4].astype(bool), best[:, 4:].astype(bool)
+
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    try:
+        out = {}
+        for name, run in (("reference", lambda r: reference.solve(index, r)), ("candidate", candidate)):
+            run(TrialRandom.for_batch(0, len(index)))  # compilation
+            seconds, rates = [], []
+            for r in range(repeats):
+                random = TrialRandom.for_batch(r, len(index))
+                start = time.perf_counter()
+                tx, rx = run(random)
+                seconds.append(time.perf_counter() - start)
+                rates.append(float(((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()))
+            out[f"bpso_{name}_1thread_ms"] = min(seconds) * 1e3
+            out[f"bpso_{name}_optimality_rate"] = float(np.mean(rates))
+    finally:
+        numba.set_num_threads(threads)
+    out["bpso_candidate_speedup"] = out["bpso_reference_1thread_ms"] / out["bpso_candidate_1thread_ms"]
+    return out
 
 
 def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
@@ -65,6 +102,9 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=5)
     args = parser.parse_args()
     r = measure(args.trials, args.repeats)
+    if HAVE_NUMBA:
+        index = np.random.default_rng(7).exponential(size=(args.trials, 4, 6))
+        r.update(candidate_kernel(index, args.repeats))
     print(
         f"super-arm solvers, M=4 N=6 Ms=2 Ns=3, {args.trials} trials per batched selection"
         f" (numba {'on' if HAVE_NUMBA else 'not installed'})"
@@ -79,6 +119,14 @@ def main() -> None:
         f"  alternating, 10x12, Ms=3 Ns=4: {r['alternating_ms_10x12']:.2f} ms, optimal in {rate:.1f} %,"
         f" mean gap {gap:.3f} %"
     )
+    if HAVE_NUMBA:
+        print(
+            f"  one thread: bpso {r['bpso_reference_1thread_ms']:.1f} ms (optimal in"
+            f" {100 * r['bpso_reference_optimality_rate']:.1f} %), SIMD candidate"
+            f" {r['bpso_candidate_1thread_ms']:.1f} ms"
+            f" (optimal in {100 * r['bpso_candidate_optimality_rate']:.1f} %):"
+            f" {r['bpso_candidate_speedup']:.2f}x"
+        )
 
 
 if __name__ == "__main__":
