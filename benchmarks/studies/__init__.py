@@ -1,7 +1,8 @@
 """The studies of ``mimo-radar-bench``, on one engine (:mod:`benchmarks.studies.base`).
 
 Importing this package registers the built-in studies: ``paper`` and ``run``
-(:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`),
+(:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`), ``mechanisms``
+(:mod:`~benchmarks.studies.mechanisms`),
 ``tracking`` (:mod:`~benchmarks.studies.tracking`), ``planning``
 (:mod:`~benchmarks.studies.planning`), ``rl`` (:mod:`~benchmarks.studies.rl`) and
 ``calibrate-layout``
@@ -9,7 +10,7 @@ Importing this package registers the built-in studies: ``paper`` and ``run``
 :class:`~benchmarks.studies.base.Study` subclass with a ``name``.
 """
 
-from . import calibration, claims, paper, planning, rl, tracking
+from . import calibration, claims, mechanisms, paper, planning, rl, tracking
 from .base import COMMANDS, Command, Finished, Run, Study, configure, execute
 from .settings import Settings
 
@@ -24,6 +25,7 @@ __all__ = [
     "claims",
     "configure",
     "execute",
+    "mechanisms",
     "paper",
     "planning",
     "rl",
