@@ -55,6 +55,7 @@ MODULE_TESTS = {
     "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),
     "benchmarks/speed/perf.py": ("tests/bench/test_perf_quick.py", r'"perf"'),
     "benchmarks/speed/scaling.py": ("tests/bench/test_perf_quick.py", r"scaling\.measure"),
+    "benchmarks/studies/layout_search.py": ("tests/bench/test_layout_search.py", r"constraint_failure"),
     "benchmarks/studies/mechanisms.py": ("tests/bench/test_mechanisms.py", r"lead_and_sampling_oracles"),
     "benchmarks/speed/bpso_simd.py": ("tests/bench/test_bpso_simd.py", r"run_numpy"),
     "benchmarks/speed/solver_speed.py": ("tests/bench/test_perf_quick.py", r"bpso_optimality_rate"),

@@ -1,0 +1,85 @@
+"""The layout search: constraints, reproducibility, the objective and the predictor check."""
+
+import numpy as np
+import pytest
+
+from benchmarks.studies import calibration, layout_search
+from benchmarks.studies.layout_search import INFEASIBLE, layout_from_vector, v1_layout, vector_from_layout
+from mimo_radar_env import RadarModel, load_scenario
+
+
+def moved(station: int, km: tuple[float, float]) -> layout_search.Layout:
+    x = vector_from_layout(v1_layout()).reshape(-1, 2)
+    x[station] = km
+    return layout_from_vector(x.ravel())
+
+
+def test_v1_layout_meets_every_constraint():
+    assert layout_search.violation(v1_layout()) == 0
+    assert calibration.constraint_failure(v1_layout()) is None
+
+
+@pytest.mark.parametrize(
+    "case",
+    ["outside the region", "on a track", "S1.1 broken"],
+)
+def test_a_layout_breaking_each_hard_constraint_is_rejected(case):
+    if case == "outside the region":
+        layout = moved(5, (101.0, 50.0))
+        reason = "outside"
+    elif case == "on a track":
+        model = RadarModel.from_scenario(load_scenario("paper-2-v1"))
+        point = model.nominal[0][300, [0, 2]] / 1e3  # a point of Scenario 2's nominal track (km)
+        layout = moved(7, (float(point[0]), float(point[1]) + 1.0))  # 1 km from it at most
+        reason = "km from a nominal track"
+    else:  # TX1 and TX3 swap places: Best's Scenario 1 selections leave their windows
+        x = vector_from_layout(v1_layout()).reshape(-1, 2)
+        x[[0, 2]] = x[[2, 0]]
+        layout = layout_from_vector(x.ravel())
+        reason = "Best selects the paper's super arm"
+    assert layout_search.violation(layout) > 0
+    assert layout_search.objective(vector_from_layout(layout)) > INFEASIBLE
+    assert reason in calibration.constraint_failure(layout)
+
+
+def test_objective_of_a_feasible_layout_counts_its_predictors():
+    p = layout_search.predictors(v1_layout())
+    assert len(p["checks"]) == 12 and set(layout_search.PREDICTED) <= set(p["checks"])
+    leads = list(p["median_lead"].values())
+    assert all(lead > 0 for lead in leads)
+    expected = -sum(p["checks"].values()) - min(leads[1:])
+    assert layout_search.objective(vector_from_layout(v1_layout())) == pytest.approx(expected)
+
+
+def test_search_is_reproducible_with_a_fixed_seed():
+    a = layout_search.search(seed=4, generations=1, population=1)
+    b = layout_search.search(seed=4, generations=1, population=1)
+    assert a["ranked"] == b["ranked"] and a["evaluations"] == b["evaluations"] == 40
+    assert a["v1_objective"] == b["v1_objective"] < 0
+    # the first population holds v1's layout, so the best is at least as good as v1's
+    assert a["ranked"][0]["objective"] <= a["v1_objective"]
+    assert [e["objective"] for e in a["ranked"]] == sorted(e["objective"] for e in a["ranked"])
+
+
+def test_distinct_feasible_skips_infeasible_and_repeated_layouts():
+    ranked = [
+        {"vector": [1.0, 2.0], "objective": -3.0},
+        {"vector": [1.0, 2.0], "objective": -3.0},
+        {"vector": [5.0, 2.0], "objective": INFEASIBLE + 1},
+        {"vector": [7.0, 2.0], "objective": -1.0},
+    ]
+    assert [e["vector"] for e in layout_search.distinct_feasible(ranked, 3)] == [[1.0, 2.0], [7.0, 2.0]]
+
+
+def test_agreement_compares_each_predictor_with_its_comparison():
+    checks = {name: True for name in layout_search.PREDICTED}
+    results = [
+        {
+            "id": claim,
+            "comparisons": [{"comparison": text, "verdict": "holds" if i % 2 == 0 else "contradicted"}],
+        }
+        for i, (claim, text) in enumerate(layout_search.PREDICTED.values())
+    ]
+    a = layout_search.agreement(checks, results)
+    assert a["compared"] == 4 and a["agree"] == 2
+    assert np.array_equal([v["scorecard"] for v in a["pairs"].values()], [True, False, True, False])
