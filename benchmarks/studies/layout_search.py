@@ -249,6 +249,11 @@ class LayoutSearch(Study):
         parser.add_argument(
             "--final", type=integer(0), default=3, help="best layouts given full scorecards (default 3)"
         )
+        parser.add_argument(
+            "--no-v1-scorecard",
+            action="store_true",
+            help="do not run v1's own layout (its scorecard under the same options is the claims study's)",
+        )
 
     def main(self) -> int:
         settings = self.settings
@@ -267,7 +272,11 @@ class LayoutSearch(Study):
             f"({found['layouts_per_s']:.1f} /s)",
             flush=True,
         )
-        finalists = [{"name": "v1", "vector": vector_from_layout(v1_layout()).tolist()}]
+        finalists = (
+            []
+            if self.args.no_v1_scorecard
+            else [{"name": "v1", "vector": vector_from_layout(v1_layout()).tolist()}]
+        )
         finalists += [
             {"name": f"search-{i + 1}", **entry}
             for i, entry in enumerate(distinct_feasible(found["ranked"], self.args.final))
