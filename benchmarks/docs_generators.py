@@ -978,3 +978,40 @@ def mechanisms_findings(docs: Path) -> str:
             f"{100 * paper:.2f} %, is {where} it; ours is {format_cell(ours, 'asr', '{:.1f}', 100)} %."
         )
     return "\n".join(lines)
+
+
+# ------------------------------------------------------------------ the global layout search
+LAYOUT_SEARCH = "layout-search/search.json"
+
+
+@generator("layout-search")
+def layout_search_table(docs: Path) -> str:
+    """The search's size and speed, and each claim's verdict under v1's layout and the best
+    searched layouts, from search.json and the v1 claims study."""
+    found = read_json(docs, LAYOUT_SEARCH)
+    v1 = {r["id"]: r["verdict"] for r in read_json(docs, SCORECARDS["v1"])}
+    finalists = [f for f in found["finalists"] if f["name"] != "v1"]
+    lines = [
+        f"{found['evaluations']} layouts scored in {found['wall_s']:.0f} s ({found['layouts_per_s']:.1f} "
+        f"layouts/s, {found['population']} a generation, {found['generations']} generations, seed "
+        f"{found['seed']}); the objective of v1's layout {found['v1_objective']:.3f}, of the best searched "
+        f"{found['ranked'][0]['objective']:.3f} (lower is better).",
+        "",
+        "| claim | v1's layout (layout 116) | " + " | ".join(f["name"] for f in finalists) + " |",
+        "|---|---|" + "---|" * len(finalists),
+    ]
+    for claim, verdict in v1.items():
+        lines.append(f"| {claim} | {verdict} | " + " | ".join(f["verdicts"][claim] for f in finalists) + " |")
+    counts = verdicts.count(v1.values())
+    for kind in ("holds", "consistent", "contradicted"):
+        lines.append(
+            f"| **{kind}** | {counts[kind]} | " + " | ".join(str(f["counts"][kind]) for f in finalists) + " |"
+        )
+    agree = sum(f["agreement"]["agree"] for f in finalists)
+    compared = sum(f["agreement"]["compared"] for f in finalists)
+    lines += [
+        "",
+        f"The noise-free predictors with a scorecard comparison of their own agree with it in {agree} of "
+        f"{compared} cases on the searched layouts' scorecards.",
+    ]
+    return "\n".join(lines)
