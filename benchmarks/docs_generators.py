@@ -1015,3 +1015,53 @@ def layout_search_table(docs: Path) -> str:
         f"{compared} cases on the searched layouts' scorecards.",
     ]
     return "\n".join(lines)
+
+
+LAYOUT_TOP = "layout-search/top10.json"
+SEED_SCORECARDS = {
+    "seed 0": "claims/v1.json",
+    "seed 1": "claims/v1-seed1.json",
+    "seed 2": "claims/v1-seed2.json",
+}
+
+
+@generator("layout-sensitivity")
+def layout_sensitivity(docs: Path) -> str:
+    """Each claim's verdict under the ten best searched layouts (short scorecards)."""
+    found = read_json(docs, LAYOUT_TOP)
+    finalists = [f for f in found["finalists"] if f["name"] != "v1"]
+    trials = found.get("trials")
+    claims_ids = list(finalists[0]["verdicts"])
+    short = {"holds": "H", "consistent": "c", "contradicted": "X"}
+    lines = [
+        "| claim | " + " | ".join(str(i + 1) for i in range(len(finalists))) + " | holds in |",
+        "|---|" + "---|" * len(finalists) + "---|",
+    ]
+    for claim in claims_ids:
+        row = [f["verdicts"][claim] for f in finalists]
+        lines.append(
+            f"| {claim} | " + " | ".join(short[v] for v in row) + f" | {row.count('holds')} of {len(row)} |"
+        )
+    lines.append("| **holds** | " + " | ".join(str(f["counts"]["holds"]) for f in finalists) + " | |")
+    note = f" at {trials} trials" if trials else ""
+    return "\n".join(lines) + f"\n\nH holds, c consistent, X contradicted{note}."
+
+
+@generator("seed-sensitivity")
+def seed_sensitivity(docs: Path) -> str:
+    """The v1 scorecard (500 trials, average fusion) under three master seeds."""
+    cards = {
+        label: {r["id"]: r["verdict"] for r in read_json(docs, path)}
+        for label, path in SEED_SCORECARDS.items()
+    }
+    labels = list(cards)
+    lines = ["| claim | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for claim in cards[labels[0]]:
+        lines.append(f"| {claim} | " + " | ".join(cards[label][claim] for label in labels) + " |")
+    for kind in ("holds", "consistent", "contradicted"):
+        lines.append(
+            f"| **{kind}** | "
+            + " | ".join(str(verdicts.count(cards[label].values())[kind]) for label in labels)
+            + " |"
+        )
+    return "\n".join(lines)

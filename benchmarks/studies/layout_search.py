@@ -289,7 +289,8 @@ class LayoutSearch(Study):
             entry["verdicts"] = {r["id"]: r["verdict"] for r in results}
             entry["agreement"] = agreement(entry["predictors"]["checks"], results)
             print(f"mimo-radar-bench: {entry['name']}: {entry['counts']}", flush=True)
-        (out / "search.json").write_text(json.dumps({**found, "finalists": finalists}, indent=1))
+        record = {**found, "trials": settings.trials, "steps": settings.steps, "finalists": finalists}
+        (out / "search.json").write_text(json.dumps(record, indent=1))
         write_timing(out, self.name, time.perf_counter() - start, before, {"search": found["wall_s"]})
         for entry in finalists:
             a = entry["agreement"]

@@ -83,3 +83,20 @@ def test_agreement_compares_each_predictor_with_its_comparison():
     a = layout_search.agreement(checks, results)
     assert a["compared"] == 4 and a["agree"] == 2
     assert np.array_equal([v["scorecard"] for v in a["pairs"].values()], [True, False, True, False])
+
+
+def test_command_scores_the_best_layout_and_records_the_agreement(tmp_path):
+    import json
+
+    from benchmarks.cli import main as cli_main
+
+    args = ["search-layouts", "--generations", "1", "--population", "1", "--final", "1", "--no-v1-scorecard"]
+    assert cli_main([*args, "--trials", "2", "--steps", "20", "--quiet", "--out", str(tmp_path)]) == 0
+    found = json.loads((tmp_path / "search.json").read_text())
+    assert (found["trials"], found["steps"], found["evaluations"]) == (2, 20, 40)
+    (finalist,) = found["finalists"]
+    assert finalist["name"] == "search-1"
+    judged = [v for v in finalist["verdicts"].values() if v in finalist["counts"]]
+    assert all(finalist["counts"][k] == judged.count(k) for k in finalist["counts"])
+    assert finalist["agreement"]["compared"] == len(layout_search.PREDICTED)
+    assert (tmp_path / "search-1" / "claims.json").exists()
