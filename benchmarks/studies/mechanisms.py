@@ -73,8 +73,9 @@ def lead_and_sampling_oracles(
     scenario: str, trials: int, seed: int, samples: tuple[int, ...] = SAMPLES, steps: int | None = None
 ) -> dict[str, Any]:
     """Part 1 on one scenario: per trial, the lead's median and the fraction of steps with a lead
-    below each of :data:`CLOSE`, and each sampling oracle's ASR; means over trials with their
-    95 % intervals (``benchmarks.uncertainty``)."""
+    below each of :data:`CLOSE`, and the ASR of each sampling oracle (``samples``), window oracle
+    and probing window oracle (:data:`WINDOWS`); means over trials with their 95 % intervals
+    (``benchmarks.uncertainty``)."""
     sc = load_scenario(scenario)
     env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=sc, tracking=False)
     env.reset(seed=seed)
