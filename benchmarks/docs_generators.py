@@ -355,6 +355,7 @@ TIMINGS = {
     "RL study": "rl/timing.json",
     "planning study": "planning/timing.json",
     "mechanisms study": "mechanisms/timing.json",
+    "layout search, 2 layouts scored at 500 trials": "layout-search/timing.json",
 }
 
 
@@ -1009,7 +1010,16 @@ def layout_search_table(docs: Path) -> str:
         )
     agree = sum(f["agreement"]["agree"] for f in finalists)
     compared = sum(f["agreement"]["compared"] for f in finalists)
+    gained = [c for c in v1 if v1[c] != "holds" and any(f["verdicts"][c] == "holds" for f in finalists)]
+    lost = [c for c in v1 if v1[c] == "holds" and any(f["verdicts"][c] != "holds" for f in finalists)]
+    never = [c for c in v1 if v1[c] != "holds" and all(f["verdicts"][c] != "holds" for f in finalists)]
+    best = max(f["counts"]["holds"] for f in finalists)
     lines += [
+        "",
+        f"The most claims holding under a searched layout: {best} (v1's layout: {counts['holds']}). "
+        f"Holding under a searched layout and not under v1's: {', '.join(gained) or 'none'}; holding under "
+        f"v1's and not under every searched one: {', '.join(lost) or 'none'}; holding under none of these "
+        f"layouts: {', '.join(never) or 'none'}.",
         "",
         f"The noise-free predictors with a scorecard comparison of their own agree with it in {agree} of "
         f"{compared} cases on the searched layouts' scorecards.",
@@ -1044,7 +1054,13 @@ def layout_sensitivity(docs: Path) -> str:
         )
     lines.append("| **holds** | " + " | ".join(str(f["counts"]["holds"]) for f in finalists) + " | |")
     note = f" at {trials} trials" if trials else ""
-    return "\n".join(lines) + f"\n\nH holds, c consistent, X contradicted{note}."
+    held = {c: sum(f["verdicts"][c] == "holds" for f in finalists) for c in claims_ids}
+    once = [c for c, n in held.items() if n == 1]
+    never = [c for c, n in held.items() if n == 0]
+    return "\n".join(lines) + (
+        f"\n\nH holds, c consistent, X contradicted{note}. Holding under one of the ten layouts only: "
+        f"{', '.join(once) or 'none'}; under none: {', '.join(never) or 'none'}."
+    )
 
 
 @generator("seed-sensitivity")
