@@ -28,7 +28,7 @@
    the smaller bound has the smaller ARMSE, and *follows SINR* when the policy with the higher
    SINR has the smaller ARMSE.
 
-Part 1 runs the env (its truth and mean SINR only: no tracker, no policy); part 2 reads the
+Part 1 runs the env under v1's options (its truth and mean SINR only: no tracker, no policy); part 2 reads the
 claims study's results (``--claims``, ``--summaries``: the committed v1 average-fusion ones by
 default). Results go to ``OUT/mechanisms.json``; ``python -m benchmarks docs`` writes the tables
 of docs/results.md from the committed copy.
@@ -45,7 +45,7 @@ from typing import Any
 
 import numpy as np
 
-from mimo_radar_env import load_scenario
+from mimo_radar_env import VERSIONS, load_scenario
 from mimo_radar_env.core.superarm import all_super_arms
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
@@ -77,7 +77,8 @@ def lead_and_sampling_oracles(
     and probing window oracle (:data:`WINDOWS`); means over trials with their 95 % intervals
     (``benchmarks.uncertainty``)."""
     sc = load_scenario(scenario)
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=sc, tracking=False)
+    options = {**VERSIONS["v1"].option_defaults, "tracking": False}  # v1's truth and lambda, no tracker
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=sc, **options)
     env.reset(seed=seed)
     engine = env.engine
     horizon = steps or sc.horizon
