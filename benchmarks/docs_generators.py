@@ -893,10 +893,25 @@ def planning_findings(docs: Path) -> str:
 MECHANISMS = "mechanisms/mechanisms.json"
 
 
+def _best_window(entry: dict, key: str) -> tuple[str, dict]:
+    """The window width of oracle ``key`` with the highest ASR, and that ASR's estimate."""
+    return max(entry[key].items(), key=lambda item: item[1]["estimate"])
+
+
 def _best_width(entry: dict, key: str) -> str:
     """The window width with the highest ASR, with that ASR (%) and its interval."""
-    width, best = max(entry[key].items(), key=lambda item: item[1]["estimate"])
+    width, best = _best_window(entry, key)
     return f"{format_judged(best, '{:.0f}', 100)} (W = {width})"
+
+
+def _v1_mg_crb_cl(docs: Path, scenario: str) -> dict:
+    """MG-CRB-CL's row of the v1 study of ``scenario`` (``paper-N-v1``), eq22 average fusion."""
+    return study_summary(docs, int(scenario.split("-")[1]), "average")["policies"]["mg-crb-cl"]
+
+
+def _verdicts(docs: Path, path: str) -> dict[str, str]:
+    """A scorecard's verdicts by claim."""
+    return {r["id"]: r["verdict"] for r in read_json(docs, path)}
 
 
 @generator("mechanisms-asr")
@@ -912,8 +927,7 @@ def mechanisms_asr(docs: Path) -> str:
         "|---|---|---|---|---|---|---|---|",
     ]
     for scenario, entry in m["lead"].items():
-        number = int(scenario.split("-")[1])
-        ours = study_summary(docs, number, "average")["policies"]["mg-crb-cl"]
+        ours = _v1_mg_crb_cl(docs, scenario)
         sampling = " / ".join(
             format_judged(entry["sampling_oracle_asr"][n], "{:.0f}", 100) for n in ("1", "10", "100")
         )
@@ -965,9 +979,8 @@ def mechanisms_findings(docs: Path) -> str:
     ]
     for scenario, entry in m["lead"].items():
         claim = entry["claim"]
-        width, cap = max(entry["probing_window_oracle_asr"].items(), key=lambda item: item[1]["estimate"])
-        number = int(scenario.split("-")[1])
-        ours = study_summary(docs, number, "average")["policies"]["mg-crb-cl"]
+        width, cap = _best_window(entry, "probing_window_oracle_asr")
+        ours = _v1_mg_crb_cl(docs, scenario)
         paper = m["paper_asr"][claim]["mg-crb-cl"] / 100
         low, high = cap["ci"]
         where = "below" if paper < low else "above" if paper > high else "within the interval of"
@@ -990,7 +1003,7 @@ def layout_search_table(docs: Path) -> str:
     """The search's size and speed, and each claim's verdict under v1's layout and the best
     searched layouts, from search.json and the v1 claims study."""
     found = read_json(docs, LAYOUT_SEARCH)
-    v1 = {r["id"]: r["verdict"] for r in read_json(docs, SCORECARDS["v1"])}
+    v1 = _verdicts(docs, SCORECARDS["v1"])
     finalists = [f for f in found["finalists"] if f["name"] != "v1"]
     lines = [
         f"{found['evaluations']} layouts scored in {found['wall_s']:.0f} s ({found['layouts_per_s']:.1f} "
@@ -1067,10 +1080,7 @@ def layout_sensitivity(docs: Path) -> str:
 @generator("seed-sensitivity")
 def seed_sensitivity(docs: Path) -> str:
     """The v1 scorecard (500 trials, average fusion) under three master seeds."""
-    cards = {
-        label: {r["id"]: r["verdict"] for r in read_json(docs, path)}
-        for label, path in SEED_SCORECARDS.items()
-    }
+    cards = {label: _verdicts(docs, path) for label, path in SEED_SCORECARDS.items()}
     labels = list(cards)
     lines = ["| claim | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for claim in cards[labels[0]]:

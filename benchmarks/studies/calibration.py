@@ -102,28 +102,43 @@ def _reflect(km: NDArray[np.float64]) -> NDArray[np.float64]:
     return size - np.abs(size - np.abs(km))
 
 
-def constraint_failure(candidate: Candidate) -> str | None:
-    """Why the candidate breaks a hard constraint of the text, or None."""
+def constraint_check(candidate: Candidate) -> tuple[float, str | None]:
+    """How far the candidate is from the text's hard constraints, and the first one it breaks.
+
+    The amount is 0 when it meets them all, else the sum of how far stations lie outside the
+    region (km), the track-distance shortfalls (in units of :data:`MIN_TRACK_DISTANCE`), the S1.1
+    windows' shortfalls below ``BEST_WINDOW_FRACTION``, and 1 for a layout that is not a valid
+    scenario (then nothing else is checked). The reason is None exactly when the amount is 0.
+    """
     tx, rx = np.array(candidate.tx_km) * 1e3, np.array(candidate.rx_km) * 1e3
     stations = np.concatenate([tx, rx])
-    if np.any(stations < 0) or np.any(stations > REGION_M):
-        return "a station outside the 100 km x 100 km region"
+    outside = float(np.sum(np.maximum(-stations, 0) + np.maximum(stations - REGION_M, 0))) / 1e3
+    reasons = ["a station outside the 100 km x 100 km region"] if outside > 0 else []
     try:
         scenarios = candidate.scenarios()
     except ValueError as exc:  # ScenarioError: e.g. two stations at one place
-        return f"not a valid scenario: {exc}"
+        return 1.0 + outside, (reasons or [f"not a valid scenario: {exc}"])[0]
+    total = outside
     for sc in scenarios:
         model = RadarModel.from_scenario(sc)
         for k in range(sc.num_targets):
             distance, _, _ = closest_approach(model.nominal[k][:, [0, 2]], stations)
             if distance < MIN_TRACK_DISTANCE:
-                return f"a station {distance / 1e3:.2f} km from a nominal track of {sc.name}"
+                total += (MIN_TRACK_DISTANCE - distance) / MIN_TRACK_DISTANCE
+                reasons.append(f"a station {distance / 1e3:.2f} km from a nominal track of {sc.name}")
     fractions = claims.best_selection_windows(scenarios[0])
     if min(fractions.values()) < claims.BEST_WINDOW_FRACTION:
-        return "noise-free Scenario 1: Best selects the paper's super arm in " + ", ".join(
-            f"{f:.0%} of {window}" for window, f in fractions.items()
+        total += sum(max(claims.BEST_WINDOW_FRACTION - f, 0.0) for f in fractions.values())
+        reasons.append(
+            "noise-free Scenario 1: Best selects the paper's super arm in "
+            + ", ".join(f"{f:.0%} of {window}" for window, f in fractions.items())
         )
-    return None
+    return total, (reasons[0] if reasons else None)
+
+
+def constraint_failure(candidate: Candidate) -> str | None:
+    """Why the candidate breaks a hard constraint of the text, or None."""
+    return constraint_check(candidate)[1]
 
 
 def scan_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], scale: str) -> NDArray:

@@ -32,10 +32,8 @@ from numpy.typing import NDArray
 from scipy.optimize import differential_evolution
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
-from mimo_radar_env.core.superarm import all_super_arms
-from mimo_radar_env.scenarios.scenario import closest_approach
 
-from . import calibration, claims
+from . import calibration, claims, mechanisms
 from .base import Study, machine, write_timing
 from .settings import integer
 
@@ -80,37 +78,18 @@ def vector_from_layout(candidate: calibration.Candidate) -> NDArray[np.float64]:
 
 
 def violation(candidate: calibration.Candidate) -> float:
-    """How far the layout is from the hard constraints: 0 when it meets them all, else the sum of
-    the track-distance shortfalls (in units of 2 km) and the S1.1 windows' shortfalls below 95 %
-    (plus 1 for a layout that is not a valid scenario)."""
-    tx, rx = np.array(candidate.tx_km) * 1e3, np.array(candidate.rx_km) * 1e3
-    stations = np.concatenate([tx, rx])
-    outside = float(np.sum(np.maximum(-stations, 0) + np.maximum(stations - calibration.REGION_M, 0)))
-    try:
-        scenarios = candidate.scenarios()
-    except ValueError:
-        return 1.0 + outside / 1e3
-    total = outside / 1e3
-    for sc in scenarios:
-        model = RadarModel.from_scenario(sc)
-        for k in range(sc.num_targets):
-            distance, _, _ = closest_approach(model.nominal[k][:, [0, 2]], stations)
-            total += max(calibration.MIN_TRACK_DISTANCE - distance, 0.0) / calibration.MIN_TRACK_DISTANCE
-    fractions = claims.best_selection_windows(scenarios[0])
-    total += sum(max(claims.BEST_WINDOW_FRACTION - f, 0.0) for f in fractions.values())
-    return total
+    """How far the layout is from the hard constraints (0 when it meets them all):
+    :func:`benchmarks.studies.calibration.constraint_check`'s amount."""
+    return calibration.constraint_check(candidate)[0]
 
 
 def median_lead(model: RadarModel) -> float:
     """The median over the noise-free track's steps of the best super arm's lead over the second
     (best / second - 1)."""
-    sc = model.scenario
-    tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-    pairs = (tx[:, :, None] & rx[:, None, :]).astype(np.float64)
     positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)
-    value = np.einsum("tmn,amn->ta", model.channel_weights(model.mean_sinr(positions)), pairs)
-    top2 = -np.partition(-value, 1, axis=1)[:, :2]
-    return float(np.median(top2[:, 0] / top2[:, 1] - 1.0))
+    weights = model.channel_weights(model.mean_sinr(positions))  # (T+1, M, N)
+    value = np.einsum("tmn,amn->ta", weights, mechanisms.super_arm_channels(model.scenario))
+    return float(np.median(mechanisms.leads(value)))
 
 
 def predictors(candidate: calibration.Candidate, scale: str = "db") -> dict[str, Any]:

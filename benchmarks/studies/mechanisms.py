@@ -44,6 +44,7 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mimo_radar_env import VERSIONS, load_scenario
 from mimo_radar_env.core.superarm import all_super_arms
@@ -69,6 +70,19 @@ DEFAULT_SUMMARIES = DOCS_RESULTS / "v1"
 _ARMSE = re.compile(r"^armse(?: of target (\d+))?: (\S+) < (\S+)$")
 
 
+def super_arm_channels(sc: Any) -> NDArray[np.float64]:
+    """Every super arm's channels as 0/1 matrices, (A, M, N)."""
+    tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+    return (tx[:, :, None] & rx[:, None, :]).astype(np.float64)
+
+
+def leads(value: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The best super arm's lead over the second, ``best / second - 1``, for mean rewards
+    (..., A)."""
+    top2 = -np.partition(-value, 1, axis=-1)[..., :2]
+    return top2[..., 0] / top2[..., 1] - 1.0
+
+
 def lead_and_sampling_oracles(
     scenario: str, trials: int, seed: int, samples: tuple[int, ...] = SAMPLES, steps: int | None = None
 ) -> dict[str, Any]:
@@ -82,11 +96,15 @@ def lead_and_sampling_oracles(
     env.reset(seed=seed)
     engine = env.engine
     horizon = steps or sc.horizon
-    tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-    pairs = (tx[:, :, None] & rx[:, None, :]).astype(np.float64)  # (A, M, N)
+    pairs = super_arm_channels(sc)  # (A, M, N)
     weights = np.asarray(engine.model.weights, dtype=np.float64)  # (K,)
+
+    def rewards(mean: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Every super arm's weighted mean SINR for channel means (B, K, M, N): (B, A)."""
+        return np.einsum("k,bkmn,amn->ba", weights, mean, pairs)
+
     rng = np.random.default_rng(np.random.SeedSequence([seed, 0x5A3B]))
-    leads = np.empty((trials, horizon))
+    lead = np.empty((trials, horizon))
     matches = np.zeros((len(samples), trials))
     window_matches = np.zeros((len(WINDOWS), trials))
     probe_matches = np.zeros((len(WINDOWS), trials))
@@ -98,14 +116,12 @@ def lead_and_sampling_oracles(
     for t in range(horizon):
         upcoming = engine.simulation.upcoming_state()[..., [0, 2]]
         mean = engine.model.mean_sinr(upcoming)  # (B, K, M, N)
-        value = np.einsum("k,bkmn,amn->ba", weights, mean, pairs)
-        top2 = -np.partition(-value, 1, axis=1)[:, :2]
-        leads[:, t] = top2[:, 0] / top2[:, 1] - 1.0
+        value = rewards(mean)
+        lead[:, t] = leads(value)
         best = np.argmax(value, axis=1)
         for i, n in enumerate(samples):
             estimate = mean * rng.gamma(n, 1.0 / n, size=mean.shape)
-            noisy = np.einsum("k,bkmn,amn->ba", weights, estimate, pairs)
-            matches[i] += np.argmax(noisy, axis=1) == best
+            matches[i] += np.argmax(rewards(estimate), axis=1) == best
         sample = mean * rng.exponential(size=mean.shape)  # Swerling I: one sample per channel
         if sums is None:
             sums, probed_sums = np.zeros((horizon + 1, *mean.shape)), np.zeros((horizon + 1, *mean.shape))
@@ -116,18 +132,16 @@ def lead_and_sampling_oracles(
         for i, width in enumerate(WINDOWS):
             low = max(t + 1 - width, 0)
             estimate = (sums[t + 1] - sums[low]) / (t + 1 - low)
-            noisy = np.einsum("k,bkmn,amn->ba", weights, estimate, pairs)
-            window_matches[i] += np.argmax(noisy, axis=1) == best
+            window_matches[i] += np.argmax(rewards(estimate), axis=1) == best
             low = max(t + 1 - period * width, 0)
             count = np.maximum(probed_counts[t + 1] - probed_counts[low], 1.0)
             estimate = (probed_sums[t + 1] - probed_sums[low]) / count
-            noisy = np.einsum("k,bkmn,amn->ba", weights, estimate, pairs)
-            probe_matches[i] += np.argmax(noisy, axis=1) == best
+            probe_matches[i] += np.argmax(rewards(estimate), axis=1) == best
         env.step(action)
         action = engine.oracle_action()
     per_trial = {
-        "median_lead": np.median(leads, axis=1),
-        **{f"fraction_lead_below_{c:g}": (leads < c).mean(axis=1) for c in CLOSE},
+        "median_lead": np.median(lead, axis=1),
+        **{f"fraction_lead_below_{c:g}": (lead < c).mean(axis=1) for c in CLOSE},
     }
     out: dict[str, Any] = {"scenario": scenario, "trials": trials, "steps": horizon}
     for name, values in per_trial.items():
@@ -145,7 +159,7 @@ def lead_and_sampling_oracles(
         for i, w in enumerate(WINDOWS)
     }
     out["probing_period"] = period
-    out["lead_quantiles"] = {str(q): float(np.quantile(leads, q)) for q in (0.1, 0.25, 0.5, 0.75, 0.9)}
+    out["lead_quantiles"] = {str(q): float(np.quantile(lead, q)) for q in (0.1, 0.25, 0.5, 0.75, 0.9)}
     return out
 
 
@@ -153,23 +167,19 @@ def bound_versus_sinr(claims: list[dict[str, Any]], summaries: Path) -> list[dic
     """Part 2: every ARMSE comparison of the claims beside the two policies' bound and SINR
     (read from the run summaries ``{scenario}-v1-average.summary.json`` in ``summaries``)."""
     rows = []
+    read: dict[str, dict[str, Any]] = {}
     for claim in claims:
         for comparison in claim["comparisons"]:
             match = _ARMSE.match(comparison["comparison"])
             if match is None:
                 continue
             target, a, b = match.groups()
-            summary = json.loads((summaries / f"{claim['scenario']}-v1-average.summary.json").read_text())
-            policies = summary["policies"]
+            scenario = claim["scenario"]
+            if scenario not in read:
+                read[scenario] = json.loads((summaries / f"{scenario}-v1-average.summary.json").read_text())
+            summary = read[scenario]
             k = int(target) - 1 if target else None
-
-            def bound(policy: str, k: int | None = k, policies: dict = policies) -> tuple[float, list[float]]:
-                entry = policies[policy]
-                if k is None:
-                    return entry["bound"], entry["ci"]["bound"]
-                return entry["bound_per_target"][k], entry["ci"]["bound_per_target"][k]
-
-            (bound_a, ci_a), (bound_b, ci_b) = bound(a), bound(b)
+            (bound_a, ci_a), (bound_b, ci_b) = (_bound(summary["policies"][p], k) for p in (a, b))
             sinr = paired_difference(summary, a, b, "mean_sinr_db")
             armse = comparison["estimate"]
             rows.append(
@@ -188,6 +198,13 @@ def bound_versus_sinr(claims: list[dict[str, Any]], summaries: Path) -> list[dic
                 }
             )
     return rows
+
+
+def _bound(policy: dict[str, Any], target: int | None) -> tuple[float, list[float]]:
+    """A summary's bound of one policy (of one target, or over targets) with its interval."""
+    if target is None:
+        return policy["bound"], policy["ci"]["bound"]
+    return policy["bound_per_target"][target], policy["ci"]["bound_per_target"][target]
 
 
 def summarise(rows: list[dict[str, Any]]) -> dict[str, int]:
