@@ -33,6 +33,7 @@ from scipy.optimize import differential_evolution
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
 
+from ..errors import BenchError
 from . import calibration, claims, mechanisms
 from .base import Study, machine, write_timing
 from .settings import integer
@@ -229,6 +230,14 @@ class LayoutSearch(Study):
             "--final", type=integer(0), default=3, help="best layouts given full scorecards (default 3)"
         )
         parser.add_argument(
+            "--score",
+            type=integer(1),
+            nargs="+",
+            metavar="RANK",
+            help="score only these of the --final best layouts (1-based ranks; default all of them), "
+            "e.g. to give the ranks a short scorecard singled out a longer one",
+        )
+        parser.add_argument(
             "--no-v1-scorecard",
             action="store_true",
             help="do not run v1's own layout (its scorecard under the same options is the claims study's)",
@@ -236,6 +245,12 @@ class LayoutSearch(Study):
 
     def main(self) -> int:
         settings = self.settings
+        ranks = self.args.score or range(1, self.args.final + 1)
+        beyond = [r for r in ranks if r > self.args.final]
+        if beyond:
+            raise BenchError(
+                f"--score {' '.join(map(str, beyond))}: ranks run from 1 to --final ({self.args.final})"
+            )
         start, before = time.perf_counter(), machine()
         out = settings.out
         out.mkdir(parents=True, exist_ok=True)
@@ -256,9 +271,15 @@ class LayoutSearch(Study):
             if self.args.no_v1_scorecard
             else [{"name": "v1", "vector": vector_from_layout(v1_layout()).tolist()}]
         )
+        best = distinct_feasible(found["ranked"], self.args.final)
+        if len(best) < max(ranks):
+            print(
+                f"mimo-radar-bench: the last population holds {len(best)} distinct feasible layouts; "
+                f"ranks above {len(best)} are not scored",
+                flush=True,
+            )
         finalists += [
-            {"name": f"search-{i + 1}", **entry}
-            for i, entry in enumerate(distinct_feasible(found["ranked"], self.args.final))
+            {"name": f"search-{r}", "rank": r, **best[r - 1]} for r in sorted(set(ranks)) if r <= len(best)
         ]
         for entry in finalists:
             layout = layout_from_vector(np.array(entry["vector"]))

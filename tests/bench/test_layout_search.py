@@ -100,3 +100,26 @@ def test_command_scores_the_best_layout_and_records_the_agreement(tmp_path):
     assert all(finalist["counts"][k] == judged.count(k) for k in finalist["counts"])
     assert finalist["agreement"]["compared"] == len(layout_search.PREDICTED)
     assert (tmp_path / "search-1" / "claims.json").exists()
+
+
+def test_command_scores_only_the_ranks_asked_for(tmp_path, capsys):
+    import json
+
+    from benchmarks.cli import main as cli_main
+
+    args = ["search-layouts", "--generations", "1", "--population", "1", "--no-v1-scorecard", "--quiet"]
+    with pytest.raises(SystemExit) as exit_info:
+        cli_main([*args, "--final", "2", "--score", "3", "--trials", "2", "--out", str(tmp_path)])
+    assert exit_info.value.code == 2
+    assert "--score 3: ranks run from 1 to --final (2)" in capsys.readouterr().err
+    assert not (tmp_path / "search.json").exists()  # refused before the search
+    out = tmp_path / "scored"
+    assert (
+        cli_main([*args, "--final", "2", "--score", "2", "--trials", "2", "--steps", "5", "--out", str(out)])
+        == 0
+    )
+    found = json.loads((out / "search.json").read_text())
+    (finalist,) = found["finalists"]
+    second = layout_search.distinct_feasible(found["ranked"], 2)[1]
+    assert (finalist["name"], finalist["rank"], finalist["vector"]) == ("search-2", 2, second["vector"])
+    assert not (out / "search-1").exists()
