@@ -131,7 +131,7 @@ class BPSOSolver(SuperArmSolver):
             axis=-1,
         ).astype(np.int8)
         keys = random.keys_for(Stream.BPSO_KEYS)
-        kernel = _kernels.run_numba if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
+        kernel = _kernels.numba_kernel() if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
         best = kernel(
             index,
             self.tx_count,

@@ -91,6 +91,30 @@ def test_bpso_numba_and_numpy_kernels_give_the_same_numbers():
     np.testing.assert_array_equal(fast[1], slow[1])
 
 
+def test_bpso_serial_kernel_is_taken_with_one_thread_and_gives_the_same_numbers():
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    import numba
+
+    index = np.random.default_rng(5).exponential(size=(12, 4, 6))
+    slow = BPSOSolver(2, 3, iterations=20, use_numba=False).solve(index, streams(index, 3))
+    threads = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        assert _bpso_kernels.numba_kernel() is _bpso_kernels.run_numba_serial
+        serial = BPSOSolver(2, 3, iterations=20).solve(index, streams(index, 3))
+    finally:
+        numba.set_num_threads(threads)
+    if threads > 1:
+        assert _bpso_kernels.numba_kernel() is _bpso_kernels.run_numba
+    parallel = BPSOSolver(2, 3, iterations=20).solve(index, streams(index, 3))
+    for got in (serial, parallel):
+        np.testing.assert_array_equal(got[0], slow[0])
+        np.testing.assert_array_equal(got[1], slow[1])
+    # two dispatchers of one source, cached under two names
+    assert _bpso_kernels.run_numba.py_func.__qualname__ != _bpso_kernels.run_numba_serial.py_func.__qualname__
+
+
 def test_bpso_exp_polynomial_is_accurate():
     v = np.linspace(-6, 6, 10001)
     np.testing.assert_allclose(_bpso_kernels.exp_negative(v), np.exp(-v), rtol=1e-7)
