@@ -2,7 +2,8 @@
 
 Importing this package registers the built-in studies: ``paper`` and ``run``
 (:mod:`~benchmarks.studies.paper`), ``claims`` (:mod:`~benchmarks.studies.claims`), ``mechanisms``
-(:mod:`~benchmarks.studies.mechanisms`), ``search-layouts``
+(:mod:`~benchmarks.studies.mechanisms`), ``ablations`` (:mod:`~benchmarks.studies.ablations`),
+``search-layouts``
 (:mod:`~benchmarks.studies.layout_search`),
 ``tracking`` (:mod:`~benchmarks.studies.tracking`), ``planning``
 (:mod:`~benchmarks.studies.planning`), ``rl`` (:mod:`~benchmarks.studies.rl`) and
@@ -11,7 +12,7 @@ Importing this package registers the built-in studies: ``paper`` and ``run``
 :class:`~benchmarks.studies.base.Study` subclass with a ``name``.
 """
 
-from . import calibration, claims, layout_search, mechanisms, paper, planning, rl, tracking
+from . import ablations, calibration, claims, layout_search, mechanisms, paper, planning, rl, tracking
 from .base import COMMANDS, Command, Finished, Run, Study, configure, execute
 from .settings import Settings
 
@@ -22,6 +23,7 @@ __all__ = [
     "Run",
     "Settings",
     "Study",
+    "ablations",
     "calibration",
     "claims",
     "configure",
