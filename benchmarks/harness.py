@@ -33,8 +33,11 @@ from tqdm.auto import tqdm
 
 import agents
 from agents.ppo import model_file
+from agents.solvers import compiled_kernels as solver_kernels
 from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
+from mimo_radar_env.core.compiled import uncached
 from mimo_radar_env.core.model import machine_memory, memory_parts, operations_per_trial_step
+from mimo_radar_env.tracking.fusion import compiled_kernels
 
 from . import backends
 from .errors import BenchError
@@ -385,6 +388,18 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
     return out
 
 
+def run_kernels(config: RunConfig, threads: int | None = None) -> list[Any]:
+    """The numba kernels a run's tasks call (the env's fusion and bound, the policies' solvers),
+    with ``threads`` numba threads in each task."""
+    kernels = compiled_kernels(config.options.fusion) if config.options.tracking else []
+    for policy in config.policies:
+        cls = agents.agent_class(agents.split_policy(policy)[0])
+        solver = config.agent_params.get(policy, {}).get("solver", getattr(cls, "default_solver", None))
+        if isinstance(solver, str):
+            kernels += solver_kernels(solver, threads)
+    return kernels
+
+
 def make_policy(
     policy: str,
     scenario: Scenario,
@@ -514,6 +529,8 @@ def run(
             smoothing=0.1,
             desc=f"{config.scenario['name']}",
         )
+        if todo and uncached(run_kernels(config, threads=1 if workers > 1 or backend == "ray" else None)):
+            bar.set_postfix_str("compiling numba kernels (first run; cached for the next)")
         payload = config.to_json()
         saved = []
 

@@ -26,4 +26,22 @@ def make_solver(name: str | SuperArmSolver, tx_count: int, rx_count: int, **para
         raise ValueError(f"bad parameters for solver {name!r}: {exc}") from exc
 
 
-__all__ = ["SOLVERS", "AlternatingSolver", "BPSOSolver", "ExactSolver", "SuperArmSolver", "make_solver"]
+def compiled_kernels(name: str, threads: int | None = None) -> list[Any]:
+    """The numba kernels solver ``name`` runs with ``threads`` numba threads (default: the
+    current count); none without numba, or for a solver that has none."""
+    from . import _bpso_kernels
+
+    if name != BPSOSolver.name or not _bpso_kernels.HAVE_NUMBA:
+        return []
+    return [_bpso_kernels.numba_kernel(threads)]
+
+
+__all__ = [
+    "SOLVERS",
+    "compiled_kernels",
+    "AlternatingSolver",
+    "BPSOSolver",
+    "ExactSolver",
+    "SuperArmSolver",
+    "make_solver",
+]

@@ -245,7 +245,7 @@ if HAVE_NUMBA:  # pragma: no branch
     run_numba_serial = numba.njit(cache=True)(_twin(_run_numba, "run_numba_serial"))
 
 
-def numba_kernel() -> Any:
-    """The compiled kernel for numba's thread count: the serial one with one thread, so that a
-    worker process compiles only what it runs."""
-    return run_numba_serial if numba.get_num_threads() == 1 else run_numba
+def numba_kernel(threads: int | None = None) -> Any:
+    """The compiled kernel for ``threads`` numba threads (default: the current count): the serial
+    one with one thread, so that a worker process compiles only what it runs."""
+    return run_numba_serial if (threads or numba.get_num_threads()) == 1 else run_numba

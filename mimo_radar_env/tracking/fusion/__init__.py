@@ -20,4 +20,27 @@ def make_fusion(name: str, **params: Any) -> Fusion:
     return FUSIONS[name](**params)
 
 
-__all__ = ["FUSIONS", "AverageFusion", "CentralizedFusion", "Fusion", "Posterior", "Prior", "make_fusion"]
+def compiled_kernels(name: str) -> list[Any]:
+    """The numba kernels a tracked env step with fusion ``name`` runs (the fusion's update and
+    the bound's step); none without numba."""
+    from ...core.compiled import HAVE_NUMBA
+
+    if not HAVE_NUMBA:
+        return []
+    from .. import bound
+    from . import average, centralized
+
+    module = {"average": average, "centralized": centralized}[name]
+    return [module._update_numba, bound._compiled_step]
+
+
+__all__ = [
+    "FUSIONS",
+    "compiled_kernels",
+    "AverageFusion",
+    "CentralizedFusion",
+    "Fusion",
+    "Posterior",
+    "Prior",
+    "make_fusion",
+]

@@ -1,0 +1,69 @@
+"""Which numba kernels a run would compile first: the cache check and the kernels of a run."""
+
+import importlib.util
+import sys
+
+import pytest
+
+from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
+
+pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed")
+
+KERNEL = """
+import numba
+
+@numba.njit(cache=True)
+def doubled(x):
+    return 2 * x
+"""
+
+
+def test_a_kernel_is_uncached_until_its_first_call_writes_the_cache(tmp_path, monkeypatch):
+    source = tmp_path / "kernel_for_cache_test.py"
+    source.write_text(KERNEL)
+    spec = importlib.util.spec_from_file_location("kernel_for_cache_test", source)
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "kernel_for_cache_test", module)
+    spec.loader.exec_module(module)
+    assert uncached([module.doubled]) == ["doubled"]
+    assert module.doubled(3) == 6
+    assert uncached([module.doubled]) == []
+    assert uncached([object()]) == []  # not a numba kernel: nothing claimed
+
+
+def test_a_run_lists_its_fusion_bound_and_solver_kernels():
+    from agents.solvers import _bpso_kernels
+    from benchmarks.harness import PAPER_POLICIES, make_config, run_kernels
+    from mimo_radar_env import VERSIONS
+    from mimo_radar_env.tracking import bound
+    from mimo_radar_env.tracking.fusion import average, centralized
+
+    v1 = VERSIONS["v1"]
+    quiet = dict(say=lambda message: None)
+    paper = make_config(
+        "paper-1-v1",
+        PAPER_POLICIES,
+        2,
+        3,
+        options=v1.options(),
+        agent_params=v1.paper_study_params(),
+        **quiet,
+    )
+    assert run_kernels(paper, threads=1) == [
+        average._update_numba,
+        bound._compiled_step,
+        _bpso_kernels.run_numba_serial,
+    ]
+    assert run_kernels(paper, threads=2)[-1] is _bpso_kernels.run_numba
+    exact = make_config(
+        "paper-1-v1",
+        PAPER_POLICIES,
+        2,
+        3,
+        options=v1.options(fusion="centralized"),
+        agent_params={"mg-crb-cl": {"solver": "exact"}},
+        **quiet,
+    )
+    assert run_kernels(exact) == [centralized._update_numba, bound._compiled_step]
+    untracked = make_config("paper-1-v1", ["ucb1"], 2, 3, options=v1.options(tracking=False), **quiet)
+    assert run_kernels(untracked) == []
