@@ -17,7 +17,14 @@ from .envs import (
     default_config,
     env_version,
 )
-from .envs.versions import ENV_IDS, FLAT_ENV_IDS, PAPER_SCENARIOS, VERSION_DEFAULTS, paper_scenario
+from .envs.versions import (
+    ENV_IDS,
+    FLAT_ENV_IDS,
+    PAPER_SCENARIOS,
+    SCENARIO_SETS,
+    VERSION_DEFAULTS,
+    paper_scenario,
+)
 from .scenarios import (
     Maneuver,
     Scenario,
@@ -54,6 +61,7 @@ __all__ = [
     "ENV_IDS",
     "FLAT_ENV_IDS",
     "PAPER_SCENARIOS",
+    "SCENARIO_SETS",
     "VERSIONS",
     "VERSION_DEFAULTS",
     "EnvOptions",

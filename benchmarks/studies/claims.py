@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario, env_version
+from mimo_radar_env.envs.versions import SCENARIO_SETS
 from mimo_radar_env.metrics import TrialMetrics
 
 from .. import uncertainty, verdicts
@@ -423,12 +424,27 @@ class ClaimsStudy(Study):
             "runs", nargs="*", help="finished paper-study folders (default: run them into --out)"
         )
         add_scenarios_argument(parser)
+        parser.add_argument(
+            "--scenario-set",
+            choices=sorted(SCENARIO_SETS),
+            default=None,
+            help="run the paper scenarios of a shipped scenario set (another station layout, "
+            "same version) instead of the version's own: "
+            + "; ".join(f"{s.name}: {s.summary}" for s in SCENARIO_SETS.values()),
+        )
 
     def runs(self) -> list[Run]:
         if self.args.runs:
             return []
-        version = env_version(self.settings.env_version)
-        names = [version.paper_scenario(n) for n in paper_numbers(self.args.scenarios)]
+        source: Any = env_version(self.settings.env_version)
+        if self.args.scenario_set:
+            source = SCENARIO_SETS[self.args.scenario_set]
+            if source.version != self.settings.env_version:
+                raise BenchError(
+                    f"scenario set {source.name!r} is made for env version {source.version}, "
+                    f"not {self.settings.env_version}: add --env-version {source.version}"
+                )
+        names = [source.paper_scenario(n) for n in paper_numbers(self.args.scenarios)]
         return paper_runs(names, self.settings.out)
 
     def judge(self, finished: dict[Hashable, Finished]) -> tuple[list[Path], list[dict[str, Any]]]:

@@ -112,6 +112,50 @@ VERSIONS: dict[str, EnvVersion] = {
 #: The version ``mimo-radar-bench`` runs unless told otherwise.
 DEFAULT_VERSION = "v1"
 
+
+@dataclass(frozen=True)
+class ScenarioSet:
+    """A version's paper scenarios with another station layout, shipped beside the version's own
+    (which it leaves unchanged: a layout is scenario data, and the version's numbers are promises).
+
+    Attributes
+    ----------
+    name : str
+        What ``mimo-radar-bench claims --scenario-set`` takes.
+    version : str
+        The env version whose options and paper study the set is meant for.
+    summary : str
+        Where the layout comes from.
+    paper_scenarios : tuple of str
+        The shipped scenarios standing for the paper's Scenarios 1, 2 and 3.
+    """
+
+    name: str
+    version: str
+    summary: str
+    paper_scenarios: tuple[str, str, str]
+
+    def paper_scenario(self, number: int) -> str:
+        """The name of paper scenario ``number`` (1, 2, 3) of this set."""
+        if number not in (1, 2, 3):
+            raise ValueError(f"paper scenarios are 1, 2 and 3, got {number!r}")
+        return self.paper_scenarios[number - 1]
+
+
+#: Named calibrations shipped as scenario sets (docs/results.md, "A global layout search").
+SCENARIO_SETS: dict[str, ScenarioSet] = {
+    s.name: s
+    for s in (
+        ScenarioSet(
+            "search-5",
+            "v1",
+            "v1's paper scenarios with layout 5 of the global layout search (search-layouts, seed 0): "
+            "12 claims hold at 500 trials, against layout 116's 11",
+            ("paper-1-v1-search5", "paper-2-v1-search5", "paper-3-v1-search5"),
+        ),
+    )
+}
+
 # Views of VERSIONS, by version name.
 ENV_IDS = {name: v.env_id for name, v in VERSIONS.items()}
 FLAT_ENV_IDS = {name: v.flat_env_id for name, v in VERSIONS.items()}
@@ -132,8 +176,8 @@ def paper_scenario(number: int, version: str) -> str:
 
 
 def paper_key(name: str) -> str:
-    """``"paper-N"`` for paper scenario N of any version; other names unchanged."""
-    for names in PAPER_SCENARIOS.values():
+    """``"paper-N"`` for paper scenario N of any version or scenario set; other names unchanged."""
+    for names in (*PAPER_SCENARIOS.values(), *(s.paper_scenarios for s in SCENARIO_SETS.values())):
         if name in names:
             return f"paper-{names.index(name) + 1}"
     return name

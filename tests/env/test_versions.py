@@ -51,3 +51,45 @@ def test_a_bad_version_is_named():
         env_version("v9")
     with pytest.raises(ValueError, match="lambda_scale must be one of"):
         mimo_radar_env.EnvVersion("v9", "bad", option_defaults={"lambda_scale": "log"})
+
+
+#: Layout 5 of the global layout search (search-layouts, seed 0), km: 4 TX then 6 RX.
+SEARCH_5_KM = [42.441, 7.232, 31.58, 16.659, 71.48, 82.425, 79.092, 61.507, 49.467, 8.597, 51.486, 41.422]
+SEARCH_5_KM += [15.811, 59.904, 69.484, 49.032, 54.065, 82.58, 86.783, 16.473]
+
+
+@pytest.mark.parametrize("number", [1, 2, 3])
+def test_a_scenario_set_is_its_versions_scenario_with_other_stations(number):
+    import numpy as np
+
+    from mimo_radar_env import SCENARIO_SETS, load_scenario
+    from mimo_radar_env.envs.versions import paper_key
+
+    chosen = SCENARIO_SETS["search-5"]
+    name = chosen.paper_scenario(number)
+    own = load_scenario(env_version(chosen.version).paper_scenario(number)).to_dict()
+    shipped = load_scenario(name).to_dict()
+    km = np.array(SEARCH_5_KM).reshape(10, 2)
+    assert np.array_equal(shipped["tx_positions"], km[:4] * 1e3)
+    assert np.allclose(shipped["rx_positions"], km[4:] * 1e3, rtol=0, atol=1e-9)
+    for key in set(own) - {"name", "tx_positions", "rx_positions"}:
+        assert shipped[key] == own[key], key
+    assert paper_key(name) == f"paper-{number}"
+    with pytest.raises(ValueError, match="paper scenarios are 1, 2 and 3"):
+        chosen.paper_scenario(4)
+
+
+def test_the_claims_study_runs_a_scenario_set_and_refuses_another_version(tmp_path, capsys):
+    import json
+
+    from benchmarks.cli import main
+
+    args = ["claims", "--scenario-set", "search-5", "--scenarios", "2", "--trials", "2", "--steps", "3"]
+    args += ["--quiet", "--no-figures", "--workers", "1"]
+    assert main([*args, "--out", str(tmp_path / "set")]) == 0
+    config = json.loads((tmp_path / "set" / "paper-2-v1-search5" / "config.json").read_text())
+    assert config["scenario"]["name"] == "paper-2-v1-search5"
+    with pytest.raises(SystemExit) as exit_info:
+        main([*args, "--env-version", "v0", "--out", str(tmp_path / "v0")])
+    assert exit_info.value.code == 2
+    assert "made for env version v1, not v0" in capsys.readouterr().err
