@@ -124,7 +124,47 @@ def _fitness_np(
     return np.where(valid, value, 0.0), valid
 
 
+#: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
+#: trial); longer particles sum their selected channels directly.
+TABLE_BITS = 14
+#: Particles are padded to a multiple of this (the vector width of float64 on AVX-512), so that
+#: the inner loops have no scalar remainder; padded particles never enter a best.
+LANES = 8
+
+
 if HAVE_NUMBA:  # pragma: no branch
+
+    @numba.njit(cache=True)
+    def _valid_codes(count, stations):
+        """The bit patterns of ``stations`` bits with exactly ``count`` bits set, ascending."""
+        codes = np.empty(1 << stations, dtype=np.int64)
+        found = 0
+        for code in range(1 << stations):
+            ones = 0
+            for bit in range(stations):
+                ones += (code >> bit) & 1
+            if ones == count:
+                codes[found] = code
+                found += 1
+        return codes[:found]
+
+    @numba.njit(cache=True)
+    def _fitness_table(index, tx_codes, rx_codes, table):
+        """eq19 of every bit pattern of one trial (bit j of a pattern is station j, transmitters
+        first), -inf where the cardinality is broken. A valid pattern's sum runs over its selected
+        channels TX-major, the order in which the direct sum adds them (the other terms it adds
+        are zeros), so both give the same number."""
+        num_tx, num_rx = index.shape
+        table[:] = -np.inf
+        for t in tx_codes:
+            for r in rx_codes:
+                total = 0.0
+                for m in range(num_tx):
+                    if (t >> m) & 1:
+                        for n in range(num_rx):
+                            if (r >> n) & 1:
+                                total += index[m, n]
+                table[t | (r << num_tx)] = total
 
     def _run_numba(
         index,
@@ -140,25 +180,40 @@ if HAVE_NUMBA:  # pragma: no branch
         velocity_clamp,
         set_rule,
     ):
-        """Same numbers as :func:`run_numpy`. Per trial, arrays are laid out (bit, particle)
-        so that every inner loop runs over particles and vectorises."""
+        """Same numbers as :func:`run_numpy`. Per trial, the swarm is laid out (bit, particle) in
+        float64 (positions are 0 or 1, exact), particles padded to :data:`LANES`, so that every
+        inner loop runs over particles with one type and vectorises; eq19 is a table lookup
+        (:func:`_fitness_table`) for particles of at most :data:`TABLE_BITS` bits."""
         batch, population, length = positions.shape
         num_tx = index.shape[1]
         num_rx = index.shape[2]
         lanes = (length + 3) // 4
-        result = np.empty((batch, length), dtype=np.int8)
+        width = (population + LANES - 1) // LANES * LANES
         steps = max(iterations - 1, 1)
+        by_table = length <= TABLE_BITS
+        tx_codes = _valid_codes(tx_count, num_tx if by_table else 0)
+        rx_codes = _valid_codes(rx_count, num_rx if by_table else 0)
+        weight = np.empty(length)
+        for j in range(length):
+            weight[j] = 2.0**j
+        result = np.empty((batch, length), dtype=np.int8)
         for b in numba.prange(batch):
-            position = positions[b].T.copy()  # (L, P)
-            velocity = np.zeros((length, population))
+            table = np.empty(1 << length if by_table else 0)
+            if by_table:
+                _fitness_table(index[b], tx_codes, rx_codes, table)
+            position = np.zeros((length, width))
+            for j in range(length):
+                for p in range(population):
+                    position[j, p] = positions[b, p, j]
+            velocity = np.zeros((length, width))
             personal_best = position.copy()
-            personal_fit = np.empty(population)
+            uniform = np.empty((length, width))
+            a1 = np.empty(width)
+            a2 = np.empty(width)
+            code = np.empty(width)
             fitness = np.empty(population)
-            valid = np.empty(population, dtype=np.bool_)
-            a1 = np.empty(population)
-            a2 = np.empty(population)
-            hashes = np.empty((lanes, population), dtype=np.uint64)
-            global_best = np.empty(length, dtype=np.int8)
+            personal_fit = np.empty(population)
+            global_best = np.zeros(length)
             global_fit = -np.inf
             key = keys[b]
             for q in range(iterations + 1):
@@ -168,24 +223,24 @@ if HAVE_NUMBA:  # pragma: no branch
                     base_r1 = stream_base_nb(key, _R1, it)
                     base_r2 = stream_base_nb(key, _R2, it)
                     base_flip = stream_base_nb(key, _FLIP, it)
-                    for p in range(population):
+                    for p in range(width):
                         a1[p] = c1 * to_unit_nb(element_bits_nb(base_r1, p))
                         a2[p] = c2 * to_unit_nb(element_bits_nb(base_r2, p))
+                    # the eq21 draws: four 16-bit uniforms per hash, bit j in lane j // 4
                     for lane in range(lanes):
-                        for p in range(population):
-                            hashes[lane, p] = element_bits_nb(base_flip, p * lanes + lane)
+                        for p in range(width):
+                            bits = element_bits_nb(base_flip, p * lanes + lane)
+                            for s in range(min(4, length - 4 * lane)):
+                                lane_bits = (bits >> np.uint64(16 * s)) & np.uint64(0xFFFF)
+                                uniform[4 * lane + s, p] = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)
                     for j in range(length):
-                        shift = np.uint64(16 * (j % 4))
-                        lane = j // 4
-                        for p in range(population):
+                        best_bit = global_best[j]
+                        for p in range(width):
                             d = position[j, p]
                             v = inertia * velocity[j, p] + a1[p] * (personal_best[j, p] - d)
-                            v = v + a2[p] * (global_best[j] - d)
+                            v = v + a2[p] * (best_bit - d)  # eq20
                             v = min(max(v, -velocity_clamp), velocity_clamp)
                             velocity[j, p] = v
-                            u = (np.float64((hashes[lane, p] >> shift) & np.uint64(0xFFFF)) + 0.5) * (
-                                1.0 / 65536.0
-                            )
                             y = v * (-1.0 / 32.0)
                             e = 1.0 + y * (1.0 + y * (0.5 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
                             e = e * e
@@ -193,30 +248,43 @@ if HAVE_NUMBA:  # pragma: no branch
                             e = e * e
                             e = e * e
                             e = e * e
-                            hit = np.int8(u * (1.0 + e) < 1.0)
-                            position[j, p] = hit if set_rule else d ^ hit
-                # eq19 for every particle, summed in the order of _fitness_np
-                for p in range(population):
-                    fitness[p] = 0.0
-                for m in range(num_tx):
-                    for n in range(num_rx):
-                        w = index[b, m, n]
-                        for p in range(population):
-                            fitness[p] += np.float64(position[m, p]) * np.float64(position[num_tx + n, p]) * w
-                for p in range(population):
-                    ct = 0
+                            hit = uniform[j, p] * (1.0 + e) < 1.0  # u < sigmoid(V), eq21
+                            if set_rule:
+                                position[j, p] = 1.0 if hit else 0.0
+                            else:
+                                position[j, p] = (1.0 - d) if hit else d
+                if by_table:
+                    for p in range(width):
+                        code[p] = 0.0
+                    for j in range(length):
+                        w = weight[j]
+                        for p in range(width):
+                            code[p] += position[j, p] * w
+                    for p in range(population):
+                        fitness[p] = table[np.int64(code[p])]
+                else:  # eq19 summed as _fitness_np sums it, -inf where the cardinality is broken
+                    for p in range(population):
+                        fitness[p] = 0.0
                     for m in range(num_tx):
-                        ct += position[m, p]
-                    cr = 0
-                    for n in range(num_rx):
-                        cr += position[num_tx + n, p]
-                    valid[p] = ct == tx_count and cr == rx_count
+                        for n in range(num_rx):
+                            w = index[b, m, n]
+                            for p in range(population):
+                                fitness[p] += position[m, p] * position[num_tx + n, p] * w
+                    for p in range(population):
+                        ct = 0.0
+                        for m in range(num_tx):
+                            ct += position[m, p]
+                        cr = 0.0
+                        for n in range(num_rx):
+                            cr += position[num_tx + n, p]
+                        if ct != tx_count or cr != rx_count:
+                            fitness[p] = -np.inf
                 if q == 0:
                     for p in range(population):
-                        personal_fit[p] = fitness[p] if valid[p] else -np.inf
+                        personal_fit[p] = fitness[p]
                 else:
                     for p in range(population):
-                        if valid[p] and fitness[p] > personal_fit[p]:
+                        if fitness[p] > personal_fit[p]:
                             personal_fit[p] = fitness[p]
                             for j in range(length):
                                 personal_best[j, p] = position[j, p]
@@ -228,7 +296,8 @@ if HAVE_NUMBA:  # pragma: no branch
                     global_fit = personal_fit[best]
                     for j in range(length):
                         global_best[j] = personal_best[j, best]
-            result[b] = global_best
+            for j in range(length):
+                result[b, j] = np.int8(global_best[j])
         return result
 
     def _twin(function: Any, name: str) -> Any:

@@ -5,8 +5,9 @@ Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
 against ``exact``, and the alternating solver's gap on a 10 x 12 layout. With numba, it also
-times the candidate SIMD kernel (``benchmarks.speed.bpso_simd``) against the agents' kernel in
-one thread, side by side.
+times, in one thread and side by side for both position rules, the agents' BPSO kernel, the
+kernel it replaced (``benchmarks.speed.bpso_reference``, the speed reference) and the candidate
+SIMD kernel (``benchmarks.speed.bpso_simd``).
 """
 
 from __future__ import annotations
@@ -18,10 +19,12 @@ import numpy as np
 
 from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
+from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.counter_hash import Stream
+from mimo_radar_env.core.superarm import top_mask
 
-from . import bpso_simd
+from . import bpso_reference, bpso_simd
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:
@@ -41,35 +44,64 @@ def optimality(index, tx, rx, etx, erx) -> tuple[float, float]:
     return float(same.mean()), float(np.mean(1 - value / best))
 
 
-def candidate_kernel(index, repeats: int, rule: str = "xor") -> dict[str, float]:
-    """One thread: the agents' BPSO against the SIMD candidate, the paper's swarm, same index;
-    each one's best of ``repeats`` and its optimality rate against ``exact``."""
-    reference = BPSOSolver(2, 3, rule=rule)
+def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
+    """One thread, the paper's swarm, the same index: the pre-rework kernel kept as the reference
+    (:mod:`benchmarks.speed.bpso_reference`), the agents' kernel and the SIMD candidate; each
+    one's best time of ``repeats`` and its optimality rate against ``exact``, and the agents'
+    and the candidate's speed-ups over the reference, all measured in this run."""
+    solver = BPSOSolver(2, 3, rule=rule)
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
+    set_rule = rule == "set"
+
+    def swarm(random: TrialRandom) -> tuple:
+        positions = np.concatenate(
+            [
+                top_mask(random.uniform(Stream.BPSO_INIT_TX, (50, 4)), 2),
+                top_mask(random.uniform(Stream.BPSO_INIT_RX, (50, 6)), 3),
+            ],
+            axis=-1,
+        ).astype(np.int8)
+        return positions, random.keys_for(Stream.BPSO_KEYS)
+
+    def reference(random: TrialRandom) -> tuple:
+        positions, keys = swarm(random)
+        best = bpso_reference.run_reference(
+            index, 2, 3, positions, keys, 100, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule
+        )
+        return best[:, :4].astype(bool), best[:, 4:].astype(bool)
 
     def candidate(random: TrialRandom) -> tuple:
         keys = random.keys_for(Stream.BPSO_KEYS)
-        best = bpso_simd.run_numba(index, 2, 3, keys, 50, 100, 2.0, 2.0, 0.9, 0.4, 6.0, rule == "set")
+        best = bpso_simd.run_numba(index, 2, 3, keys, 50, 100, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule)
         return best[:, :4].astype(bool), best[:, 4:].astype(bool)
 
+    kernels = {"reference": reference, "agents": lambda r: solver.solve(index, r), "candidate": candidate}
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        out = {}
-        for name, run in (("reference", lambda r: reference.solve(index, r)), ("candidate", candidate)):
+        out: dict[str, float] = {}
+        seconds: dict[str, list[float]] = {name: [] for name in kernels}
+        rates: dict[str, list[float]] = {name: [] for name in kernels}
+        for run in kernels.values():
             run(TrialRandom.for_batch(0, len(index)))  # compilation
-            seconds, rates = [], []
-            for r in range(repeats):
+        for r in range(repeats):  # interleaved, so that a change of the machine's load hits all three
+            for name, run in kernels.items():
                 random = TrialRandom.for_batch(r, len(index))
                 start = time.perf_counter()
                 tx, rx = run(random)
-                seconds.append(time.perf_counter() - start)
-                rates.append(float(((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()))
-            out[f"bpso_{name}_1thread_ms"] = min(seconds) * 1e3
-            out[f"bpso_{name}_optimality_rate"] = float(np.mean(rates))
+                seconds[name].append(time.perf_counter() - start)
+                rates[name].append(float(((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()))
+        for name in kernels:
+            key = "bpso" if name == "agents" else f"bpso_{name}"
+            out[f"{key}_1thread_ms_{rule}"] = min(seconds[name]) * 1e3
+            out[f"{key}_optimality_rate_{rule}"] = float(np.mean(rates[name]))
     finally:
         numba.set_num_threads(threads)
-    out["bpso_candidate_speedup"] = out["bpso_reference_1thread_ms"] / out["bpso_candidate_1thread_ms"]
+    reference_ms = out[f"bpso_reference_1thread_ms_{rule}"]
+    out[f"bpso_speedup_vs_reference_{rule}"] = reference_ms / out[f"bpso_1thread_ms_{rule}"]
+    out[f"bpso_candidate_speedup_vs_reference_{rule}"] = (
+        reference_ms / out[f"bpso_candidate_1thread_ms_{rule}"]
+    )
     return out
 
 
@@ -104,7 +136,8 @@ def main() -> None:
     r = measure(args.trials, args.repeats)
     if HAVE_NUMBA:
         index = np.random.default_rng(7).exponential(size=(args.trials, 4, 6))
-        r.update(candidate_kernel(index, args.repeats))
+        for rule in BPSO_RULES:
+            r.update(one_thread(index, args.repeats, rule))
     print(
         f"super-arm solvers, M=4 N=6 Ms=2 Ns=3, {args.trials} trials per batched selection"
         f" (numba {'on' if HAVE_NUMBA else 'not installed'})"
@@ -120,13 +153,17 @@ def main() -> None:
         f" mean gap {gap:.3f} %"
     )
     if HAVE_NUMBA:
-        print(
-            f"  one thread: bpso {r['bpso_reference_1thread_ms']:.1f} ms (optimal in"
-            f" {100 * r['bpso_reference_optimality_rate']:.1f} %), SIMD candidate"
-            f" {r['bpso_candidate_1thread_ms']:.1f} ms"
-            f" (optimal in {100 * r['bpso_candidate_optimality_rate']:.1f} %):"
-            f" {r['bpso_candidate_speedup']:.2f}x"
-        )
+        print("  one thread, the paper's swarm (best of the repeats; optimal fraction against exact):")
+        for rule in BPSO_RULES:
+            print(
+                f"    rule {rule}: pre-rework kernel {r[f'bpso_reference_1thread_ms_{rule}']:.1f} ms"
+                f" ({100 * r[f'bpso_reference_optimality_rate_{rule}']:.1f} %), agents' kernel"
+                f" {r[f'bpso_1thread_ms_{rule}']:.1f} ms ({100 * r[f'bpso_optimality_rate_{rule}']:.1f} %):"
+                f" {r[f'bpso_speedup_vs_reference_{rule}']:.2f}x; SIMD candidate"
+                f" {r[f'bpso_candidate_1thread_ms_{rule}']:.1f} ms"
+                f" ({100 * r[f'bpso_candidate_optimality_rate_{rule}']:.1f} %):"
+                f" {r[f'bpso_candidate_speedup_vs_reference_{rule}']:.2f}x"
+            )
 
 
 if __name__ == "__main__":

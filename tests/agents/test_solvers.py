@@ -115,6 +115,50 @@ def test_bpso_serial_kernel_is_taken_with_one_thread_and_gives_the_same_numbers(
     assert _bpso_kernels.run_numba.py_func.__qualname__ != _bpso_kernels.run_numba_serial.py_func.__qualname__
 
 
+@pytest.mark.parametrize(
+    ("shape", "counts", "population"),
+    [
+        ((4, 6), (2, 3), 13),  # eq19 by table; particles padded from 13 to 16
+        ((3, 3), (1, 1), 1),  # one particle
+        ((8, 9), (3, 4), 50),  # 17 bits: eq19 summed directly
+        ((12, 12), (2, 2), 9),
+    ],
+)
+def test_bpso_kernels_agree_by_table_and_by_direct_sum(shape, counts, population):
+    """The compiled kernel looks eq19 up in a table up to TABLE_BITS bits and sums it beyond;
+    both, with any population, select what the numpy kernel selects, under both rules."""
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    assert (sum(shape) <= _bpso_kernels.TABLE_BITS) == (shape == (4, 6) or shape == (3, 3))
+    index = np.random.default_rng(sum(shape)).exponential(size=(9, *shape))
+    for rule in ("xor", "set"):
+        solvers = [
+            BPSOSolver(*counts, population=population, iterations=15, rule=rule, use_numba=use)
+            for use in (True, False)
+        ]
+        fast, slow = (solver.solve(index, streams(index, 7)) for solver in solvers)
+        np.testing.assert_array_equal(fast[0], slow[0])
+        np.testing.assert_array_equal(fast[1], slow[1])
+
+
+def test_bpso_fitness_table_is_eq19_of_every_pattern():
+    """Every bit pattern's table entry: the index sum of its channels (brute force) where it
+    selects Ms transmitters and Ns receivers, -inf elsewhere."""
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    index = np.random.default_rng(1).normal(size=(4, 6))
+    table = np.empty(1 << 10)
+    codes = _bpso_kernels._valid_codes
+    _bpso_kernels._fitness_table(index, codes(2, 4), codes(3, 6), table)
+    for pattern in range(1 << 10):
+        bits = (pattern >> np.arange(10)) & 1
+        tx, rx = bits[:4], bits[4:]
+        if tx.sum() == 2 and rx.sum() == 3:
+            assert table[pattern] == pytest.approx(tx @ index @ rx, rel=1e-12)
+        else:
+            assert table[pattern] == -np.inf
+
+
 def test_bpso_exp_polynomial_is_accurate():
     v = np.linspace(-6, 6, 10001)
     np.testing.assert_allclose(_bpso_kernels.exp_negative(v), np.exp(-v), rtol=1e-7)
