@@ -230,9 +230,10 @@ if HAVE_NUMBA:  # pragma: no branch
                     for lane in range(lanes):
                         for p in range(width):
                             bits = element_bits_nb(base_flip, p * lanes + lane)
-                            for s in range(min(4, length - 4 * lane)):
-                                lane_bits = (bits >> np.uint64(16 * s)) & np.uint64(0xFFFF)
-                                uniform[4 * lane + s, p] = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)
+                            for s in range(4):  # a constant trip count: the loop over p vectorises
+                                if 4 * lane + s < length:
+                                    lane_bits = (bits >> np.uint64(16 * s)) & np.uint64(0xFFFF)
+                                    uniform[4 * lane + s, p] = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)
                     for j in range(length):
                         best_bit = global_best[j]
                         for p in range(width):
