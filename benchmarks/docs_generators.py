@@ -356,6 +356,8 @@ TIMINGS = {
     "planning study": "planning/timing.json",
     "mechanisms study": "mechanisms/timing.json",
     "layout search, 2 layouts scored at 500 trials": "layout-search/timing.json",
+    "layout search, ranks 4, 5 and 10 re-scored at 500 trials": "layout-search/rescored.timing.json",
+    "ablations study": "mechanisms/ablations.timing.json",
 }
 
 
@@ -994,17 +996,272 @@ def mechanisms_findings(docs: Path) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------ the ablations
+ABLATIONS = "mechanisms/ablations.json"
+#: The ASR claim of each v1 paper scenario.
+ASR_CLAIM_OF = {"paper-1-v1": "S1.10", "paper-2-v1": "S2.5", "paper-3-v1": "S3.4"}
+
+
+def _ablation_scenarios(a: dict) -> dict[str, dict]:
+    return {k: v for k, v in a.items() if k != "variants"}
+
+
+def _pp(judged: dict) -> str:
+    """A difference of fractions in percentage points, signed, with its interval."""
+    return format_judged(judged, "{:+.1f}", 100)
+
+
+@generator("ablations-asr")
+def ablations_asr(docs: Path) -> str:
+    """MG-CRB-CL's ASR under each one-parameter change, with its paired difference to the paper's
+    MG-CRB-CL, from ablations.json."""
+    a = read_json(docs, ABLATIONS)
+    mechanisms = read_json(docs, MECHANISMS)
+    scenarios = _ablation_scenarios(a)
+    labels = [k for k in next(iter(scenarios.values()))["asr"] if k != "paper"]
+    lines = [
+        "| claim | MG-CRB-CL as in the paper (ASR %) | "
+        + " | ".join(
+            f"{label.removeprefix('mg-crb-cl, ')} (ASR %; minus the paper's, pp)" for label in labels
+        )
+        + " | the paper's MG-CRB-CL (ASR %) |",
+        "|---|---|" + "---|" * len(labels) + "---|",
+    ]
+    for scenario, entry in scenarios.items():
+        claim = ASR_CLAIM_OF[scenario]
+        asr = entry["asr"]
+        cells = [
+            f"{format_judged(asr[k]['asr'], '{:.1f}', 100)}; {_pp(asr[k]['asr_minus_paper'])}" for k in labels
+        ]
+        paper = mechanisms["paper_asr"][claim]["mg-crb-cl"]
+        lines.append(
+            f"| {claim} ({scenario}) | {format_judged(asr['paper']['asr'], '{:.1f}', 100)} | "
+            + " | ".join(cells)
+            + f" | {paper:.2f} |"
+        )
+    trials = {e["trials"] for e in scenarios.values()}
+    lines += [
+        "",
+        f"{', '.join(map(str, sorted(trials)))} trials per scenario, paired on the claims study's trials.",
+    ]
+    return "\n".join(lines)
+
+
+@generator("ablations-s17")
+def ablations_s17(docs: Path) -> str:
+    """S1.7: UCB1's and epsilon-greedy's regret and what each way of exploring costs over the
+    greedy core, from ablations.json (Scenario 1)."""
+    entry = read_json(docs, ABLATIONS)["paper-1-v1"]["exploration"]
+    lines = [
+        "| regret at | UCB1 | epsilon-greedy | greedy core (UCB1, beta = 0) | UCB1 minus greedy "
+        "| epsilon-greedy minus greedy | UCB1 minus epsilon-greedy |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    keys = ("ucb1", "epsilon-greedy", "greedy", "ucb1_minus_greedy", "epsilon_greedy_minus_greedy")
+    for at, row in entry["at"].items():
+        lines.append(
+            f"| {at} s | "
+            + " | ".join(format_judged(row[k], "{:.0f}") for k in (*keys, "ucb1_minus_epsilon_greedy"))
+            + " |"
+        )
+    crossing = entry["crossing"]
+    lines += [
+        "",
+        "UCB1's mean regret stays above epsilon-greedy's from step "
+        f"{crossing} on (the paper: they cross near 455 s)."
+        if crossing
+        else "UCB1's mean regret ends below epsilon-greedy's.",
+    ]
+    return "\n".join(lines)
+
+
+@generator("ablations-s18")
+def ablations_s18(docs: Path) -> str:
+    """S1.8: every policy's ARMSE and bound in the claim's windows, from ablations.json
+    (Scenario 1)."""
+    rows = read_json(docs, ABLATIONS)["paper-1-v1"]["rmse_windows"]
+    policies = list(rows[0]["armse"])
+    lines = [
+        "| window | the claim | "
+        + " | ".join(f"{p}: ARMSE (m); bound (m)" for p in policies)
+        + " | the extreme ARMSE | the extreme bound |",
+        "|---|---|" + "---|" * len(policies) + "---|---|",
+    ]
+    for row in rows:
+        a, b = row["window"]
+        cells = [f"{format_judged(row['armse'][p], '{:.2f}')}; {row['bound'][p]:.2f}" for p in policies]
+        lines.append(
+            f"| {a}-{b} s | {row['policy']} {row['extreme']} | "
+            + " | ".join(cells)
+            + f" | {row['extreme']}: {row['armse_extreme']} | {row['extreme']}: {row['bound_extreme']} |"
+        )
+    return "\n".join(lines)
+
+
+@generator("ablations-s22")
+def ablations_s22(docs: Path) -> str:
+    """S2.2: every policy's SINR change across the maneuver and its SINR below Best's, and the
+    super arms that gain mean reward, from ablations.json (Scenario 2)."""
+    m = read_json(docs, ABLATIONS)["paper-2-v1"]["maneuver"]
+    lines = [
+        "| policy | SINR 400-500 s minus 300-400 s (dB) | below Best, 300-400 s (dB) "
+        "| below Best, 400-500 s (dB) |",
+        "|---|---|---|---|",
+    ]
+    for policy, row in m["policies"].items():
+        lines.append(
+            f"| {policy} | {format_judged(row['change_db'], '{:+.2f}')} "
+            f"| {format_judged(row['below_best_before_db'], '{:.2f}')} "
+            f"| {format_judged(row['below_best_after_db'], '{:.2f}')} |"
+        )
+    lines += [
+        "",
+        f"Along the true track, {m['super_arms_rising']} of the {m['super_arms']} super arms have a higher "
+        "mean reward over 400-500 s than over 300-400 s; the best super arm changes "
+        + ("once" if m["best_arm_changes"] == 1 else f"{m['best_arm_changes']} times")
+        + " over 300-500 s.",
+    ]
+    return "\n".join(lines)
+
+
+def _m(judged: dict, fmt: str = "{:.2f}", scale: float = 1.0) -> str:
+    return format_judged(judged, fmt, scale)
+
+
+@generator("mechanisms-per-claim")
+def mechanisms_per_claim(docs: Path) -> str:
+    """One measured mechanism per claim contradicted under v1, from mechanisms.json and
+    ablations.json (the sections below give the tables); each lead phrase is said only where the
+    intervals show it."""
+    a = read_json(docs, ABLATIONS)
+    m = read_json(docs, MECHANISMS)
+    v1 = _verdicts(docs, SCORECARDS["v1"])
+    rows = ["| claim | v1 | mechanism, measured (v1, eq22 average fusion) |", "|---|---|---|"]
+
+    explore = a["paper-1-v1"]["exploration"]
+    at = min(explore["at"], key=int)
+    early = explore["at"][at]
+    lead = (
+        "Exploring costs UCB1 more than epsilon-greedy from the start"
+        if early["ucb1_minus_epsilon_greedy"]["ci"][0] > 0
+        else "Exploring costs"
+    )
+    crossing = explore["crossing"]
+    rows.append(
+        f"| S1.7 | {v1['S1.7']} | {lead}: by {at} s UCB1's regret is above its greedy core's (UCB1 with "
+        f"beta = 0) by {_m(early['ucb1_minus_greedy'], '{:.0f}')}, epsilon-greedy's by "
+        f"{_m(early['epsilon_greedy_minus_greedy'], '{:.0f}')}"
+        + (f"; UCB1's mean regret stays above epsilon-greedy's from step {crossing} on" if crossing else "")
+        + " |"
+    )
+    windows = a["paper-1-v1"]["rmse_windows"]
+    parts = []
+    for row in windows:
+        lo, hi = row["window"]
+        claimed, extreme, top, worst = (
+            row["policy"],
+            row["extreme"],
+            row["bound_extreme"],
+            row["armse_extreme"],
+        )
+
+        def ratio(p: str, row: dict = row) -> str:
+            return f"{row['armse'][p]['estimate'] / row['bound'][p]:.2f}"
+
+        text = f"over {lo}-{hi} s the {extreme} bound is {top}'s ({row['bound'][top]:.2f} m"
+        text += f"; {claimed}'s {row['bound'][claimed]:.2f} m)" if top != claimed else ")"
+        if worst == top:
+            text += " and so is the ARMSE"
+        else:
+            text += (
+                f", the {extreme} ARMSE {worst}'s (ARMSE / bound {ratio(worst)} against {top}'s {ratio(top)})"
+            )
+        parts.append(text)
+    follow = sum(r["armse_extreme"] == r["bound_extreme"] for r in windows)
+    rows.append(
+        f"| S1.8 | {v1['S1.8']} | The windows' extreme ARMSE is the extreme bound's in {follow} of "
+        f"{len(windows)} windows: " + "; ".join(parts) + " |"
+    )
+    s = m["armse_summary"]
+    for claim in ("S1.9", "S2.4", "S3.2", "S3.3"):
+        mine = [r for r in m["armse_comparisons"] if r["claim"] == claim]
+        broken = [r for r in mine if r["verdict"] == "contradicted"]
+        rows.append(
+            f"| {claim} | {v1[claim]} | {sum(r['follows_bound'] for r in mine)} of its {len(mine)} ARMSE "
+            f"comparisons go the way the two policies' position bounds go "
+            f"({sum(r['follows_bound'] for r in broken)} of the {len(broken)} contradicted; over all the "
+            f"claims {s['follow_bound']} of {s['comparisons']}) |"
+        )
+    for scenario, claim in ASR_CLAIM_OF.items():
+        asr = a[scenario]["asr"]
+        greedy = asr["mg-crb-cl, exact, beta = 0"]
+        cap_width, cap = _best_window(m["lead"][scenario], "probing_window_oracle_asr")
+        lead = "eq18's optimism keeps MG-CRB-CL's ASR low: " if greedy["asr_minus_paper"]["ci"][0] > 0 else ""
+        rows.append(
+            f"| {claim} | {v1[claim]} | {lead}without it (beta = 0, exact solver) the ASR is "
+            f"{_m(greedy['asr'], '{:.1f}', 100)} % ({_pp(greedy['asr_minus_paper'])} pp over the paper's "
+            f"MG-CRB-CL, {_m(asr['paper']['asr'], '{:.1f}', 100)} %); the exact solver alone moves it by "
+            f"{_pp(asr['mg-crb-cl, exact solver']['asr_minus_paper'])} pp, a longer memory "
+            f"(alpha_bar = 0.05) by {_pp(asr['mg-crb-cl, exact, alpha_bar = 0.05']['asr_minus_paper'])} pp; "
+            f"the probing window oracle's cap is {_m(cap, '{:.1f}', 100)} % (W = {cap_width}) |"
+        )
+    man = a["paper-2-v1"]["maneuver"]
+    pol = man["policies"]
+    mg = pol["mg-crb-cl"]
+    behind = mg["below_best_after_db"]["ci"][0] > mg["below_best_before_db"]["ci"][1]
+    rising = [p for p in ("fix1", "fix2") if pol[p]["change_db"]["ci"][0] > 0]
+    among = {2: "fix1's and fix2's among them", 1: f"{''.join(rising)}'s among them", 0: "neither fixed one"}
+    rows.append(
+        f"| S2.2 | {v1['S2.2']} | Along the true track {man['super_arms_rising']} of the {man['super_arms']} "
+        f"super arms gain mean reward after the maneuver, {among[len(rising)]} (their SINR changes by "
+        f"{_m(pol['fix1']['change_db'], '{:+.2f}')} and {_m(pol['fix2']['change_db'], '{:+.2f}')} dB); "
+        f"Best's SINR changes by {_m(pol['best']['change_db'], '{:+.2f}')} dB, MG-CRB-CL's by "
+        f"{_m(mg['change_db'], '{:+.2f}')} dB; MG-CRB-CL's SINR below Best's goes from "
+        f"{_m(mg['below_best_before_db'])} to {_m(mg['below_best_after_db'])} dB"
+        + (": it falls further behind Best after the maneuver |" if behind else " |")
+    )
+    return "\n".join(rows)
+
+
 # ------------------------------------------------------------------ the global layout search
 LAYOUT_SEARCH = "layout-search/search.json"
 
 
+#: The searched layouts re-scored at 500 trials (``search-layouts --score``), by rank of top10.json.
+LAYOUT_RESCORED = "layout-search/rescored.json"
+
+
+def _long_trials(docs: Path) -> int:
+    """The trials of the long scorecards (rescored.json records them; search.json, written before
+    the search recorded its trials, is checked against them where it has them)."""
+    trials = read_json(docs, LAYOUT_RESCORED)["trials"]
+    if read_json(docs, LAYOUT_SEARCH).get("trials", trials) != trials:
+        raise BenchError(f"{LAYOUT_SEARCH} and {LAYOUT_RESCORED} scored their layouts at different trials")
+    return trials
+
+
+def _long_scorecards(docs: Path) -> list[dict]:
+    """Every searched layout with a long scorecard (search.json's finalists, then the re-scored
+    ranks), by rank; each must be the layout of that rank in top10.json (same search, same seed)."""
+    top = [f for f in read_json(docs, LAYOUT_TOP)["finalists"] if f["name"] != "v1"]
+    scored = [f for f in read_json(docs, LAYOUT_SEARCH)["finalists"] if f["name"] != "v1"]
+    scored += read_json(docs, LAYOUT_RESCORED)["finalists"]
+    by_rank: dict[int, dict] = {}
+    for f in scored:
+        rank = f.get("rank") or int(f["name"].rsplit("-", 1)[1])
+        if not np.allclose(f["vector"], top[rank - 1]["vector"]):
+            raise BenchError(f"{f['name']} of the 500-trial scorecards is not layout {rank} of {LAYOUT_TOP}")
+        by_rank[rank] = {**f, "name": f"search-{rank}"}
+    return [by_rank[r] for r in sorted(by_rank)]
+
+
 @generator("layout-search")
 def layout_search_table(docs: Path) -> str:
-    """The search's size and speed, and each claim's verdict under v1's layout and the best
-    searched layouts, from search.json and the v1 claims study."""
+    """The search's size and speed, and each claim's verdict under v1's layout and every searched
+    layout with a 500-trial scorecard, from search.json, rescored.json and the v1 claims study."""
     found = read_json(docs, LAYOUT_SEARCH)
     v1 = _verdicts(docs, SCORECARDS["v1"])
-    finalists = [f for f in found["finalists"] if f["name"] != "v1"]
+    finalists = _long_scorecards(docs)
     lines = [
         f"{found['evaluations']} layouts scored in {found['wall_s']:.0f} s ({found['layouts_per_s']:.1f} "
         f"layouts/s, {found['population']} a generation, {found['generations']} generations, seed "
@@ -1027,12 +1284,13 @@ def layout_search_table(docs: Path) -> str:
     lost = [c for c in v1 if v1[c] == "holds" and any(f["verdicts"][c] != "holds" for f in finalists)]
     never = [c for c in v1 if v1[c] != "holds" and all(f["verdicts"][c] != "holds" for f in finalists)]
     best = max(f["counts"]["holds"] for f in finalists)
+    under = [f["name"] for f in finalists if f["counts"]["holds"] == best]
     lines += [
         "",
-        f"The most claims holding under a searched layout: {best} (v1's layout: {counts['holds']}). "
-        f"Holding under a searched layout and not under v1's: {', '.join(gained) or 'none'}; holding under "
-        f"v1's and not under every searched one: {', '.join(lost) or 'none'}; holding under none of these "
-        f"layouts: {', '.join(never) or 'none'}.",
+        f"The most claims holding under a searched layout at {_long_trials(docs)} trials: {best}, under "
+        f"{', '.join(under)} (v1's layout: {counts['holds']}). Holding under a searched layout and not under "
+        f"v1's: {', '.join(gained) or 'none'}; holding under v1's and not under every searched one: "
+        f"{', '.join(lost) or 'none'}; holding under none of these layouts: {', '.join(never) or 'none'}.",
         "",
         f"The noise-free predictors with a scorecard comparison of their own agree with it in {agree} of "
         f"{compared} cases on the searched layouts' scorecards.",
@@ -1043,9 +1301,9 @@ def layout_search_table(docs: Path) -> str:
 LAYOUT_TOP = "layout-search/top10.json"
 #: Master seeds 1000 apart: trial i is seeded seed + i, so the three share no trial.
 SEED_SCORECARDS = {
-    "seed 0": "claims/v1.json",
-    "seed 1000": "claims/v1-seed1000.json",
-    "seed 2000": "claims/v1-seed2000.json",
+    "layout 116, seed 0": "claims/v1.json",
+    "layout 116, seed 1000": "claims/v1-seed1000.json",
+    "layout 116, seed 2000": "claims/v1-seed2000.json",
 }
 
 
@@ -1067,20 +1325,100 @@ def layout_sensitivity(docs: Path) -> str:
             f"| {claim} | " + " | ".join(short[v] for v in row) + f" | {row.count('holds')} of {len(row)} |"
         )
     lines.append("| **holds** | " + " | ".join(str(f["counts"]["holds"]) for f in finalists) + " | |")
+    long = {int(f["name"].rsplit("-", 1)[1]): f for f in _long_scorecards(docs)}
+    long_trials = _long_trials(docs)
+    lines.append(
+        f"| **holds at {long_trials} trials** | "
+        + " | ".join(
+            str(long[i + 1]["counts"]["holds"]) if i + 1 in long else "—" for i in range(len(finalists))
+        )
+        + " | |"
+    )
     note = f" at {trials} trials" if trials else ""
+    v1_holds = verdicts.count(_verdicts(docs, SCORECARDS["v1"]).values())["holds"]
+    could = [
+        i + 1 for i, f in enumerate(finalists) if f["counts"]["holds"] + f["counts"]["consistent"] > v1_holds
+    ]
+    missing = [rank for rank in could if rank not in long]
     held = {c: sum(f["verdicts"][c] == "holds" for f in finalists) for c in claims_ids}
     once = [c for c, n in held.items() if n == 1]
     never = [c for c, n in held.items() if n == 0]
     return "\n".join(lines) + (
         f"\n\nH holds, c consistent, X contradicted{note}. Holding under one of the ten layouts only: "
-        f"{', '.join(once) or 'none'}; under none: {', '.join(never) or 'none'}."
+        f"{', '.join(once) or 'none'}; under none: {', '.join(never) or 'none'}. The last row counts the "
+        f"claims holding at {long_trials} trials for the layouts scored there (—: not scored). "
+        f"Only a layout whose claims holding or consistent{note} outnumber the {v1_holds} holding under "
+        f"v1's layout at {long_trials} trials can beat it (unless a contradicted verdict turns): "
+        f"{', '.join(map(str, could)) or 'none'}; "
+        + (
+            f"each of them was scored at {long_trials} trials."
+            if not missing
+            else f"not scored at {long_trials} trials: {', '.join(map(str, missing))}."
+        )
     )
+
+
+#: The shipped scenario set's scorecards under the other master seeds (seed 0: rescored.json).
+SET_SEED_SCORECARDS = {
+    "search-5, seed 1000": "claims/search5-seed1000.json",
+    "search-5, seed 2000": "claims/search5-seed2000.json",
+}
+#: The layout shipped as a scenario set, by its rank in top10.json.
+SHIPPED_RANK, SHIPPED_SET = 5, "search-5"
+
+
+@generator("layout-adoption")
+def layout_adoption(docs: Path) -> str:
+    """Which searched layouts beat v1's at 500 trials, what they win and lose, and the shipped
+    set's stations checked against its layout."""
+    from mimo_radar_env import SCENARIO_SETS, load_scenario
+
+    v1 = _verdicts(docs, SCORECARDS["v1"])
+    v1_counts = verdicts.count(v1.values())
+    better = [f for f in _long_scorecards(docs) if f["counts"]["holds"] > v1_counts["holds"]]
+    if not better:
+        return f"No searched layout has more claims holding than v1's at {_long_trials(docs)} trials."
+    scored, trials = len(_long_scorecards(docs)), _long_trials(docs)
+    lines = [f"{len(better)} of the {scored} searched layouts scored at {trials} trials:", ""]
+    for f in better:
+        won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
+        lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
+        c = f["counts"]
+        lines.append(
+            f"- {f['name']}: {c['holds']} hold, {c['consistent']} consistent, {c['contradicted']} "
+            f"contradicted (v1's layout: {v1_counts['holds']}, {v1_counts['consistent']}, "
+            f"{v1_counts['contradicted']}); "
+            f"it makes {', '.join(won) or 'none'} hold and loses {', '.join(lost) or 'none'}."
+        )
+    shipped = next(f for f in better if f["name"] == f"search-{SHIPPED_RANK}")
+    km = np.array(shipped["vector"]).reshape(-1, 2) * 1e3
+    for name in SCENARIO_SETS[SHIPPED_SET].paper_scenarios:
+        sc = load_scenario(name)
+        stations = np.vstack([sc.tx_positions, sc.rx_positions])
+        if not np.allclose(stations, km, rtol=0, atol=1e-6):
+            raise BenchError(f"scenario {name} does not have the stations of {shipped['name']}")
+    tied = [f["name"] for f in better if f["counts"]["holds"] == shipped["counts"]["holds"]]
+    fewest = min(f["counts"]["contradicted"] for f in better if f["name"] in tied)
+    lines.append(
+        f"- Shipped as the scenario set `{SHIPPED_SET}`: {shipped['name']}, "
+        + (
+            "the most claims holding with the fewest contradicted"
+            if shipped["counts"]["contradicted"] == fewest and len(tied) > 1
+            else "the most claims holding"
+        )
+        + f" ({', '.join(SCENARIO_SETS[SHIPPED_SET].paper_scenarios)}: its stations, checked here)."
+    )
+    return "\n".join(lines)
 
 
 @generator("seed-sensitivity")
 def seed_sensitivity(docs: Path) -> str:
-    """The v1 scorecard (500 trials, average fusion) under three master seeds."""
+    """The v1 scorecard (500 trials, average fusion) under three master seeds, and the shipped
+    scenario set's under the same seeds."""
     cards = {label: _verdicts(docs, path) for label, path in SEED_SCORECARDS.items()}
+    shipped = next(f for f in _long_scorecards(docs) if f["name"] == f"search-{SHIPPED_RANK}")
+    cards[f"{SHIPPED_SET}, seed {read_json(docs, LAYOUT_RESCORED)['seed']}"] = shipped["verdicts"]
+    cards.update({label: _verdicts(docs, path) for label, path in SET_SEED_SCORECARDS.items()})
     labels = list(cards)
     lines = ["| claim | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for claim in cards[labels[0]]:
@@ -1090,5 +1428,18 @@ def seed_sensitivity(docs: Path) -> str:
             f"| **{kind}** | "
             + " | ".join(str(verdicts.count(cards[label].values())[kind]) for label in labels)
             + " |"
+        )
+    lines.append("")
+    for layout in dict.fromkeys(label.split(",")[0] for label in labels):
+        mine = [label for label in labels if label.split(",")[0] == layout]
+        moving = [c for c in cards[mine[0]] if len({cards[label][c] for label in mine}) > 1]
+        holds = [verdicts.count(cards[label].values())["holds"] for label in mine]
+        span = (
+            f"{min(holds)} claims hold under each of the {len(mine)} seeds"
+            if min(holds) == max(holds)
+            else f"{min(holds)} to {max(holds)} claims hold, depending on the seed"
+        )
+        lines.append(
+            f"- {layout}: {span}; verdicts that change with the seed: {', '.join(moving) or 'none'}."
         )
     return "\n".join(lines)

@@ -1,0 +1,81 @@
+"""The layout search's generated statements (docs/results.md): which searched layouts beat v1's,
+what each wins and loses, that the shipped scenario set has the scored stations, and which
+verdicts move with the seed, each against a computation of its own from the artefacts."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from benchmarks import docs_generators as generators
+from benchmarks.errors import BenchError
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+RESCORED = Path("results/layout-search/rescored.json")
+
+
+@pytest.fixture
+def docs(tmp_path):
+    copy = tmp_path / "docs"
+    shutil.copytree(DOCS / "results", copy / "results", ignore=shutil.ignore_patterns("*.png", "*.md"))
+    return copy
+
+
+def load(docs, path):
+    return json.loads((docs / path).read_text())
+
+
+def verdicts_of(card):
+    return {c["id"]: c["verdict"] for c in card}
+
+
+def test_layouts_that_beat_v1_are_listed_with_what_they_win_and_lose(docs):
+    v1 = verdicts_of(load(docs, "results/claims/v1.json"))
+    v1_holds = sum(v == "holds" for v in v1.values())
+    rescored = load(docs, RESCORED)
+    text = generators.layout_adoption(docs)
+    for f in rescored["finalists"]:
+        holds = f["counts"]["holds"]
+        listed = f"- {f['name']}: {holds} hold" in text
+        assert listed == (holds > v1_holds)
+        if listed:
+            won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
+            lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
+            assert f"it makes {', '.join(won)} hold and loses {', '.join(lost)}." in text
+    # one layout fewer above v1's count: it drops out of the list and the count says so
+    ten = next(f for f in rescored["finalists"] if f["name"] == "search-10")
+    ten["counts"]["holds"] = v1_holds
+    (docs / RESCORED).write_text(json.dumps(rescored))
+    text = generators.layout_adoption(docs)
+    assert "- search-10:" not in text and text.startswith("1 of the 5 searched layouts scored at 500 trials")
+
+
+def test_the_shipped_set_must_have_the_scored_stations(docs):
+    rescored = load(docs, RESCORED)
+    five = next(f for f in rescored["finalists"] if f["name"] == "search-5")
+    five["vector"][0] += 1.0  # 1 km off: no longer the shipped scenarios' first transmitter
+    (docs / RESCORED).write_text(json.dumps(rescored))
+    with pytest.raises(BenchError, match="search-5 of the 500-trial scorecards is not layout 5"):
+        generators.layout_adoption(docs)
+    top = load(docs, "results/layout-search/top10.json")
+    ranked = [f for f in top["finalists"] if f["name"] != "v1"]
+    ranked[4]["vector"][0] += 1.0  # the search's own rank 5 moved too: now the stations disagree
+    (docs / "results/layout-search/top10.json").write_text(json.dumps(top))
+    with pytest.raises(BenchError, match="does not have the stations of search-5"):
+        generators.layout_adoption(docs)
+
+
+def test_seed_sensitivity_names_the_verdicts_that_move(docs):
+    v1_cards = [verdicts_of(load(docs, f"results/{p}")) for p in generators.SEED_SCORECARDS.values()]
+    cards = {"layout 116": v1_cards}
+    five = next(f for f in load(docs, RESCORED)["finalists"] if f["name"] == "search-5")
+    cards["search-5"] = [five["verdicts"]] + [
+        verdicts_of(load(docs, f"results/{p}")) for p in generators.SET_SEED_SCORECARDS.values()
+    ]
+    text = generators.seed_sensitivity(docs)
+    for layout, seeds in cards.items():
+        moving = [c for c in seeds[0] if len({s[c] for s in seeds}) > 1]
+        assert f"- {layout}: " in text
+        line = next(row for row in text.splitlines() if row.startswith(f"- {layout}: "))
+        assert line.endswith(f"verdicts that change with the seed: {', '.join(moving) or 'none'}.")
