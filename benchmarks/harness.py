@@ -118,7 +118,7 @@ def make_config(
     trials: int,
     steps: int | None = None,
     seed: int = 0,
-    shard_size: int = 50,
+    shard_size: int | None = None,
     agent_params: dict[str, dict[str, Any]] | None = None,
     options: EnvOptions | None = None,
     workers: int = 1,
@@ -135,14 +135,17 @@ def make_config(
     shard size is lowered until it fits, and ``say`` says so, or the run is refused. Its time
     (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is said
     when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
+    ``shard_size`` None is :func:`auto_shard_size` for those tasks.
     """
     try:
         sc = load_scenario(scenario)
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
     options = options or EnvOptions()
-    for name, value, low in (("--trials", trials, 1), ("--shard-size", shard_size, 1), ("--seed", seed, 0)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+    for name, value, low in (("--trials", trials, 1), ("--seed", seed, 0), ("--shard-size", shard_size, 1)):
+        if name == "--shard-size" and value is None:
+            shard_size = auto_shard_size(trials, parallel or workers)
+        elif isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise HarnessError(f"{name} must be an integer >= {low}, got {value!r}")
     steps = sc.horizon if steps is None else steps
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
@@ -217,6 +220,17 @@ def make_config(
 
 #: The share of the machine's memory the tasks running at once may take together.
 MEMORY_FRACTION = 0.5
+#: The largest shard :func:`auto_shard_size` makes: a shard is saved whole, so this bounds the
+#: work an interruption loses (about a minute of the paper study's slowest policy).
+MAX_AUTO_SHARD_SIZE = 250
+
+
+def auto_shard_size(trials: int, parallel: int) -> int:
+    """The shard size when none is given: the trials split evenly over the ``parallel`` tasks
+    that run at once, so that every task steps as large a batch as it can (a step's fixed costs
+    are shared by the batch), at most :data:`MAX_AUTO_SHARD_SIZE`. The numbers do not depend on
+    it (trial ``i`` is seeded ``seed + i`` whatever its shard)."""
+    return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // max(1, parallel))))
 
 
 def fit_shard_size(
@@ -426,6 +440,16 @@ def policy_env_options(agent: agents.Agent, options: dict[str, Any]) -> dict[str
 
 
 # ------------------------------------------------------------------ storage
+def recorded_shard_size(out: str | Path) -> int | None:
+    """The shard size of the run already in ``out`` (None: no readable run there), which a
+    resumed run without ``--shard-size`` keeps, whatever its number of workers."""
+    try:
+        size = json.loads((Path(out) / CONFIG_FILE).read_text()).get("shard_size")
+    except (OSError, ValueError, AttributeError):
+        return None
+    return size if isinstance(size, int) and not isinstance(size, bool) and size >= 1 else None
+
+
 def prepare_output(out: Path, config: RunConfig) -> None:
     """Create DIR, or check that the run already in it has the same configuration."""
     path = out / CONFIG_FILE

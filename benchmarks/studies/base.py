@@ -116,7 +116,8 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
             settings.trials,
             settings.steps,
             settings.seed,
-            settings.shard_size,
+            # without --shard-size, a run being resumed keeps its own (it may have had other workers)
+            settings.shard_size or harness.recorded_shard_size(run.folder),
             settings.agent_params if run.agent_params is None else run.agent_params,
             options=run.options or settings.options,
             # tasks at once on this machine (a Ray task runs on a node: one at a time is checked)

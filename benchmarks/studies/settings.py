@@ -20,12 +20,11 @@ from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
 
 from ..errors import BenchError
-from ..harness import DEFAULT_MAX_HOURS
+from ..harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
 
 DEFAULT_TRIALS = 500
 #: The most Monte-Carlo trials a study takes (a million trials of the paper study take days).
 MAX_TRIALS = 1_000_000
-DEFAULT_SHARD_SIZE = 50
 
 
 def default_workers() -> int:
@@ -57,9 +56,11 @@ class Settings:
     ----------
     out : Path
         The study's output folder.
-    trials, steps, seed, shard_size : int
-        Monte-Carlo trials, steps per episode (None: the scenario's horizon), the base seed
-        (trial ``i`` uses ``seed + i``) and trials per shard.
+    trials, steps, seed : int
+        Monte-Carlo trials, steps per episode (None: the scenario's horizon) and the base seed
+        (trial ``i`` uses ``seed + i``).
+    shard_size : int or None
+        Trials per shard (None: :func:`benchmarks.harness.auto_shard_size` for the workers).
     workers, backend, address
         Local worker processes, ``"local"`` or ``"ray"``, and the Ray cluster's address.
     progress, figures : bool
@@ -78,7 +79,7 @@ class Settings:
     trials: int = DEFAULT_TRIALS
     steps: int | None = None
     seed: int = 0
-    shard_size: int = DEFAULT_SHARD_SIZE
+    shard_size: int | None = None
     workers: int = field(default_factory=default_workers)
     backend: str = "local"
     address: str | None = None
@@ -303,8 +304,9 @@ def add_run_arguments(
     parser.add_argument(
         "--shard-size",
         type=integer(1),
-        default=DEFAULT_SHARD_SIZE,
-        help=f"trials per shard; each finished shard is saved at once (default {DEFAULT_SHARD_SIZE})",
+        default=None,
+        help="trials per shard; each finished shard is saved at once (default: the trials split "
+        f"evenly over the workers, at most {MAX_AUTO_SHARD_SIZE})",
     )
     parser.add_argument(
         "--workers",

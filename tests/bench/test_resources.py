@@ -46,7 +46,7 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "7", "--steps", "3"]
     assert main([*argv, "--workers", "1", "--out", str(out), "--quiet", "--no-figures"]) == 0
-    assert "shards of 3 trials instead of 50" in capsys.readouterr().err
+    assert "shards of 3 trials instead of 7" in capsys.readouterr().err  # 7 trials, one worker
     assert json.loads((out / "config.json").read_text())["shard_size"] == 3
     assert len(list((out / "shards" / "ucb1").glob("*.npz"))) == 3  # 3 + 3 + 1 trials
 

@@ -72,3 +72,38 @@ def test_the_study_written_in_the_docs_runs_as_written(tmp_path):
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert result.returncode == 0, result.stderr[-2000:]
     assert result.stdout.strip() == "Best's regret is below random's: holds"
+
+
+def test_without_a_shard_size_the_trials_are_split_over_the_workers_and_a_resumed_run_keeps_its_own(
+    tmp_path,
+):
+    from benchmarks.harness import MAX_AUTO_SHARD_SIZE, auto_shard_size, make_config, run
+
+    # the trials split evenly over the tasks at once, capped, never below one
+    assert [auto_shard_size(t, w) for t, w in ((500, 2), (20, 2), (7, 2), (3, 8), (10_000, 2))] == [
+        250,
+        10,
+        4,
+        1,
+        MAX_AUTO_SHARD_SIZE,
+    ]
+    quiet = dict(say=lambda message: None)
+    assert make_config("paper-1-v1", ["fix1"], trials=9, steps=3, workers=2, **quiet).shard_size == 5
+    assert make_config("paper-1-v1", ["fix1"], 9, 3, workers=1, parallel=3, **quiet).shard_size == 3
+    assert make_config("paper-1-v1", ["fix1"], 9, 3, shard_size=2, workers=2, **quiet).shard_size == 2
+    # a run started with one worker is resumed with three: it keeps its shards of 6, not 2
+    folder = tmp_path / "a"
+    first = configure(
+        [Run("a", "paper-1-v1", ("fix1",), folder)], Settings(out=tmp_path, trials=6, steps=3, workers=1)
+    )
+    assert first[0].shard_size == 6
+    run(first[0], folder, progress=False, max_tasks=0)  # writes config.json only
+    again = configure(
+        [Run("a", "paper-1-v1", ("fix1",), folder)], Settings(out=tmp_path, trials=6, steps=3, workers=3)
+    )
+    assert again[0].shard_size == 6
+    fresh = configure(
+        [Run("b", "paper-1-v1", ("fix1",), tmp_path / "b")],
+        Settings(out=tmp_path, trials=6, steps=3, workers=3),
+    )
+    assert fresh[0].shard_size == 2
