@@ -131,18 +131,20 @@ class Perf(Command):
     order = 7
     help = "performance figures, each as a ratio to a reference measured in the same run"
     description = (
-        "Measure the tracker against filterpy, exact vs BPSO, the vector env's throughput and the wall "
-        "time of the paper's study; write DIR/perf.json and print a table."
+        "Measure the tracker against filterpy, BPSO against the kernel it replaced, the v1 vector env "
+        "against its numpy paths, and the v1 claims and tracking studies timed whole; write "
+        "DIR/perf.json and print a table."
     )
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
         parser.add_argument("--out", required=True, help="output directory for perf.json")
+        parser.add_argument("--quick", action="store_true", help="small sizes, a few minutes (CI smoke test)")
         parser.add_argument(
-            "--quick", action="store_true", help="small sizes, under a minute (CI smoke test)"
-        )
-        parser.add_argument(
-            "--workers", type=integer(1), default=None, help="worker processes for the study (default: cores)"
+            "--workers",
+            type=integer(1),
+            default=None,
+            help="worker processes for the studies (default: cores)",
         )
 
     def main(self) -> int:

@@ -710,6 +710,51 @@ def rl_findings(docs: Path) -> str:
     return "\n".join(lines)
 
 
+@generator("bpso-parts")
+def bpso_parts_table(docs: Path) -> str:
+    """``python -m benchmarks.speed.bpso_parts``: what each part of the BPSO kernel costs, and how
+    the exp polynomial alone compares with the speed target over the kernel it replaced."""
+    from .speed.perf import TARGETS
+
+    r = read_json(docs, "perf/bpso_parts.json")
+    lines = [
+        "| part knocked out | kernel without it (ms) | the part's cost (ms) | share of the kernel |",
+        "|---|---|---|---|",
+    ]
+    for row in r["parts"]:
+        lines.append(
+            f"| {row['part']} | {row['without_ms']:.1f} | {row['cost_ms']:.1f} | {100 * row['share']:.0f} % |"
+        )
+    speedup = TARGETS[f"bpso_speedup_vs_reference_{r['rule']}"][1]
+    budget = r["reference_ms"] / speedup
+    polynomial = next(row for row in r["parts"] if "polynomial" in row["part"])
+    verdict = "more than" if polynomial["cost_ms"] > budget else "less than"
+    lines += [
+        "",
+        f"{r['trials']} trials, rule {r['rule']}, one thread: the kernel {r['kernel_ms']:.1f} ms, the "
+        f"kernel it replaced {r['reference_ms']:.1f} ms ({r['reference_ms'] / r['kernel_ms']:.2f}x). A "
+        f"{speedup:g}x speed-up would leave {budget:.1f} ms; the exp polynomial alone costs "
+        f"{polynomial['cost_ms']:.1f} ms, {verdict} that.",
+    ]
+    return "\n".join(lines)
+
+
+@generator("first-run")
+def first_run_sentence(docs: Path) -> str:
+    """``python -m benchmarks.speed.first_run``: the quickstart's first run from an empty numba
+    cache against its second."""
+    from .speed.first_run import TARGET as FIRST_RUN_TARGET
+
+    r = read_json(docs, "perf/first_run.json")
+    pairs = "; ".join(f"{p['first_s']:.1f} s against {p['second_s']:.1f} s" for p in r["repeats"])
+    met = "met" if r["max_ratio"] <= FIRST_RUN_TARGET else "**missed**"
+    return (
+        f"`{' '.join(r['command'])}`, each repeat from an empty cache: first run against second {pairs}; "
+        f"first / second {r['median_ratio']:.2f} at the median, {r['max_ratio']:.2f} at the largest "
+        f"(target <= {FIRST_RUN_TARGET:g}: {met}; load average {r['machine']['load_average_1min']:.2f})."
+    )
+
+
 @generator("step-stages")
 def step_stages(docs: Path) -> str:
     """``python -m benchmarks.speed.stages``' rows: each stage's time per step, its share, the

@@ -61,6 +61,7 @@ MODULE_TESTS = {
     "benchmarks/studies/mechanisms.py": ("tests/bench/test_mechanisms.py", r"lead_and_sampling_oracles"),
     "benchmarks/speed/bpso_simd.py": ("tests/bench/test_bpso_simd.py", r"run_numpy"),
     "benchmarks/speed/bpso_reference.py": ("tests/bench/test_bpso_reference.py", r"run_reference"),
+    "benchmarks/speed/bpso_parts.py": ("tests/bench/test_perf_quick.py", r"bpso_parts\.measure"),
     "benchmarks/speed/solver_speed.py": ("tests/bench/test_perf_quick.py", r"bpso_optimality_rate"),
     "benchmarks/speed/tracker_speed.py": ("tests/bench/test_perf_quick.py", r"tracker_speedup_vs_filterpy"),
     "benchmarks/studies/base.py": ("tests/bench/test_studies.py", r"configure"),

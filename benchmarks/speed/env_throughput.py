@@ -1,7 +1,8 @@
 """Vector env throughput: trial-steps per second with random valid actions.
 
-Run: ``python -m benchmarks.speed.env_throughput [--trials 500] [--steps 200] [--scenario paper-1]``.
-Prints trial-steps/s with and without the in-loop IMM-UKF tracker, then those of the Flat
+Run: ``python -m benchmarks.speed.env_throughput [--trials 500] [--steps 200] [--scenario paper-1-v1]``.
+Prints trial-steps/s with and without the in-loop IMM-UKF tracker (and, under v1, its position
+bound), each fusion also on the numpy twins of its numba kernels, then those of the Flat
 id (``MimoRadarSelectFlat-v1``, what learners train on) through its native vector entry point
 against Gymnasium's sync vector env of single Flat envs (at most 50 of them), in the same run.
 """
@@ -9,19 +10,38 @@ against Gymnasium's sync vector env of single Flat envs (at most 50 of them), in
 from __future__ import annotations
 
 import argparse
+import contextlib
+import functools
 import time
+from collections.abc import Iterator
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
 import mimo_radar_env  # noqa: F401  (registers the env)
 from mimo_radar_env.core.superarm import random_super_arms
+from mimo_radar_env.envs import engine as engine_module
+from mimo_radar_env.tracking import bound
 
 
-def measure(scenario: str, trials: int, steps: int, tracking: bool, fusion: str = "average") -> float:
-    """Trial-steps per second of the vector env (actions drawn beforehand, not timed)."""
+def measure(
+    scenario: str,
+    trials: int,
+    steps: int,
+    tracking: bool,
+    fusion: str = "average",
+    version: str | None = None,
+    compiled: bool = True,
+) -> float:
+    """Trial-steps per second of the vector env (actions drawn beforehand, not timed): the env id
+    of ``version`` (default: the scenario's own, ``-v1`` names are v1's), its defaults (under v1
+    the tracker's position bound is computed every step). ``compiled=False`` runs the numpy twins
+    of the fusion's and the bound's numba kernels, the reference the compiled paths are measured
+    against."""
+    version = version or ("v1" if scenario.endswith("-v1") else "v0")
     venv = gym.make_vec(
-        "MimoRadarSelect-v0",
+        f"MimoRadarSelect-{version}",
         num_envs=trials,
         vectorization_mode="vector_entry_point",
         scenario=scenario,
@@ -34,7 +54,27 @@ def measure(scenario: str, trials: int, steps: int, tracking: bool, fusion: str 
         random_super_arms(rng, trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
         for _ in range(steps)
     ]
-    return _trial_steps_per_s(venv, actions, trials)
+    with contextlib.nullcontext() if compiled else numpy_paths(venv):
+        return _trial_steps_per_s(venv, actions, trials)
+
+
+@contextlib.contextmanager
+def numpy_paths(venv: Any) -> Iterator[None]:
+    """The env's fusion and position bound on their numpy paths (the numba kernels' twins, equal
+    to 1e-10 and 1e-12) while the block runs."""
+    engine = venv.unwrapped.engine if hasattr(venv, "unwrapped") else venv.engine
+    fusion = engine.tracker.fusion if engine.tracker is not None else None
+    original = engine_module.bound_step
+    was = fusion.use_numba if fusion is not None else None
+    engine_module.bound_step = functools.partial(bound.bound_step, use_numba=False)
+    if fusion is not None:
+        fusion.use_numba = False
+    try:
+        yield
+    finally:
+        engine_module.bound_step = original
+        if fusion is not None:
+            fusion.use_numba = was
 
 
 def _trial_steps_per_s(venv, actions: list, trials: int) -> float:
@@ -96,17 +136,19 @@ def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int =
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--scenario", default="paper-1")
+    parser.add_argument("--scenario", default="paper-1-v1")
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=200)
     args = parser.parse_args()
     print(f"vector env, {args.scenario}, {args.trials} trials, {args.steps} steps, random valid actions")
-    for label, tracking, fusion in (
-        ("simulation only (tracking=False)", False, "average"),
-        ("with IMM-UKF, fusion=average", True, "average"),
-        ("with IMM-UKF, fusion=centralized", True, "centralized"),
+    for label, tracking, fusion, compiled in (
+        ("simulation only (tracking=False)", False, "average", True),
+        ("with IMM-UKF, fusion=average", True, "average", True),
+        ("  the same on the numpy paths", True, "average", False),
+        ("with IMM-UKF, fusion=centralized", True, "centralized", True),
+        ("  the same on the numpy paths", True, "centralized", False),
     ):
-        rate = measure(args.scenario, args.trials, args.steps, tracking, fusion)
+        rate = measure(args.scenario, args.trials, args.steps, tracking, fusion, compiled=compiled)
         print(f"  {label:<36} {rate:>12,.0f} trial-steps/s")
     flat = f"{args.scenario}-v1" if not args.scenario.endswith("-v1") else args.scenario
     for label, mode, trials in (

@@ -1,16 +1,26 @@
 """``mimo-radar-bench perf``: the performance figures, each measured against its reference in one run.
 
-Figures (``perf.json``):
+Figures (``perf.json``), on v1's paper scenarios, the tracker's position bound included:
 
 * ``tracker_speedup_vs_filterpy``: batched IMM-UKF vs filterpy filters looped in Python,
   same inputs, 500 trials, 6 channels, 3 models (``benchmarks/speed/tracker_speed.py``);
 * ``exact_vs_bpso_speedup``, ``bpso_optimality_rate``: the solvers at the paper's size, 500
   trials (``benchmarks/speed/solver_speed.py``);
-* ``env_trial_steps_per_s``: vector env with tracker, 500 trials, ``paper-1``, random valid
-  actions (``benchmarks/speed/env_throughput.py``);
-* ``repro_wall_s_exact``: all three paper scenarios, six policies, 500 trials, T = 1000,
-  every index policy with the exact solver, through the harness;
-* ``repro_wall_s_paper``: the same with MG-CRB-CL using BPSO, as in the paper;
+* ``bpso_speedup_vs_reference_{xor,set}``: the agents' BPSO kernel against the kernel it
+  replaced (``benchmarks/speed/bpso_reference.py``), one thread, the paper's swarm, 500 trials,
+  each position rule, interleaved in the same run; ``bpso_1thread_ms_*``,
+  ``bpso_reference_1thread_ms_*`` the times and ``bpso_*optimality_rate_*`` the optimal
+  fractions against ``exact`` (the same: the rework kept the numbers);
+* ``env_trial_steps_per_s_{average,centralized}``: the v1 vector env with the tracker and the
+  bound, 500 trials, ``paper-1-v1``, random valid actions, and
+  ``env_compiled_speedup_{average,centralized}`` over the same env on the numpy twins of its
+  numba kernels (``env_numpy_trial_steps_per_s_*``); ``env_trial_steps_per_s_no_tracker``
+  (``benchmarks/speed/env_throughput.py``);
+* ``claims_v1_average_wall_s``, ``claims_v1_centralized_wall_s``,
+  ``claims_v1_both_fusions_wall_s``: the v1 claims study (``mimo-radar-bench claims``, three
+  paper scenarios, six policies, MG-CRB-CL with the paper's BPSO, 500 trials) timed whole with
+  ``--workers`` processes, under each fusion, and their sum; ``tracking_study_wall_s``: the
+  tracking study (``mimo-radar-bench tracking``, 200 trials, both fusions) timed whole;
 * ``flat_vector_trial_steps_per_s``, ``flat_sync_trial_steps_per_s``,
   ``flat_vector_vs_sync_speedup``: ``MimoRadarSelectFlat-v1`` (paper-1-v1, random Discrete
   actions) through its native vector entry point (``trials`` trials) against Gymnasium's sync
@@ -23,7 +33,8 @@ Figures (``perf.json``):
   and 64 x 64 stations, K = 1 and 5, against what it declares (``policy_cost.json`` beside
   ``perf.json``; ``benchmarks/speed/policy_cost.py``; ``--quick``: 4 x 6 only).
 
-``--quick`` measures the same things at small sizes (under a minute), for CI smoke tests.
+``--quick`` measures the same things at small sizes (a few minutes), for CI smoke tests; its
+study timings are of a few trials and steps and mark no target.
 """
 
 from __future__ import annotations
@@ -36,53 +47,62 @@ import time
 from pathlib import Path
 from typing import Any
 
-from ..harness import PAPER_POLICIES, make_config, run
+import numpy as np
+
+from agents.solvers.bpso import BPSO_RULES
+
 from ..studies.settings import default_workers
 from . import env_throughput, policy_cost, solver_speed, tracker_speed
 
+SCENARIO = "paper-1-v1"
 FULL = {
     "trials": 500,
     "tracker_steps": 20,
     "reference_trials": 10,
     "env_steps": 200,
-    "repro_trials": 500,
-    "repro_steps": None,
     "solver_repeats": 5,
+    "claims_trials": 500,
+    "tracking_trials": 200,
+    "study_steps": None,
 }
 QUICK = {
     "trials": 100,
     "tracker_steps": 5,
     "reference_trials": 2,
     "env_steps": 30,
-    "repro_trials": 20,
-    "repro_steps": 50,
     "solver_repeats": 2,
+    "claims_trials": 4,
+    "tracking_trials": 2,
+    "study_steps": 20,
 }
 TARGETS = {
     "tracker_speedup_vs_filterpy": (">=", 300.0),
-    "repro_wall_s_exact": ("<=", 120.0),
-    "repro_wall_s_paper": ("<=", 600.0),
+    "bpso_speedup_vs_reference_xor": (">=", 5.0),
+    "bpso_speedup_vs_reference_set": (">=", 5.0),
+    "claims_v1_average_wall_s": ("<=", 120.0),
+    "claims_v1_both_fusions_wall_s": ("<=", 240.0),
+    "tracking_study_wall_s": ("<=", 300.0),
 }
 
 
-def repro_wall_s(solver: str, trials: int, steps: int | None, workers: int, shard_size: int) -> float:
-    """Wall seconds of the paper's study (3 scenarios x 6 policies) through the harness."""
-    start = time.perf_counter()
+def study_wall_s(argv: list[str], trials: int, steps: int | None, workers: int) -> float:
+    """Wall seconds of one ``mimo-radar-bench`` study run whole (``argv``: its name and options),
+    into a fresh folder, without figures."""
+    from ..cli import main as cli_main
+
+    size = ["--trials", str(trials), *([] if steps is None else ["--steps", str(steps)])]
     with tempfile.TemporaryDirectory() as tmp:
-        for scenario in ("paper-1", "paper-2", "paper-3"):
-            params = {"mg-crb-cl": {"solver": solver}}
-            config = make_config(
-                scenario, list(PAPER_POLICIES), trials, steps, shard_size=shard_size, agent_params=params
-            )
-            run(config, Path(tmp) / scenario, workers=workers, progress=False)
-    return time.perf_counter() - start
+        start = time.perf_counter()
+        code = cli_main([*argv, *size, "--workers", str(workers), "--quiet", "--no-figures", "--out", tmp])
+        seconds = time.perf_counter() - start
+    if code != 0:
+        raise RuntimeError(f"mimo-radar-bench {' '.join(argv)} exited with {code}")
+    return seconds
 
 
 def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     sizes = QUICK if quick else FULL
     workers = workers or default_workers()
-    trials = sizes["repro_trials"]
-    shard_size = max(1, -(-trials // workers))  # one shard per worker and policy: the largest batches
     results: dict[str, Any] = {
         "quick": quick,
         "workers": workers,
@@ -96,34 +116,51 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     results.update(
         {k: solvers[k] for k in ("exact_ms", "bpso_ms", "exact_vs_bpso_speedup", "bpso_optimality_rate")}
     )
-    results["env_trial_steps_per_s"] = env_throughput.measure(
-        "paper-1", sizes["trials"], sizes["env_steps"], tracking=True
-    )
+    if solver_speed.HAVE_NUMBA:
+        index = np.random.default_rng(7).exponential(size=(sizes["trials"], 4, 6))
+        for rule in BPSO_RULES:
+            results.update(solver_speed.one_thread(index, sizes["solver_repeats"], rule))
+    steps = sizes["env_steps"]
+    for fusion in ("average", "centralized"):
+        rate = env_throughput.measure(SCENARIO, sizes["trials"], steps, True, fusion)
+        numpy = env_throughput.measure(SCENARIO, sizes["trials"], steps, True, fusion, compiled=False)
+        results[f"env_trial_steps_per_s_{fusion}"] = rate
+        results[f"env_numpy_trial_steps_per_s_{fusion}"] = numpy
+        results[f"env_compiled_speedup_{fusion}"] = rate / numpy
     results["env_trial_steps_per_s_no_tracker"] = env_throughput.measure(
-        "paper-1", sizes["trials"], sizes["env_steps"], tracking=False
+        SCENARIO, sizes["trials"], steps, False
     )
     flat_steps = min(sizes["env_steps"], 20)
     results["flat_vector_trial_steps_per_s"] = env_throughput.flat_measure(
-        "paper-1-v1", sizes["trials"], flat_steps, "vector_entry_point"
+        SCENARIO, sizes["trials"], flat_steps, "vector_entry_point"
     )
     results["flat_sync_trial_steps_per_s"] = env_throughput.flat_measure(
-        "paper-1-v1", sizes["reference_trials"] * 5, flat_steps, "sync"
+        SCENARIO, sizes["reference_trials"] * 5, flat_steps, "sync"
     )
     results["flat_vector_vs_sync_speedup"] = (
         results["flat_vector_trial_steps_per_s"] / results["flat_sync_trial_steps_per_s"]
     )
     training_steps = 2048 if quick else 8192
     results["ppo_training_steps_per_s_native"] = env_throughput.ppo_training_rate(
-        "paper-1-v1", training_steps, native=True
+        SCENARIO, training_steps, native=True
     )
     results["ppo_training_steps_per_s_sync"] = env_throughput.ppo_training_rate(
-        "paper-1-v1", training_steps, native=False
+        SCENARIO, training_steps, native=False
     )
     results["ppo_training_native_vs_sync_speedup"] = (
         results["ppo_training_steps_per_s_native"] / results["ppo_training_steps_per_s_sync"]
     )
-    results["repro_wall_s_exact"] = repro_wall_s("exact", trials, sizes["repro_steps"], workers, shard_size)
-    results["repro_wall_s_paper"] = repro_wall_s("bpso", trials, sizes["repro_steps"], workers, shard_size)
+    study_steps = sizes["study_steps"]
+    for fusion in ("average", "centralized"):
+        results[f"claims_v1_{fusion}_wall_s"] = study_wall_s(
+            ["claims", "--fusion", fusion], sizes["claims_trials"], study_steps, workers
+        )
+    results["claims_v1_both_fusions_wall_s"] = (
+        results["claims_v1_average_wall_s"] + results["claims_v1_centralized_wall_s"]
+    )
+    results["tracking_study_wall_s"] = study_wall_s(
+        ["tracking"], sizes["tracking_trials"], study_steps, workers
+    )
     start = time.perf_counter()
     layouts = policy_cost.LAYOUTS[:1] if quick else policy_cost.LAYOUTS
     rows = policy_cost.measure(4, 7, progress=lambda line: None, layouts=layouts)
@@ -138,18 +175,29 @@ FIGURES = (
     ("tracker_speedup_vs_filterpy", "x", "batched IMM-UKF / filterpy loop"),
     ("batched_channel_cycles_per_s", "/s", "IMM-UKF channel-cycles, batched"),
     ("filterpy_channel_cycles_per_s", "/s", "IMM-UKF channel-cycles, filterpy"),
-    ("exact_ms", "ms", "exact solver per batched selection"),
-    ("bpso_ms", "ms", "BPSO per batched selection"),
+    ("exact_ms", "ms", "exact solver per batched selection (500 trials)"),
+    ("bpso_ms", "ms", "BPSO per batched selection (500 trials, all threads)"),
     ("exact_vs_bpso_speedup", "x", "exact / BPSO"),
-    ("bpso_optimality_rate", "", "BPSO optimal fraction"),
-    ("env_trial_steps_per_s", "/s", "vector env with tracker"),
-    ("env_trial_steps_per_s_no_tracker", "/s", "vector env, tracking=False"),
-    ("repro_wall_s_exact", "s", "paper study, exact solvers"),
-    ("repro_wall_s_paper", "s", "paper study, MG-CRB-CL with BPSO"),
-)
-#: Figures measured since the committed perf.json (shown by ``perf``; in the docs' table once
-#: perf.json is re-measured).
-NEW_FIGURES = (
+    ("bpso_optimality_rate", "", "BPSO optimal fraction (rule xor)"),
+    ("bpso_1thread_ms_xor", "ms", "BPSO, one thread, rule xor"),
+    ("bpso_reference_1thread_ms_xor", "ms", "the kernel it replaced, one thread, rule xor"),
+    ("bpso_speedup_vs_reference_xor", "x", "BPSO / the kernel it replaced, rule xor"),
+    ("bpso_1thread_ms_set", "ms", "BPSO, one thread, rule set (v1's)"),
+    ("bpso_reference_1thread_ms_set", "ms", "the kernel it replaced, one thread, rule set"),
+    ("bpso_speedup_vs_reference_set", "x", "BPSO / the kernel it replaced, rule set"),
+    ("bpso_candidate_speedup_vs_reference_xor", "x", "float32 SIMD candidate / the kernel replaced, xor"),
+    ("bpso_candidate_speedup_vs_reference_set", "x", "float32 SIMD candidate / the kernel replaced, set"),
+    ("env_trial_steps_per_s_average", "/s", "v1 env, tracker and bound, average fusion"),
+    ("env_numpy_trial_steps_per_s_average", "/s", "the same on the numpy paths"),
+    ("env_compiled_speedup_average", "x", "compiled / numpy paths, average fusion"),
+    ("env_trial_steps_per_s_centralized", "/s", "v1 env, tracker and bound, centralised fusion"),
+    ("env_numpy_trial_steps_per_s_centralized", "/s", "the same on the numpy paths"),
+    ("env_compiled_speedup_centralized", "x", "compiled / numpy paths, centralised fusion"),
+    ("env_trial_steps_per_s_no_tracker", "/s", "v1 env, tracking=False"),
+    ("claims_v1_average_wall_s", "s", "v1 claims study, 500 trials, average fusion, whole"),
+    ("claims_v1_centralized_wall_s", "s", "v1 claims study, 500 trials, centralised fusion, whole"),
+    ("claims_v1_both_fusions_wall_s", "s", "v1 claims study, both fusions"),
+    ("tracking_study_wall_s", "s", "tracking study, 200 trials, both fusions, whole"),
     ("flat_vector_trial_steps_per_s", "/s", "Flat-v1, native vector entry point"),
     ("flat_sync_trial_steps_per_s", "/s", "Flat-v1, sync vector env of single envs"),
     ("flat_vector_vs_sync_speedup", "x", "Flat-v1 native vector / sync"),
@@ -180,7 +228,7 @@ def target_met(key: str, value: float) -> bool | None:
 
 
 def format_table(results: dict[str, Any]) -> str:
-    rows = FIGURES + tuple(f for f in NEW_FIGURES + POLICY_FIGURES if f[0] in results)
+    rows = tuple(f for f in FIGURES + POLICY_FIGURES if f[0] in results)
     lines = [f"{'figure':<44}{'value':>14}  {'target':<10}what", "-" * 100]
     for key, unit, what in rows:
         value = results[key]

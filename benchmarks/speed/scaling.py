@@ -1,7 +1,8 @@
 """Cost per step against array size (M*N), targets (K) and trials (B), with memory peaks.
 
-Run: ``python -m benchmarks.speed.scaling [--steps 10]``. Each row runs the vector env with its
-in-loop tracker and a UCB1 agent on a random layout in 100 km x 100 km (the exact solver
+Run: ``python -m benchmarks.speed.scaling [--steps 10]``. Each row runs the vector env under v1's
+options (its in-loop tracker and the tracker's position bound) and a UCB1 agent on a random
+layout in 100 km x 100 km (the exact solver
 where ``min(C(M,Ms), C(N,Ns)) <= 20,000``, alternating maximisation beyond, as the env's
 oracle does), and reports
 milliseconds per step, microseconds per trial-step, and the peak of numpy allocations
@@ -19,7 +20,7 @@ from typing import Any
 import numpy as np
 
 import agents
-from mimo_radar_env import MimoRadarSelectVectorEnv, random_scenario
+from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv, random_scenario
 from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
 
 
@@ -32,7 +33,7 @@ def measure(
         if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
         else "alternating"
     )
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario)
+    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **VERSIONS["v1"].options().to_dict())
     agent = agents.make_agent("ucb1", scenario, seed=0, solver=solver)
     obs, _ = env.reset(seed=0)
     agent.reset(obs)

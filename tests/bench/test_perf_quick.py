@@ -10,9 +10,15 @@ FIGURES = {
     "tracker_speedup_vs_filterpy",
     "exact_vs_bpso_speedup",
     "bpso_optimality_rate",
-    "env_trial_steps_per_s",
-    "repro_wall_s_exact",
-    "repro_wall_s_paper",
+    "env_trial_steps_per_s_average",
+    "env_trial_steps_per_s_centralized",
+    "env_compiled_speedup_average",
+    "env_compiled_speedup_centralized",
+    "bpso_speedup_vs_reference_xor",
+    "bpso_speedup_vs_reference_set",
+    "claims_v1_average_wall_s",
+    "claims_v1_centralized_wall_s",
+    "tracking_study_wall_s",
     "flat_vector_trial_steps_per_s",
     "flat_sync_trial_steps_per_s",
     "flat_vector_vs_sync_speedup",
@@ -27,6 +33,11 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
     for key in FIGURES:
         assert result[key] > 0, key
     assert 0 <= result["bpso_optimality_rate"] <= 1
+    assert result["claims_v1_both_fusions_wall_s"] == pytest.approx(
+        result["claims_v1_average_wall_s"] + result["claims_v1_centralized_wall_s"]
+    )
+    for rule in ("xor", "set"):  # the rework kept the numbers: the same selections, the same rate
+        assert result[f"bpso_optimality_rate_{rule}"] == result[f"bpso_reference_optimality_rate_{rule}"]
     assert "tracker_speedup_vs_filterpy" in capsys.readouterr().out
     # every policy's cost beside its declaration, at 4 x 6 (K = 1 and 5) in quick mode
     cost = json.loads((tmp_path / "policy_cost.json").read_text())
@@ -90,3 +101,18 @@ def test_first_run_refuses_no_repeats(capsys):
     with pytest.raises(SystemExit):
         first_run.main(["--repeats", "0"])
     assert "--repeats must be at least 1" in capsys.readouterr().err
+
+
+def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeypatch):
+    from benchmarks.speed import bpso_parts
+
+    result = bpso_parts.measure(trials=4, repeats=1)
+    assert [row["part"] for row in result["parts"]] == list(bpso_parts.PARTS)
+    assert result["kernel_ms"] > 0 and result["reference_ms"] > 0
+    for row in result["parts"]:
+        assert row["without_ms"] > 0
+        assert row["cost_ms"] == pytest.approx(result["kernel_ms"] - row["without_ms"])
+    stale = {"a part the kernel no longer has": [("e = exp(-v)", "e = 1.0")]}
+    monkeypatch.setattr(bpso_parts, "PARTS", stale)
+    with pytest.raises(RuntimeError, match="no longer holds 'a part the kernel no longer has'"):
+        bpso_parts.variant("a part the kernel no longer has")
