@@ -228,8 +228,9 @@ MAX_AUTO_SHARD_SIZE = 250
 def auto_shard_size(trials: int, parallel: int) -> int:
     """The shard size when none is given: the trials split evenly over the ``parallel`` tasks
     that run at once, so that every task steps as large a batch as it can (a step's fixed costs
-    are shared by the batch), at most :data:`MAX_AUTO_SHARD_SIZE`. The numbers do not depend on
-    it (trial ``i`` is seeded ``seed + i`` whatever its shard)."""
+    are shared by the batch), at most :data:`MAX_AUTO_SHARD_SIZE`. Trial ``i`` is seeded
+    ``seed + i`` whatever its shard, so the numbers depend on it only through floating-point
+    rounding (a batch of another size may sum in another order: a relative 1e-12)."""
     return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // max(1, parallel))))
 
 

@@ -116,13 +116,12 @@ class BPSOSolver(SuperArmSolver):
         per_particle = num_tx + num_rx + self.tx_count * self.rx_count
         return float(self.population * self.iterations * per_particle)
 
-    def solve(
-        self, index: NDArray[np.float64], random: TrialRandom
-    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        index = self.check(index)
-        batch, num_tx, num_rx = index.shape
-        if random.batch_size != batch:
-            raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
+    def initial_swarm(
+        self, random: TrialRandom, num_tx: int, num_rx: int
+    ) -> tuple[NDArray[np.int8], NDArray[np.uint64]]:
+        """A call's starting swarm from the agent's per-trial streams: every particle a uniformly
+        random valid super arm, (B, population, M + N) int8, and one key per trial for the
+        iteration streams (the kernels' ``positions`` and ``keys``)."""
         positions = np.concatenate(
             [
                 top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count),
@@ -130,7 +129,16 @@ class BPSOSolver(SuperArmSolver):
             ],
             axis=-1,
         ).astype(np.int8)
-        keys = random.keys_for(Stream.BPSO_KEYS)
+        return positions, random.keys_for(Stream.BPSO_KEYS)
+
+    def solve(
+        self, index: NDArray[np.float64], random: TrialRandom
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        index = self.check(index)
+        batch, num_tx, num_rx = index.shape
+        if random.batch_size != batch:
+            raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
+        positions, keys = self.initial_swarm(random, num_tx, num_rx)
         kernel = _kernels.numba_kernel() if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
         best = kernel(
             index,

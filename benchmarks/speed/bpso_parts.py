@@ -26,10 +26,8 @@ from typing import Any
 import numpy as np
 
 from agents.random_streams import TrialRandom
-from agents.solvers import _bpso_kernels
+from agents.solvers import BPSOSolver, _bpso_kernels
 from mimo_radar_env.core.compiled import numba
-from mimo_radar_env.core.counter_hash import Stream
-from mimo_radar_env.core.superarm import top_mask
 
 from . import bpso_reference
 
@@ -91,15 +89,8 @@ def variant(part: str) -> Any:
 def swarm(trials: int, seed: int = 0) -> tuple:
     """The paper-size problem: exponential indices (B, 4, 6), initial particles and keys."""
     index = np.random.default_rng(7).exponential(size=(trials, 4, 6))
-    random = TrialRandom.for_batch(seed, trials)
-    positions = np.concatenate(
-        [
-            top_mask(random.uniform(Stream.BPSO_INIT_TX, (50, 4)), 2),
-            top_mask(random.uniform(Stream.BPSO_INIT_RX, (50, 6)), 3),
-        ],
-        axis=-1,
-    ).astype(np.int8)
-    return index, positions, random.keys_for(Stream.BPSO_KEYS)
+    positions, keys = BPSOSolver(2, 3).initial_swarm(TrialRandom.for_batch(seed, trials), 4, 6)
+    return index, positions, keys
 
 
 def measure(trials: int = 500, repeats: int = 3, rule: str = "set") -> dict[str, Any]:

@@ -22,7 +22,6 @@ from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
 from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.counter_hash import Stream
-from mimo_radar_env.core.superarm import top_mask
 
 from . import bpso_reference, bpso_simd
 
@@ -53,18 +52,8 @@ def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
     set_rule = rule == "set"
 
-    def swarm(random: TrialRandom) -> tuple:
-        positions = np.concatenate(
-            [
-                top_mask(random.uniform(Stream.BPSO_INIT_TX, (50, 4)), 2),
-                top_mask(random.uniform(Stream.BPSO_INIT_RX, (50, 6)), 3),
-            ],
-            axis=-1,
-        ).astype(np.int8)
-        return positions, random.keys_for(Stream.BPSO_KEYS)
-
     def reference(random: TrialRandom) -> tuple:
-        positions, keys = swarm(random)
+        positions, keys = solver.initial_swarm(random, 4, 6)
         best = bpso_reference.run_reference(
             index, 2, 3, positions, keys, 100, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule
         )

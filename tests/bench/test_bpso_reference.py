@@ -4,24 +4,10 @@ import numpy as np
 import pytest
 
 from agents.random_streams import TrialRandom
-from agents.solvers import _bpso_kernels
+from agents.solvers import BPSOSolver, _bpso_kernels
 from benchmarks.speed import bpso_reference
-from mimo_radar_env.core.counter_hash import Stream
-from mimo_radar_env.core.superarm import top_mask
 
 pytestmark = pytest.mark.skipif(not bpso_reference.HAVE_NUMBA, reason="numba is not installed")
-
-
-def swarm(trials, num_tx, num_rx, tx_count, rx_count, population, seed):
-    random = TrialRandom.for_batch(seed, trials)
-    positions = np.concatenate(
-        [
-            top_mask(random.uniform(Stream.BPSO_INIT_TX, (population, num_tx)), tx_count),
-            top_mask(random.uniform(Stream.BPSO_INIT_RX, (population, num_rx)), rx_count),
-        ],
-        axis=-1,
-    ).astype(np.int8)
-    return positions, random.keys_for(Stream.BPSO_KEYS)
 
 
 @pytest.mark.parametrize("set_rule", [False, True])
@@ -29,7 +15,7 @@ def test_reference_kernel_selects_what_the_agents_kernels_select(set_rule):
     """The measuring stick of solver_speed and perf gives the same super arms as the agents'
     compiled kernel and its numpy twin, at the paper's size (fewer iterations)."""
     index = np.random.default_rng(11).exponential(size=(30, 4, 6))
-    positions, keys = swarm(30, 4, 6, 2, 3, 50, seed=5)
+    positions, keys = BPSOSolver(2, 3).initial_swarm(TrialRandom.for_batch(5, 30), 4, 6)
     args = (index, 2, 3, positions, keys, 25, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule)
     reference = bpso_reference.run_reference(*args)
     np.testing.assert_array_equal(_bpso_kernels.run_numba_serial(*args), reference)
