@@ -131,6 +131,19 @@ class BPSOSolver(SuperArmSolver):
         ).astype(np.int8)
         return positions, random.keys_for(Stream.BPSO_KEYS)
 
+    def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool]:
+        """The kernels' arguments after ``keys``: ``q_max``, ``c1``, ``c2``, the inertia at the first
+        and last iteration, the velocity clamp and whether the rule is ``"set"``."""
+        return (
+            self.iterations,
+            float(self.c1),
+            float(self.c2),
+            float(self.inertia_start),
+            float(self.inertia_end),
+            float(self.velocity_clamp),
+            self.rule == "set",
+        )
+
     def solve(
         self, index: NDArray[np.float64], random: TrialRandom
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
@@ -140,18 +153,5 @@ class BPSOSolver(SuperArmSolver):
             raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
         positions, keys = self.initial_swarm(random, num_tx, num_rx)
         kernel = _kernels.numba_kernel() if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
-        best = kernel(
-            index,
-            self.tx_count,
-            self.rx_count,
-            positions,
-            keys,
-            self.iterations,
-            float(self.c1),
-            float(self.c2),
-            float(self.inertia_start),
-            float(self.inertia_end),
-            float(self.velocity_clamp),
-            self.rule == "set",
-        ).astype(bool)
-        return best[:, :num_tx], best[:, num_tx:]
+        best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
+        return best[:, :num_tx].astype(bool), best[:, num_tx:].astype(bool)

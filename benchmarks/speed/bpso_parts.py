@@ -86,18 +86,19 @@ def variant(part: str) -> Any:
     return numba.njit(namespace[name])
 
 
-def swarm(trials: int, seed: int = 0) -> tuple:
-    """The paper-size problem: exponential indices (B, 4, 6), initial particles and keys."""
+def kernel_arguments(trials: int, rule: str, seed: int = 0) -> tuple:
+    """The kernels' arguments for the paper-size problem: exponential indices (B, 4, 6), Ms = 2,
+    Ns = 3, the starting swarm and the paper's swarm parameters (the solver's defaults)."""
     index = np.random.default_rng(7).exponential(size=(trials, 4, 6))
-    positions, keys = BPSOSolver(2, 3).initial_swarm(TrialRandom.for_batch(seed, trials), 4, 6)
-    return index, positions, keys
+    solver = BPSOSolver(2, 3, rule=rule)
+    positions, keys = solver.initial_swarm(TrialRandom.for_batch(seed, trials), 4, 6)
+    return (index, 2, 3, positions, keys, *solver.swarm_arguments())
 
 
 def measure(trials: int = 500, repeats: int = 3, rule: str = "set") -> dict[str, Any]:
     """Best-of-``repeats`` milliseconds of the kernel, of each knocked-out variant and of the
     reference kernel, one thread, interleaved; each part's cost and share of the kernel's time."""
-    index, positions, keys = swarm(trials)
-    args = (index, 2, 3, positions, keys, 100, 2.0, 2.0, 0.9, 0.4, 6.0, rule == "set")
+    args = kernel_arguments(trials, rule)
     kernels = {
         "kernel": _bpso_kernels.run_numba_serial,
         "reference": bpso_reference.run_reference,

@@ -48,20 +48,17 @@ def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
     (:mod:`benchmarks.speed.bpso_reference`), the agents' kernel and the SIMD candidate; each
     one's best time of ``repeats`` and its optimality rate against ``exact``, and the agents'
     and the candidate's speed-ups over the reference, all measured in this run."""
-    solver = BPSOSolver(2, 3, rule=rule)
+    solver = BPSOSolver(2, 3, rule=rule)  # the paper's swarm: the solver's defaults
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
-    set_rule = rule == "set"
 
     def reference(random: TrialRandom) -> tuple:
         positions, keys = solver.initial_swarm(random, 4, 6)
-        best = bpso_reference.run_reference(
-            index, 2, 3, positions, keys, 100, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule
-        )
+        best = bpso_reference.run_reference(index, 2, 3, positions, keys, *solver.swarm_arguments())
         return best[:, :4].astype(bool), best[:, 4:].astype(bool)
 
     def candidate(random: TrialRandom) -> tuple:
         keys = random.keys_for(Stream.BPSO_KEYS)
-        best = bpso_simd.run_numba(index, 2, 3, keys, 50, 100, 2.0, 2.0, 0.9, 0.4, 6.0, set_rule)
+        best = bpso_simd.run_numba(index, 2, 3, keys, solver.population, *solver.swarm_arguments())
         return best[:, :4].astype(bool), best[:, 4:].astype(bool)
 
     kernels = {"reference": reference, "agents": lambda r: solver.solve(index, r), "candidate": candidate}
