@@ -1420,11 +1420,11 @@ def layout_adoption(docs: Path) -> str:
 
     v1 = _verdicts(docs, SCORECARDS["v1"])
     v1_counts = verdicts.count(v1.values())
-    better = [f for f in _long_scorecards(docs) if f["counts"]["holds"] > v1_counts["holds"]]
+    scorecards, trials = _long_scorecards(docs), _long_trials(docs)
+    better = [f for f in scorecards if f["counts"]["holds"] > v1_counts["holds"]]
     if not better:
-        return f"No searched layout has more claims holding than v1's at {_long_trials(docs)} trials."
-    scored, trials = len(_long_scorecards(docs)), _long_trials(docs)
-    lines = [f"{len(better)} of the {scored} searched layouts scored at {trials} trials:", ""]
+        return f"No searched layout has more claims holding than v1's at {trials} trials."
+    lines = [f"{len(better)} of the {len(scorecards)} searched layouts scored at {trials} trials:", ""]
     for f in better:
         won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
         lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]

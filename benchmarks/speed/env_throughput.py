@@ -19,7 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-import mimo_radar_env  # noqa: F401  (registers the env)
+from mimo_radar_env import DEFAULT_VERSION  # importing the package registers the env
 from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs import engine as engine_module
 from mimo_radar_env.tracking import bound
@@ -31,15 +31,13 @@ def measure(
     steps: int,
     tracking: bool,
     fusion: str = "average",
-    version: str | None = None,
+    version: str = DEFAULT_VERSION,
     compiled: bool = True,
 ) -> float:
     """Trial-steps per second of the vector env (actions drawn beforehand, not timed): the env id
-    of ``version`` (default: the scenario's own, ``-v1`` names are v1's), its defaults (under v1
-    the tracker's position bound is computed every step). ``compiled=False`` runs the numpy twins
-    of the fusion's and the bound's numba kernels, the reference the compiled paths are measured
-    against."""
-    version = version or ("v1" if scenario.endswith("-v1") else "v0")
+    of ``version`` with its defaults (the tracker's position bound is computed every step).
+    ``compiled=False`` runs the numpy twins of the fusion's and the bound's numba kernels, the
+    reference the compiled paths are measured against."""
     venv = gym.make_vec(
         f"MimoRadarSelect-{version}",
         num_envs=trials,
@@ -137,6 +135,9 @@ def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int =
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenario", default="paper-1-v1")
+    parser.add_argument(
+        "--env-version", default=DEFAULT_VERSION, help="the env id's version (default %(default)s)"
+    )
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=200)
     args = parser.parse_args()
@@ -148,7 +149,7 @@ def main() -> None:
         ("with IMM-UKF, fusion=centralized", True, "centralized", True),
         ("  the same on the numpy paths", True, "centralized", False),
     ):
-        rate = measure(args.scenario, args.trials, args.steps, tracking, fusion, compiled=compiled)
+        rate = measure(args.scenario, args.trials, args.steps, tracking, fusion, args.env_version, compiled)
         print(f"  {label:<36} {rate:>12,.0f} trial-steps/s")
     flat = f"{args.scenario}-v1" if not args.scenario.endswith("-v1") else args.scenario
     for label, mode, trials in (
