@@ -142,11 +142,14 @@ def make_config(
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
     options = options or EnvOptions()
-    for name, value, low in (("--trials", trials, 1), ("--seed", seed, 0), ("--shard-size", shard_size, 1)):
-        if name == "--shard-size" and value is None:
-            shard_size = auto_shard_size(trials, parallel or workers)
-        elif isinstance(value, bool) or not isinstance(value, int) or value < low:
+    given = [("--trials", trials, 1), ("--seed", seed, 0)]
+    if shard_size is not None:
+        given.append(("--shard-size", shard_size, 1))
+    for name, value, low in given:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise HarnessError(f"{name} must be an integer >= {low}, got {value!r}")
+    if shard_size is None:
+        shard_size = auto_shard_size(trials, parallel or workers)
     steps = sc.horizon if steps is None else steps
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
         raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
