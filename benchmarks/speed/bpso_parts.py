@@ -29,7 +29,7 @@ from agents.random_streams import TrialRandom
 from agents.solvers import BPSOSolver, _bpso_kernels
 from mimo_radar_env.core.compiled import numba
 
-from . import bpso_reference
+from . import bpso_reference, solver_speed
 
 _POLYNOMIAL = """y = v * (-1.0 / 32.0)
 e = 1.0 + y * (1.0 + y * (0.5 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
@@ -89,7 +89,7 @@ def variant(part: str) -> Any:
 def kernel_arguments(trials: int, rule: str, seed: int = 0) -> tuple:
     """The kernels' arguments for the paper-size problem: exponential indices (B, 4, 6), Ms = 2,
     Ns = 3, the starting swarm and the paper's swarm parameters (the solver's defaults)."""
-    index = np.random.default_rng(7).exponential(size=(trials, 4, 6))
+    index = solver_speed.paper_index(trials)
     solver = BPSOSolver(2, 3, rule=rule)
     positions, keys = solver.initial_swarm(TrialRandom.for_batch(seed, trials), 4, 6)
     return (index, 2, 3, positions, keys, *solver.swarm_arguments())

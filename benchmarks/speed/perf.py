@@ -47,8 +47,6 @@ import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from agents.solvers.bpso import BPSO_RULES
 
 from ..studies.settings import default_workers
@@ -117,7 +115,7 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
         {k: solvers[k] for k in ("exact_ms", "bpso_ms", "exact_vs_bpso_speedup", "bpso_optimality_rate")}
     )
     if solver_speed.HAVE_NUMBA:
-        index = np.random.default_rng(7).exponential(size=(sizes["trials"], 4, 6))
+        index = solver_speed.paper_index(sizes["trials"])
         for rule in BPSO_RULES:
             results.update(solver_speed.one_thread(index, sizes["solver_repeats"], rule))
     steps = sizes["env_steps"]

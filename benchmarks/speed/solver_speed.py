@@ -26,6 +26,11 @@ from mimo_radar_env.core.counter_hash import Stream
 from . import bpso_reference, bpso_simd
 
 
+def paper_index(trials: int) -> np.ndarray:
+    """The benchmark's index matrices at the paper's size: i.i.d. Exponential(1), (B, 4, 6)."""
+    return np.random.default_rng(7).exponential(size=(trials, 4, 6))
+
+
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:
     solver.solve(index, TrialRandom.for_batch(0, len(index)))  # warm-up (numba compilation)
     best, result = np.inf, None
@@ -92,7 +97,7 @@ def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
 
 
 def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
-    index = np.random.default_rng(7).exponential(size=(trials, 4, 6))
+    index = paper_index(trials)
     exact_s, (etx, erx) = _time(ExactSolver(2, 3), index, repeats)
     bpso_s, (btx, brx) = _time(BPSOSolver(2, 3), index, repeats)
     numpy_s, _ = _time(BPSOSolver(2, 3, use_numba=False), index, 1)
@@ -121,7 +126,7 @@ def main() -> None:
     args = parser.parse_args()
     r = measure(args.trials, args.repeats)
     if HAVE_NUMBA:
-        index = np.random.default_rng(7).exponential(size=(args.trials, 4, 6))
+        index = paper_index(args.trials)
         for rule in BPSO_RULES:
             r.update(one_thread(index, args.repeats, rule))
     print(
