@@ -1134,7 +1134,10 @@ def ablations_s18(docs: Path) -> str:
     ]
     for row in rows:
         a, b = row["window"]
-        cells = [f"{format_judged(row['armse'][p], '{:.2f}')}; {row['bound'][p]:.2f}" for p in policies]
+        cells = [
+            f"{format_judged(row['armse'][p], '{:.2f}')}; {format_judged(row['bound'][p], '{:.2f}')}"
+            for p in policies
+        ]
         lines.append(
             f"| {a}-{b} s | {row['policy']} {row['extreme']} | "
             + " | ".join(cells)
@@ -1211,10 +1214,10 @@ def mechanisms_per_claim(docs: Path) -> str:
         )
 
         def ratio(p: str, row: dict = row) -> str:
-            return f"{row['armse'][p]['estimate'] / row['bound'][p]:.2f}"
+            return _m(row["armse_over_bound"][p])
 
-        text = f"over {lo}-{hi} s the {extreme} bound is {top}'s ({row['bound'][top]:.2f} m"
-        text += f"; {claimed}'s {row['bound'][claimed]:.2f} m)" if top != claimed else ")"
+        text = f"over {lo}-{hi} s the {extreme} bound is {top}'s ({_m(row['bound'][top])} m"
+        text += f"; {claimed}'s {_m(row['bound'][claimed])} m)" if top != claimed else ")"
         if worst == top:
             text += " and so is the ARMSE"
         else:

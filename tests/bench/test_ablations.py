@@ -75,7 +75,12 @@ def test_rmse_windows_pick_the_extremes_of_armse_and_bound():
     assert rows[(268, 360)]["armse_extreme"] == "fix1" and rows[(268, 360)]["bound_extreme"] == "fix2"
     assert rows[(0, 500)]["armse_extreme"] == "fix2" and rows[(0, 500)]["bound_extreme"] == "best"
     assert rows[(268, 360)]["armse"]["fix1"]["estimate"] == pytest.approx(0.5)
-    assert rows[(590, 1000)]["bound"]["best"] == pytest.approx(4.0)
+    assert rows[(590, 1000)]["bound"]["best"]["estimate"] == pytest.approx(4.0)
+    # fix1 in its window: ARMSE 0.5 over a bound of 2, the ratio of the two per resampled trials
+    assert rows[(268, 360)]["armse_over_bound"]["fix1"]["estimate"] == pytest.approx(0.25)
+    for row in rows.values():  # the bound and the ratio carry their intervals, as the ARMSE does
+        for judged in (*row["bound"].values(), *row["armse_over_bound"].values()):
+            assert judged["ci"][0] <= judged["estimate"] <= judged["ci"][1]
 
 
 def test_true_super_arm_values_match_itertools_and_the_envs_optimum():
