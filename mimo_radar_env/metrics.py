@@ -32,9 +32,9 @@ def trial_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
     (``arange(num_trials)`` gives the equal weights of the estimate)."""
     index = np.asarray(index)
     rows = index.reshape(-1, index.shape[-1])
-    weights = np.zeros((rows.shape[0], num_trials))
-    np.add.at(weights, (np.arange(rows.shape[0])[:, None], rows), 1.0)
-    return (weights / rows.shape[1]).reshape((*index.shape[:-1], num_trials))
+    flat = (rows + num_trials * np.arange(rows.shape[0])[:, None]).ravel()  # row r's trials at r * N
+    counts = np.bincount(flat, minlength=rows.shape[0] * num_trials).reshape(rows.shape[0], num_trials)
+    return (counts / rows.shape[1]).reshape((*index.shape[:-1], num_trials))
 
 
 class TrialMetrics:
