@@ -1,10 +1,12 @@
 """Where a run's tasks execute: in the calling process, in local worker processes, or on Ray.
 
-Every backend hands each finished task to ``finished`` as soon as it is done, so the harness
-saves it at once. Ctrl-C (``KeyboardInterrupt``) stops a run within seconds: queued tasks are
-cancelled, worker processes are terminated, and the interruption propagates to the caller
-after every finished task has been saved. Workers ignore SIGINT (the parent decides) and
-exit by themselves when their parent dies.
+A task is ``(payload, policy, shard)``: the run's configuration travels with each task, so one
+call can mix the tasks of several runs (a study's). They are started in the order given. Every
+backend hands each finished task to ``finished`` (with its position in the list) as soon as
+it is done, so the harness saves it at once. Ctrl-C (``KeyboardInterrupt``) stops a run
+within seconds: queued tasks are cancelled, worker processes are terminated, and the
+interruption propagates to the caller after every finished task has been saved. Workers
+ignore SIGINT (the parent decides) and exit by themselves when their parent dies.
 """
 
 from __future__ import annotations
@@ -19,8 +21,10 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-Task = tuple[str, int]
-Finished = Callable[[str, int, dict], None]
+#: ``(payload, policy, shard)``: the run's configuration (``RunConfig.to_json()``) and one task.
+Task = tuple[dict[str, Any], str, int]
+#: Called with a task's position in the list and its result.
+Finished = Callable[[int, dict], None]
 Runner = Callable[[dict[str, Any], str, int], dict]
 
 
@@ -46,9 +50,9 @@ def worker_init(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
 
-def run_inline(runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished) -> None:
-    for policy, shard in todo:
-        finished(policy, shard, runner(payload, policy, shard))
+def run_inline(runner: Runner, todo: list[Task], finished: Finished) -> None:
+    for number, task in enumerate(todo):
+        finished(number, runner(*task))
 
 
 @contextlib.contextmanager
@@ -72,16 +76,13 @@ def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
     pool.shutdown()
 
 
-def run_processes(
-    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, workers: int
-) -> None:
+def run_processes(runner: Runner, todo: list[Task], finished: Finished, workers: int) -> None:
     with worker_pool(workers) as pool:
-        pending = {pool.submit(runner, payload, policy, shard): (policy, shard) for policy, shard in todo}
+        pending = {pool.submit(runner, *task): number for number, task in enumerate(todo)}
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
-            for future in done:
-                policy, shard = pending.pop(future)
-                finished(policy, shard, future.result())
+            for future in sorted(done, key=pending.__getitem__):
+                finished(pending.pop(future), future.result())
 
 
 def check_ray_address(address: str | None, timeout: float = 3.0) -> None:
@@ -123,9 +124,7 @@ def _resolve_auto_address() -> str:
         ) from None
 
 
-def run_ray(
-    runner: Runner, payload: dict[str, Any], todo: list[Task], finished: Finished, address: str | None
-) -> None:
+def run_ray(runner: Runner, todo: list[Task], finished: Finished, address: str | None) -> None:
     from mimo_radar_env.extras import require
 
     ray = require("ray", "ray", "--backend ray")
@@ -133,15 +132,18 @@ def run_ray(
     started_here = not ray.is_initialized()
     if started_here:
         ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
-    pending: dict[Any, Task] = {}
+    pending: dict[Any, int] = {}
     try:
         remote_task = ray.remote(runner)
-        pending = {remote_task.remote(payload, policy, shard): (policy, shard) for policy, shard in todo}
+        payloads: dict[int, Any] = {}  # each run's configuration is put in the object store once
+        for number, (payload, policy, shard) in enumerate(todo):
+            if id(payload) not in payloads:
+                payloads[id(payload)] = ray.put(payload)
+            pending[remote_task.remote(payloads[id(payload)], policy, shard)] = number
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
             for ref in done:
-                policy, shard = pending.pop(ref)
-                finished(policy, shard, ray.get(ref))
+                finished(pending.pop(ref), ray.get(ref))
     except BaseException:
         for ref in pending:
             ray.cancel(ref, force=True)

@@ -516,6 +516,23 @@ class RunInterrupted(HarnessError):
     """Ctrl-C stopped the run; every finished task is saved and the run can be resumed."""
 
 
+def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
+    """Every (policy, shard) task's estimated seconds (:func:`estimate_seconds` for the shard's
+    trials alone): the order in which a run starts its tasks, the longest first."""
+    scenario, options = config.scenario_object, config.options
+    costs = {}
+    for policy in config.policies:
+        params = config.agent_params.get(policy, {})
+        agent = make_policy(policy, scenario, params, seed=config.seed, options=config.env_options)
+        operations, fixed = {policy: agent.operations_per_trial_step()}, {policy: agent.seconds_per_step()}
+        for shard in range(config.num_shards):
+            n = len(config.shard_trials(shard))
+            costs[policy, shard] = estimate_seconds(
+                scenario, options, operations, n, config.steps, n, 1, fixed
+            )
+    return costs
+
+
 def run(
     config: RunConfig,
     out: str | Path,
@@ -532,7 +549,29 @@ def run(
     then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
     the finished tasks are saved.
     """
-    out = Path(out)
+    complete = run_many([(config, out)], workers, backend, address, progress, max_tasks)
+    return load_per_trial(Path(out), config) if complete[0] else None
+
+
+def run_many(
+    runs: Sequence[tuple[RunConfig, str | Path]],
+    workers: int = 1,
+    backend: str = "local",
+    address: str | None = None,
+    progress: bool = True,
+    max_tasks: int | None = None,
+    on_complete: Callable[[int], None] | None = None,
+) -> list[bool]:
+    """Run the tasks of several runs (a study's) on one set of workers; whether each run is
+    complete.
+
+    Each run's tasks not yet in its folder are started the longest first
+    (:func:`task_seconds`), run after run, without waiting for one run to end before the
+    next starts, so that no worker idles at a run's end. ``on_complete(i)`` is called in this
+    process as soon as run ``i`` has all its shards (at once for a run already complete), while
+    the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
+    and Ctrl-C as in :func:`run`.
+    """
     if backend not in ("local", "ray"):
         raise HarnessError(f"--backend must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -542,52 +581,84 @@ def run(
             backends.check_ray_address(address)
         except ValueError as exc:
             raise HarnessError(str(exc)) from exc
-    with output_lock(out):
-        prepare_output(out, config)
-        todo = _tasks_to_run(out, config, tqdm.write)
+    folders = [Path(out) for _, out in runs]
+    if len({f.resolve() for f in folders}) != len(folders):
+        raise HarnessError(f"two runs write into one folder: {[str(f) for f in folders]}")
+    configs = [config for config, _ in runs]
+    with contextlib.ExitStack() as locks:
+        for config, out in zip(configs, folders, strict=True):
+            locks.enter_context(output_lock(out))
+            prepare_output(out, config)
+        payloads = [config.to_json() for config in configs]
+        todo: list[tuple[int, str, int]] = []
+        for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
+            tasks = _tasks_to_run(out, config, tqdm.write)
+            if len(tasks) > 1:
+                cost = task_seconds(config)
+                tasks.sort(key=lambda task: -cost[task])  # stable: ties keep the shard order
+            todo += [(number, policy, shard) for policy, shard in tasks]
         if max_tasks is not None:
             todo = todo[:max_tasks]
-        total = config.trials * config.steps * len(config.policies)
-        done_units = total - sum(len(config.shard_trials(s)) * config.steps for _, s in todo)
+        left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
+        steps_of = [
+            [len(c.shard_trials(s)) * c.steps for s in range(c.num_shards)] for c in configs
+        ]  # trial-steps of each run's shards
+        total = sum(sum(steps) * len(c.policies) for steps, c in zip(steps_of, configs, strict=True))
         bar = tqdm(
             total=total,
-            initial=done_units,
+            initial=total - sum(steps_of[n][s] for n, _, s in todo),
             unit="trial-step",
             disable=not progress,
             smoothing=0.1,
-            desc=f"{config.scenario['name']}",
+            desc=configs[0].scenario["name"] if len(configs) == 1 else f"{len(configs)} runs",
         )
-        if todo and uncached(run_kernels(config, threads=1 if workers > 1 or backend == "ray" else None)):
+        threads = 1 if workers > 1 or backend == "ray" else None
+        if any(uncached(run_kernels(configs[n], threads)) for n in {n for n, _, _ in todo}):
             bar.set_postfix_str("compiling numba kernels (first run; cached for the next)")
-        payload = config.to_json()
         saved = []
+        complete = [False] * len(configs)
 
-        def finished(policy: str, shard: int, result: dict[str, NDArray]) -> None:
+        def run_done(number: int) -> None:
+            if not _tasks_to_run(folders[number], configs[number], tqdm.write):
+                complete[number] = True
+                if on_complete is not None:
+                    on_complete(number)
+
+        def finished(position: int, result: dict[str, NDArray]) -> None:
+            number, policy, shard = todo[position]
+            config = configs[number]
             write_shard(
-                shard_path(out, policy, shard),
+                shard_path(folders[number], policy, shard),
                 result,
                 config.shard_trials(shard),
-                config_hash(payload, policy),
+                config_hash(payloads[number], policy),
             )
-            saved.append((policy, shard))
-            bar.update(len(config.shard_trials(shard)) * config.steps)
-            bar.set_postfix_str(policy)
+            saved.append(position)
+            bar.update(steps_of[number][shard])
+            bar.set_postfix_str(policy if len(configs) == 1 else f"{config.scenario['name']}: {policy}")
+            left[number] -= 1
+            if left[number] == 0:
+                run_done(number)
 
+        tasks = [(payloads[number], policy, shard) for number, policy, shard in todo]
         try:
+            for number in range(len(configs)):
+                if left[number] == 0:
+                    run_done(number)
             if backend == "ray":
-                backends.run_ray(run_task, payload, todo, finished, address)
+                backends.run_ray(run_task, tasks, finished, address)
             elif workers == 1:
-                backends.run_inline(run_task, payload, todo, finished)
+                backends.run_inline(run_task, tasks, finished)
             else:
-                backends.run_processes(run_task, payload, todo, finished, workers)
+                backends.run_processes(run_task, tasks, finished, workers)
         except KeyboardInterrupt:
             raise RunInterrupted(
-                f"interrupted: {len(saved)} of {len(todo)} tasks finished and saved in {out}; "
-                "run the same command again to resume"
+                f"interrupted: {len(saved)} of {len(todo)} tasks finished and saved in "
+                f"{', '.join(str(f) for f in folders)}; run the same command again to resume"
             ) from None
         finally:
             bar.close()
-        return None if _tasks_to_run(out, config, tqdm.write) else load_per_trial(out, config)
+        return complete
 
 
 def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, NDArray]:

@@ -10,8 +10,8 @@ A :class:`Study` is a command that runs Monte-Carlo runs and judges or reports t
 1. :meth:`Study.runs` lists its runs (scenario x policies x options -> folder);
 2. :func:`configure` validates every run before anything is written (a bad policy, parameter or
    option fails here with one :class:`~benchmarks.errors.BenchError`);
-3. :func:`execute` runs each one resumably into its folder and writes its outputs
-   (summary.json, curves.csv, table.md, figures);
+3. :func:`execute` runs them all resumably on one set of workers, each into its folder, and
+   writes a run's outputs (summary.json, curves.csv, table.md, figures) once its tasks are done;
 4. :meth:`Study.judge` turns the finished runs into results (verdicts, targets), and
    :meth:`Study.report` into the text the command prints (and the files it writes).
 
@@ -131,14 +131,25 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
 
 
 def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]:
-    """Configure every run, then run each (resumably) into its folder and write its outputs."""
+    """Configure every run, then run them all (resumably) on one set of workers
+    (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
+    soon as its last task is saved, while the workers go on with the next run's tasks."""
     configs = configure(runs, settings)
-    finished = {}
-    for run, config in zip(runs, configs, strict=True):
-        per_trial = harness.run(config, run.folder, progress=settings.progress, **settings.execution())
+    written: dict[int, Finished] = {}
+
+    def write(number: int) -> None:
+        run, config = runs[number], configs[number]
+        per_trial = harness.load_per_trial(run.folder, config)
         summary = report.write_outputs(config, per_trial, run.folder, figures=settings.figures)
-        finished[run.key] = Finished(run, config, summary)
-    return finished
+        written[number] = Finished(run, config, summary)
+
+    harness.run_many(
+        [(config, run.folder) for run, config in zip(runs, configs, strict=True)],
+        progress=settings.progress,
+        on_complete=write,
+        **settings.execution(),
+    )
+    return {run.key: written[number] for number, run in enumerate(runs)}
 
 
 class Study(Command):

@@ -1,0 +1,111 @@
+"""A study's runs on one set of workers (harness.run_many): each run's tasks the longest first,
+no barrier between runs, a run's outputs written as soon as its last task is saved."""
+
+import numpy as np
+import pytest
+
+from benchmarks import harness
+from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, task_seconds
+from mimo_radar_env.core.model import operations_per_trial_step
+
+
+@pytest.fixture
+def calls(monkeypatch):
+    """The (scenario, policy, shard) of every task run in this process, in order, and the
+    ``on_complete`` calls among them."""
+    events = []
+    task = harness.run_task
+
+    def recording(payload, policy, shard):
+        events.append((payload["scenario"]["name"], policy, shard))
+        return task(payload, policy, shard)
+
+    monkeypatch.setattr(harness, "run_task", recording)
+    return events
+
+
+def test_task_estimates_follow_the_declared_operations_and_the_shards_trials():
+    config = make_config("paper-1", ["ucb1", "mg-crb-cl"], trials=5, steps=4, shard_size=2)
+    cost = task_seconds(config)
+    assert set(cost) == {(p, s) for p in config.policies for s in range(3)}
+    env = operations_per_trial_step(config.scenario_object, True, config.options.fusion)
+    ops = {
+        p: harness.make_policy(
+            p, config.scenario_object, {}, seed=0, options=config.env_options
+        ).operations_per_trial_step()
+        for p in config.policies
+    }
+    assert ops["mg-crb-cl"] > ops["ucb1"]  # BPSO against the exact solver
+    for p in config.policies:
+        # a shard of 2 trials against one of 1: the per-trial part doubles, the per-step part stays
+        per_trial = 4 * (env + ops[p]) * harness.SECONDS_PER_OPERATION
+        assert cost[p, 0] == cost[p, 1]
+        assert cost[p, 0] - cost[p, 2] == pytest.approx(per_trial, rel=1e-9)
+    assert cost["mg-crb-cl", 2] > cost["ucb1", 0]
+
+
+def test_a_runs_tasks_start_the_longest_first(tmp_path, calls):
+    config = make_config("paper-1", ["ucb1", "mg-crb-cl"], trials=5, steps=4, shard_size=2)
+    run(config, tmp_path, progress=False)
+    cost = task_seconds(config)
+    started = [(p, s) for _, p, s in calls]
+    assert started == sorted(started, key=lambda task: -cost[task])
+    assert started[:3] == [("mg-crb-cl", 0), ("mg-crb-cl", 1), ("mg-crb-cl", 2)]
+
+
+def test_runs_share_the_workers_and_each_is_written_when_its_tasks_are_done(tmp_path, calls):
+    configs = [
+        make_config(name, ["fix1", "ucb1"], trials=3, steps=6, shard_size=2)
+        for name in ("paper-1", "paper-2")
+    ]
+    folders = [tmp_path / "one", tmp_path / "two"]
+
+    def complete(number):
+        assert harness._tasks_to_run(folders[number], configs[number], print) == []
+        calls.append(("complete", number))
+
+    assert run_many(list(zip(configs, folders, strict=True)), progress=False, on_complete=complete) == [
+        True,
+        True,
+    ]
+    names = [c[0] for c in calls]
+    assert calls.index(("complete", 0)) == 4  # after run one's four tasks, before run two's
+    assert names[:4] == ["paper-1"] * 4 and names[5:9] == ["paper-2"] * 4
+    assert calls[-1] == ("complete", 1)
+    for config, folder in zip(configs, folders, strict=True):  # the numbers of the run alone
+        alone = run(config, folder.with_name(folder.name + "-alone"), progress=False)
+        together = load_per_trial(folder, config)
+        for policy in config.policies:
+            for key, value in alone[policy].items():
+                if key != "wall_s":
+                    np.testing.assert_array_equal(together[policy][key], value)
+    calls.clear()  # all complete: nothing runs, and each is reported complete again
+    assert run_many(list(zip(configs, folders, strict=True)), progress=False, on_complete=complete) == [
+        True,
+        True,
+    ]
+    assert calls == [("complete", 0), ("complete", 1)]
+
+
+def test_two_processes_give_the_numbers_of_one(tmp_path):
+    configs = [
+        make_config(n, ["mg-crb-cl", "fix2"], trials=3, steps=5, shard_size=1) for n in ("paper-1", "paper-3")
+    ]
+    one = [tmp_path / "a1", tmp_path / "b1"]
+    two = [tmp_path / "a2", tmp_path / "b2"]
+    assert run_many(list(zip(configs, one, strict=True)), progress=False) == [True, True]
+    assert run_many(list(zip(configs, two, strict=True)), workers=2, progress=False) == [True, True]
+    for config, a, b in zip(configs, one, two, strict=True):
+        x, y = load_per_trial(a, config), load_per_trial(b, config)
+        for policy in config.policies:
+            np.testing.assert_array_equal(x[policy]["trial_expected"], y[policy]["trial_expected"])
+            np.testing.assert_array_equal(x[policy]["trial_squared_error"], y[policy]["trial_squared_error"])
+
+
+def test_max_tasks_leaves_later_runs_incomplete_and_two_runs_may_not_share_a_folder(tmp_path):
+    configs = [make_config(n, ["fix1"], trials=2, steps=3, shard_size=1) for n in ("paper-1", "paper-2")]
+    folders = [tmp_path / "one", tmp_path / "two"]
+    assert run_many(list(zip(configs, folders, strict=True)), progress=False, max_tasks=3) == [True, False]
+    assert run_many(list(zip(configs, folders, strict=True)), progress=False) == [True, True]
+    with pytest.raises(HarnessError, match="two runs write into one folder"):
+        run_many([(configs[0], tmp_path / "x"), (configs[1], tmp_path / "x" / ".." / "x")], progress=False)
