@@ -77,6 +77,9 @@ class Agent(ABC):
     needs_oracle: ClassVar[bool] = False
     #: True for agents that need the tracker's keys in the observation.
     needs_tracking: ClassVar[bool] = False
+    #: True for agents that score super arms with the tracking search (it has a numba kernel:
+    #: :func:`mimo_radar_env.tracking.selection.compiled_kernels`).
+    searches_for_tracking: ClassVar[bool] = False
     #: Env options the agent needs set (they add observation keys and change no number);
     #: the benchmark harness sets them on the envs the agent runs in.
     observation_options: ClassVar[dict[str, Any]] = {}

@@ -101,6 +101,7 @@ class PlanTrackingAgent(Agent):
 
     name = "plan-tracking"
     needs_oracle = True
+    searches_for_tracking = True  # a plan's first step is scored by the tracking search
     needs_tracking = True
 
     def __init__(

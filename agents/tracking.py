@@ -33,6 +33,7 @@ class TrackingSearchCost:
     (:func:`~mimo_radar_env.tracking.selection.select_for_tracking`) on its scenario."""
 
     scenario: Scenario
+    searches_for_tracking: ClassVar[bool] = True
 
     def _search_size(self) -> tuple[int, int, int, int, int]:
         sc = self.scenario

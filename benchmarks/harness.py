@@ -38,6 +38,7 @@ from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, Scena
 from mimo_radar_env.core.compiled import uncached
 from mimo_radar_env.core.model import machine_memory, memory_parts, operations_per_trial_step
 from mimo_radar_env.tracking.fusion import compiled_kernels
+from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
 from . import backends
 from .errors import BenchError
@@ -412,6 +413,8 @@ def run_kernels(config: RunConfig, threads: int | None = None) -> list[Any]:
     kernels = compiled_kernels(config.options.fusion) if config.options.tracking else []
     for policy in config.policies:
         cls = agents.agent_class(agents.split_policy(policy)[0])
+        if cls.searches_for_tracking:
+            kernels += selection_kernels()
         solver = config.agent_params.get(policy, {}).get("solver", getattr(cls, "default_solver", None))
         if isinstance(solver, str):
             kernels += solver_kernels(solver, threads)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.compiled import HAVE_NUMBA
 from ..core.superarm import all_super_arms, super_arm_count
 from .fusion import FUSIONS
 from .information import det_2x2, inverse_2x2
@@ -102,6 +103,7 @@ def super_arm_criterion(
     weights: NDArray[np.float64],
     criterion: str = "trace",
     fusion: str = "centralized",
+    use_numba: bool = True,
 ) -> NDArray[np.float64]:
     """The criterion of every super arm in every trial: (B, A).
 
@@ -110,18 +112,40 @@ def super_arm_criterion(
     (A, N) the super arms, or (B, A, M), (B, A, N) for per-trial ones (partial selections
     allowed); ``weights`` (K,) ``Omega``; ``fusion`` a fusion of the registry
     (:data:`POSTERIORS`: ``"centralized"``, the channels' information adds, or ``"average"``,
-    eq22, their posteriors are averaged).
+    eq22, their posteriors are averaged); ``use_numba`` the compiled sum over each super arm's
+    channels (:func:`selected_sums`, the same numbers), when numba is installed.
     """
     _check_choices(criterion, fusion)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
-    selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # ([B,] A, M, N)
-    if selected.ndim == 3:
-        selected = np.broadcast_to(selected, (position_cov.shape[0], *selected.shape))
+    batch = position_cov.shape[0]
+    if tx_masks.ndim == 2:
+        tx_masks = np.broadcast_to(tx_masks, (batch, *tx_masks.shape))
+        rx_masks = np.broadcast_to(rx_masks, (batch, *rx_masks.shape))
     posterior = POSTERIORS[fusion]
-    total = np.einsum("bamn,bkmnij->bkaij", selected, posterior.terms(prior_info, information))
-    count = selected.sum(axis=(2, 3))[:, None, :, None, None]
+    total = selected_sums(tx_masks, rx_masks, posterior.terms(prior_info, information), use_numba)
+    count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
     covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), _per_target(covariance, criterion))
+
+
+def selected_sums(
+    tx_masks: NDArray[np.bool_],
+    rx_masks: NDArray[np.bool_],
+    terms: NDArray[np.float64],
+    use_numba: bool = True,
+) -> NDArray[np.float64]:
+    """Each super arm's sum of its channels' terms: (B, K, A, 2, 2) from masks (B, A, M), (B, A, N)
+    and ``terms`` (B, K, M, N, 2, 2). The numpy path is one einsum over the 0/1 channel masks;
+    the compiled one (:mod:`._selection_kernels`) adds only the selected channels' terms, in
+    the einsum's (m, n) order, which gives the same numbers bit for bit (a product with a 0
+    mask adds a signed zero); it runs with numba, ``use_numba`` and finite terms (a 0 mask
+    times an infinite term is NaN in the einsum)."""
+    if use_numba and HAVE_NUMBA and np.isfinite(terms).all():
+        out = np.zeros((terms.shape[0], terms.shape[1], tx_masks.shape[1], 2, 2))
+        _compiled_sums(tx_masks, rx_masks, np.ascontiguousarray(terms, dtype=np.float64), out)
+        return out
+    selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # (B, A, M, N)
+    return np.einsum("bamn,bkmnij->bkaij", selected, terms)
 
 
 def _check_choices(criterion: str, fusion: str) -> None:
@@ -319,3 +343,12 @@ def _swap_search(
         total, by_tx, by_rx = scorer.sums(tx, rx)
         current = np.where(better, scores[rows, choice], current)
     return tx, rx
+
+
+def compiled_kernels() -> list:
+    """The numba kernels the tracking search runs (none without numba)."""
+    return [_compiled_sums] if HAVE_NUMBA else []
+
+
+if HAVE_NUMBA:  # pragma: no branch
+    from ._selection_kernels import selected_sums as _compiled_sums

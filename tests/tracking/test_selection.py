@@ -10,7 +10,7 @@ from mimo_radar_env.core.geometry import bistatic_measurement
 from mimo_radar_env.core.superarm import subset_masks
 from mimo_radar_env.tracking import IMMUKFTracker
 from mimo_radar_env.tracking.information import channel_information
-from mimo_radar_env.tracking.selection import super_arm_criterion
+from mimo_radar_env.tracking.selection import selected_sums, super_arm_criterion
 
 
 def _super_arms(num_tx, num_rx, ms, ns):
@@ -289,3 +289,42 @@ def test_greedy_search_on_a_64x64_layout_stays_in_bounded_memory():
     finally:
         tracemalloc.stop()
     assert peak / batch < 100e6, f"{peak / batch / 1e6:.0f} MB per trial"
+
+
+@pytest.mark.parametrize(
+    ("batch", "targets", "num_tx", "num_rx", "ms", "ns"),
+    [(40, 1, 4, 6, 2, 3), (30, 3, 4, 6, 2, 3), (10, 2, 8, 8, 2, 2), (5, 4, 6, 6, 3, 3), (1, 1, 5, 5, 1, 1)],
+)
+def test_compiled_channel_sums_equal_the_einsum_bit_for_bit(batch, targets, num_tx, num_rx, ms, ns):
+    pytest.importorskip("numba")
+    rng = np.random.default_rng(batch + targets)
+    terms = rng.normal(size=(batch, targets, num_tx, num_rx, 2, 2))
+    terms *= 10.0 ** rng.uniform(-6, 6, size=(batch, targets, num_tx, num_rx, 1, 1))
+    shared = _super_arms(num_tx, num_rx, ms, ns)
+    per_trial = rng.random((batch, 9, num_tx)) < 0.5, rng.random((batch, 9, num_rx)) < 0.5  # partial
+    for tx, rx in (tuple(np.broadcast_to(m, (batch, *m.shape)) for m in shared), per_trial):
+        einsum = np.einsum("bamn,bkmnij->bkaij", tx[..., :, None].astype(float) * rx[..., None, :], terms)
+        np.testing.assert_array_equal(selected_sums(tx, rx, terms), einsum)
+        np.testing.assert_array_equal(selected_sums(tx, rx, terms, use_numba=False), einsum)
+
+
+def test_channel_sums_keep_the_einsums_nan_for_infinite_terms():
+    pytest.importorskip("numba")
+    tx, rx = (np.broadcast_to(m, (2, *m.shape)) for m in _super_arms(3, 4, 1, 2))
+    terms = np.ones((2, 1, 3, 4, 2, 2))
+    terms[0, 0, 2, 3] = np.inf  # a channel most super arms leave out: 0 x inf is NaN in the einsum
+    out = selected_sums(tx, rx, terms)
+    assert np.isnan(out[0]).any() and np.isfinite(out[1]).all()
+    np.testing.assert_array_equal(out, selected_sums(tx, rx, terms, use_numba=False))
+
+
+@pytest.mark.parametrize("fusion", ["average", "centralized"])
+@pytest.mark.parametrize("criterion", ["trace", "logdet"])
+def test_criterion_is_the_same_on_the_compiled_and_numpy_paths(fusion, criterion):
+    rng = np.random.default_rng(11)
+    tx_pos, rx_pos, states, cov, variance, weights = _random_case(rng, batch=6, targets=2, num_tx=4, num_rx=6)
+    info = channel_information(states[..., [0, 2]], tx_pos, rx_pos, variance)
+    tx, rx = _super_arms(4, 6, 2, 3)
+    position_cov = cov[..., [[0], [2]], [0, 2]]
+    args = (position_cov, info, tx, rx, weights, criterion, fusion)
+    np.testing.assert_array_equal(super_arm_criterion(*args), super_arm_criterion(*args, use_numba=False))
