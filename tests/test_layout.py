@@ -92,6 +92,10 @@ MODULE_TESTS = {
     "mimo_radar_env/scenarios/validation.py": ("tests/env/test_bad_input.py", r"ScenarioError"),
     "mimo_radar_env/tracking/bound.py": ("tests/tracking/test_bound.py", r"bound_step"),
     "mimo_radar_env/tracking/_bound_kernels.py": ("tests/tracking/test_bound.py", r"_compiled_step"),
+    "mimo_radar_env/tracking/_selection_kernels.py": (
+        "tests/tracking/test_selection.py",
+        r"selected_sums\(tx, rx, terms\)",
+    ),
     "mimo_radar_env/tracking/fusion/_average_kernels.py": (
         "tests/tracking/test_average_kernels.py",
         r"kernels\.",
