@@ -94,6 +94,16 @@ def test_adding_a_channel_never_increases_the_criterion(criterion):
         assert np.all(after <= before + 1e-12 * np.abs(before))
 
 
+def _search_inputs(seed, batch, num_tx, num_rx, targets=2):
+    """A random case's predicted position covariance (B, K, 2, 2), channel information and
+    target weights: the tracking search's inputs."""
+    tx, rx, states, cov, variance, weights = _random_case(
+        np.random.default_rng(seed), batch=batch, targets=targets, num_tx=num_tx, num_rx=num_rx
+    )
+    info = channel_information(states[..., [0, 2]], tx, rx, variance)
+    return cov[..., [[0], [2]], [0, 2]], info, weights
+
+
 def test_predicted_covariance_is_the_mixture_of_the_models_predictions():
     model = RadarModel.from_scenario(load_scenario("paper-2-v1"))
     tracker = IMMUKFTracker(model, batch_size=2)
@@ -258,10 +268,7 @@ def _reference_greedy(pcov, info, weights, ms, ns, criterion, fusion, starts=8):
 def test_greedy_search_equals_the_search_spelt_out(fusion, criterion):
     from mimo_radar_env.tracking.selection import greedy_super_arm
 
-    rng = np.random.default_rng(7)
-    tx, rx, states, cov, variance, weights = _random_case(rng, batch=12, targets=2, num_tx=5, num_rx=6)
-    info = channel_information(states[..., [0, 2]], tx, rx, variance)
-    pcov = cov[..., [0, 2], :][..., [0, 2]]
+    pcov, info, weights = _search_inputs(7, batch=12, num_tx=5, num_rx=6)
     expected = _reference_greedy(pcov, info, weights, 2, 3, criterion, fusion)
     found = greedy_super_arm(pcov, info, weights, 2, 3, criterion, fusion)
     np.testing.assert_array_equal(found[0], expected[0])
@@ -321,10 +328,7 @@ def test_channel_sums_keep_the_einsums_nan_for_infinite_terms():
 @pytest.mark.parametrize("fusion", ["average", "centralized"])
 @pytest.mark.parametrize("criterion", ["trace", "logdet"])
 def test_criterion_is_the_same_on_the_compiled_and_numpy_paths(fusion, criterion):
-    rng = np.random.default_rng(11)
-    tx_pos, rx_pos, states, cov, variance, weights = _random_case(rng, batch=6, targets=2, num_tx=4, num_rx=6)
-    info = channel_information(states[..., [0, 2]], tx_pos, rx_pos, variance)
+    position_cov, info, weights = _search_inputs(11, batch=6, num_tx=4, num_rx=6)
     tx, rx = _super_arms(4, 6, 2, 3)
-    position_cov = cov[..., [[0], [2]], [0, 2]]
     args = (position_cov, info, tx, rx, weights, criterion, fusion)
     np.testing.assert_array_equal(super_arm_criterion(*args), super_arm_criterion(*args, use_numba=False))
