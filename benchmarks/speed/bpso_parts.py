@@ -29,6 +29,7 @@ from agents.random_streams import TrialRandom
 from agents.solvers import BPSOSolver, _bpso_kernels
 from mimo_radar_env.core.compiled import numba
 
+from ..studies.settings import integer
 from . import bpso_reference, solver_speed
 
 _POLYNOMIAL = """y = v * (-1.0 / 32.0)
@@ -137,8 +138,8 @@ def measure(trials: int = 500, repeats: int = 3, rule: str = "set") -> dict[str,
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--repeats", type=integer(1), default=3)
     parser.add_argument("--json", default=None, help="also write the figures to this file")
     args = parser.parse_args(argv)
     result = measure(args.trials, args.repeats)

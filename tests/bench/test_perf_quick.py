@@ -103,6 +103,15 @@ def test_first_run_refuses_no_repeats(capsys):
     assert "--repeats must be at least 1" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("argument", ["--trials", "--repeats"])
+def test_the_bpso_breakdown_refuses_no_trials_or_repeats(argument, capsys):
+    from benchmarks.speed import bpso_parts
+
+    with pytest.raises(SystemExit):
+        bpso_parts.main([argument, "0"])
+    assert f"argument {argument}: must be an integer >= 1, got 0" in capsys.readouterr().err
+
+
 def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeypatch):
     from benchmarks.speed import bpso_parts
 
