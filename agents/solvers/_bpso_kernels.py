@@ -183,7 +183,10 @@ if HAVE_NUMBA:  # pragma: no branch
         """Same numbers as :func:`run_numpy`. Per trial, the swarm is laid out (bit, particle) in
         float64 (positions are 0 or 1, exact), particles padded to :data:`LANES`, so that every
         inner loop runs over particles with one type and vectorises; eq19 is a table lookup
-        (:func:`_fitness_table`) for particles of at most :data:`TABLE_BITS` bits."""
+        (:func:`_fitness_table`) for particles of at most :data:`TABLE_BITS` bits. With the table,
+        a trial stops once its global best holds the table's largest value: a best is replaced
+        only by a strictly larger fitness, so no later iteration could change it (the numpy
+        kernel runs every iteration and selects the same)."""
         batch, population, length = positions.shape
         num_tx = index.shape[1]
         num_rx = index.shape[2]
@@ -199,8 +202,15 @@ if HAVE_NUMBA:  # pragma: no branch
         result = np.empty((batch, length), dtype=np.int8)
         for b in numba.prange(batch):
             table = np.empty(1 << length if by_table else 0)
+            # the best value a valid particle can have: once the global best holds it, no
+            # particle can be strictly better, so the global best is final and the trial stops
+            optimum = np.inf
             if by_table:
                 _fitness_table(index[b], tx_codes, rx_codes, table)
+                optimum = -np.inf
+                for v in table:
+                    if v > optimum:
+                        optimum = v
             position = np.zeros((length, width))
             for j in range(length):
                 for p in range(population):
@@ -297,6 +307,8 @@ if HAVE_NUMBA:  # pragma: no branch
                     global_fit = personal_fit[best]
                     for j in range(length):
                         global_best[j] = personal_best[j, best]
+                if global_fit >= optimum:
+                    break
             for j in range(length):
                 result[b, j] = np.int8(global_best[j])
         return result

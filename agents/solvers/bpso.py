@@ -65,6 +65,11 @@ class BPSOSolver(SuperArmSolver):
     trial and call for the iteration streams), ``r1``, ``r2`` once per particle and iteration,
     one 16-bit flip draw per bit; the sigmoid uses an exp built from + and *
     (relative error < 1e-7). Both kernels share these, so they agree number for number.
+    The compiled kernel stops a trial's swarm as soon as its global best holds the best value
+    any valid super arm has (its eq19 table's maximum): only a strictly larger fitness replaces
+    a best, so the remaining iterations could not change the result. How much that saves
+    depends on the rule: on i.i.d. exponential indices ``"set"`` reaches the optimum in about
+    99 % of trials and ``"xor"`` in about half (docs/performance.md).
     """
 
     name = "bpso"

@@ -141,6 +141,27 @@ def test_bpso_kernels_agree_by_table_and_by_direct_sum(shape, counts, population
         np.testing.assert_array_equal(fast[1], slow[1])
 
 
+@pytest.mark.parametrize("rule", ["xor", "set"])
+def test_bpso_kernel_stopping_at_the_optimum_selects_what_the_whole_swarm_selects(rule):
+    """The compiled kernel stops a trial once its global best holds the table's best value (no
+    particle can then replace it). The paper's whole swarm (Npop = 50, q_max = 100, which the numpy
+    kernel always runs) selects the same super arms, on ties too: indices drawn from {0, 1, 2}
+    give several optimal super arms, of which the first one found must be kept."""
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    rng = np.random.default_rng(23)
+    ties = rng.integers(0, 3, size=(40, 4, 6)).astype(float)
+    index = np.concatenate([rng.exponential(size=(40, 4, 6)), ties])
+    solvers = [BPSOSolver(2, 3, rule=rule, use_numba=use) for use in (True, False)]
+    fast, slow = (solver.solve(index, streams(index, 4)) for solver in solvers)
+    np.testing.assert_array_equal(fast[0], slow[0])
+    np.testing.assert_array_equal(fast[1], slow[1])
+    etx, erx = ExactSolver(2, 3).solve(index, streams(index))
+    values = np.einsum("bm,bmn,bn->b", fast[0], index, fast[1])
+    best = np.einsum("bm,bmn,bn->b", etx, index, erx)
+    assert (values == best).mean() > 0.4  # most trials reach the optimum, where the stop applies
+
+
 def test_bpso_fitness_table_is_eq19_of_every_pattern():
     """Every bit pattern's table entry: the index sum of its channels (brute force) where it
     selects Ms transmitters and Ns receivers, -inf elsewhere."""
