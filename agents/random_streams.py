@@ -53,10 +53,16 @@ class TrialRandom:
     def batch_size(self) -> int:
         return len(self.keys)
 
-    def _bits(self, stream: Stream, shape: tuple[int, ...]) -> NDArray[np.uint64]:
+    def bases(self, stream: Stream) -> NDArray[np.uint64]:
+        """One draw from ``stream`` left to a compiled kernel: the per-trial bases (B,) that
+        :meth:`uniform` hashes its elements with, so that ``to_unit(element_bits(bases[:, None],
+        i))`` is ``uniform(stream, shape)`` at flat index ``i``."""
         call = self.calls.get(stream, 0)
         self.calls[stream] = call + 1
-        base = stream_base(self.keys, stream, call).reshape((-1,) + (1,) * len(shape))
+        return stream_base(self.keys, stream, call)
+
+    def _bits(self, stream: Stream, shape: tuple[int, ...]) -> NDArray[np.uint64]:
+        base = self.bases(stream).reshape((-1,) + (1,) * len(shape))
         element = np.arange(int(np.prod(shape)), dtype=np.uint64).reshape(shape)
         return element_bits(base, element[None])
 

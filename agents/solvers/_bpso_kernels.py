@@ -166,6 +166,40 @@ if HAVE_NUMBA:  # pragma: no branch
                                 total += index[m, n]
                 table[t | (r << num_tx)] = total
 
+    @numba.njit(cache=True)
+    def _top_counts(values, stations, count, out, b, offset):
+        """``out[b, p, offset + i] = 1`` where ``values[p * stations + i]`` is among the ``count``
+        largest of particle ``p``'s ``stations`` values (ties: the lowest index first, as
+        ``top_mask``'s stable sort), 0 elsewhere."""
+        for p in range(out.shape[1]):
+            row = p * stations
+            for i in range(stations):
+                vi = values[row + i]
+                above = 0
+                for j in range(stations):
+                    vj = values[row + j]
+                    above += (vj > vi) | ((j < i) & (vj == vi))  # branch-free: the draws are random
+                out[b, p, offset + i] = 1 if above < count else 0
+
+    @numba.njit(cache=True)
+    def initial_positions(tx_bases, rx_bases, population, num_tx, num_rx, tx_count, rx_count):
+        """The starting swarm (B, population, M + N) int8 that ``BPSOSolver.initial_swarm``
+        builds with numpy: particle ``p``'s transmitters are the ``tx_count`` largest of the
+        uniforms at flat indices ``p * M .. p * M + M - 1`` of the transmitters' draw (bases
+        ``tx_bases``), its receivers likewise; the same hashes, so the same particles."""
+        batch = tx_bases.shape[0]
+        positions = np.empty((batch, population, num_tx + num_rx), dtype=np.int8)
+        tx_values = np.empty(population * num_tx)
+        rx_values = np.empty(population * num_rx)
+        for b in range(batch):
+            for i in range(population * num_tx):
+                tx_values[i] = to_unit_nb(element_bits_nb(tx_bases[b], i))
+            for i in range(population * num_rx):
+                rx_values[i] = to_unit_nb(element_bits_nb(rx_bases[b], i))
+            _top_counts(tx_values, num_tx, tx_count, positions, b, 0)
+            _top_counts(rx_values, num_rx, rx_count, positions, b, num_tx)
+        return positions
+
     def _run_numba(
         index,
         tx_count,

@@ -126,14 +126,21 @@ class BPSOSolver(SuperArmSolver):
     ) -> tuple[NDArray[np.int8], NDArray[np.uint64]]:
         """A call's starting swarm from the agent's per-trial streams: every particle a uniformly
         random valid super arm, (B, population, M + N) int8, and one key per trial for the
-        iteration streams (the kernels' ``positions`` and ``keys``)."""
-        positions = np.concatenate(
-            [
-                top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count),
-                top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count),
-            ],
-            axis=-1,
-        ).astype(np.int8)
+        iteration streams (the kernels' ``positions`` and ``keys``). With numba, a compiled
+        twin (``_bpso_kernels.initial_positions``) hashes the same draws."""
+        if self.use_numba and _kernels.HAVE_NUMBA:
+            tx_bases, rx_bases = random.bases(Stream.BPSO_INIT_TX), random.bases(Stream.BPSO_INIT_RX)
+            positions = _kernels.initial_positions(
+                tx_bases, rx_bases, self.population, num_tx, num_rx, self.tx_count, self.rx_count
+            )
+        else:
+            positions = np.concatenate(
+                [
+                    top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count),
+                    top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count),
+                ],
+                axis=-1,
+            ).astype(np.int8)
         return positions, random.keys_for(Stream.BPSO_KEYS)
 
     def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool]:

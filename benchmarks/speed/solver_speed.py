@@ -5,9 +5,9 @@ Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
 against ``exact``, and the alternating solver's gap on a 10 x 12 layout. With numba, it also
-times, in one thread and side by side for both position rules, the agents' BPSO kernel, the
-kernel it replaced (``benchmarks.speed.bpso_reference``, the speed reference) and the candidate
-SIMD kernel (``benchmarks.speed.bpso_simd``).
+times, in one thread and side by side for both position rules, the agents' BPSO selection, the
+selection it replaced (the numpy starting swarm and ``benchmarks.speed.bpso_reference``'s kernel,
+the speed reference) and the candidate SIMD kernel (``benchmarks.speed.bpso_simd``).
 """
 
 from __future__ import annotations
@@ -49,15 +49,18 @@ def optimality(index, tx, rx, etx, erx) -> tuple[float, float]:
 
 
 def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
-    """One thread, the paper's swarm, the same index: the pre-rework kernel kept as the reference
-    (:mod:`benchmarks.speed.bpso_reference`), the agents' kernel and the SIMD candidate; each
+    """One thread, the paper's swarm, the same index: the pre-rework selection kept as the
+    reference (the numpy starting swarm and :mod:`benchmarks.speed.bpso_reference`'s kernel), the
+    agents' selection and the SIMD candidate; each
     one's best time of ``repeats`` and its optimality rate against ``exact``, and the agents'
     and the candidate's speed-ups over the reference, all measured in this run."""
     solver = BPSOSolver(2, 3, rule=rule)  # the paper's swarm: the solver's defaults
+    # the selection as it was before the rework: the numpy starting swarm, the reference kernel
+    before = BPSOSolver(2, 3, rule=rule, use_numba=False)
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
 
     def reference(random: TrialRandom) -> tuple:
-        positions, keys = solver.initial_swarm(random, 4, 6)
+        positions, keys = before.initial_swarm(random, 4, 6)
         best = bpso_reference.run_reference(index, 2, 3, positions, keys, *solver.swarm_arguments())
         return best[:, :4].astype(bool), best[:, 4:].astype(bool)
 

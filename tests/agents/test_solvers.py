@@ -9,6 +9,7 @@ from hypothesis import strategies as st
 
 from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver, _bpso_kernels, make_solver
+from mimo_radar_env.core.superarm import top_mask
 
 
 def brute_force(index, ms, ns):
@@ -160,6 +161,38 @@ def test_bpso_kernel_stopping_at_the_optimum_selects_what_the_whole_swarm_select
     values = np.einsum("bm,bmn,bn->b", fast[0], index, fast[1])
     best = np.einsum("bm,bmn,bn->b", etx, index, erx)
     assert (values == best).mean() > 0.4  # most trials reach the optimum, where the stop applies
+
+
+@pytest.mark.parametrize(
+    ("shape", "counts", "population"), [((4, 6), (2, 3), 50), ((8, 9), (3, 4), 13), ((3, 3), (1, 1), 1)]
+)
+def test_bpso_compiled_initial_swarm_is_the_numpy_one(shape, counts, population):
+    """The compiled starting swarm hashes the draws the numpy one draws and keeps the same top
+    stations: the same particles, and the streams left in the same state."""
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    index = np.zeros((17, *shape))
+    randoms = [streams(index, 8), streams(index, 8)]
+    swarms = [
+        BPSOSolver(*counts, population=population, use_numba=use).initial_swarm(random, *shape)
+        for use, random in zip((True, False), randoms, strict=True)
+    ]
+    np.testing.assert_array_equal(swarms[0][0], swarms[1][0])
+    np.testing.assert_array_equal(swarms[0][1], swarms[1][1])
+    assert swarms[0][0].dtype == np.int8
+    assert randoms[0].calls == randoms[1].calls
+
+
+def test_bpso_compiled_top_stations_break_ties_as_top_mask():
+    """Ties go to the lowest index, as top_mask's stable sort has them."""
+    if not _bpso_kernels.HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy kernel exists")
+    rng = np.random.default_rng(3)
+    values = rng.integers(0, 3, size=(200, 6)).astype(float)  # many ties
+    for count in range(7):
+        out = np.empty((1, 200, 6), dtype=np.int8)
+        _bpso_kernels._top_counts(values.ravel(), 6, count, out, 0, 0)
+        np.testing.assert_array_equal(out[0].astype(bool), top_mask(values, count))
 
 
 def test_bpso_fitness_table_is_eq19_of_every_pattern():

@@ -2,6 +2,7 @@
 
 import json
 
+import numpy as np
 import pytest
 
 from benchmarks.cli import main
@@ -113,14 +114,18 @@ def test_the_bpso_breakdown_refuses_no_trials_or_repeats(argument, capsys):
 
 
 def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeypatch):
+    from agents.solvers import _bpso_kernels
     from benchmarks.speed import bpso_parts
 
     result = bpso_parts.measure(trials=4, repeats=1)
     assert [row["part"] for row in result["parts"]] == list(bpso_parts.PARTS)
-    assert result["kernel_ms"] > 0 and result["reference_ms"] > 0
+    assert result["kernel_ms"] > 0 and result["reference_ms"] > 0 and result["whole_swarm_ms"] > 0
     for row in result["parts"]:
         assert row["without_ms"] > 0
-        assert row["cost_ms"] == pytest.approx(result["kernel_ms"] - row["without_ms"])
+        assert row["cost_ms"] == pytest.approx(result["whole_swarm_ms"] - row["without_ms"])
+    # the whole swarm (the kernel without its stop at the optimum) selects what the kernel does
+    args = bpso_parts.kernel_arguments(60, "set")
+    np.testing.assert_array_equal(bpso_parts.variant()(*args), _bpso_kernels.run_numba_serial(*args))
     stale = {"a part the kernel no longer has": [("e = exp(-v)", "e = 1.0")]}
     monkeypatch.setattr(bpso_parts, "PARTS", stale)
     with pytest.raises(RuntimeError, match="no longer holds 'a part the kernel no longer has'"):
