@@ -33,7 +33,7 @@ def compiled_kernels(name: str, threads: int | None = None) -> list[Any]:
 
     if name != BPSOSolver.name or not _bpso_kernels.HAVE_NUMBA:
         return []
-    return [_bpso_kernels.numba_kernel(threads)]
+    return [_bpso_kernels.initial_positions, _bpso_kernels.numba_kernel(threads)]
 
 
 __all__ = [

@@ -52,6 +52,7 @@ def test_a_run_lists_its_fusion_bound_and_solver_kernels():
     assert run_kernels(paper, threads=1) == [
         average._update_numba,
         bound._compiled_step,
+        _bpso_kernels.initial_positions,
         _bpso_kernels.run_numba_serial,
     ]
     assert run_kernels(paper, threads=2)[-1] is _bpso_kernels.run_numba
