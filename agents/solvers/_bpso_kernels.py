@@ -127,6 +127,9 @@ def _fitness_np(
 #: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
 #: trial); longer particles sum their selected channels directly.
 TABLE_BITS = 14
+#: Trials per chunk of the compiled kernel: a chunk's trials share one set of scratch arrays
+#: (allocated once, not per trial); the chunks are what ``prange`` spreads over threads.
+CHUNK = 64
 #: Particles are padded to a multiple of this (the vector width of float64 on AVX-512), so that
 #: the inner loops have no scalar remainder; padded particles never enter a best.
 LANES = 8
@@ -149,22 +152,58 @@ if HAVE_NUMBA:  # pragma: no branch
         return codes[:found]
 
     @numba.njit(cache=True)
-    def _fitness_table(index, tx_codes, rx_codes, table):
-        """eq19 of every bit pattern of one trial (bit j of a pattern is station j, transmitters
-        first), -inf where the cardinality is broken. A valid pattern's sum runs over its selected
-        channels TX-major, the order in which the direct sum adds them (the other terms it adds
-        are zeros), so both give the same number."""
-        num_tx, num_rx = index.shape
-        table[:] = -np.inf
-        for t in tx_codes:
-            for r in rx_codes:
+    def _selected(codes, count):
+        """The stations (ascending) of each bit pattern of ``codes``, (len(codes), count)."""
+        stations = np.empty((codes.shape[0], count), dtype=np.int64)
+        for i in range(codes.shape[0]):
+            found = 0
+            bit = 0
+            while found < count:
+                if (codes[i] >> bit) & 1:
+                    stations[i, found] = bit
+                    found += 1
+                bit += 1
+        return stations
+
+    @numba.njit(cache=True)
+    def _valid_entries(index, tx_codes, rx_codes, tx_selected, rx_selected, table):
+        """Writes eq19 of every valid bit pattern of one trial into ``table`` (bit j of a pattern
+        is station j, transmitters first; ``*_selected``: :func:`_selected` of the codes) and
+        returns the largest. A valid pattern's sum runs over its selected channels TX-major, the
+        order in which the direct sum adds them (the other terms it adds are zeros), so both give
+        the same number."""
+        num_tx = index.shape[0]
+        best = -np.inf
+        for a in range(tx_codes.shape[0]):
+            for c in range(rx_codes.shape[0]):
                 total = 0.0
-                for m in range(num_tx):
-                    if (t >> m) & 1:
-                        for n in range(num_rx):
-                            if (r >> n) & 1:
-                                total += index[m, n]
-                table[t | (r << num_tx)] = total
+                for m in tx_selected[a]:
+                    for n in rx_selected[c]:
+                        total += index[m, n]
+                table[tx_codes[a] | (rx_codes[c] << num_tx)] = total
+                if total > best:
+                    best = total
+        return best
+
+    @numba.njit(cache=True)
+    def _ones(code):
+        """The number of bits set in ``code``."""
+        ones = 0
+        while code:
+            ones += code & 1
+            code >>= 1
+        return ones
+
+    @numba.njit(cache=True)
+    def _fitness_table(index, tx_codes, rx_codes, table):
+        """eq19 of every bit pattern of one trial (:func:`_valid_entries`), -inf where the
+        cardinality is broken."""
+        table[:] = -np.inf
+        tx_count = 0 if tx_codes.shape[0] == 0 else _ones(tx_codes[0])
+        rx_count = 0 if rx_codes.shape[0] == 0 else _ones(rx_codes[0])
+        _valid_entries(
+            index, tx_codes, rx_codes, _selected(tx_codes, tx_count), _selected(rx_codes, rx_count), table
+        )
 
     @numba.njit(cache=True)
     def _top_counts(values, stations, count, out, b, offset):
@@ -230,121 +269,128 @@ if HAVE_NUMBA:  # pragma: no branch
         by_table = length <= TABLE_BITS
         tx_codes = _valid_codes(tx_count, num_tx if by_table else 0)
         rx_codes = _valid_codes(rx_count, num_rx if by_table else 0)
+        tx_selected = _selected(tx_codes, tx_count)
+        rx_selected = _selected(rx_codes, rx_count)
         weight = np.empty(length)
         for j in range(length):
             weight[j] = 2.0**j
         result = np.empty((batch, length), dtype=np.int8)
-        for b in numba.prange(batch):
-            table = np.empty(1 << length if by_table else 0)
-            # the best value a valid particle can have: once the global best holds it, no
-            # particle can be strictly better, so the global best is final and the trial stops
-            optimum = np.inf
-            if by_table:
-                _fitness_table(index[b], tx_codes, rx_codes, table)
-                optimum = -np.inf
-                for v in table:
-                    if v > optimum:
-                        optimum = v
-            position = np.zeros((length, width))
-            for j in range(length):
-                for p in range(population):
-                    position[j, p] = positions[b, p, j]
-            velocity = np.zeros((length, width))
-            personal_best = position.copy()
+        chunks = (batch + CHUNK - 1) // CHUNK
+        for chunk in numba.prange(chunks):
+            # scratch space shared by the chunk's trials; the table's invalid patterns stay -inf
+            table = np.full(1 << length if by_table else 0, -np.inf)
+            position = np.empty((length, width))
+            velocity = np.empty((length, width))
+            personal_best = np.empty((length, width))
             uniform = np.empty((length, width))
             a1 = np.empty(width)
             a2 = np.empty(width)
             code = np.empty(width)
             fitness = np.empty(population)
             personal_fit = np.empty(population)
-            global_best = np.zeros(length)
-            global_fit = -np.inf
-            key = keys[b]
-            for q in range(iterations + 1):
-                if q > 0:
-                    it = q - 1
-                    inertia = inertia_start - (inertia_start - inertia_end) * it / steps
-                    base_r1 = stream_base_nb(key, _R1, it)
-                    base_r2 = stream_base_nb(key, _R2, it)
-                    base_flip = stream_base_nb(key, _FLIP, it)
-                    for p in range(width):
-                        a1[p] = c1 * to_unit_nb(element_bits_nb(base_r1, p))
-                        a2[p] = c2 * to_unit_nb(element_bits_nb(base_r2, p))
-                    # the eq21 draws: four 16-bit uniforms per hash, bit j in lane j // 4
-                    for lane in range(lanes):
-                        for p in range(width):
-                            bits = element_bits_nb(base_flip, p * lanes + lane)
-                            for s in range(4):  # a constant trip count: the loop over p vectorises
-                                if 4 * lane + s < length:
-                                    lane_bits = (bits >> np.uint64(16 * s)) & np.uint64(0xFFFF)
-                                    uniform[4 * lane + s, p] = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)
-                    for j in range(length):
-                        best_bit = global_best[j]
-                        for p in range(width):
-                            d = position[j, p]
-                            v = inertia * velocity[j, p] + a1[p] * (personal_best[j, p] - d)
-                            v = v + a2[p] * (best_bit - d)  # eq20
-                            v = min(max(v, -velocity_clamp), velocity_clamp)
-                            velocity[j, p] = v
-                            y = v * (-1.0 / 32.0)
-                            e = 1.0 + y * (1.0 + y * (0.5 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
-                            e = e * e
-                            e = e * e
-                            e = e * e
-                            e = e * e
-                            e = e * e
-                            hit = uniform[j, p] * (1.0 + e) < 1.0  # u < sigmoid(V), eq21
-                            if set_rule:
-                                position[j, p] = 1.0 if hit else 0.0
-                            else:
-                                position[j, p] = (1.0 - d) if hit else d
+            global_best = np.empty(length)
+            for b in range(chunk * CHUNK, min(batch, (chunk + 1) * CHUNK)):
+                # the trial's swarm: its particles, zero velocity; its table's valid entries
+                optimum = np.inf  # no table: only an infinite fitness is final
                 if by_table:
+                    # the best value a valid particle can have: once the global best holds it, no
+                    # particle can be strictly better, so the global best is final and the trial stops
+                    optimum = _valid_entries(index[b], tx_codes, rx_codes, tx_selected, rx_selected, table)
+                for j in range(length):
                     for p in range(width):
-                        code[p] = 0.0
-                    for j in range(length):
-                        w = weight[j]
+                        d = np.float64(positions[b, p, j]) if p < population else 0.0
+                        position[j, p] = d
+                        personal_best[j, p] = d
+                        velocity[j, p] = 0.0
+                    global_best[j] = 0.0
+                global_fit = -np.inf
+                key = keys[b]
+                for q in range(iterations + 1):
+                    if q > 0:
+                        it = q - 1
+                        inertia = inertia_start - (inertia_start - inertia_end) * it / steps
+                        base_r1 = stream_base_nb(key, _R1, it)
+                        base_r2 = stream_base_nb(key, _R2, it)
+                        base_flip = stream_base_nb(key, _FLIP, it)
                         for p in range(width):
-                            code[p] += position[j, p] * w
-                    for p in range(population):
-                        fitness[p] = table[np.int64(code[p])]
-                else:  # eq19 summed as _fitness_np sums it, -inf where the cardinality is broken
-                    for p in range(population):
-                        fitness[p] = 0.0
-                    for m in range(num_tx):
-                        for n in range(num_rx):
-                            w = index[b, m, n]
-                            for p in range(population):
-                                fitness[p] += position[m, p] * position[num_tx + n, p] * w
-                    for p in range(population):
-                        ct = 0.0
+                            a1[p] = c1 * to_unit_nb(element_bits_nb(base_r1, p))
+                            a2[p] = c2 * to_unit_nb(element_bits_nb(base_r2, p))
+                        # the eq21 draws: four 16-bit uniforms per hash, bit j in lane j // 4
+                        for lane in range(lanes):
+                            for p in range(width):
+                                bits = element_bits_nb(base_flip, p * lanes + lane)
+                                for s in range(4):  # a constant trip count: the loop over p vectorises
+                                    if 4 * lane + s < length:
+                                        lane_bits = (bits >> np.uint64(16 * s)) & np.uint64(0xFFFF)
+                                        u = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)
+                                        uniform[4 * lane + s, p] = u
+                        for j in range(length):
+                            best_bit = global_best[j]
+                            for p in range(width):
+                                d = position[j, p]
+                                v = inertia * velocity[j, p] + a1[p] * (personal_best[j, p] - d)
+                                v = v + a2[p] * (best_bit - d)  # eq20
+                                v = min(max(v, -velocity_clamp), velocity_clamp)
+                                velocity[j, p] = v
+                                y = v * (-1.0 / 32.0)
+                                e = 1.0 + y * (1.0 + y * (0.5 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))
+                                e = e * e
+                                e = e * e
+                                e = e * e
+                                e = e * e
+                                e = e * e
+                                hit = uniform[j, p] * (1.0 + e) < 1.0  # u < sigmoid(V), eq21
+                                if set_rule:
+                                    position[j, p] = 1.0 if hit else 0.0
+                                else:
+                                    position[j, p] = (1.0 - d) if hit else d
+                    if by_table:
+                        for p in range(width):
+                            code[p] = 0.0
+                        for j in range(length):
+                            w = weight[j]
+                            for p in range(width):
+                                code[p] += position[j, p] * w
+                        for p in range(population):
+                            fitness[p] = table[np.int64(code[p])]
+                    else:  # eq19 summed as _fitness_np sums it, -inf where the cardinality is broken
+                        for p in range(population):
+                            fitness[p] = 0.0
                         for m in range(num_tx):
-                            ct += position[m, p]
-                        cr = 0.0
-                        for n in range(num_rx):
-                            cr += position[num_tx + n, p]
-                        if ct != tx_count or cr != rx_count:
-                            fitness[p] = -np.inf
-                if q == 0:
-                    for p in range(population):
-                        personal_fit[p] = fitness[p]
-                else:
-                    for p in range(population):
-                        if fitness[p] > personal_fit[p]:
+                            for n in range(num_rx):
+                                w = index[b, m, n]
+                                for p in range(population):
+                                    fitness[p] += position[m, p] * position[num_tx + n, p] * w
+                        for p in range(population):
+                            ct = 0.0
+                            for m in range(num_tx):
+                                ct += position[m, p]
+                            cr = 0.0
+                            for n in range(num_rx):
+                                cr += position[num_tx + n, p]
+                            if ct != tx_count or cr != rx_count:
+                                fitness[p] = -np.inf
+                    if q == 0:
+                        for p in range(population):
                             personal_fit[p] = fitness[p]
-                            for j in range(length):
-                                personal_best[j, p] = position[j, p]
-                best = 0
-                for p in range(1, population):
-                    if personal_fit[p] > personal_fit[best]:
-                        best = p
-                if q == 0 or personal_fit[best] > global_fit:
-                    global_fit = personal_fit[best]
-                    for j in range(length):
-                        global_best[j] = personal_best[j, best]
-                if global_fit >= optimum:
-                    break
-            for j in range(length):
-                result[b, j] = np.int8(global_best[j])
+                    else:
+                        for p in range(population):
+                            if fitness[p] > personal_fit[p]:
+                                personal_fit[p] = fitness[p]
+                                for j in range(length):
+                                    personal_best[j, p] = position[j, p]
+                    best = 0
+                    for p in range(1, population):
+                        if personal_fit[p] > personal_fit[best]:
+                            best = p
+                    if q == 0 or personal_fit[best] > global_fit:
+                        global_fit = personal_fit[best]
+                        for j in range(length):
+                            global_best[j] = personal_best[j, best]
+                    if global_fit >= optimum:
+                        break
+                for j in range(length):
+                    result[b, j] = np.int8(global_best[j])
         return result
 
     def _twin(function: Any, name: str) -> Any:
