@@ -21,6 +21,7 @@ import fcntl
 import functools
 import hashlib
 import json
+import math
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
@@ -150,7 +151,7 @@ def make_config(
         if isinstance(value, bool) or not isinstance(value, int) or value < low:
             raise HarnessError(f"{name} must be an integer >= {low}, got {value!r}")
     if shard_size is None:
-        shard_size = auto_shard_size(trials, parallel or workers)
+        shard_size = auto_shard_size(trials, parallel or workers, len(policies or ()))
     steps = sc.horizon if steps is None else steps
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
         raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
@@ -225,17 +226,22 @@ def make_config(
 #: The share of the machine's memory the tasks running at once may take together.
 MEMORY_FRACTION = 0.5
 #: The largest shard :func:`auto_shard_size` makes: a shard is saved whole, so this bounds the
-#: work an interruption loses (about a minute of the paper study's slowest policy).
-MAX_AUTO_SHARD_SIZE = 250
+#: work an interruption loses (well under a minute of the v1 paper study's slowest policy).
+MAX_AUTO_SHARD_SIZE = 500
 
 
-def auto_shard_size(trials: int, parallel: int) -> int:
-    """The shard size when none is given: the trials split evenly over the ``parallel`` tasks
-    that run at once, so that every task steps as large a batch as it can (a step's fixed costs
-    are shared by the batch), at most :data:`MAX_AUTO_SHARD_SIZE`. Trial ``i`` is seeded
+def auto_shard_size(trials: int, parallel: int, policies: int = 1) -> int:
+    """The shard size when none is given: each policy's trials cut into the fewest shards that
+    make the run's tasks a multiple of the ``parallel`` tasks that run at once
+    (``parallel // gcd(policies, parallel)`` shards per policy: with 6 policies and 2 workers,
+    one shard per policy; with 1 policy, one per worker), so that every task steps as large a
+    batch as it can (a step's fixed costs are shared by the batch) while no worker is left
+    without a task of the last round, at most :data:`MAX_AUTO_SHARD_SIZE`. Trial ``i`` is seeded
     ``seed + i`` whatever its shard, so the numbers depend on it only through floating-point
     rounding (a batch of another size may sum in another order: a relative 1e-12)."""
-    return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // max(1, parallel))))
+    parallel, policies = max(1, parallel), max(1, policies)
+    shards = parallel // math.gcd(policies, parallel)
+    return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // shards)))
 
 
 def fit_shard_size(

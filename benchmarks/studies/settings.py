@@ -60,7 +60,8 @@ class Settings:
         Monte-Carlo trials, steps per episode (None: the scenario's horizon) and the base seed
         (trial ``i`` uses ``seed + i``).
     shard_size : int or None
-        Trials per shard (None: :func:`benchmarks.harness.auto_shard_size` for the workers).
+        Trials per shard (None: :func:`benchmarks.harness.auto_shard_size` for the workers and
+        policies).
     workers, backend, address
         Local worker processes, ``"local"`` or ``"ray"``, and the Ray cluster's address.
     progress, figures : bool
@@ -305,8 +306,8 @@ def add_run_arguments(
         "--shard-size",
         type=integer(1),
         default=None,
-        help="trials per shard; each finished shard is saved at once (default: the trials split "
-        f"evenly over the workers, at most {MAX_AUTO_SHARD_SIZE})",
+        help="trials per shard; each finished shard is saved at once (default: each policy's trials "
+        f"in the fewest shards that keep every worker busy, at most {MAX_AUTO_SHARD_SIZE})",
     )
     parser.add_argument(
         "--workers",

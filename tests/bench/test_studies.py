@@ -79,7 +79,7 @@ def test_without_a_shard_size_the_trials_are_split_over_the_workers_and_a_resume
 ):
     from benchmarks.harness import MAX_AUTO_SHARD_SIZE, auto_shard_size, make_config, run
 
-    # the trials split evenly over the tasks at once, capped, never below one
+    # one policy: the trials split evenly over the tasks at once, capped, never below one
     assert [auto_shard_size(t, w) for t, w in ((500, 2), (20, 2), (7, 2), (3, 8), (10_000, 2))] == [
         250,
         10,
@@ -87,7 +87,15 @@ def test_without_a_shard_size_the_trials_are_split_over_the_workers_and_a_resume
         1,
         MAX_AUTO_SHARD_SIZE,
     ]
+    # several: the fewest shards per policy that make the tasks a multiple of the tasks at once
+    cases = {(500, 2, 6): 500, (500, 2, 3): 250, (200, 2, 12): 200, (500, 4, 6): 250, (500, 3, 2): 167}
+    assert {case: auto_shard_size(*case) for case in cases} == cases
+    for (trials, parallel, policies), size in cases.items():
+        assert policies * -(-trials // size) % parallel == 0
+    assert auto_shard_size(10_000, 2, 6) == MAX_AUTO_SHARD_SIZE == 500
     quiet = dict(say=lambda message: None)
+    six = ["fix1", "fix2", "ucb1", "random", "best", "epsilon-greedy"]
+    assert make_config("paper-1-v1", six, trials=9, steps=3, workers=2, **quiet).shard_size == 9
     assert make_config("paper-1-v1", ["fix1"], trials=9, steps=3, workers=2, **quiet).shard_size == 5
     assert make_config("paper-1-v1", ["fix1"], 9, 3, workers=1, parallel=3, **quiet).shard_size == 3
     assert make_config("paper-1-v1", ["fix1"], 9, 3, shard_size=2, workers=2, **quiet).shard_size == 2
