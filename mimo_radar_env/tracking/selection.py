@@ -60,6 +60,9 @@ POSTERIORS: dict[str, SuperArmPosterior] = {
         from_sum=lambda prior_info, total, count: total / count,
     ),
 }
+#: The fusions whose posterior the compiled search computes too (``_selection_kernels.
+#: posterior_values``); another fusion's search takes the numpy path.
+COMPILED_POSTERIORS = ("centralized", "average")
 if set(POSTERIORS) != set(FUSIONS):  # a new fusion must say what it does to the posterior
     raise ImportError(
         f"selection knows the posteriors of {sorted(POSTERIORS)}, the fusions are {sorted(FUSIONS)}"
@@ -122,10 +125,27 @@ def super_arm_criterion(
         tx_masks = np.broadcast_to(tx_masks, (batch, *tx_masks.shape))
         rx_masks = np.broadcast_to(rx_masks, (batch, *rx_masks.shape))
     posterior = POSTERIORS[fusion]
-    total = selected_sums(tx_masks, rx_masks, posterior.terms(prior_info, information), use_numba)
-    count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
-    covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
-    return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), _per_target(covariance, criterion))
+    terms = posterior.terms(prior_info, information)
+    if use_numba and HAVE_NUMBA and fusion in COMPILED_POSTERIORS and np.isfinite(terms).all():
+        # the channel sums, the posteriors and their traces or determinants in one pass: the same
+        # numbers as the numpy path below, without its (B, K, A, 2, 2) intermediates
+        values = np.empty((batch, terms.shape[1], tx_masks.shape[1]))
+        _compiled_posteriors(
+            tx_masks,
+            rx_masks,
+            np.ascontiguousarray(terms, dtype=np.float64),
+            np.ascontiguousarray(prior_info),
+            fusion == "centralized",
+            criterion == "trace",
+            values,
+        )
+        per_target = values if criterion == "trace" else np.log(values)
+    else:
+        total = selected_sums(tx_masks, rx_masks, terms, use_numba)
+        count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
+        covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
+        per_target = _per_target(covariance, criterion)
+    return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
 
 
 def selected_sums(
@@ -347,8 +367,9 @@ def _swap_search(
 
 def compiled_kernels() -> list:
     """The numba kernels the tracking search runs (none without numba)."""
-    return [_compiled_sums] if HAVE_NUMBA else []
+    return [_compiled_sums, _compiled_posteriors] if HAVE_NUMBA else []
 
 
 if HAVE_NUMBA:  # pragma: no branch
+    from ._selection_kernels import posterior_values as _compiled_posteriors
     from ._selection_kernels import selected_sums as _compiled_sums

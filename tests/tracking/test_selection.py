@@ -332,3 +332,29 @@ def test_criterion_is_the_same_on_the_compiled_and_numpy_paths(fusion, criterion
     tx, rx = _super_arms(4, 6, 2, 3)
     args = (position_cov, info, tx, rx, weights, criterion, fusion)
     np.testing.assert_array_equal(super_arm_criterion(*args), super_arm_criterion(*args, use_numba=False))
+
+
+@pytest.mark.parametrize("fusion", ["average", "centralized"])
+@pytest.mark.parametrize("criterion", ["trace", "logdet"])
+@pytest.mark.parametrize(("batch", "targets", "num_tx", "num_rx"), [(7, 1, 4, 6), (5, 3, 6, 6), (3, 4, 8, 5)])
+def test_compiled_posteriors_equal_the_numpy_path_on_partial_and_degenerate_selections(
+    fusion, criterion, batch, targets, num_tx, num_rx
+):
+    """The compiled search goes from the channel sums to the criterion with the numpy path's
+    operations: the same numbers bit for bit, for per-trial partial selections too, including
+    empty ones (a count of 0) and a singular information matrix (a determinant of 0), which
+    give the numpy path's inf and NaN rather than an error."""
+    pytest.importorskip("numba")
+    position_cov, info, weights = _search_inputs(batch + targets, batch, num_tx, num_rx, targets)
+    rng = np.random.default_rng(targets)
+    tx = rng.random((batch, 12, num_tx)) < 0.4
+    rx = rng.random((batch, 12, num_rx)) < 0.4
+    tx[:, 0], rx[:, 1] = False, False  # nothing selected
+    info[0] = 0.0  # no information at all in trial 0
+    if fusion == "centralized":
+        position_cov[0, 0] = np.array([[1.0, 1.0], [1.0, 1.0]])  # singular prior: S^-1 is inf/NaN
+    with np.errstate(all="ignore"):
+        args = (position_cov, info, tx, rx, weights, criterion, fusion)
+        fast, slow = super_arm_criterion(*args), super_arm_criterion(*args, use_numba=False)
+    np.testing.assert_array_equal(fast, slow)
+    assert np.isfinite(slow).any() and not np.isfinite(slow).all()
