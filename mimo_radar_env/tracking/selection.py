@@ -115,8 +115,9 @@ def super_arm_criterion(
     (A, N) the super arms, or (B, A, M), (B, A, N) for per-trial ones (partial selections
     allowed); ``weights`` (K,) ``Omega``; ``fusion`` a fusion of the registry
     (:data:`POSTERIORS`: ``"centralized"``, the channels' information adds, or ``"average"``,
-    eq22, their posteriors are averaged); ``use_numba`` the compiled sum over each super arm's
-    channels (:func:`selected_sums`, the same numbers), when numba is installed.
+    eq22, their posteriors are averaged); ``use_numba`` the compiled path, when numba is
+    installed: each super arm's sum over its channels (:func:`selected_sums`' order), its
+    posterior and that posterior's trace or determinant in one pass, with the same numbers.
     """
     _check_choices(criterion, fusion)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
