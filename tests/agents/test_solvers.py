@@ -160,7 +160,7 @@ def test_bpso_kernel_stopping_at_the_optimum_selects_what_the_whole_swarm_select
     etx, erx = ExactSolver(2, 3).solve(index, streams(index))
     values = np.einsum("bm,bmn,bn->b", fast[0], index, fast[1])
     best = np.einsum("bm,bmn,bn->b", etx, index, erx)
-    assert (values == best).mean() > 0.4  # most trials reach the optimum, where the stop applies
+    assert (values == best).mean() > 0.4  # many trials reach the optimum, where the stop applies
 
 
 @pytest.mark.parametrize(
