@@ -1,12 +1,12 @@
-"""The compiled sum over a super arm's channels of the tracking search (numba).
+"""The tracking search's compiled criterion (numba): :func:`posterior_values`.
 
-:func:`selected_sums` gives, number for number, what ``np.einsum("bamn,bkmnij->bkaij",
-selected, terms)`` gives for 0/1 channel masks ``selected`` and finite ``terms``: numpy's
-einsum adds each output's products in ``(m, n)`` order, a product with a 0 mask adds a
-signed zero (which changes no sum that starts at +0) and one with a 1 mask adds the term
-itself, so the kernel adds the selected channels' terms in the same order and skips the rest.
-:func:`posterior_values` goes on from those sums to each super arm's posterior position
-covariance and its trace or determinant, with the operations of the numpy path.
+Each super arm's sum of its channels' terms is what ``np.einsum("bamn,bkmnij->bkaij",
+selected, terms)`` gives for 0/1 channel masks ``selected`` and finite ``terms``, number for
+number: numpy's einsum adds each output's products in ``(m, n)`` order, a product with a 0
+mask adds a signed zero (which changes no sum that starts at +0) and one with a 1 mask adds
+the term itself, so the kernel adds the selected channels' terms in the same order and skips
+the rest. From those sums it goes on to each super arm's posterior position covariance and
+its trace or determinant, with the operations of the numpy path.
 """
 
 from __future__ import annotations
@@ -16,31 +16,13 @@ import numpy as np
 from ..core.compiled import numba
 
 if numba is not None:  # pragma: no branch
-
-    @numba.njit(cache=True)
-    def selected_sums(tx_masks, rx_masks, terms, out):
-        """``out[b, k, a] = sum over (m, n) with tx_masks[b, a, m] and rx_masks[b, a, n] of
-        terms[b, k, m, n]`` (2 x 2 blocks), in (m, n) order; ``out`` zeros (B, K, A, 2, 2)."""
-        batch, targets, num_tx, num_rx = terms.shape[:4]
-        arms = tx_masks.shape[1]
-        for b in range(batch):
-            for a in range(arms):
-                for m in range(num_tx):
-                    if tx_masks[b, a, m]:
-                        for n in range(num_rx):
-                            if rx_masks[b, a, n]:
-                                for k in range(targets):
-                                    for i in range(2):
-                                        for j in range(2):
-                                            out[b, k, a, i, j] += terms[b, k, m, n, i, j]
-
     # error_model numpy: a division by a zero determinant or count gives inf or NaN, as in numpy
     @numba.njit(cache=True, error_model="numpy")
     def posterior_values(tx_masks, rx_masks, terms, prior_info, centralized, trace, out):
         """Each super arm's predicted posterior position covariance, reduced to its trace
         (``trace``) or its determinant, written into ``out`` (B, K, A): the numbers
         ``selection.super_arm_criterion``'s numpy path computes before its ``log`` and its sum
-        over targets. The channel sum is :func:`selected_sums`' (in (m, n) order, from +0); then
+        over targets. The channel sum runs in (m, n) order from +0 (the module's docstring); then
         ``centralized``: the closed-form inverse of ``prior_info + sum`` (its entries divided by
         the determinant, as ``information.inverse_2x2``), else eq22's mean ``sum / count``."""
         batch, targets, num_tx, num_rx = terms.shape[:4]

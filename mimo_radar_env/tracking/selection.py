@@ -116,8 +116,10 @@ def super_arm_criterion(
     allowed); ``weights`` (K,) ``Omega``; ``fusion`` a fusion of the registry
     (:data:`POSTERIORS`: ``"centralized"``, the channels' information adds, or ``"average"``,
     eq22, their posteriors are averaged); ``use_numba`` the compiled path, when numba is
-    installed: each super arm's sum over its channels (:func:`selected_sums`' order), its
-    posterior and that posterior's trace or determinant in one pass, with the same numbers.
+    installed and the channels' terms are finite: each super arm's sum over its channels (in
+    the numpy path's einsum order), its posterior and that posterior's trace or determinant
+    in one pass (:mod:`._selection_kernels`), with the same numbers (a 0 mask times an
+    infinite term is NaN in the einsum, so infinite terms take the numpy path).
     """
     _check_choices(criterion, fusion)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
@@ -142,31 +144,12 @@ def super_arm_criterion(
         )
         per_target = values if criterion == "trace" else np.log(values)
     else:
-        total = selected_sums(tx_masks, rx_masks, terms, use_numba)
+        selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # (B, A, M, N)
+        total = np.einsum("bamn,bkmnij->bkaij", selected, terms)
         count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
         covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
         per_target = _per_target(covariance, criterion)
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
-
-
-def selected_sums(
-    tx_masks: NDArray[np.bool_],
-    rx_masks: NDArray[np.bool_],
-    terms: NDArray[np.float64],
-    use_numba: bool = True,
-) -> NDArray[np.float64]:
-    """Each super arm's sum of its channels' terms: (B, K, A, 2, 2) from masks (B, A, M), (B, A, N)
-    and ``terms`` (B, K, M, N, 2, 2). The numpy path is one einsum over the 0/1 channel masks;
-    the compiled one (:mod:`._selection_kernels`) adds only the selected channels' terms, in
-    the einsum's (m, n) order, which gives the same numbers bit for bit (a product with a 0
-    mask adds a signed zero); it runs with numba, ``use_numba`` and finite terms (a 0 mask
-    times an infinite term is NaN in the einsum)."""
-    if use_numba and HAVE_NUMBA and np.isfinite(terms).all():
-        out = np.zeros((terms.shape[0], terms.shape[1], tx_masks.shape[1], 2, 2))
-        _compiled_sums(tx_masks, rx_masks, np.ascontiguousarray(terms, dtype=np.float64), out)
-        return out
-    selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # (B, A, M, N)
-    return np.einsum("bamn,bkmnij->bkaij", selected, terms)
 
 
 def _check_choices(criterion: str, fusion: str) -> None:
@@ -368,9 +351,8 @@ def _swap_search(
 
 def compiled_kernels() -> list:
     """The numba kernels the tracking search runs (none without numba)."""
-    return [_compiled_sums, _compiled_posteriors] if HAVE_NUMBA else []
+    return [_compiled_posteriors] if HAVE_NUMBA else []
 
 
 if HAVE_NUMBA:  # pragma: no branch
     from ._selection_kernels import posterior_values as _compiled_posteriors
-    from ._selection_kernels import selected_sums as _compiled_sums
