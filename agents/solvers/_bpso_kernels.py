@@ -186,26 +186,6 @@ if HAVE_NUMBA:  # pragma: no branch
         return best
 
     @numba.njit(cache=True)
-    def _ones(code):
-        """The number of bits set in ``code``."""
-        ones = 0
-        while code:
-            ones += code & 1
-            code >>= 1
-        return ones
-
-    @numba.njit(cache=True)
-    def _fitness_table(index, tx_codes, rx_codes, table):
-        """eq19 of every bit pattern of one trial (:func:`_valid_entries`), -inf where the
-        cardinality is broken."""
-        table[:] = -np.inf
-        tx_count = 0 if tx_codes.shape[0] == 0 else _ones(tx_codes[0])
-        rx_count = 0 if rx_codes.shape[0] == 0 else _ones(rx_codes[0])
-        _valid_entries(
-            index, tx_codes, rx_codes, _selected(tx_codes, tx_count), _selected(rx_codes, rx_count), table
-        )
-
-    @numba.njit(cache=True)
     def _top_counts(values, stations, count, out, b, offset):
         """``out[b, p, offset + i] = 1`` where ``values[p * stations + i]`` is among the ``count``
         largest of particle ``p``'s ``stations`` values (ties: the lowest index first, as
@@ -256,7 +236,7 @@ if HAVE_NUMBA:  # pragma: no branch
         """Same numbers as :func:`run_numpy`. Per trial, the swarm is laid out (bit, particle) in
         float64 (positions are 0 or 1, exact), particles padded to :data:`LANES`, so that every
         inner loop runs over particles with one type and vectorises; eq19 is a table lookup
-        (:func:`_fitness_table`) for particles of at most :data:`TABLE_BITS` bits. With the table,
+        (:func:`_valid_entries`) for particles of at most :data:`TABLE_BITS` bits. With the table,
         a trial stops once its global best holds the table's largest value: a best is replaced
         only by a strictly larger fitness, so no later iteration could change it (the numpy
         kernel runs every iteration and selects the same)."""

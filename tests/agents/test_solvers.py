@@ -196,21 +196,30 @@ def test_bpso_compiled_top_stations_break_ties_as_top_mask():
 
 
 def test_bpso_fitness_table_is_eq19_of_every_pattern():
-    """Every bit pattern's table entry: the index sum of its channels (brute force) where it
-    selects Ms transmitters and Ns receivers, -inf elsewhere."""
+    """Every valid bit pattern's table entry is the index sum of its channels (brute force)
+    where it selects Ms transmitters and Ns receivers; the others are left as they were (the
+    kernel sets them to -inf once per chunk of trials); the largest entry is returned."""
     if not _bpso_kernels.HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy kernel exists")
     index = np.random.default_rng(1).normal(size=(4, 6))
-    table = np.empty(1 << 10)
-    codes = _bpso_kernels._valid_codes
-    _bpso_kernels._fitness_table(index, codes(2, 4), codes(3, 6), table)
+    untouched = -np.inf
+    table = np.full(1 << 10, untouched)
+    k = _bpso_kernels
+    tx_codes, rx_codes = k._valid_codes(2, 4), k._valid_codes(3, 6)
+    stations = k._selected(tx_codes, 2), k._selected(rx_codes, 3)
+    best = k._valid_entries(index, tx_codes, rx_codes, *stations, table)
+    assert best == table.max()  # the optimum the kernel stops at
+    sentinel = np.full(1 << 10, 7.5)  # invalid patterns are never written, whatever they hold
+    k._valid_entries(index, tx_codes, rx_codes, *stations, sentinel)
+    valid = sentinel != 7.5
+    np.testing.assert_array_equal(sentinel[valid], table[valid])
     for pattern in range(1 << 10):
         bits = (pattern >> np.arange(10)) & 1
         tx, rx = bits[:4], bits[4:]
         if tx.sum() == 2 and rx.sum() == 3:
             assert table[pattern] == pytest.approx(tx @ index @ rx, rel=1e-12)
         else:
-            assert table[pattern] == -np.inf
+            assert table[pattern] == untouched and not valid[pattern]
 
 
 def test_bpso_exp_polynomial_is_accurate():
