@@ -623,7 +623,7 @@ def run_many(
         )
         threads = 1 if workers > 1 or backend == "ray" else None
         if any(uncached(run_kernels(configs[n], threads)) for n in {n for n, _, _ in todo}):
-            bar.set_postfix_str("compiling numba kernels (first run; cached for the next)")
+            bar.set_postfix_str("compiling numba kernels (first run only; or once: mimo-radar-bench compile)")
         saved = []
         complete = [False] * len(configs)
 

@@ -59,6 +59,7 @@ MODULE_TESTS = {
     "benchmarks/studies/layout_search.py": ("tests/bench/test_layout_search.py", r"constraint_failure"),
     "benchmarks/studies/ablations.py": ("tests/bench/test_ablations.py", r"exploration_costs"),
     "benchmarks/studies/mechanisms.py": ("tests/bench/test_mechanisms.py", r"lead_and_sampling_oracles"),
+    "benchmarks/precompile.py": ("tests/bench/test_precompile.py", r"precompile\.all_kernels"),
     "benchmarks/speed/bpso_simd.py": ("tests/bench/test_bpso_simd.py", r"run_numpy"),
     "benchmarks/speed/bpso_reference.py": ("tests/bench/test_bpso_reference.py", r"run_reference"),
     "benchmarks/speed/bpso_parts.py": ("tests/bench/test_perf_quick.py", r"bpso_parts\.measure"),

@@ -38,6 +38,7 @@ COMMANDS = {
     "demo": (["--steps", "3"], ["--scenario", "--seed", "--steps", "--fusion", "--env-version"]),
     "model-figures": (["--only", "bpso-set-optimal"], ["--only"]),
     "docs": (["--check"], ["--docs"]),
+    "compile": ([], ["--workers"]),
 }  # fmt: skip
 #: The studies, the comparison of scorecards and the perf suite (each valid invocation takes
 #: seconds); ``None`` sends the hostile value as a positional argument.
