@@ -228,7 +228,7 @@ class Demo(Command):
 class Compile(Command):
     name = "compile"
     order = 12
-    help = "compile every numba kernel once, into numba's cache, so that no run compiles (needs the fast extra)"
+    help = "compile every numba kernel once into numba's cache, so that no run compiles (fast extra)"
     description = (
         "A fresh install has no numba cache: a run compiles the kernels it calls on their first call. "
         "This compiles all of them up front (the env's fusions and bound, the tracking search, BPSO), "
@@ -255,7 +255,9 @@ class Compile(Command):
             return 0
         start = time.perf_counter()
         workers = self.args.workers or os.cpu_count() or 1
-        print(f"compiling numba kernels in {workers} worker processes (once; later runs load them)", flush=True)
+        print(
+            f"compiling numba kernels in {workers} worker processes (once: later runs load them)", flush=True
+        )
         for name, seconds in precompile(workers):
             print(f"  {name}: {seconds:.1f} s", flush=True)
         print(f"all {len(all_kernels())} kernels compiled and cached in {time.perf_counter() - start:.1f} s")
