@@ -745,6 +745,14 @@ def rl_findings(docs: Path) -> str:
     return "\n".join(lines)
 
 
+def _rate_with_interval(rate: float, trials: int) -> str:
+    """A fraction of ``trials`` as a percentage with its 95 % Wilson interval."""
+    from scipy.stats import binomtest
+
+    low, high = binomtest(round(rate * trials), trials).proportion_ci(0.95, method="wilson")
+    return f"{100 * rate:.1f} % [{100 * low:.1f}, {100 * high:.1f}]"
+
+
 @generator("bpso-parts")
 def bpso_parts_table(docs: Path) -> str:
     """``python -m benchmarks.speed.bpso_parts``: what each part of the whole swarm costs, what
@@ -775,6 +783,34 @@ def bpso_parts_table(docs: Path) -> str:
         f"stop is {'within' if r['kernel_ms'] <= budget else 'above'} it; in the whole swarm the exp "
         f"polynomial alone costs {polynomial['cost_ms']:.1f} ms, {verdict} that.",
     ]
+    if "float32" in r:
+        lines += [
+            "",
+            "The kernel transcribed to float32 (16 particles per vector; its stop kept), beside the "
+            f"kernel and the kernel it replaced, the kernels alone (no starting swarm), "
+            f"{r['float32']['trials']} trials, one thread:",
+            "",
+            "| rule | the kernel (ms) | in float32 (ms) | the kernel it replaced (ms) | speed-up over it: "
+            "the kernel, in float32 | target | optimal selections (95 % Wilson interval): the kernel, "
+            "in float32, the kernel it replaced |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for rule, row in r["float32"]["rules"].items():
+            target = TARGETS[f"bpso_speedup_vs_reference_{rule}"][1]
+            kernel, float32 = (row["reference_ms"] / row[f"{k}_ms"] for k in ("kernel", "float32"))
+            rates = ", ".join(
+                _rate_with_interval(row[f"{k}_optimality_rate"], r["float32"]["trials"])
+                for k in ("kernel", "float32", "reference")
+            )
+            reach = (
+                "both reach it"
+                if min(kernel, float32) >= target
+                else ("float32 alone reaches it" if float32 >= target else "neither reaches it")
+            )
+            lines.append(
+                f"| {rule} | {row['kernel_ms']:.1f} | {row['float32_ms']:.1f} | {row['reference_ms']:.1f} | "
+                f"{kernel:.1f}x, {float32:.1f}x | >= {target:g}x: {reach} | {rates} |"
+            )
     return "\n".join(lines)
 
 

@@ -16,6 +16,12 @@ paper's size (Npop = 50, q_max = 100, Ms = 2, Ns = 3 of 4 x 6), beside the kerne
 replaced (:mod:`benchmarks.speed.bpso_reference`). A replacement that no longer matches the
 kernel's source is an error naming the part, so the breakdown cannot silently measure
 something else.
+
+It also times, under both rules, the agents' kernel transcribed to float32 with its stop
+(:func:`float32_variant`: the swarm's state, the draws and eq20-eq21 in float32, particles
+padded to 16, the float32 vector width; eq19's table stays float64), the layout the performance
+issue proposed, beside the kernel and the kernel it replaced. Its selections are a different
+random stream's: how often they are the optimum is counted against the exact solver's.
 """
 
 from __future__ import annotations
@@ -97,6 +103,130 @@ def variant(part: str | None = None) -> Any:
     return numba.njit(namespace[name])
 
 
+#: The float32 transcription: (old, new) substrings of the kernel's source, each found once.
+FLOAT32: list[tuple[str, str]] = [
+    ("width = (population + LANES - 1) // LANES * LANES", "width = (population + 15) // 16 * 16"),
+    *[
+        (f"{name} = np.empty({shape})", f"{name} = np.empty({shape}, dtype=np.float32)")
+        for name, shape in [
+            ("position", "(length, width)"),
+            ("velocity", "(length, width)"),
+            ("personal_best", "(length, width)"),
+            ("uniform", "(length, width)"),
+            ("a1", "width"),
+            ("a2", "width"),
+            ("global_best", "length"),
+        ]
+    ],
+    (
+        "d = np.float64(positions[b, p, j]) if p < population else 0.0",
+        "d = np.float32(positions[b, p, j]) if p < population else _F0",
+    ),
+    ("velocity[j, p] = 0.0", "velocity[j, p] = _F0"),
+    ("global_best[j] = 0.0", "global_best[j] = _F0"),
+    (
+        "inertia = inertia_start - (inertia_start - inertia_end) * it / steps",
+        "inertia = np.float32(inertia_start - (inertia_start - inertia_end) * it / steps)",
+    ),
+    (
+        "a1[p] = c1 * to_unit_nb(element_bits_nb(base_r1, p))",
+        "a1[p] = np.float32(c1 * to_unit_nb(element_bits_nb(base_r1, p)))",
+    ),
+    (
+        "a2[p] = c2 * to_unit_nb(element_bits_nb(base_r2, p))",
+        "a2[p] = np.float32(c2 * to_unit_nb(element_bits_nb(base_r2, p)))",
+    ),
+    ("u = (np.float64(lane_bits) + 0.5) * (1.0 / 65536.0)", "u = (np.float32(lane_bits) + _HALF) * _UNIT16"),
+    (
+        "v = min(max(v, -velocity_clamp), velocity_clamp)",
+        "v = min(max(v, -np.float32(velocity_clamp)), np.float32(velocity_clamp))",
+    ),
+    ("y = v * (-1.0 / 32.0)", "y = v * _SCALE"),
+    (
+        "e = 1.0 + y * (1.0 + y * (0.5 + y * (_C3 + y * (_C4 + y * (_C5 + y * _C6)))))",
+        "e = _F1 + y * (_F1 + y * (_HALF + y * (_G3 + y * (_G4 + y * (_G5 + y * _G6)))))",
+    ),
+    ("hit = uniform[j, p] * (1.0 + e) < 1.0", "hit = uniform[j, p] * (_F1 + e) < _F1"),
+    ("position[j, p] = 1.0 if hit else 0.0", "position[j, p] = _F1 if hit else _F0"),
+    ("position[j, p] = (1.0 - d) if hit else d", "position[j, p] = (_F1 - d) if hit else d"),
+    ("code[p] += position[j, p] * w", "code[p] += np.float64(position[j, p]) * w"),
+]
+_F32 = np.float32
+#: The float32 constants the transcription reads (numba takes module globals as constants).
+FLOAT32_CONSTANTS = {
+    "_F0": _F32(0.0),
+    "_F1": _F32(1.0),
+    "_HALF": _F32(0.5),
+    "_UNIT16": _F32(1.0 / 65536.0),
+    "_SCALE": _F32(-1.0 / 32.0),
+    "_G3": _F32(1.0 / 6.0),
+    "_G4": _F32(1.0 / 24.0),
+    "_G5": _F32(1.0 / 120.0),
+    "_G6": _F32(1.0 / 720.0),
+}
+
+
+def float32_variant() -> Any:
+    """The agents' kernel, stop included, transcribed to float32 by :data:`FLOAT32`, compiled
+    (one thread). A replacement that no longer matches the kernel's source exactly once is an
+    error naming it."""
+    source = textwrap.dedent(inspect.getsource(_bpso_kernels._run_numba))
+    for old, new in FLOAT32:
+        if source.count(old) != 1:
+            raise RuntimeError(
+                f"the kernel's source no longer holds {old!r} once, as the float32 transcription knows it"
+            )
+        source = source.replace(old, new)
+    name = "float32_kernel"
+    namespace = {**vars(_bpso_kernels), **FLOAT32_CONSTANTS}
+    exec(
+        compile(source.replace("def _run_numba(", f"def {name}(", 1), "<bpso_parts float32>", "exec"),
+        namespace,
+    )
+    return numba.njit(namespace[name])
+
+
+def float32_comparison(trials: int = 500, repeats: int = 3) -> dict[str, Any]:
+    """Per rule, best-of-``repeats`` milliseconds of the kernel, of its float32 transcription and
+    of the kernel it replaced (one thread, interleaved), and how often each selects the exact
+    solver's super arm (its fitness's largest value)."""
+    from agents.solvers import ExactSolver
+
+    float32 = float32_variant()
+    kernels = {
+        "kernel": _bpso_kernels.run_numba_serial,
+        "float32": float32,
+        "reference": bpso_reference.run_reference,
+    }
+    threads = numba.get_num_threads()
+    numba.set_num_threads(1)
+    rules = {}
+    try:
+        for rule in ("set", "xor"):
+            args = kernel_arguments(trials, rule)
+            index = args[0]
+            exact_tx, exact_rx = ExactSolver(2, 3).solve(index, None)
+            optimum = np.einsum("bm,bn,bmn->b", exact_tx, exact_rx, index)
+            selected = {name: kernel(*args) for name, kernel in kernels.items()}  # compiles
+            best = {name: np.inf for name in kernels}
+            for _ in range(repeats):
+                for name, kernel in kernels.items():
+                    start = time.perf_counter()
+                    kernel(*args)
+                    best[name] = min(best[name], time.perf_counter() - start)
+            rate = {
+                name: float(np.mean(np.einsum("bm,bn,bmn->b", s[:, :4], s[:, 4:], index) == optimum))
+                for name, s in selected.items()
+            }
+            rules[rule] = {
+                **{f"{name}_ms": 1e3 * seconds for name, seconds in best.items()},
+                **{f"{name}_optimality_rate": value for name, value in rate.items()},
+            }
+    finally:
+        numba.set_num_threads(threads)
+    return {"trials": trials, "rules": rules}
+
+
 def kernel_arguments(trials: int, rule: str, seed: int = 0) -> tuple:
     """The kernels' arguments for the paper-size problem: exponential indices (B, 4, 6), Ms = 2,
     Ns = 3, the starting swarm and the paper's swarm parameters (the solver's defaults)."""
@@ -156,6 +286,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--json", default=None, help="also write the figures to this file")
     args = parser.parse_args(argv)
     result = measure(args.trials, args.repeats)
+    result["float32"] = float32_comparison(args.trials, args.repeats)
     print(
         f"BPSO kernel, one thread, {args.trials} trials, rule {result['rule']}: "
         f"{result['kernel_ms']:.1f} ms; without its stop at the optimum (the whole swarm) "
@@ -166,6 +297,13 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"  without {row['part']:<40} {row['without_ms']:6.1f} ms: "
             f"the part costs {row['cost_ms']:5.1f} ms ({100 * row['share']:.0f} %)"
+        )
+    for rule, row in result["float32"]["rules"].items():
+        print(
+            f"rule {rule}: the kernel {row['kernel_ms']:.1f} ms, in float32 {row['float32_ms']:.1f} ms, the "
+            f"kernel it replaced {row['reference_ms']:.1f} ms (optimal selections: "
+            f"{row['kernel_optimality_rate']:.1%}, {row['float32_optimality_rate']:.1%}, "
+            f"{row['reference_optimality_rate']:.1%})"
         )
     if args.json:
         Path(args.json).write_text(json.dumps(result, indent=2))

@@ -130,3 +130,24 @@ def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeyp
     monkeypatch.setattr(bpso_parts, "PARTS", stale)
     with pytest.raises(RuntimeError, match="no longer holds 'a part the kernel no longer has'"):
         bpso_parts.variant("a part the kernel no longer has")
+
+
+def test_the_float32_transcription_selects_valid_super_arms_and_refuses_a_stale_replacement(monkeypatch):
+    from agents.solvers import _bpso_kernels
+    from benchmarks.speed import bpso_parts
+
+    float32 = bpso_parts.float32_variant()
+    for rule in ("set", "xor"):
+        args = bpso_parts.kernel_arguments(200, rule)
+        selected, kernel = float32(*args), _bpso_kernels.run_numba_serial(*args)
+        assert (selected[:, :4].sum(axis=1) == 2).all() and (selected[:, 4:].sum(axis=1) == 3).all()
+        # the same uniforms decide nearly every flip the same way in float32 and float64
+        assert (selected == kernel).all(axis=1).mean() > 0.9
+    result = bpso_parts.float32_comparison(trials=40, repeats=1)
+    assert set(result["rules"]) == {"set", "xor"}
+    for row in result["rules"].values():
+        assert all(row[f"{k}_ms"] > 0 for k in ("kernel", "float32", "reference"))
+        assert all(0 <= row[f"{k}_optimality_rate"] <= 1 for k in ("kernel", "float32", "reference"))
+    monkeypatch.setattr(bpso_parts, "FLOAT32", [("e = exp(-v)", "e = 1.0")])
+    with pytest.raises(RuntimeError, match="float32 transcription"):
+        bpso_parts.float32_variant()
