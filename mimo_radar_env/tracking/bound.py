@@ -33,11 +33,10 @@ def bound_step(
     closed-form test, and this numpy path otherwise.
     """
     if use_numba and HAVE_NUMBA:
+        # writable C arrays always: numba compiles a read-only array (a one-trial env's
+        # broadcast initial bound) as another signature, a second compilation of the same kernel
         out, healthy = _compiled_step(
-            np.ascontiguousarray(covariance, dtype=np.float64),
-            np.ascontiguousarray(transition, dtype=np.float64),
-            np.ascontiguousarray(process_cov, dtype=np.float64),
-            np.ascontiguousarray(measured, dtype=np.float64),
+            *(np.require(a, np.float64, ["C", "W"]) for a in (covariance, transition, process_cov, measured)),
             MAX_CONDITION,
         )
         if healthy:

@@ -68,6 +68,17 @@ def test_compile_without_numba_is_one_line_naming_the_extra(monkeypatch, capsys)
     assert len(err) == 1 and "numba is not installed" in err[0] and "[fast]" in err[0]
 
 
+GYM_EPISODES = """
+import gymnasium as gym
+import mimo_radar_env
+for version, fusion in [("v0", "average"), ("v1", "average"), ("v1", "centralized")]:
+    env = gym.make(f"MimoRadarSelect-{version}", fusion=fusion)
+    env.reset(seed=0)
+    for _ in range(3):
+        env.step(env.action_space.sample())
+"""
+
+
 def _bench(args, cache):
     return subprocess.run(
         [sys.executable, "-m", "benchmarks", *args],
@@ -96,5 +107,10 @@ def test_after_compile_no_run_compiles_anything(tmp_path):
     ]  # fmt: skip
     for number, args in enumerate(runs):
         _bench([*args, "--quiet", "--no-figures", "--out", str(tmp_path / f"run{number}")], cache)
+    subprocess.run(  # one-trial envs through Gymnasium, both versions and fusions
+        [sys.executable, "-W", "ignore", "-c", GYM_EPISODES],
+        env={**os.environ, "NUMBA_CACHE_DIR": str(cache)},
+        check=True,
+    )
     assert _cache_files(cache) == before  # no kernel compiled, no cache index rewritten
     assert "cached already: nothing to compile" in _bench(["compile"], cache)

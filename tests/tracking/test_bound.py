@@ -124,3 +124,29 @@ def test_a_matrix_the_compiled_check_refuses_takes_the_numpy_path_and_its_repair
     assert not healthy
     np.testing.assert_array_equal(bound.bound_step(*args), bound.bound_step(*args, use_numba=False))
     assert np.linalg.cond(bound.bound_step(*args)[0, 0]) < 1.01e12  # repaired
+
+
+def test_a_one_trial_env_passes_the_bound_kernel_what_a_batch_passes(monkeypatch):
+    """A one-trial env's initial bound is a read-only broadcast: passed as it is, numba would
+    compile the kernel again for a read-only signature. Every call gets writable C arrays."""
+    from mimo_radar_env import MimoRadarSelectVectorEnv
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
+    from mimo_radar_env.tracking import bound
+
+    if not HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy path exists")
+    calls = []
+    compiled = bound._compiled_step
+
+    def recording(*args):
+        calls.append([(a.flags.writeable, a.flags.c_contiguous) for a in args[:4]])
+        return compiled(*args)
+
+    monkeypatch.setattr(bound, "_compiled_step", recording)
+    for trials in (1, 3):
+        env = MimoRadarSelectVectorEnv(num_envs=trials, scenario="paper-1-v1")
+        env.reset(seed=0)
+        for _ in range(2):
+            env.step(env.tracking_oracle_action())
+    assert len(calls) == 4
+    assert all(flags == [(True, True)] * 4 for flags in calls)
