@@ -29,13 +29,17 @@ SCENARIO = "paper-1-v1"
 
 
 def _env_and_tracking_search(fusion: str) -> None:
-    """A two-trial, two-step harness task of best-tracking under ``fusion``: the fusion's update,
-    the bound and the tracking search's posteriors."""
+    """Two-step harness tasks of best-tracking under ``fusion``, of two trials and of one: the
+    fusion's update, the bound and the tracking search's posteriors (whose super-arm masks, a
+    broadcast view, are typed differently for one trial)."""
     from . import harness
 
     options = VERSIONS["v1"].options(fusion=fusion)
-    config = harness.make_config(SCENARIO, ["best-tracking"], 2, 2, options=options, say=lambda _: None)
-    harness.run_task(config.to_json(), "best-tracking", 0)
+    for trials in (2, 1):
+        config = harness.make_config(
+            SCENARIO, ["best-tracking"], trials, 2, options=options, say=lambda _: None
+        )
+        harness.run_task(config.to_json(), "best-tracking", 0)
 
 
 def _bpso(threads: int) -> None:

@@ -100,10 +100,13 @@ def test_after_compile_no_run_compiles_anything(tmp_path):
     assert "kernels compiled and cached" in out
     before = _cache_files(cache)
     assert before
-    runs = [  # a harness worker's kernels, a one-process run's, both fusions, the tracking search
+    runs = [  # a harness worker's kernels, a one-process run's, both fusions, the tracking search,
+        # one-trial tasks
         ["paper", "--scenario", "1", "--trials", "2", "--steps", "2", "--workers", "2"],
         ["run", "--scenario", "paper-3-v1", "--policies", "best-tracking,mg-crb-cl", "--trials", "2",
          "--steps", "2", "--workers", "1", "--fusion", "centralized"],
+        ["run", "--scenario", "paper-2-v1", "--policies", "best-tracking,tracking-ucb,plan-tracking",
+         "--trials", "1", "--steps", "2", "--workers", "2"],
     ]  # fmt: skip
     for number, args in enumerate(runs):
         _bench([*args, "--quiet", "--no-figures", "--out", str(tmp_path / f"run{number}")], cache)
