@@ -131,8 +131,9 @@ def test_the_edges_of_the_ranges_give_finite_outputs(edge, fusion):
 
 
 def _edge(low: float, high: float) -> st.SearchStrategy[float]:
-    """The ends of a range, and values spread log-uniformly between them."""
-    inner = st.floats(np.log10(low), np.log10(high)).map(lambda e: float(10.0**e))
+    """The ends of a range, and values spread log-uniformly between them (``10**log10(x)`` can
+    round one ulp past an end: such a value is the end itself)."""
+    inner = st.floats(np.log10(low), np.log10(high)).map(lambda e: min(max(float(10.0**e), low), high))
     return st.one_of(st.sampled_from([low, high]), inner)
 
 
