@@ -16,19 +16,24 @@ import numpy as np
 
 from ..core.compiled import numba
 
-njit = numba.njit(cache=True)
+# numpy's error model: a division by a zero determinant gives inf or NaN, which the condition
+# checks refuse (the numpy path then repairs the matrix), where Python's would raise
+njit = numba.njit(cache=True, error_model="numpy")
 
 
 @njit
 def certainly_conditioned(a, det, max_condition):
     """``unscented._certainly_conditioned`` of one symmetric 4 x 4 matrix of determinant
-    ``det`` (:func:`determinant`'s)."""
+    ``det`` (:func:`determinant`'s), and False unless ``det`` and the trace are finite (an
+    inverse by a zero determinant is not a covariance to go on with)."""
     minor2 = a[0, 0] * a[1, 1] - a[0, 1] * a[1, 0]
     cof0 = a[1, 1] * a[2, 2] - a[1, 2] * a[2, 1]
     cof1 = a[1, 0] * a[2, 2] - a[1, 2] * a[2, 0]
     cof2 = a[1, 0] * a[2, 1] - a[1, 1] * a[2, 0]
     minor3 = a[0, 0] * cof0 - a[0, 1] * cof1 + a[0, 2] * cof2
     trace = a[0, 0] + a[1, 1] + a[2, 2] + a[3, 3]
+    if not (np.isfinite(det) and np.isfinite(trace)):
+        return False
     return a[0, 0] > 0 and minor2 > 0 and minor3 > 0 and det > 0 and trace**4 <= max_condition * det
 
 

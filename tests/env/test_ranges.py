@@ -164,3 +164,19 @@ def test_scenarios_at_the_edges_of_their_ranges_run_finite(scenario, fusion):
 @given(edge_scenarios(), st.sampled_from(["average", "centralized"]))
 def test_scenarios_at_the_edges_of_their_ranges_run_finite_many(scenario, fusion):
     assert _all_finite(_episode(scenario, fusion, steps=60, trials=4)) == []
+
+
+def test_an_edge_scenario_whose_bound_once_divided_by_zero_runs_finite():
+    """Found by the slow test's random examples: the compiled bound divided by a zero
+    determinant (ZeroDivisionError out of the env's step) instead of handing the matrix to the
+    numpy path's repair."""
+    targets = BASE.to_dict()["targets"]
+    targets[0]["initial_covariance"] = [1e-6] * 4
+    scenario = BASE.replace(
+        targets=targets,
+        sample_time=6.493816315762113,
+        process_noise=130100273.37380923,
+        range_variance=1e-6,
+        azimuth_variance=1e-12,
+    )
+    assert _all_finite(_episode(scenario, "average", steps=60, trials=4)) == []

@@ -150,3 +150,23 @@ def test_a_one_trial_env_passes_the_bound_kernel_what_a_batch_passes(monkeypatch
             env.step(env.tracking_oracle_action())
     assert len(calls) == 4
     assert all(flags == [(True, True)] * 4 for flags in calls)
+
+
+def test_a_singular_matrix_is_refused_by_the_compiled_check_not_divided_by():
+    """A zero determinant: the closed-form inverse divides by it (inf, NaN under numpy's error
+    model, where Python's raised ZeroDivisionError out of the env's step); the check refuses
+    the result and the numpy path repairs it."""
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
+    from mimo_radar_env.tracking import bound
+
+    if not HAVE_NUMBA:
+        pytest.skip("numba is not installed: only the numpy path exists")
+    singular = np.zeros((2, 1, 4, 4))  # F P F' + Q = 0
+    args = (singular, np.eye(4)[None], np.zeros((4, 4)), np.zeros((2, 1, 2, 2)))
+    _, healthy = bound._compiled_step(*args, 1e12)
+    assert not healthy
+    finite = np.broadcast_to(np.eye(4), (2, 1, 4, 4)).copy()
+    overflow = (finite * 1e200, np.eye(4)[None], np.eye(4) * 1e200, np.zeros((2, 1, 2, 2)))
+    _, healthy = bound._compiled_step(*overflow, 1e12)  # a determinant of inf
+    assert not healthy
+    assert np.isfinite(bound.bound_step(*args)).all()
