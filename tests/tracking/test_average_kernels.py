@@ -83,3 +83,26 @@ def test_average_channels_mirrors_numpy(kernels):
     ):
         np.testing.assert_allclose(mine, theirs[0, 0], rtol=1e-12, atol=1e-13)
     np.testing.assert_allclose(out[2], logsumexp(log_post, axis=0) - np.log(C), rtol=1e-14)
+
+
+def test_a_zero_divisor_gives_what_numpy_gives_not_an_exception(kernels):
+    """A singular innovation covariance and a sigma point on the receiver divide by zero: the
+    kernels give inf or NaN as the numpy path does (the update's finiteness check then falls
+    back to the prediction in that trial); Python's error model raised ZeroDivisionError out of
+    the env's step."""
+    n = 4
+    gain, cross, posterior = np.empty((1, 1, n, 2)), np.empty((1, 1, n, 2)), np.empty((1, 1, n))
+    log_likelihood = kernels.kalman_update(
+        np.zeros((1, 1, 1, n)), 0, 0, 0, np.ones(n), np.ones(n), 0.0, 0.0, 0.0, 1.0, 1.0, 0,
+        gain, cross, posterior,
+    )  # fmt: skip
+    # S = 0: its closed-form inverse is 0 / 0
+    assert np.isnan(log_likelihood) and np.isnan(gain).all() and np.isnan(posterior).all()
+    on_receiver = np.array([7e4, 0.0, 9e4, 0.0])[None, None, None, None].repeat(3, axis=3)
+    h0, h1, sn, cs = (np.empty(3) for _ in range(4))
+    kernels.station_geometry(on_receiver, 0, 0, 0, 1e4, 2e4, 7e4, 9e4, h0, h1, sn, cs)
+    with np.errstate(all="ignore"):
+        _, _, _, sin, cos = station_geometry(on_receiver[0, 0, 0], np.array([1e4, 2e4]), np.array([7e4, 9e4]))
+    np.testing.assert_array_equal(np.isnan(sn), np.isnan(sin))
+    np.testing.assert_array_equal(np.isnan(cs), np.isnan(cos))
+    assert np.isnan(sn).all()

@@ -26,8 +26,11 @@ from ...core.compiled import numba
 
 _TWO_PI = 2.0 * math.pi
 _LOG_2PI = math.log(2.0 * math.pi)
-# serial: numba threads contend with OpenBLAS's spinning threads here
-njit = numba.njit(cache=True)
+# serial: numba threads contend with OpenBLAS's spinning threads here. numpy's error model: a
+# division by zero (a singular innovation covariance, a target on a receiver) gives inf or NaN
+# as the numpy path does, and the update's finiteness check falls back to the prediction in
+# that trial, where Python's would raise ZeroDivisionError out of the env's step
+njit = numba.njit(cache=True, error_model="numpy")
 
 
 @njit

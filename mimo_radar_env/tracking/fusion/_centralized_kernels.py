@@ -29,7 +29,8 @@ from ...core.compiled import numba
 from ._average_kernels import logsumexp, measurement_mean, station_geometry, symmetrize, wrap_residual
 
 _LOG_2PI = math.log(2.0 * math.pi)
-njit = numba.njit(cache=True)
+# numpy's error model, as the average fusion's kernels (a division by zero gives inf or NaN)
+njit = numba.njit(cache=True, error_model="numpy")
 
 
 @njit
