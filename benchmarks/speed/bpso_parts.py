@@ -198,33 +198,42 @@ def float32_comparison(trials: int = 500, repeats: int = 3) -> dict[str, Any]:
         "float32": float32,
         "reference": bpso_reference.run_reference,
     }
+    rules = {}
+    for rule in ("set", "xor"):
+        args = kernel_arguments(trials, rule)
+        index = args[0]
+        exact_tx, exact_rx = ExactSolver(2, 3).solve(index, None)
+        optimum = np.einsum("bm,bn,bmn->b", exact_tx, exact_rx, index)
+        selected, best = _interleaved(kernels, args, repeats)
+        rate = {
+            name: float(np.mean(np.einsum("bm,bn,bmn->b", s[:, :4], s[:, 4:], index) == optimum))
+            for name, s in selected.items()
+        }
+        rules[rule] = {
+            **{f"{name}_ms": 1e3 * seconds for name, seconds in best.items()},
+            **{f"{name}_optimality_rate": value for name, value in rate.items()},
+        }
+    return {"trials": trials, "rules": rules}
+
+
+def _interleaved(
+    kernels: dict[str, Any], args: tuple, repeats: int
+) -> tuple[dict[str, Any], dict[str, float]]:
+    """Each kernel's result (of its first call, which compiles it) and its best-of-``repeats``
+    seconds, in one numba thread, the kernels interleaved."""
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
-    rules = {}
     try:
-        for rule in ("set", "xor"):
-            args = kernel_arguments(trials, rule)
-            index = args[0]
-            exact_tx, exact_rx = ExactSolver(2, 3).solve(index, None)
-            optimum = np.einsum("bm,bn,bmn->b", exact_tx, exact_rx, index)
-            selected = {name: kernel(*args) for name, kernel in kernels.items()}  # compiles
-            best = {name: np.inf for name in kernels}
-            for _ in range(repeats):
-                for name, kernel in kernels.items():
-                    start = time.perf_counter()
-                    kernel(*args)
-                    best[name] = min(best[name], time.perf_counter() - start)
-            rate = {
-                name: float(np.mean(np.einsum("bm,bn,bmn->b", s[:, :4], s[:, 4:], index) == optimum))
-                for name, s in selected.items()
-            }
-            rules[rule] = {
-                **{f"{name}_ms": 1e3 * seconds for name, seconds in best.items()},
-                **{f"{name}_optimality_rate": value for name, value in rate.items()},
-            }
+        results = {name: kernel(*args) for name, kernel in kernels.items()}
+        best = {name: np.inf for name in kernels}
+        for _ in range(repeats):
+            for name, kernel in kernels.items():
+                start = time.perf_counter()
+                kernel(*args)
+                best[name] = min(best[name], time.perf_counter() - start)
     finally:
         numba.set_num_threads(threads)
-    return {"trials": trials, "rules": rules}
+    return results, best
 
 
 def kernel_arguments(trials: int, rule: str, seed: int = 0) -> tuple:
@@ -247,19 +256,7 @@ def measure(trials: int = 500, repeats: int = 3, rule: str = "set") -> dict[str,
         "reference": bpso_reference.run_reference,
         **{part: variant(part) for part in PARTS},
     }
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        for kernel in kernels.values():
-            kernel(*args)  # compilation
-        best = {name: np.inf for name in kernels}
-        for _ in range(repeats):
-            for name, kernel in kernels.items():
-                start = time.perf_counter()
-                kernel(*args)
-                best[name] = min(best[name], time.perf_counter() - start)
-    finally:
-        numba.set_num_threads(threads)
+    _, best = _interleaved(kernels, args, repeats)
     ms = {name: 1e3 * seconds for name, seconds in best.items()}
     return {
         "trials": trials,
