@@ -17,6 +17,13 @@ replaced (:mod:`benchmarks.speed.bpso_reference`). A replacement that no longer 
 kernel's source is an error naming the part, so the breakdown cannot silently measure
 something else.
 
+The breakdown runs under both position rules, each with how many iterations the kernel's trials
+run before their stop (:func:`counting_variant`: the kernel with its stop, recording the iteration
+each trial stops at). From these it estimates the time of a kernel with today's numbers whose
+eq21 decision cost nothing: the whole swarm without the exp polynomial, scaled by the share of
+the ``q_max`` iterations the trials run (the same scaling of the whole swarm is printed beside the
+kernel's measured time, as a check of the estimate).
+
 It also times, under both rules, the agents' kernel transcribed to float32 with its stop
 (:func:`float32_variant`: the swarm's state, the draws and eq20-eq21 in float32, particles
 padded to 16, the float32 vector width; eq19's table stays float64), the layout the performance
@@ -38,6 +45,7 @@ import numpy as np
 
 from agents.random_streams import TrialRandom
 from agents.solvers import BPSOSolver, _bpso_kernels
+from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import numba
 
 from ..studies.settings import integer
@@ -166,24 +174,60 @@ FLOAT32_CONSTANTS = {
 }
 
 
-def float32_variant() -> Any:
-    """The agents' kernel, stop included, transcribed to float32 by :data:`FLOAT32`, compiled
-    (one thread). A replacement that no longer matches the kernel's source exactly once is an
-    error naming it."""
+def _transcribed(
+    replacements: list[tuple[str, str]], what: str, constants: dict[str, Any] | None = None
+) -> Any:
+    """The agents' kernel with each (old, new) substring of its source replaced, compiled (one
+    thread). A replacement that no longer matches the kernel's source exactly once is an error
+    naming it and ``what`` the transcription is."""
     source = textwrap.dedent(inspect.getsource(_bpso_kernels._run_numba))
-    for old, new in FLOAT32:
+    for old, new in replacements:
         if source.count(old) != 1:
-            raise RuntimeError(
-                f"the kernel's source no longer holds {old!r} once, as the float32 transcription knows it"
-            )
+            raise RuntimeError(f"the kernel's source no longer holds {old!r} once, as the {what} knows it")
         source = source.replace(old, new)
-    name = "float32_kernel"
-    namespace = {**vars(_bpso_kernels), **FLOAT32_CONSTANTS}
+    name = "transcribed_kernel"
+    namespace = {**vars(_bpso_kernels), **(constants or {})}
     exec(
-        compile(source.replace("def _run_numba(", f"def {name}(", 1), "<bpso_parts float32>", "exec"),
+        compile(source.replace("def _run_numba(", f"def {name}(", 1), f"<bpso_parts {what}>", "exec"),
         namespace,
     )
     return numba.njit(namespace[name])
+
+
+def float32_variant() -> Any:
+    """The agents' kernel, stop included, transcribed to float32 by :data:`FLOAT32`, compiled
+    (one thread)."""
+    return _transcribed(FLOAT32, "float32 transcription", FLOAT32_CONSTANTS)
+
+
+#: The kernel with its stop, recording in an extra column the last iteration each trial runs.
+COUNTING: list[tuple[str, str]] = [
+    (
+        "result = np.empty((batch, length), dtype=np.int8)",
+        "result = np.zeros((batch, length + 1), dtype=np.int64)",
+    ),
+    ("if global_fit >= optimum:", "result[b, length] = q\n                if global_fit >= optimum:"),
+]
+
+
+def counting_variant() -> Any:
+    """The agents' kernel, stop included, returning (B, M + N + 1): its selections and, last, the
+    number of iterations each trial ran (``q_max`` for a trial that never held the optimum)."""
+    return _transcribed(COUNTING, "iteration count")
+
+
+def iterations_run(trials: int = 500, rule: str = "set") -> dict[str, float]:
+    """How many of the ``q_max`` iterations the kernel's trials run before their stop: the mean,
+    and the share of trials that run them all."""
+    args = kernel_arguments(trials, rule)
+    counted = counting_variant()(*args)
+    iterations = args[5]
+    run = counted[:, -1]
+    return {
+        "q_max": iterations,
+        "mean_iterations": float(run.mean()),
+        "share_all_iterations": float(np.mean(run == iterations)),
+    }
 
 
 def float32_comparison(trials: int = 500, repeats: int = 3) -> dict[str, Any]:
@@ -199,7 +243,7 @@ def float32_comparison(trials: int = 500, repeats: int = 3) -> dict[str, Any]:
         "reference": bpso_reference.run_reference,
     }
     rules = {}
-    for rule in ("set", "xor"):
+    for rule in BPSO_RULES:
         args = kernel_arguments(trials, rule)
         index = args[0]
         exact_tx, exact_rx = ExactSolver(2, 3).solve(index, None)
@@ -261,6 +305,7 @@ def measure(trials: int = 500, repeats: int = 3, rule: str = "set") -> dict[str,
     return {
         "trials": trials,
         "rule": rule,
+        **iterations_run(trials, rule),
         "kernel_ms": ms["kernel"],
         "whole_swarm_ms": ms["whole swarm"],
         "reference_ms": ms["reference"],
@@ -282,19 +327,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--repeats", type=integer(1), default=3)
     parser.add_argument("--json", default=None, help="also write the figures to this file")
     args = parser.parse_args(argv)
-    result = measure(args.trials, args.repeats)
-    result["float32"] = float32_comparison(args.trials, args.repeats)
-    print(
-        f"BPSO kernel, one thread, {args.trials} trials, rule {result['rule']}: "
-        f"{result['kernel_ms']:.1f} ms; without its stop at the optimum (the whole swarm) "
-        f"{result['whole_swarm_ms']:.1f} ms; "
-        f"the kernel it replaced {result['reference_ms']:.1f} ms"
-    )
-    for row in result["parts"]:
+    result: dict[str, Any] = {
+        "trials": args.trials,
+        "breakdowns": [measure(args.trials, args.repeats, rule) for rule in BPSO_RULES],
+        "float32": float32_comparison(args.trials, args.repeats),
+    }
+    for breakdown in result["breakdowns"]:
         print(
-            f"  without {row['part']:<40} {row['without_ms']:6.1f} ms: "
-            f"the part costs {row['cost_ms']:5.1f} ms ({100 * row['share']:.0f} %)"
+            f"BPSO kernel, one thread, {args.trials} trials, rule {breakdown['rule']}: "
+            f"{breakdown['kernel_ms']:.1f} ms, its trials running {breakdown['mean_iterations']:.1f} of "
+            f"{breakdown['q_max']} iterations on average ({breakdown['share_all_iterations']:.1%} all); "
+            f"without its stop at the optimum (the whole swarm) {breakdown['whole_swarm_ms']:.1f} ms; "
+            f"the kernel it replaced {breakdown['reference_ms']:.1f} ms"
         )
+        for row in breakdown["parts"]:
+            print(
+                f"  without {row['part']:<40} {row['without_ms']:6.1f} ms: "
+                f"the part costs {row['cost_ms']:5.1f} ms ({100 * row['share']:.0f} %)"
+            )
     for rule, row in result["float32"]["rules"].items():
         print(
             f"rule {rule}: the kernel {row['kernel_ms']:.1f} ms, in float32 {row['float32_ms']:.1f} ms, the "

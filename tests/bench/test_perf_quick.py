@@ -117,7 +117,9 @@ def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeyp
     from agents.solvers import _bpso_kernels
     from benchmarks.speed import bpso_parts
 
-    result = bpso_parts.measure(trials=4, repeats=1)
+    result = bpso_parts.measure(trials=4, repeats=1, rule="xor")
+    assert result["rule"] == "xor" and result["q_max"] == 100
+    assert 0 <= result["mean_iterations"] <= 100 and 0 <= result["share_all_iterations"] <= 1
     assert [row["part"] for row in result["parts"]] == list(bpso_parts.PARTS)
     assert result["kernel_ms"] > 0 and result["reference_ms"] > 0 and result["whole_swarm_ms"] > 0
     for row in result["parts"]:
@@ -130,6 +132,42 @@ def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeyp
     monkeypatch.setattr(bpso_parts, "PARTS", stale)
     with pytest.raises(RuntimeError, match="no longer holds 'a part the kernel no longer has'"):
         bpso_parts.variant("a part the kernel no longer has")
+
+
+def test_the_iteration_count_is_where_the_kernel_stops(monkeypatch):
+    """The counting variant selects what the kernel does, and its count is the iteration at which
+    the global best first holds the eq19 optimum (the exact solver's value), q_max where it never
+    does: checked against the numpy kernel run for 1, 2, ... iterations, which runs every one."""
+    from agents.solvers import ExactSolver, _bpso_kernels
+    from benchmarks.speed import bpso_parts
+
+    counting = bpso_parts.counting_variant()
+    for rule in ("set", "xor"):
+        index, tx, rx, positions, keys, _, c1, c2, _, _, clamp, set_rule = bpso_parts.kernel_arguments(
+            30, rule
+        )
+        # a constant inertia, so that a run of q iterations is the first q of a longer run
+        swarm = (c1, c2, 0.65, 0.65, clamp, set_rule)
+        iterations = 12
+        args = (index, tx, rx, positions, keys, iterations, *swarm)
+        counted = counting(*args)
+        np.testing.assert_array_equal(counted[:, :-1], _bpso_kernels.run_numba_serial(*args))
+        optimum = np.einsum("bm,bn,bmn->b", *ExactSolver(tx, rx).solve(index, None), index)
+        first = np.full(len(index), iterations)
+        for q in range(iterations, -1, -1):
+            if q == 0:  # the starting swarm alone: the best of its valid particles
+                fit, valid = _bpso_kernels._fitness_np(index, positions, 4, tx, rx)
+                best = positions[np.arange(len(index)), np.argmax(np.where(valid, fit, -np.inf), axis=1)]
+                value = np.einsum("bm,bn,bmn->b", best[:, :4], best[:, 4:], index)
+            else:
+                best = _bpso_kernels.run_numpy(index, tx, rx, positions, keys, q, *swarm)
+                value = np.einsum("bm,bn,bmn->b", best[:, :4], best[:, 4:], index)
+            first = np.where(value >= optimum, q, first)
+        np.testing.assert_array_equal(counted[:, -1], first)
+        assert 0 < np.mean(first < iterations) and (rule == "xor" or np.mean(first < iterations) > 0.5)
+    monkeypatch.setattr(bpso_parts, "COUNTING", [("e = exp(-v)", "e = 1.0")])
+    with pytest.raises(RuntimeError, match="iteration count"):
+        bpso_parts.counting_variant()
 
 
 def test_the_float32_transcription_selects_valid_super_arms_and_refuses_a_stale_replacement(monkeypatch):

@@ -48,23 +48,61 @@ def test_the_study_floor_sentence(tmp_path, bpso, floor, verdict):
     assert sum(v in text for v in ("within the 120 s target", "no BPSO kernel")) == 1
 
 
-@pytest.mark.parametrize(("kernel_ms", "within"), [(4.0, True), (20.0, False)])
-def test_the_bpso_breakdown_sentence(tmp_path, kernel_ms, within):
-    """The whole swarm's parts and the stop's saving, and whether the kernel with its stop is
-    within the speed target's budget (the kernel it replaced over the target)."""
+def _breakdown(rule, kernel_ms, whole_ms, polynomial_without_ms, mean_iterations):
+    parts = [
+        {"part": "the exp polynomial of eq21", "without_ms": polynomial_without_ms},
+        {"part": "the flip draws' hashes", "without_ms": whole_ms - 2.0},
+    ]
+    for part in parts:
+        part["cost_ms"] = whole_ms - part["without_ms"]
+        part["share"] = part["cost_ms"] / whole_ms
+    return {
+        "trials": 500,
+        "rule": rule,
+        "q_max": 100,
+        "mean_iterations": mean_iterations,
+        "share_all_iterations": 0.5,
+        "kernel_ms": kernel_ms,
+        "whole_swarm_ms": whole_ms,
+        "reference_ms": 52.5,
+        "parts": parts,
+    }
+
+
+@pytest.mark.parametrize(
+    ("kernel_ms", "polynomial_without_ms", "within", "free_within"),
+    [(4.0, 15.0, True, True), (20.0, 20.0, False, False), (20.0, 15.0, False, True)],
+)
+def test_the_bpso_breakdown_sentences(tmp_path, kernel_ms, polynomial_without_ms, within, free_within):
+    """Each rule's parts side by side; per rule, the stop's share of the iterations, the estimate it
+    gives beside the kernel's time, and whether the kernel, and a kernel whose eq21 decision cost
+    nothing (the whole swarm without the polynomial, scaled the same), are within the budget of the
+    speed target (the kernel it replaced over the target)."""
     docs = tmp_path / "docs"
     (docs / "results" / "perf").mkdir(parents=True)
-    parts = [
-        {"part": "the exp polynomial of eq21", "without_ms": 20.0, "cost_ms": 9.5, "share": 0.32},
-        {"part": "the flip draws' hashes", "without_ms": 27.5, "cost_ms": 2.0, "share": 0.07},
+    breakdowns = [
+        _breakdown("xor", kernel_ms, 30.0, polynomial_without_ms, 60.0),
+        _breakdown("set", 2.5, 29.5, 20.0, 7.0),
     ]
-    figures = {"trials": 500, "rule": "set", "kernel_ms": kernel_ms, "whole_swarm_ms": 29.5}
-    figures |= {"reference_ms": 52.5, "parts": parts}
+    figures = {"trials": 500, "breakdowns": breakdowns}
     (docs / "results" / "perf" / "bpso_parts.json").write_text(json.dumps(figures))
     text = generators.bpso_parts_table(docs)
-    budget = 52.5 / TARGETS["bpso_speedup_vs_reference_set"][1]
-    assert "| the exp polynomial of eq21 | 20.0 | 9.5 | 32 % |" in text
-    saving = f"({29.5 / kernel_ms:.1f}x less)"
-    assert f"the kernel with its stop at the optimum {kernel_ms:.1f} ms {saving}" in text
-    assert f"leaves {budget:.1f} ms: the kernel with its stop is {'within' if within else 'above'} it" in text
-    assert f"the exp polynomial alone costs 9.5 ms, {'more' if 9.5 > budget else 'less'} than that" in text
+    assert "| rule xor: without it (ms) | the part's cost (ms) | share | rule set: without it (ms) |" in text
+    polynomial_cost = 30.0 - polynomial_without_ms
+    assert (
+        f"| the exp polynomial of eq21 | {polynomial_without_ms:.1f} | {polynomial_cost:.1f} | "
+        f"{100 * polynomial_cost / 30:.0f} % | 20.0 | 9.5 | 32 % |" in text
+    )
+    budget = 52.5 / TARGETS["bpso_speedup_vs_reference_xor"][1]
+    xor = next(line for line in text.splitlines() if line.startswith("- rule xor"))
+    assert "its trials run 60.0 of 100 iterations on average (50.0 % of them all 100)" in xor
+    assert f"estimates the kernel at {30.0 * 0.6:.1f} ms against {kernel_ms:.1f} ms measured" in xor
+    assert f"leaves {budget:.1f} ms, and the kernel is {'within' if within else 'above'} it" in xor
+    free = polynomial_without_ms * 0.6
+    assert f"would take about {free:.1f} ms: {'within' if free_within else 'above'} the budget" in xor
+    set_rule = next(line for line in text.splitlines() if line.startswith("- rule set"))
+    assert "estimates the kernel at 2.1 ms against 2.5 ms measured" in set_rule
+    breakdowns[1]["parts"][1]["part"] = "another part"
+    (docs / "results" / "perf" / "bpso_parts.json").write_text(json.dumps(figures))
+    with pytest.raises(ValueError, match="the rules' parts differ"):
+        generators.bpso_parts_table(docs)
