@@ -80,6 +80,44 @@ def readings(docs: Path) -> str:
     return claims.comparison_markdown(_scorecards(docs, READINGS), claim_text=False)
 
 
+#: Each change of the readings table: (what changes, its column, the column it modifies).
+READING_CHANGES = [
+    ("eq32 on dB alone", "v0 + dB", "v0"),
+    ("One shared ground truth alone", "v0 + shared truth", "v0"),
+    ("The standard BPSO rule alone", "v0 + set rule", "v0"),
+    ("All three readings together, on section 1's layout", "v1, section 1 layout", "v0"),
+    ("The calibrated layout", "v1", "v1, section 1 layout"),
+    ("Centralised fusion (on v1)", "v1, centralised", "v1"),
+]
+
+
+@generator("readings-moves")
+def reading_moves(docs: Path) -> str:
+    """Per change of the readings table, the claims whose verdict it moves against the column it
+    modifies, and the claims contradicted in every column."""
+    cards = _scorecards(docs, READINGS)
+    lines = []
+    for change, column, base in READING_CHANGES:
+        before = {r["id"]: r["verdict"] for r in cards[base]}
+        moved = [
+            (r["id"], before[r["id"]], r["verdict"]) for r in cards[column] if r["verdict"] != before[r["id"]]
+        ]
+        what = ", ".join(f"{claim} ({old} to {new})" for claim, old, new in moved) or "no claim"
+        counts = verdicts.count(r["verdict"] for r in cards[column])
+        holds = counts["holds"]
+        lines.append(
+            f"- **{change}** (`{column}` against `{base}`) moves {what}; {holds} "
+            f"{'claim holds' if holds == 1 else 'claims hold'} there, against "
+            f"{verdicts.count(before.values())['holds']}."
+        )
+    always = _always_contradicted(cards)
+    lines.append(
+        f"- Contradicted in every column ({len(always)} {'claim' if len(always) == 1 else 'claims'}): "
+        f"{', '.join(always) or 'none'}."
+    )
+    return "\n".join(lines)
+
+
 @generator("calibration-summary")
 def calibration_summary(docs: Path) -> str:
     """The layouts judged by full scorecards, with their counts at both sizes."""

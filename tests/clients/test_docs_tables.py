@@ -84,3 +84,37 @@ def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
         main(["docs", "--docs", str(docs)])
     assert exit_info.value.code == 2 and "no figure 'no-such-figure'" in capsys.readouterr().err
+
+
+def test_the_reading_moves_are_each_column_against_the_one_it_modifies(tmp_path):
+    """Hand-made scorecards: each change lists exactly the claims whose verdict differs from the
+    column it modifies (not from the column beside it), and the claims contradicted everywhere."""
+    from benchmarks import docs_generators as generators
+
+    docs = tmp_path / "docs"
+    (docs / "results" / "claims").mkdir(parents=True)
+    base = {"S1": "holds", "S2": "contradicted", "A1": "consistent"}
+    columns = {
+        "v0": base,
+        "v0 + dB": base | {"A1": "holds"},
+        "v0 + shared truth": base,
+        "v0 + set rule": base | {"S1": "consistent", "A1": "contradicted"},
+        "v1, section 1 layout": base | {"A1": "holds"},
+        "v1": base | {"A1": "holds", "S1": "contradicted"},
+        "v1, centralised": base | {"A1": "holds", "S1": "contradicted"},
+    }
+    for label, path in generators.READINGS.items():
+        card = [{"id": claim, "verdict": verdict} for claim, verdict in columns[label].items()]
+        (docs / "results" / path).write_text(json.dumps(card))
+    lines = generators.reading_moves(docs).splitlines()
+    assert (
+        lines[0] == "- **eq32 on dB alone** (`v0 + dB` against `v0`) moves A1 (consistent to holds); "
+        "2 claims hold there, against 1."
+    )
+    assert lines[1].endswith("moves no claim; 1 claim holds there, against 1.")
+    assert "moves S1 (holds to consistent), A1 (consistent to contradicted); 0 claims hold" in lines[2]
+    # the section 1 layout is against v0, the calibrated layout against the section 1 layout
+    assert "(`v1, section 1 layout` against `v0`) moves A1 (consistent to holds)" in lines[3]
+    assert "(`v1` against `v1, section 1 layout`) moves S1 (holds to contradicted); 1 claim holds" in lines[4]
+    assert lines[5].endswith("moves no claim; 1 claim holds there, against 1.")
+    assert lines[6] == "- Contradicted in every column (1 claim): S2."
