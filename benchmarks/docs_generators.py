@@ -3,6 +3,7 @@ numbers, each reading the committed artefacts it names under ``docs/results``.""
 
 from __future__ import annotations
 
+import shlex
 from pathlib import Path
 
 import numpy as np
@@ -389,6 +390,10 @@ TIMINGS = {
     "v1 claims, eq22 average": "claims/v1.timing.json",
     "v1 claims, centralised": "claims/v1-centralized.timing.json",
     "v0 claims": "claims/v0.timing.json",
+    "v0 + dB claims": "claims/v0+db.timing.json",
+    "v0 + shared truth claims": "claims/v0+shared-truth.timing.json",
+    "v0 + set rule claims": "claims/v0+set-rule.timing.json",
+    "v1 readings on section 1's layout, claims": "claims/v1-reconstructed-layout.timing.json",
     "tracking study": "tracking/timing.json",
     "RL study": "rl/timing.json",
     "planning study": "planning/timing.json",
@@ -410,7 +415,8 @@ def timings(docs: Path) -> str:
         if not (docs / "results" / path).exists():
             continue
         t = read_json(docs, path)
-        command = " ".join("DIR" if a.startswith("/") else a for a in t["command"])
+        # quoted as a shell needs it (an agent parameter holds spaces and braces)
+        command = shlex.join("DIR" if a.startswith("/") else a for a in t["command"])
         m = t["machine"]
         lines.append(
             f"| {label} | `{command}` | {t['wall_s']:.0f} | {m['cores']} cores, {m['machine']}, Python "
