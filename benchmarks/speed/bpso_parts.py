@@ -102,13 +102,18 @@ def variant(part: str | None = None) -> Any:
         if len(replaced) != len(want):
             indents = [indents[0]] * len(replaced)
         lines[i : i + len(want)] = [indent + line for indent, line in zip(indents, replaced, strict=True)]
-    name = "knocked_out"
-    namespace = dict(vars(_bpso_kernels))
+    return _compiled("\n".join(lines), "knocked-out variant")
+
+
+def _compiled(source: str, what: str, constants: dict[str, Any] | None = None) -> Any:
+    """``source``, an edited copy of the agents' kernel, compiled (one thread) in the kernels'
+    module namespace with ``constants`` added."""
+    namespace = {**vars(_bpso_kernels), **(constants or {})}
     exec(
-        compile("\n".join(lines).replace("def _run_numba(", f"def {name}(", 1), "<bpso_parts>", "exec"),
+        compile(source.replace("def _run_numba(", "def edited_kernel(", 1), f"<bpso_parts {what}>", "exec"),
         namespace,
     )
-    return numba.njit(namespace[name])
+    return numba.njit(namespace["edited_kernel"])
 
 
 #: The float32 transcription: (old, new) substrings of the kernel's source, each found once.
@@ -185,13 +190,7 @@ def _transcribed(
         if source.count(old) != 1:
             raise RuntimeError(f"the kernel's source no longer holds {old!r} once, as the {what} knows it")
         source = source.replace(old, new)
-    name = "transcribed_kernel"
-    namespace = {**vars(_bpso_kernels), **(constants or {})}
-    exec(
-        compile(source.replace("def _run_numba(", f"def {name}(", 1), f"<bpso_parts {what}>", "exec"),
-        namespace,
-    )
-    return numba.njit(namespace[name])
+    return _compiled(source, what, constants)
 
 
 def float32_variant() -> Any:
@@ -200,13 +199,17 @@ def float32_variant() -> Any:
     return _transcribed(FLOAT32, "float32 transcription", FLOAT32_CONSTANTS)
 
 
-#: The kernel with its stop, recording in an extra column the last iteration each trial runs.
+#: The kernel with its stop, recording in an extra column the last iteration each trial runs (the
+#: iteration loop's ``q`` after the loop: where it stopped, or ``q_max``).
 COUNTING: list[tuple[str, str]] = [
     (
         "result = np.empty((batch, length), dtype=np.int8)",
         "result = np.zeros((batch, length + 1), dtype=np.int64)",
     ),
-    ("if global_fit >= optimum:", "result[b, length] = q\n                if global_fit >= optimum:"),
+    (
+        "result[b, j] = np.int8(global_best[j])",
+        "result[b, j] = np.int8(global_best[j]); result[b, length] = q",
+    ),
 ]
 
 
