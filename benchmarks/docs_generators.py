@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
-from . import verdicts
+from . import model_figures, verdicts
 from .doctables import generator, read_json, value_source
 from .errors import BenchError
 from .model_figures import FIGURES_FILE, format_figure
@@ -790,10 +790,9 @@ def rl_findings(docs: Path) -> str:
 
 
 def _rate_with_interval(rate: float, trials: int) -> str:
-    """A fraction of ``trials`` as a percentage with its 95 % Wilson interval."""
-    from scipy.stats import binomtest
-
-    low, high = binomtest(round(rate * trials), trials).proportion_ci(0.95, method="wilson")
+    """A fraction of ``trials`` as a percentage with its 95 % Wilson interval (``model_figures.rate``)."""
+    figure = model_figures.rate(np.arange(trials) < round(rate * trials), "")
+    low, high = figure["ci"]
     return f"{100 * rate:.1f} % [{100 * low:.1f}, {100 * high:.1f}]"
 
 
