@@ -15,8 +15,6 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
 from typing import Any
 
-import numpy as np
-
 from mimo_radar_env import VERSIONS
 from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
 from mimo_radar_env.tracking.fusion import FUSIONS, compiled_kernels
@@ -48,8 +46,10 @@ def _bpso(threads: int) -> None:
     from agents.random_streams import TrialRandom
     from agents.solvers import BPSOSolver, _bpso_kernels
 
+    from .speed.solver_speed import paper_index
+
     solver = BPSOSolver(2, 3)
-    index = solver.check(np.random.default_rng(0).exponential(size=(2, 4, 6)))
+    index = solver.check(paper_index(2))
     positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, 2), 4, 6)
     _bpso_kernels.numba_kernel(threads)(index, 2, 3, positions, keys, *solver.swarm_arguments())
 
