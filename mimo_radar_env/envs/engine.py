@@ -16,7 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.geometry import channel_jacobian
-from ..core.model import RadarModel, check_memory
+from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
@@ -27,6 +27,7 @@ from ..tracking.bound import bound_step, position_bound
 from ..tracking.information import channel_information, jacobian_information, position_determinant
 from ..tracking.planning import Forecast
 from ..tracking.selection import select_for_tracking
+from .cost import check_memory
 from .options import EnvOptions
 
 

@@ -24,7 +24,9 @@ from ..tracking import FUSIONS
 DEFAULT_SCENARIO = "paper-1"
 
 
-FusionName = Literal[tuple(FUSIONS)]  # type: ignore[valid-type]
+#: The fusion option's choices are the fusion registry's at the time of asking
+#: (:func:`option_choices`), so a fusion registered later is a valid option.
+FusionName = str
 FilterNoise = Literal["true", "estimated"]
 InvalidAction = Literal["probe-nothing", "raise"]
 LambdaScale = Literal["linear", "db"]
@@ -189,9 +191,13 @@ def option_names() -> tuple[str, ...]:
 
 
 def option_choices() -> dict[str, tuple[str, ...]]:
-    """``{option: its allowed values}`` for the options typed as a ``Literal``."""
+    """``{option: its allowed values}`` for the options with choices: those typed as a
+    ``Literal``, and ``fusion`` (the fusion registry's names)."""
     hints = typing.get_type_hints(EnvOptions)
-    return {name: typing.get_args(hint) for name, hint in hints.items() if typing.get_origin(hint) is Literal}
+    choices = {
+        name: typing.get_args(hint) for name, hint in hints.items() if typing.get_origin(hint) is Literal
+    }
+    return {"fusion": tuple(FUSIONS), **choices}
 
 
 def option_help() -> dict[str, str]:

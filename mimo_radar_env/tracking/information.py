@@ -53,3 +53,19 @@ def inverse_2x2(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np
         [np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)], -2
     )
     return inv / det[..., None, None], det
+
+
+def woodbury_gain(information: NDArray[np.float64], position_cov: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(I + J P)^-1 J`` of position information ``J`` and a prior's position block ``P``
+    (..., 2, 2): what Woodbury's identity subtracts, ``(P^-1 + E J E')^-1 = P - P E G E' P``
+    (``E`` picks the position), symmetrised; no inverse of a 4 x 4 matrix, and ``J`` may be
+    singular."""
+    j00, j01, j10, j11 = (information[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
+    p00, p01, p10, p11 = (position_cov[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
+    # M = I + J P, written out (products of 2 x 2 matrices by matmul are slower than this)
+    m00, m01 = 1.0 + j00 * p00 + j01 * p10, j00 * p01 + j01 * p11
+    m10, m11 = j10 * p00 + j11 * p10, 1.0 + j10 * p01 + j11 * p11
+    det = m00 * m11 - m01 * m10
+    g00, g11 = (m11 * j00 - m01 * j10) / det, (m00 * j11 - m10 * j01) / det
+    g01 = 0.5 * ((m11 * j01 - m01 * j11) + (m00 * j10 - m10 * j00)) / det
+    return np.stack([np.stack([g00, g01], -1), np.stack([g01, g11], -1)], -2)

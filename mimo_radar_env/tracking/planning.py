@@ -7,8 +7,8 @@ is carried from step to step in the information form of the tracker's model:
 
 * step ``t + 1`` starts from the tracker's predicted covariance ``P_bar`` (the IMM mixture);
 * a super arm adds its channels' position information ``H' R^-1 H`` (at the forecast's
-  predicted positions, with its variances) as the fusion does: centralised, the information
-  of the channels adds; eq22's average, the channels' posteriors are averaged;
+  predicted positions, with its variances) as the fusion does
+  (:meth:`~.fusion.Fusion.planning_gain`);
 * between steps the posterior is predicted with the constant-velocity model,
   ``P' = F P F' + Q``.
 
@@ -37,14 +37,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ..core.superarm import all_super_arms, super_arm_count
+from .fusion import fusion_class
 from .information import inverse_2x2
-from .selection import (
-    MAX_ENUMERATED_SUPER_ARMS,
-    POSTERIORS,
-    _check_choices,
-    _per_target,
-    super_arm_criterion,
-)
+from .selection import MAX_ENUMERATED_SUPER_ARMS, _check_choices, _per_target, super_arm_criterion
 
 PLAN_SEARCHES = ("beam", "rollout", "mcts", "exhaustive")
 #: The most sequences the exhaustive search scores per trial.
@@ -95,22 +90,6 @@ def _position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     return covariance[..., [[0], [2]], [0, 2]]
 
 
-def _gain(information: NDArray[np.float64], position_cov: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(I + J P)^-1 J`` of position information ``J`` and the prior's position block ``P``
-    (..., 2, 2): what Woodbury's identity subtracts, ``(P^-1 + E J E')^-1 = P - P E G E' P``
-    (``E`` picks the position), symmetrised; no inverse of a 4 x 4 matrix, and ``J`` may be
-    singular."""
-    j00, j01, j10, j11 = (information[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
-    p00, p01, p10, p11 = (position_cov[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
-    # M = I + J P, written out (products of 2 x 2 matrices by matmul are slower than this)
-    m00, m01 = 1.0 + j00 * p00 + j01 * p10, j00 * p01 + j01 * p11
-    m10, m11 = j10 * p00 + j11 * p10, 1.0 + j10 * p01 + j11 * p11
-    det = m00 * m11 - m01 * m10
-    g00, g11 = (m11 * j00 - m01 * j10) / det, (m00 * j11 - m10 * j01) / det
-    g01 = 0.5 * ((m11 * j01 - m01 * j11) + (m00 * j10 - m10 * j00)) / det
-    return np.stack([np.stack([g00, g01], -1), np.stack([g01, g11], -1)], -2)
-
-
 def posterior_covariance(
     covariance: NDArray[np.float64],
     information: NDArray[np.float64],
@@ -120,20 +99,12 @@ def posterior_covariance(
 ) -> NDArray[np.float64]:
     """The full posterior covariance (S, K, 4, 4) after the channels ``tx_mask x rx_mask``
     ((S, M), (S, N)) with position information ``information`` (S, K, M, N, 2, 2), from the
-    prior ``covariance`` (S, K, 4, 4), fused as ``fusion`` fuses: centralised, the channels'
-    information adds to the prior's; eq22's average, each selected channel's posterior is
-    averaged. Both are ``P - P E G E' P`` (Woodbury's identity): centralised, ``G`` is the gain
-    of the summed information; averaged, the mean of each channel's gain."""
+    prior ``covariance`` (S, K, 4, 4), fused as ``fusion`` fuses: ``P - P E G E' P``
+    (Woodbury's identity) with the fusion's gain ``G`` (:meth:`~.fusion.Fusion.planning_gain`:
+    centralised, the gain of the summed information; eq22's average, the mean of each
+    channel's gain)."""
     selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(np.float64)  # (S, M, N)
-    position_cov = _position_block(covariance)  # (S, K, 2, 2)
-    if fusion == "centralized":
-        gain = _gain(np.einsum("smn,skmnij->skij", selected, information), position_cov)
-    else:
-        count = selected.sum(axis=(1, 2))
-        if (count == 0).any():
-            raise ValueError("the average fusion needs at least one selected channel in every state")
-        each = _gain(information, position_cov[:, :, None, None])  # (S, K, M, N, 2, 2)
-        gain = np.einsum("smn,skmnij->skij", selected / count[:, None, None], each)
+    gain = fusion_class(fusion).planning_gain(information, _position_block(covariance), selected)
     cross = covariance[..., :, 0::2]  # P E: (S, K, 4, 2)
     return covariance - cross @ gain @ np.swapaxes(cross, -1, -2)
 
@@ -241,14 +212,14 @@ class Planner:
 
     def _fast_costs(self, covariance, information, weights) -> NDArray:
         prior_info, _ = inverse_2x2(_position_block(covariance))  # (S, K, 2, 2)
-        posterior = POSTERIORS[self.fusion]
-        terms = posterior.terms(prior_info, information)  # (S, K, M, N, 2, 2)
+        posterior = fusion_class(self.fusion)
+        terms = posterior.channel_terms(prior_info, information)  # (S, K, M, N, 2, 2)
         S, K = terms.shape[:2]
         flat = terms.reshape(S, K, -1, 4)  # (S, K, M N, 4)
         total = np.matmul(np.swapaxes(flat, -1, -2), self._selected)  # (S, K, 4, A)
         total = np.moveaxis(total, -1, 2).reshape(S, K, self.arms, 2, 2)
         count = self._channels[None, None, :, None, None]
-        covariance_a = posterior.from_sum(prior_info[:, :, None], total, count)  # (S, K, A, 2, 2)
+        covariance_a = posterior.posterior_from_sum(prior_info[:, :, None], total, count)  # (S, K, A, 2, 2)
         return np.einsum(
             "k,ska->sa", np.asarray(weights, dtype=np.float64), _per_target(covariance_a, self.criterion)
         )

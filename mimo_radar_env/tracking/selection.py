@@ -11,62 +11,25 @@ measurements see the position only, the position block of ``J_A^-1`` is
 inverse. The criterion is ``sum_k Omega_k trace`` of that block (the predicted posterior
 position MSE, m^2), or ``sum_k Omega_k log det`` of it; smaller is better.
 
-That is the posterior of centralised fusion, which adds the channels' information. The
-paper's eq22 fusion (``"average"``) averages the channels' single-channel posteriors instead,
-so under it the predicted position covariance of a super arm is the mean over its channels of
-``(S^-1 + I_mn)^-1`` (the spread of the channels' means left out); ``fusion="average"`` scores
-that.
+That is the posterior of centralised fusion, which adds the channels' information. Each
+fusion says what its posterior is (:meth:`~.fusion.Fusion.channel_terms` and
+:meth:`~.fusion.Fusion.posterior_from_sum`): the paper's eq22 fusion averages the channels'
+single-channel posteriors instead, the mean over its channels of ``(S^-1 + I_mn)^-1``.
 """
 
 from __future__ import annotations
-
-from collections.abc import Callable
-from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..core.compiled import HAVE_NUMBA
 from ..core.superarm import all_super_arms, super_arm_count
-from .fusion import FUSIONS
+from .fusion import Fusion, fusion_class
 from .information import det_2x2, inverse_2x2
 
 CRITERIA: tuple[str, ...] = ("trace", "logdet")
 #: Super arms :func:`select_for_tracking` enumerates at most (exact search); greedy beyond.
 MAX_ENUMERATED_SUPER_ARMS = 5_000
-
-
-@dataclass(frozen=True)
-class SuperArmPosterior:
-    """A fusion's predicted posterior position covariance of a super arm, as a function of a sum
-    over the super arm's channels: ``terms(prior_info, information)`` gives each channel's term
-    (B, K, M, N, 2, 2), ``from_sum(prior_info, total, count)`` the posterior of a super arm whose
-    terms sum to ``total`` over ``count`` channels (arguments broadcast against each other)."""
-
-    terms: Callable[[NDArray, NDArray], NDArray]
-    from_sum: Callable[[NDArray, NDArray, NDArray], NDArray]
-
-
-#: The predicted posterior of a super arm under each fusion of the registry: centralised, the
-#: channels' information adds, ``(S^-1 + sum_A I_mn)^-1``; eq22's average, the mean over the
-#: channels of their single-channel posteriors ``(S^-1 + I_mn)^-1``.
-POSTERIORS: dict[str, SuperArmPosterior] = {
-    "centralized": SuperArmPosterior(
-        terms=lambda prior_info, information: information,
-        from_sum=lambda prior_info, total, count: inverse_2x2(prior_info + total)[0],
-    ),
-    "average": SuperArmPosterior(
-        terms=lambda prior_info, information: inverse_2x2(prior_info[:, :, None, None] + information)[0],
-        from_sum=lambda prior_info, total, count: total / count,
-    ),
-}
-#: The fusions whose posterior the compiled search computes too (``_selection_kernels.
-#: posterior_values``); another fusion's search takes the numpy path.
-COMPILED_POSTERIORS = ("centralized", "average")
-if set(POSTERIORS) != set(FUSIONS):  # a new fusion must say what it does to the posterior
-    raise ImportError(
-        f"selection knows the posteriors of {sorted(POSTERIORS)}, the fusions are {sorted(FUSIONS)}"
-    )
 
 
 def selection_memory_per_trial(
@@ -113,23 +76,23 @@ def super_arm_criterion(
     ``position_cov`` (B, K, 2, 2) the predicted position covariance; ``information``
     (B, K, M, N, 2, 2) from :func:`channel_information`; ``tx_masks`` (A, M) and ``rx_masks``
     (A, N) the super arms, or (B, A, M), (B, A, N) for per-trial ones (partial selections
-    allowed); ``weights`` (K,) ``Omega``; ``fusion`` a fusion of the registry
-    (:data:`POSTERIORS`: ``"centralized"``, the channels' information adds, or ``"average"``,
-    eq22, their posteriors are averaged); ``use_numba`` the compiled path, when numba is
-    installed and the channels' terms are finite: each super arm's sum over its channels (in
+    allowed); ``weights`` (K,) ``Omega``; ``fusion`` a name of the fusion registry
+    (:data:`~.fusion.FUSIONS`), whose posterior is scored; ``use_numba`` the compiled path, when
+    numba is installed, the fusion has one and the channels' terms are finite: each super arm's
+    sum over its channels (in
     the numpy path's einsum order), its posterior and that posterior's trace or determinant
     in one pass (:mod:`._selection_kernels`), with the same numbers (a 0 mask times an
     infinite term is NaN in the einsum, so infinite terms take the numpy path).
     """
-    _check_choices(criterion, fusion)
+    posterior = _check_choices(criterion, fusion)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
     batch = position_cov.shape[0]
     if tx_masks.ndim == 2:
         tx_masks = np.broadcast_to(tx_masks, (batch, *tx_masks.shape))
         rx_masks = np.broadcast_to(rx_masks, (batch, *rx_masks.shape))
-    posterior = POSTERIORS[fusion]
-    terms = posterior.terms(prior_info, information)
-    if use_numba and HAVE_NUMBA and fusion in COMPILED_POSTERIORS and np.isfinite(terms).all():
+    terms = posterior.channel_terms(prior_info, information)
+    compiled = posterior.compiled_posterior
+    if use_numba and HAVE_NUMBA and compiled is not None and np.isfinite(terms).all():
         # the channel sums, the posteriors and their traces or determinants in one pass: the same
         # numbers as the numpy path below, without its (B, K, A, 2, 2) intermediates
         values = np.empty((batch, terms.shape[1], tx_masks.shape[1]))
@@ -138,7 +101,7 @@ def super_arm_criterion(
             rx_masks,
             np.ascontiguousarray(terms, dtype=np.float64),
             np.ascontiguousarray(prior_info),
-            fusion == "centralized",
+            compiled == "information",
             criterion == "trace",
             values,
         )
@@ -147,16 +110,16 @@ def super_arm_criterion(
         selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # (B, A, M, N)
         total = np.einsum("bamn,bkmnij->bkaij", selected, terms)
         count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
-        covariance = posterior.from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
+        covariance = posterior.posterior_from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
         per_target = _per_target(covariance, criterion)
     return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
 
 
-def _check_choices(criterion: str, fusion: str) -> None:
+def _check_choices(criterion: str, fusion: str) -> type[Fusion]:
+    """The fusion class of ``fusion``, after checking both choices."""
     if criterion not in CRITERIA:
         raise ValueError(f"criterion must be one of {list(CRITERIA)}, got {criterion!r}")
-    if fusion not in POSTERIORS:
-        raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {fusion!r}")
+    return fusion_class(fusion)
 
 
 def _per_target(posterior: NDArray[np.float64], criterion: str) -> NDArray[np.float64]:
@@ -271,16 +234,13 @@ def greedy_super_arm(
 
 
 class _Scorer:
-    """The criterion of super arms given as sums over their channels of a per-channel term
-    (B, K, M, N, 2, 2): the channels' information (centralised fusion, the posterior is
-    ``(S^-1 + sum)^-1``) or their single-channel posteriors (eq22's average, the posterior is
-    ``sum / count``)."""
+    """The criterion of super arms given as sums over their channels of the fusion's
+    per-channel term (B, K, M, N, 2, 2) (:meth:`~.fusion.Fusion.channel_terms`)."""
 
     def __init__(self, position_cov, information, weights, criterion, fusion) -> None:
-        _check_choices(criterion, fusion)
+        self.posterior = _check_choices(criterion, fusion)
         self.prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
-        self.posterior = POSTERIORS[fusion]
-        self.terms = self.posterior.terms(self.prior_info, information)  # (B, K, M, N, 2, 2)
+        self.terms = self.posterior.channel_terms(self.prior_info, information)  # (B, K, M, N, 2, 2)
         self.weights = np.asarray(weights, dtype=np.float64)
         self.criterion = criterion
 
@@ -305,7 +265,7 @@ class _Scorer:
         prior = self.prior_info.reshape(self.prior_info.shape[0], *([1] * extra), *self.prior_info.shape[1:])
         count = np.asarray(count, dtype=np.float64)
         count = count.reshape(*count.shape, *([1] * (total.ndim - count.ndim)))
-        posterior = self.posterior.from_sum(prior, total, count)
+        posterior = self.posterior.posterior_from_sum(prior, total, count)
         with np.errstate(invalid="ignore", divide="ignore"):  # disallowed swaps are masked later
             return _per_target(posterior, self.criterion) @ self.weights
 

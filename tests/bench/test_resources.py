@@ -11,7 +11,7 @@ import agents
 from benchmarks.cli import main
 from benchmarks.harness import HarnessError, fit_shard_size
 from mimo_radar_env import load_scenario, random_scenario
-from mimo_radar_env.core.model import memory_parts
+from mimo_radar_env.envs.cost import memory_parts
 
 PAPER = load_scenario("paper-1-v1")
 
@@ -109,7 +109,7 @@ def test_the_policy_cost_benchmark_measures_within_the_declaration():
 def test_the_time_estimate_counts_every_task_and_the_tasks_at_once():
     from benchmarks.harness import SECONDS_PER_OPERATION, STEP_OVERHEAD_SECONDS, estimate_seconds
     from mimo_radar_env import VERSIONS
-    from mimo_radar_env.core.model import operations_per_trial_step
+    from mimo_radar_env.envs.cost import operations_per_trial_step
 
     options = VERSIONS["v1"].options()
     env = operations_per_trial_step(PAPER, options.tracking, options.fusion)
@@ -141,7 +141,7 @@ def test_declared_operations_follow_the_work():
         for k in (1, 5)
     }
     assert costs[8, 1] < costs[8, 5] and costs[64, 1] < costs[64, 5] and costs[8, 5] < costs[64, 5]
-    from mimo_radar_env.core.model import operations_per_trial_step
+    from mimo_radar_env.envs.cost import operations_per_trial_step
 
     assert (
         operations_per_trial_step(scenario, True, "centralized")

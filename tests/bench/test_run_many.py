@@ -6,7 +6,7 @@ import pytest
 
 from benchmarks import harness
 from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, task_seconds
-from mimo_radar_env.core.model import operations_per_trial_step
+from mimo_radar_env.envs.cost import operations_per_trial_step
 
 
 @pytest.fixture

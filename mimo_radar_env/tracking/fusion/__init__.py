@@ -1,6 +1,7 @@
 """Fusions of the selected channels' measurements, by name: ``"average"`` (the paper's eq22)
-and ``"centralized"``. :data:`FUSIONS` is the one registry; the env options take their
-choices from it."""
+and ``"centralized"``. :data:`FUSIONS` is the one registry: the env option ``fusion``, the
+tracker, the tracking search, the planner and the cost model all take a fusion from it, so a
+new fusion is one module with one :class:`Fusion` subclass passed to :func:`register_fusion`."""
 
 from __future__ import annotations
 
@@ -10,14 +11,36 @@ from .average import AverageFusion
 from .base import Fusion, Posterior, Prior
 from .centralized import CentralizedFusion
 
-FUSIONS: dict[str, type[Fusion]] = {cls.name: cls for cls in (AverageFusion, CentralizedFusion)}
+FUSIONS: dict[str, type[Fusion]] = {}
+
+
+def register_fusion(cls: type[Fusion]) -> type[Fusion]:
+    """Add a fusion class to :data:`FUSIONS` under its ``name`` (usable as a decorator)."""
+    if not (isinstance(cls, type) and issubclass(cls, Fusion)) or not getattr(cls, "name", ""):
+        raise TypeError(f"a fusion is a Fusion subclass with a name, got {cls!r}")
+    if cls.compiled_posterior not in (None, "information", "mean"):
+        raise ValueError(
+            f"{cls.__name__}.compiled_posterior must be None, 'information' or 'mean', "
+            f"got {cls.compiled_posterior!r}"
+        )
+    FUSIONS[cls.name] = cls
+    return cls
+
+
+for _cls in (AverageFusion, CentralizedFusion):
+    register_fusion(_cls)
+
+
+def fusion_class(name: str) -> type[Fusion]:
+    """The fusion class registered as ``name``; ``ValueError`` naming the choices otherwise."""
+    if not isinstance(name, str) or name not in FUSIONS:
+        raise ValueError(f"fusion must be one of {list(FUSIONS)}, got {name!r}")
+    return FUSIONS[name]
 
 
 def make_fusion(name: str, **params: Any) -> Fusion:
     """A fusion by registry name."""
-    if name not in FUSIONS:
-        raise ValueError(f"fusion must be one of {sorted(FUSIONS)}, got {name!r}")
-    return FUSIONS[name](**params)
+    return fusion_class(name)(**params)
 
 
 def compiled_kernels(name: str) -> list[Any]:
@@ -28,10 +51,8 @@ def compiled_kernels(name: str) -> list[Any]:
     if not HAVE_NUMBA:
         return []
     from .. import bound
-    from . import average, centralized
 
-    module = {"average": average, "centralized": centralized}[name]
-    return [module._update_numba, bound._compiled_step]
+    return [*fusion_class(name).compiled_kernels(), bound._compiled_step]
 
 
 __all__ = [
@@ -42,5 +63,7 @@ __all__ = [
     "Fusion",
     "Posterior",
     "Prior",
+    "fusion_class",
     "make_fusion",
+    "register_fusion",
 ]

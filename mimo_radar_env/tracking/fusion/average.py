@@ -20,14 +20,50 @@ from numpy.typing import NDArray
 from ...core.compiled import HAVE_NUMBA
 from ...core.geometry import station_geometry
 from ..imm import logsumexp
+from ..information import inverse_2x2, woodbury_gain
 from ..unscented import symmetrize, unscented_update
-from .base import Fusion, Posterior, Prior
+from .base import CHANNEL_OPERATIONS, Fusion, Posterior, Prior
 
 
 class AverageFusion(Fusion):
-    """eq22: the mean over channels of per-channel IMM-UKF updates of one prior."""
+    """eq22: the mean over channels of per-channel IMM-UKF updates of one prior.
+
+    Its predicted posterior of a super arm is the mean over the channels of their
+    single-channel posteriors ``(S^-1 + I_mn)^-1`` (the spread of the channels' means left
+    out), and in the planner each channel's Woodbury gain is averaged the same way."""
 
     name = "average"
+    compiled_posterior = "mean"
+
+    @staticmethod
+    def channel_terms(
+        prior_info: NDArray[np.float64], information: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        return inverse_2x2(prior_info[:, :, None, None] + information)[0]
+
+    @staticmethod
+    def posterior_from_sum(
+        prior_info: NDArray[np.float64], total: NDArray[np.float64], count: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        return total / count
+
+    @staticmethod
+    def planning_gain(
+        information: NDArray[np.float64], position_cov: NDArray[np.float64], selected: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        count = selected.sum(axis=(1, 2))
+        if (count == 0).any():
+            raise ValueError("the average fusion needs at least one selected channel in every state")
+        each = woodbury_gain(information, position_cov[:, :, None, None])  # (S, K, M, N, 2, 2)
+        return np.einsum("smn,skmnij->skij", selected / count[:, None, None], each)
+
+    @staticmethod
+    def update_operations(channels: int) -> float:
+        return channels * (CHANNEL_OPERATIONS + 300)  # one update per channel, then eq22's average
+
+    @classmethod
+    def compiled_kernels(cls) -> list:
+        return [_update_numba] if HAVE_NUMBA else []
 
     def update(
         self,

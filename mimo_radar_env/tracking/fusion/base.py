@@ -1,11 +1,25 @@
-"""The fusion interface: how the measurements of the selected channels update the IMM prior."""
+"""The fusion interface: everything the project knows of one way of fusing the selected
+channels' measurements.
+
+A fusion is one module defining one :class:`Fusion` subclass (Stone Soup's updaters are built
+the same way). It holds:
+
+* :meth:`Fusion.update`, the tracker's update of the IMM prior, with its compiled twin;
+* its predicted posterior of a super arm, for the tracking search and the planner:
+  :meth:`Fusion.channel_terms`, :meth:`Fusion.posterior_from_sum` and
+  :meth:`Fusion.planning_gain`;
+* :meth:`Fusion.update_operations`, its cost per trial-step for the harness's time estimates.
+
+:func:`register_fusion` adds it to :data:`FUSIONS` (the env option ``fusion`` takes its choices
+from there); no other module names a fusion.
+"""
 
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -50,6 +64,13 @@ class Posterior:
         )
 
 
+#: Models of the IMM (constant velocity and the two coordinated turns), sigma points of a
+#: 4-state unscented transform, and the operations of one channel's measurement model, 2 x 2
+#: innovation and gain (the cost model's units: :meth:`Fusion.update_operations`).
+MODELS, SIGMA_POINTS = 3, 9
+CHANNEL_OPERATIONS = SIGMA_POINTS * 2 * 40 + 400
+
+
 class Fusion(ABC):
     """Base class of fusions; each is registered by its ``name`` in ``FUSIONS``.
 
@@ -60,6 +81,11 @@ class Fusion(ABC):
     """
 
     name: ClassVar[str]
+    #: How the compiled tracking search (``_selection_kernels.posterior_values``) turns a super
+    #: arm's sum of :meth:`channel_terms` into its posterior: ``"information"``, the inverse of
+    #: the prior's information plus the sum; ``"mean"``, the sum over the channel count; ``None``,
+    #: neither (the search takes the numpy path with :meth:`posterior_from_sum`).
+    compiled_posterior: ClassVar[str | None] = None
 
     def __init__(self, use_numba: bool = True) -> None:
         self.use_numba = use_numba and HAVE_NUMBA
@@ -80,6 +106,46 @@ class Fusion(ABC):
         ``noise_variance`` (B, K, Ms * Ns, 2) hold each channel's range sum and azimuth and the
         diagonal of its measurement covariance.
         """
+
+    # ------------------------------------------ the predicted posterior of a super arm
+    @staticmethod
+    @abstractmethod
+    def channel_terms(
+        prior_info: NDArray[np.float64], information: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """Each channel's term (B, K, M, N, 2, 2) of the super-arm sum that
+        :meth:`posterior_from_sum` maps to a posterior, from the prior's position information
+        ``prior_info`` (B, K, 2, 2) and each channel's ``information`` (B, K, M, N, 2, 2)."""
+
+    @staticmethod
+    @abstractmethod
+    def posterior_from_sum(
+        prior_info: NDArray[np.float64], total: NDArray[np.float64], count: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The predicted posterior position covariance (..., 2, 2) of a super arm whose channels'
+        terms sum to ``total`` over ``count`` channels (the arguments broadcast)."""
+
+    @staticmethod
+    @abstractmethod
+    def planning_gain(
+        information: NDArray[np.float64], position_cov: NDArray[np.float64], selected: NDArray[np.float64]
+    ) -> NDArray[np.float64]:
+        """The gain ``G`` (S, K, 2, 2) of the posterior ``P - P E G E' P`` (Woodbury's identity,
+        ``E`` picks the position) after the channels ``selected`` (S, M, N; 0 or 1) with position
+        ``information`` (S, K, M, N, 2, 2), from priors of position block ``position_cov``
+        (S, K, 2, 2): what the planner carries from step to step."""
+
+    # ------------------------------------------------------------------ its cost
+    @staticmethod
+    @abstractmethod
+    def update_operations(channels: int) -> float:
+        """Arithmetic operations of one update of one target and model with ``channels`` selected
+        channels, roughly (an upper estimate, in the units of :data:`CHANNEL_OPERATIONS`)."""
+
+    @classmethod
+    def compiled_kernels(cls) -> list[Any]:
+        """The numba kernels its update runs (none without numba or a compiled path)."""
+        return []
 
     @staticmethod
     def run_path(
