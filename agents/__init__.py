@@ -2,7 +2,8 @@
 
 ``make_agent(name, scenario, **params)`` creates an agent by name;
 ``available_agents()`` lists them. Every agent is batch-native: the same object
-acts on the single env and on the vector env.
+acts on the single env and on the vector env; :class:`Rollout` (with :func:`make_env`) is the
+one loop that runs an agent on an env.
 """
 
 from .base import Agent, IndexPolicy
@@ -24,6 +25,7 @@ from .registry import (
     register_agent,
     split_policy,
 )
+from .rollout import Rollout, Step, env_options_for, make_env
 from .solvers import SOLVERS, SuperArmSolver, make_solver
 from .thompson import CombinatorialThompson, DiscountedThompson
 from .tracking import TrackingUCB
@@ -55,6 +57,8 @@ __all__ = [
     "RecurrentPPOAgent",
     "RandomAgent",
     "RecencyBasedExploration",
+    "Rollout",
+    "Step",
     "SlidingWindowUCB",
     "SuperArmSolver",
     "TrackingUCB",
@@ -64,7 +68,9 @@ __all__ = [
     "agent_parameters",
     "agent_summary",
     "available_agents",
+    "env_options_for",
     "make_agent",
+    "make_env",
     "make_solver",
     "register_agent",
     "split_policy",

@@ -5,8 +5,11 @@ from __future__ import annotations
 import gymnasium as gym
 import numpy as np
 
+import agents
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
-from mimo_radar_env.core.superarm import random_super_arms
+
+#: The demo's policies: uniformly random valid super arms, and the oracle of the true mean SINR.
+POLICIES = ("random", "best")
 
 
 def run_demo(
@@ -14,22 +17,16 @@ def run_demo(
 ) -> dict[str, dict[str, float]]:
     """Run one episode per policy (same seed, so the same target trajectory) and summarise it."""
     results: dict[str, dict[str, float]] = {}
-    for policy in ("random-valid", "oracle"):
+    for policy in POLICIES:
         env = gym.make(VERSIONS[DEFAULT_VERSION].env_id, scenario=scenario)
-        env.reset(seed=seed)
         sc = env.unwrapped.scenario
-        rng = np.random.default_rng(seed)
         horizon = sc.horizon if steps is None else min(steps, sc.horizon)
+        episode = agents.Rollout(agents.make_agent(policy, sc, seed=seed), env, seed=seed)
         regret, errors, reward_sum = 0.0, [], 0.0
-        for _ in range(horizon):
-            if policy == "oracle":
-                action = env.unwrapped.oracle_action()
-            else:
-                action = random_super_arms(rng, 1, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)[0]
-            _, reward, _, _, info = env.step(action)
-            reward_sum += reward
-            regret += info["optimal_reward"] - info["expected_reward"]
-            errors.append(info["position_error"])
+        for step in episode.run(horizon):
+            reward_sum += float(step.reward)
+            regret += step.info["optimal_reward"] - step.info["expected_reward"]
+            errors.append(step.info["position_error"])
         results[policy] = {
             "steps": horizon,
             "total_reward": reward_sum,
@@ -40,7 +37,9 @@ def run_demo(
 
 
 def print_demo(results: dict[str, dict[str, float]], scenario: str) -> None:
-    print(f"MimoRadarSelect-v1, scenario {scenario}: one episode per policy, same target trajectory")
+    print(
+        f"{VERSIONS[DEFAULT_VERSION].env_id}, scenario {scenario}: one episode per policy, same target trajectory"
+    )
     print(f"{'policy':<14}{'steps':>7}{'total reward':>15}{'regret':>12}{'mean pos. error (m)':>22}")
     for name, row in results.items():
         print(

@@ -35,9 +35,9 @@ from tqdm.auto import tqdm
 import agents
 from agents.ppo import model_file
 from agents.solvers import compiled_kernels as solver_kernels
-from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario, ScenarioError, load_scenario
+from mimo_radar_env import EnvOptions, Scenario, ScenarioError, load_scenario
 from mimo_radar_env.core.compiled import uncached
-from mimo_radar_env.core.model import machine_memory, memory_parts, operations_per_trial_step
+from mimo_radar_env.envs.cost import machine_memory, memory_parts, operations_per_trial_step
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -185,13 +185,7 @@ def make_config(
             per_trial[policy] = agent.memory_per_trial()
             operations[policy] = agent.operations_per_trial_step()
             fixed[policy] = agent.seconds_per_step()
-            probe = MimoRadarSelectVectorEnv(
-                num_envs=1, scenario=sc, **policy_env_options(agent, options.to_dict())
-            )
-            obs, _ = probe.reset(seed=seed)
-            if agent.needs_oracle:
-                agent.attach(probe)
-            agent.reset(obs)
+            agents.Rollout(agent, agents.make_env(agent, 1, options.to_dict(), sc), seed=seed)
         except (ValueError, TypeError, OSError) as exc:
             raise HarnessError(f"policy {policy!r}: {exc}") from exc
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
@@ -305,7 +299,7 @@ def estimate_seconds(
     """A run's wall time, roughly: every (policy, shard) task takes, per step,
     :data:`STEP_OVERHEAD_SECONDS` and the policy's own fixed time
     (:meth:`agents.Agent.seconds_per_step`, ``agent_seconds``) plus its trials' operations (the
-    env's, :func:`~mimo_radar_env.core.model.operations_per_trial_step`, and the policy's,
+    env's, :func:`~mimo_radar_env.envs.cost.operations_per_trial_step`, and the policy's,
     :meth:`agents.Agent.operations_per_trial_step`) at :data:`SECONDS_PER_OPERATION`;
     ``parallel`` tasks run at once."""
     env = operations_per_trial_step(scenario, options.tracking, options.fusion)
@@ -378,13 +372,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         seed=cfg.seed + trials.start,
         options=cfg.env_options,
     )
-    env = MimoRadarSelectVectorEnv(
-        num_envs=len(trials), scenario=scenario, **policy_env_options(agent, cfg.env_options)
+    episode = agents.Rollout(
+        agent, agents.make_env(agent, len(trials), cfg.env_options, scenario), seed=cfg.seed + trials.start
     )
-    if agent.needs_oracle:
-        agent.attach(env)
-    obs, info = env.reset(seed=cfg.seed + trials.start)
-    agent.reset(obs)
     n, T, K = len(trials), cfg.steps, scenario.num_targets
     out = {
         "trial_expected": np.zeros((n, T)),
@@ -395,19 +385,18 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
         TRUTH_FIELD: np.empty((T + 1, K, 2)),
     }
-    out[TRUTH_FIELD][0] = info["true_state"][0][:, [0, 2]]
-    for t in range(T):
-        action = agent.act(obs)
-        obs, reward, _, _, info = env.step(action)
-        agent.update(obs, reward)
+    out[TRUTH_FIELD][0] = episode.info["true_state"][0][:, [0, 2]]
+    for t, step in enumerate(episode.run(T)):
+        info, action = step.info, np.asarray(step.action)
         out["trial_expected"][:, t] = info["expected_reward"]
         out["trial_optimal"][:, t] = info["optimal_reward"]
-        out["trial_matches"][:, t] = np.all(np.asarray(action) == info["optimal_action"], axis=1)
+        out["trial_matches"][:, t] = np.all(action == info["optimal_action"], axis=1)
         if "position_error" in info:
             out["trial_squared_error"][:, t] = info["position_error"] ** 2
             out["trial_bound_squared"][:, t] = info["position_bound"] ** 2
-        out["selections"][t] = np.asarray(action).sum(axis=0)
+        out["selections"][t] = action.sum(axis=0)
         out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
+    info = episode.info
     out["tracker_repairs"] = np.array(float(np.sum(info.get("tracker_repairs", 0))))
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
@@ -444,12 +433,6 @@ def make_policy(
         if options is not None and key not in params
     }
     return agents.make_agent(name, scenario, seed=seed, **argument, **from_env, **params)
-
-
-def policy_env_options(agent: agents.Agent, options: dict[str, Any]) -> dict[str, Any]:
-    """The run's env options with those the agent needs for its observation
-    (``Agent.observation_options``; they change no number of the env)."""
-    return {**options, **agent.observation_options}
 
 
 # ------------------------------------------------------------------ storage

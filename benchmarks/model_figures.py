@@ -16,7 +16,6 @@ import argparse
 import json
 import re
 import time
-import warnings
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -26,7 +25,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from mimo_radar_env import RadarModel, load_scenario, random_scenario
+import agents
+from mimo_radar_env import VERSIONS, RadarModel, load_scenario, random_scenario
 from mimo_radar_env.core.simulation import RadarSimulation
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms, subset_masks
@@ -299,26 +299,20 @@ def consistency() -> dict[str, Figure]:
 
 def vector_run(scenario: str, batch: int, steps: int, fusion: str, fixed=None, **options) -> tuple:
     """Target 0's position errors (steps, batch) and model probabilities (steps, batch, R) of a
-    v0 vector env, with ``fixed`` selections or the oracle's (tests/tracking/test_closed_loop.py
-    asserts on them too)."""
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)  # v0 on purpose: these facts are v0's
-        venv = gym.make_vec(
-            "MimoRadarSelect-v0",
-            num_envs=batch,
-            vectorization_mode="vector_entry_point",
-            scenario=scenario,
-            fusion=fusion,
-            **options,
-        )
-    obs, _ = venv.reset(seed=0)
+    v0 vector env, with ``fixed`` selections (an action (M + N,)) or the oracle's
+    (tests/tracking/test_closed_loop.py asserts on them too)."""
+    if fixed is None:
+        agent = agents.make_agent("best", scenario)
+    else:
+        num_tx = load_scenario(scenario).num_tx
+        tx, rx = np.flatnonzero(fixed[:num_tx]).tolist(), np.flatnonzero(fixed[num_tx:]).tolist()
+        agent = agents.make_agent("fixed", scenario, tx=tx, rx=rx)
+    env = agents.make_env(agent, batch, VERSIONS["v0"].options(fusion=fusion, **options))
     errors, modes = [], []
-    for _ in range(steps):
-        action = np.tile(fixed, (batch, 1)) if fixed is not None else venv.oracle_action()
-        obs, _, _, _, info = venv.step(action)
-        errors.append(info["position_error"][:, 0])
-        modes.append(obs["mode_prob"][:, 0])
-    venv.close()
+    for step in agents.Rollout(agent, env, seed=0).run(steps):
+        errors.append(step.info["position_error"][:, 0])
+        modes.append(step.obs["mode_prob"][:, 0])
+    env.close()
     return np.array(errors), np.array(modes)
 
 

@@ -13,14 +13,13 @@ from __future__ import annotations
 
 import argparse
 import json
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import agents
-from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv
+from mimo_radar_env import VERSIONS
 
 #: (policy, parameters) measured against best-tracking.
 PLANNERS = (
@@ -35,21 +34,9 @@ def act_seconds(
 ) -> float:
     """The median time of one ``act`` of ``policy`` on ``trials`` trials (s)."""
     agent = agents.make_agent(policy, scenario, seed=0, **params)
-    options = VERSIONS["v1"].options(**agent.observation_options).to_dict()
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **options)
-    if agent.needs_oracle:
-        agent.attach(env)
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
-    times = []
-    for step in range(steps + 1):
-        start = time.perf_counter()
-        action = agent.act(obs)
-        if step:  # the first step warms up
-            times.append(time.perf_counter() - start)
-        obs, reward, *_ = env.step(action)
-        agent.update(obs, reward)
-    return float(np.median(times))
+    episode = agents.Rollout(agent, agents.make_env(agent, trials, VERSIONS["v1"].options()), seed=0)
+    episode.step()  # the first step warms up
+    return float(np.median([step.act_seconds for step in episode.run(steps)]))
 
 
 def measure(trials: int = 500, steps: int = 5) -> dict[str, float]:

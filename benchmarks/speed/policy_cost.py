@@ -23,17 +23,15 @@ import dataclasses
 import json
 import time
 import tracemalloc
-import warnings
 from pathlib import Path
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 
 import agents
 from mimo_radar_env import VERSIONS, random_scenario
-from mimo_radar_env.core.model import memory_parts
 from mimo_radar_env.core.superarm import is_exact_affordable
+from mimo_radar_env.envs.cost import memory_parts
 
 from ..harness import estimate_seconds
 
@@ -53,33 +51,15 @@ def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[
     ):
         params["solver"] = "alternating"
     agent = agents.make_agent(policy, scenario, seed=0, **params)
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        env = gym.make_vec(
-            "MimoRadarSelect-v1",
-            num_envs=trials,
-            vectorization_mode="vector_entry_point",
-            scenario=scenario,
-            **agent.observation_options,
-        )
-    if agent.needs_oracle:
-        agent.attach(env)
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
-
-    def one_step(obs):
-        action = agent.act(obs)
-        obs, reward, *_ = env.step(action)
-        agent.update(obs, reward)
-        return obs
-
-    obs = one_step(obs)  # warm-up: compilation and first allocations
+    env = agents.make_env(agent, trials, VERSIONS["v1"].options().to_dict(), scenario)
+    episode = agents.Rollout(agent, env, seed=0)
+    episode.step()  # warm-up: compilation and first allocations
     tracemalloc.start()
     try:
         times = []
         for _ in range(steps):
             start = time.perf_counter()
-            obs = one_step(obs)
+            episode.step()
             times.append(time.perf_counter() - start)
         seconds = steps * float(np.median(times))  # a one-off pause (collection, compilation) left out
         peak = tracemalloc.get_traced_memory()[1]

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 import agents
-from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv, random_scenario
+from mimo_radar_env import VERSIONS, random_scenario
 from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
 
 
@@ -33,17 +33,13 @@ def measure(
         if is_exact_affordable(num_tx, num_rx, tx_count, rx_count, AUTO_EXACT_SUBSETS)
         else "alternating"
     )
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=scenario, **VERSIONS["v1"].options().to_dict())
     agent = agents.make_agent("ucb1", scenario, seed=0, solver=solver)
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
-    obs, reward, _, _, _ = env.step(agent.act(obs))  # warm-up
-    agent.update(obs, reward)
+    episode = agents.Rollout(agent, agents.make_env(agent, trials, VERSIONS["v1"].options()), seed=0)
+    episode.step()  # warm-up
     tracemalloc.start()
     start = time.perf_counter()
-    for _ in range(steps):
-        obs, reward, _, _, _ = env.step(agent.act(obs))
-        agent.update(obs, reward)
+    for _ in episode.run(steps):
+        pass
     elapsed = time.perf_counter() - start
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()

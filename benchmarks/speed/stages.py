@@ -26,9 +26,9 @@ import numpy as np
 
 import agents
 from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv, load_scenario
-from mimo_radar_env.core.model import operations_per_trial_step
 from mimo_radar_env.core.superarm import random_super_arms, search_operations
 from mimo_radar_env.envs import engine as engine_module
+from mimo_radar_env.envs.cost import operations_per_trial_step
 
 SCENARIO = "paper-1-v1"
 #: An assumed sustained float64 rate of an accelerator (operations per second: a data-centre
@@ -85,20 +85,11 @@ def env_stages(fusion: str, trials: int, steps: int, scenario: str = SCENARIO) -
 
 
 def act_seconds(solver: dict[str, Any], trials: int, steps: int) -> float:
-    """MG-CRB-CL's ``act`` per step with ``solver``."""
-    env = MimoRadarSelectVectorEnv(num_envs=trials, scenario=SCENARIO, **VERSIONS["v1"].options().to_dict())
+    """MG-CRB-CL's ``act`` per step with ``solver`` (the first step warms up)."""
     agent = agents.make_agent("mg-crb-cl", SCENARIO, seed=0, **solver)
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
-    spent = 0.0
-    for step in range(steps + 1):
-        start = time.perf_counter()
-        action = agent.act(obs)
-        if step:
-            spent += time.perf_counter() - start
-        obs, reward, *_ = env.step(action)
-        agent.update(obs, reward)
-    return spent / steps
+    episode = agents.Rollout(agent, agents.make_env(agent, trials, VERSIONS["v1"].options()), seed=0)
+    episode.step()
+    return sum(step.act_seconds for step in episode.run(steps)) / steps
 
 
 def measure(trials: int = 500, steps: int = 40) -> dict[str, Any]:

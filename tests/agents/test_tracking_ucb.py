@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 import agents
-from benchmarks.harness import make_policy, policy_env_options
+from agents import env_options_for as policy_env_options
+from benchmarks.harness import make_policy
 from mimo_radar_env import EnvOptions, RadarModel, load_scenario
 from mimo_radar_env.core.geometry import bistatic_measurement
 

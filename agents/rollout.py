@@ -1,0 +1,98 @@
+"""The one loop that runs an agent on an env.
+
+Every place that runs a policy (the benchmark harness, the speed suite, the demo, the docs'
+figures and the tests) goes through it, so they all build the env with what the agent
+needs, attach the oracle and run act, step and update the same way, batched over trials::
+
+    agent = agents.make_agent("best-tracking", "paper-1-v1", seed=0)
+    env = agents.make_env(agent, num_envs=500, options={"fusion": "centralized"})
+    episode = agents.Rollout(agent, env, seed=0)  # resets the env and the agent
+    for step in episode.run(100):
+        step.info["position_error"]  # (500, K)
+
+A :class:`Rollout` runs on a vector env (actions (B, M + N)) or a single env (the batch of
+one: actions (M + N,)) alike.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from numpy.typing import NDArray
+
+from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario
+
+from .base import Agent, Observation
+
+
+def env_options_for(agent: Agent, options: EnvOptions | Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The env options ``options`` with those ``agent`` needs for its observation
+    (``Agent.observation_options``; they add observation keys and change no number of the env)."""
+    given = options.to_dict() if isinstance(options, EnvOptions) else dict(options or {})
+    return {**given, **agent.observation_options}
+
+
+def make_env(
+    agent: Agent,
+    num_envs: int,
+    options: EnvOptions | Mapping[str, Any] | None = None,
+    scenario: Scenario | str | Path | None = None,
+) -> MimoRadarSelectVectorEnv:
+    """The native vector env of ``num_envs`` trials of ``scenario`` (default: the agent's) with
+    env ``options`` (an :class:`~mimo_radar_env.EnvOptions` or a mapping; default: the env
+    class's) and the options the agent needs."""
+    return MimoRadarSelectVectorEnv(
+        num_envs=num_envs,
+        scenario=agent.scenario if scenario is None else scenario,
+        **env_options_for(agent, options),
+    )
+
+
+@dataclass
+class Step:
+    """One step of a rollout: the step's number ``t`` (from 1), the action played, what the env
+    returned for it, and the agent's ``act`` time (s)."""
+
+    t: int
+    action: NDArray[Any]
+    obs: Observation
+    reward: NDArray[Any]
+    terminated: Any
+    truncated: Any
+    info: dict[str, Any]
+    act_seconds: float
+
+
+class Rollout:
+    """An episode of ``agent`` on ``env`` from ``env.reset(seed=seed)``: attaches the env to an
+    oracle agent, resets both, then each :meth:`step` acts, steps the env and updates the agent.
+
+    ``obs`` and ``info`` are the latest the env returned (the reset's until the first step)."""
+
+    def __init__(self, agent: Agent, env: Any, seed: int | None = None) -> None:
+        self.agent, self.env = agent, env
+        if agent.needs_oracle:
+            agent.attach(env)  # type: ignore[attr-defined]
+        self.obs, self.info = env.reset(seed=seed)
+        agent.reset(self.obs)
+        self.t = 0
+
+    def step(self) -> Step:
+        """Act, step the env, and update the agent with what it returned."""
+        start = time.perf_counter()
+        action = self.agent.act(self.obs)
+        act_seconds = time.perf_counter() - start
+        obs, reward, terminated, truncated, info = self.env.step(action)
+        self.agent.update(obs, reward)
+        self.obs, self.info = obs, info
+        self.t += 1
+        return Step(self.t, action, obs, reward, terminated, truncated, info, act_seconds)
+
+    def run(self, steps: int) -> Iterator[Step]:
+        """The next ``steps`` steps, one at a time."""
+        for _ in range(steps):
+            yield self.step()
