@@ -29,16 +29,11 @@ def record() -> dict[str, np.ndarray]:
         )
         for name in ("mg-crb-cl", "ucb1"):
             agent = agents.make_agent(name, venv.scenario, seed=4)
-            obs, _ = venv.reset(seed=11)
-            agent.reset(obs)
             tracks, rewards, actions = [], [], []
-            for _ in range(120):
-                action = agent.act(obs)
-                obs, reward, _, _, info = venv.step(action)
-                agent.update(obs, reward)
-                tracks.append(obs["track"])
-                rewards.append(reward)
-                actions.append(action)
+            for step in agents.Rollout(agent, venv, seed=11).run(120):
+                tracks.append(step.obs["track"])
+                rewards.append(step.reward)
+                actions.append(step.action)
             key = f"{scenario}_{fusion}_{name}"
             out[f"{key}_track"] = np.array(tracks)
             out[f"{key}_reward"] = np.array(rewards)
@@ -62,16 +57,12 @@ def record_v1() -> dict[str, np.ndarray]:
         params = version.paper_study_params()
         for name in ("mg-crb-cl", "epsilon-greedy"):
             agent = agents.make_agent(name, venv.scenario, seed=7, **params.get(name, {}))
-            obs, _ = venv.reset(seed=3)
-            agent.reset(obs)
             recorded: dict[str, list] = {"track": [], "reward": [], "action": [], "bound": []}
-            for _ in range(80):
-                action = agent.act(obs)
-                obs, reward, _, _, info = venv.step(action)
-                agent.update(obs, reward)
-                for key, value in (("track", obs["track"]), ("reward", reward), ("action", action)):
-                    recorded[key].append(value)
-                recorded["bound"].append(info["position_bound"])
+            for step in agents.Rollout(agent, venv, seed=3).run(80):
+                recorded["track"].append(step.obs["track"])
+                recorded["reward"].append(step.reward)
+                recorded["action"].append(step.action)
+                recorded["bound"].append(step.info["position_bound"])
             for key, values in recorded.items():
                 out[f"{scenario}_{fusion}_{name}_{key}"] = np.array(values)
     return out

@@ -192,17 +192,10 @@ def _episode(agent_name, scenario, vector, steps):
     options = env.unwrapped.options if not vector else env.options
     params.update({key: getattr(options, key) for key in cls.env_option_params})
     agent = agents.make_agent(agent_name, sc, **params)
-    if agent.needs_oracle:
-        agent.attach(env)
-    obs, _ = env.reset(seed=1)
-    agent.reset(obs)
-    for _ in range(steps or sc.horizon):
-        action = agent.act(obs)
-        obs, reward, _, truncated, info = env.step(action)
-        agent.update(obs, reward)
-        assert np.all(info["action_valid"])
+    for step in agents.Rollout(agent, env, seed=1).run(steps or sc.horizon):
+        assert np.all(step.info["action_valid"])
     if steps is None:
-        assert np.all(truncated)
+        assert np.all(step.truncated)
 
 
 SCENARIOS = ["paper-1", "paper-2", "paper-3", "large"]
@@ -232,16 +225,10 @@ def test_paper1_mg_crb_cl_beats_ucb1_and_best_has_the_highest_sinr():
     for name in ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"):
         venv = gym.make_vec("MimoRadarSelect-v0", num_envs=50, vectorization_mode="vector_entry_point")
         agent = agents.make_agent(name, venv.scenario, seed=0)
-        if agent.needs_oracle:
-            agent.attach(venv)
-        obs, _ = venv.reset(seed=0)
-        agent.reset(obs)
         regret = sinr = 0.0
-        for _ in range(1000):
-            obs, reward, _, _, info = venv.step(agent.act(obs))
-            agent.update(obs, reward)
-            regret += np.mean(info["optimal_reward"] - info["expected_reward"])
-            sinr += np.mean(info["expected_reward"])
+        for step in agents.Rollout(agent, venv, seed=0).run(1000):
+            regret += np.mean(step.info["optimal_reward"] - step.info["expected_reward"])
+            sinr += np.mean(step.info["expected_reward"])
         results[name] = (regret, sinr)
     assert results["mg-crb-cl"][0] < results["ucb1"][0]
     assert max(results, key=lambda n: results[n][1]) == "best"

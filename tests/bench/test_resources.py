@@ -77,15 +77,10 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
         oracle_solver="alternating",
         **agent.observation_options,
     )
-    if agent.needs_oracle:
-        agent.attach(env)
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
+    episode = agents.Rollout(agent, env, seed=0)
     tracemalloc.start()
     try:
-        action = agent.act(obs)
-        obs, reward, *_ = env.step(action)
-        agent.update(obs, reward)
+        step = episode.step()
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -94,7 +89,7 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
     assert peak <= declared, (
         f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
     )
-    assert np.isfinite(reward).all()
+    assert np.isfinite(step.reward).all()
 
 
 def test_the_policy_cost_benchmark_measures_within_the_declaration():

@@ -113,21 +113,14 @@ def _bound_run(env, policy, trials):
 
     sc = env.scenario
     arms = Planner(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, fusion="centralized")
-    obs, _ = env.reset(seed=7)
-    agent = agents.make_agent(policy, sc, seed=0)
-    if agent.needs_oracle:
-        agent.attach(env)
-    agent.reset(obs)
+    episode = agents.Rollout(agents.make_agent(policy, sc, seed=0), env, seed=7)
     forecast = env.engine.bound_forecast()
     played, bound = [], []
-    for _ in range(sc.horizon):
-        action = agent.act(obs)
-        tx, rx = action[:, : sc.num_tx].astype(bool), action[:, sc.num_tx :].astype(bool)
+    for step in episode.run(sc.horizon):
+        tx, rx = step.action[:, : sc.num_tx].astype(bool), step.action[:, sc.num_tx :].astype(bool)
         match = (arms.tx_masks[None] == tx[:, None]).all(-1) & (arms.rx_masks[None] == rx[:, None]).all(-1)
         played.append(np.argmax(match, axis=1))
-        obs, reward, _, _, info = env.step(action)
-        agent.update(obs, reward)
-        bound.append(info["position_bound"] ** 2)
+        bound.append(step.info["position_bound"] ** 2)
     return forecast, arms, np.stack(played, axis=1), np.stack(bound, axis=1)
 
 
