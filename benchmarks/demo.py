@@ -37,9 +37,8 @@ def run_demo(
 
 
 def print_demo(results: dict[str, dict[str, float]], scenario: str) -> None:
-    print(
-        f"{VERSIONS[DEFAULT_VERSION].env_id}, scenario {scenario}: one episode per policy, same target trajectory"
-    )
+    env_id = VERSIONS[DEFAULT_VERSION].env_id
+    print(f"{env_id}, scenario {scenario}: one episode per policy, same target trajectory")
     print(f"{'policy':<14}{'steps':>7}{'total reward':>15}{'regret':>12}{'mean pos. error (m)':>22}")
     for name, row in results.items():
         print(

@@ -1,0 +1,69 @@
+"""The one rollout loop: the same steps as act/step/update written out, on vector and single
+envs, with the agent's observation options and its oracle attached."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import agents
+from mimo_radar_env import MimoRadarSelectVectorEnv
+
+
+def _by_hand(policy, env, seed, steps):
+    """The loop as every caller used to write it."""
+    agent = agents.make_agent(policy, "paper-1-v1", seed=5)
+    if agent.needs_oracle:
+        agent.attach(env)
+    obs, _ = env.reset(seed=seed)
+    agent.reset(obs)
+    actions, rewards = [], []
+    for _ in range(steps):
+        action = agent.act(obs)
+        obs, reward, _, _, _ = env.step(action)
+        agent.update(obs, reward)
+        actions.append(action)
+        rewards.append(reward)
+    return np.array(actions), np.array(rewards)
+
+
+@pytest.mark.parametrize("policy", ["mg-crb-cl", "best", "tracking-ucb"])
+def test_a_rollout_is_the_loop_written_out(policy):
+    agent = agents.make_agent(policy, "paper-1-v1", seed=5)
+    env = agents.make_env(agent, 4, {"fusion": "centralized"})
+    assert env.options.fusion == "centralized"
+    steps = list(agents.Rollout(agent, env, seed=9).run(6))
+    assert [step.t for step in steps] == list(range(1, 7))
+    assert all(step.act_seconds >= 0 for step in steps)
+    reference_env = MimoRadarSelectVectorEnv(
+        num_envs=4, scenario="paper-1-v1", **agents.env_options_for(agent, {"fusion": "centralized"})
+    )
+    actions, rewards = _by_hand(policy, reference_env, 9, 6)
+    np.testing.assert_array_equal(np.array([step.action for step in steps]), actions)
+    np.testing.assert_array_equal(np.array([step.reward for step in steps]), rewards)
+
+
+def test_make_env_adds_what_the_agent_observes():
+    agent = agents.make_agent("tracking-ucb", "paper-1-v1")
+    assert agents.env_options_for(agent, {"fusion": "average"}) == {
+        "fusion": "average",
+        "prediction_covariance": True,
+    }
+    assert "track_pred_pos_cov" in agents.make_env(agent, 2).reset(seed=0)[0]
+    plain = agents.make_agent("ucb1", "paper-1-v1")
+    assert agents.env_options_for(plain) == {}
+
+
+def test_a_rollout_runs_on_the_single_env_as_the_batch_of_one():
+    env = gym.make("MimoRadarSelect-v1")
+    agent = agents.make_agent("best", "paper-1-v1")
+    episode = agents.Rollout(agent, env, seed=3)
+    assert episode.info["true_state"].shape == (1, 4)  # the reset's info until the first step
+    step = episode.step()
+    assert step.action.shape == (10,)
+    np.testing.assert_array_equal(step.action, step.info["optimal_action"])
+    vector = agents.make_env(
+        agents.make_agent("best", "paper-1-v1"), 1, {"lambda_scale": "db", "truth": "shared"}
+    )
+    batch = agents.Rollout(agents.make_agent("best", "paper-1-v1"), vector, seed=3).step()
+    np.testing.assert_array_equal(batch.action[0], step.action)
+    assert batch.reward[0] == pytest.approx(step.reward, rel=1e-12)
