@@ -1,24 +1,194 @@
 """``mimo-radar-bench``: the command-line entry point (also ``python -m benchmarks``).
 
-Its subcommands are the registered commands and studies (:mod:`benchmarks.studies.base`): the
-parser is built from their declarations and each runs itself; a failure it can name is one
-line on standard error and exit code 2.
+Its subcommands are listed in one explicit registry, :data:`COMMANDS`: a name, the group its
+help lists it under, a one-line help and where its :class:`Command` class lives
+(``"module:Class"``). The registry imports nothing: ``--help`` and a mistyped command name
+answer before numpy, numba, scipy, torch or matplotlib are imported, and a command's own module
+is imported only when that command is named. A failure a command can name is one line on
+standard error and exit code 2.
+
+A study of one's own is one module defining a :class:`~benchmarks.studies.base.Study` and
+calling :func:`register_command`; ``mimo-radar-bench --import MODULE NAME ...`` imports it
+first (as rl-zoo3's ``--gym-packages`` does).
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import importlib.util
 import sys
 from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, ClassVar
+
+PROG = "mimo-radar-bench"
+#: The help's groups, in the order it lists them.
+GROUPS = ("first steps", "studies", "maintenance")
 
 EPILOG = """examples:
+  mimo-radar-bench demo
   mimo-radar-bench paper --scenario 1 --trials 20 --out runs/paper1
-  mimo-radar-bench run --scenario paper-3 --policies mg-crb-cl,discounted-thompson \\
+  mimo-radar-bench run --scenario paper-3-v1 --policies mg-crb-cl,discounted-thompson \\
       --agent-param mg-crb-cl.solver=exact --fusion centralized --trials 100 --out runs/mine
   mimo-radar-bench run --scenario my_layout.yaml --policies ucb1,best --steps 200 --out runs/custom
 
 Outputs (docs/benchmark.md): summary.json, curves.csv, table.md and PNG figures in --out.
-An interrupted run started again with the same arguments and --out continues where it stopped."""
+An interrupted run started again with the same arguments and --out continues where it stopped.
+'mimo-radar-bench COMMAND --help' lists a command's options."""
+
+
+class Command:
+    """A subcommand of ``mimo-radar-bench``.
+
+    Subclasses set :attr:`name` (the registry's key), optionally :attr:`description` (the
+    registry's help line stands in for it), declare their arguments in :meth:`add_arguments`
+    and run in :meth:`main`.
+    """
+
+    name: ClassVar[str] = ""
+    description: ClassVar[str | None] = None
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        self.args = args
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        """Declare the command's arguments."""
+
+    def main(self) -> int:
+        """Run the command; its exit code."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class CommandEntry:
+    """A registered command: its group in the help, its one-line help, and its class as
+    ``"module:Class"`` (imported by :meth:`load` only when the command runs)."""
+
+    name: str
+    group: str
+    help: str
+    target: str
+
+    def load(self) -> type[Command]:
+        module, _, attribute = self.target.partition(":")
+        cls = getattr(importlib.import_module(module), attribute)
+        if not (isinstance(cls, type) and issubclass(cls, Command)):
+            raise TypeError(f"command {self.name!r}: {self.target} is not a Command class")
+        return cls
+
+
+_BUILT_IN = (
+    ("demo", "first steps", "one episode of a scenario with a random policy and the oracle", "commands:Demo"),
+    ("agents", "first steps", "list the registered agents and their parameters", "commands:Agents"),
+    (
+        "paper",
+        "first steps",
+        "the paper's study: six policies on a paper scenario",
+        "studies.paper:PaperStudy",
+    ),
+    ("run", "first steps", "any scenario, any registered policies", "studies.paper:RunStudy"),
+    (
+        "compile",
+        "first steps",
+        "compile every numba kernel once into numba's cache, so that no run compiles (fast extra)",
+        "commands:Compile",
+    ),
+    (
+        "train-ppo",
+        "first steps",
+        "train PPO, MaskablePPO or RecurrentPPO, one seed or several (needs the rl extra)",
+        "commands:TrainPPO",
+    ),
+    (
+        "claims",
+        "studies",
+        "judge the paper's claims on paper studies (holds / consistent / contradicted)",
+        "studies.claims:ClaimsStudy",
+    ),
+    (
+        "compare-claims",
+        "studies",
+        "the verdicts of several scorecards side by side",
+        "commands:CompareClaims",
+    ),
+    (
+        "tracking",
+        "studies",
+        "the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets",
+        "studies.tracking:TrackingStudy",
+    ),
+    (
+        "planning",
+        "studies",
+        "the planning study: looking ahead in tracking, against the one-step policies and the best bound",
+        "studies.planning:PlanningStudy",
+    ),
+    (
+        "rl",
+        "studies",
+        "the RL study: PPO, MaskablePPO and RecurrentPPO over several seeds beside the bandits",
+        "studies.rl:RLStudy",
+    ),
+    (
+        "mechanisms",
+        "studies",
+        "measure why the paper's ASR and ARMSE claims fail under v1 (gap, sampling oracles, bound vs SINR)",
+        "studies.mechanisms:MechanismsStudy",
+    ),
+    (
+        "ablations",
+        "studies",
+        "the learners with one parameter changed, paired with v1's paper study: mechanisms of "
+        "S1.7, S1.8, S2.2 and MG-CRB-CL's ASR",
+        "studies.ablations:AblationsStudy",
+    ),
+    (
+        "calibrate-layout",
+        "studies",
+        "search station layouts under which the most of the paper's claims hold",
+        "studies.calibration:CalibrationStudy",
+    ),
+    (
+        "search-layouts",
+        "studies",
+        "differential evolution over every layout the paper's text allows, then full scorecards",
+        "studies.layout_search:LayoutSearch",
+    ),
+    (
+        "docs",
+        "maintenance",
+        "regenerate the docs' tables and numbers from the committed artefacts (--check: compare only)",
+        "doctables:DocsCommand",
+    ),
+    (
+        "model-figures",
+        "maintenance",
+        "measure the figures docs/model.md and docs/agents.md quote (solvers, tracker, bound)",
+        "model_figures:ModelFigures",
+    ),
+    (
+        "perf",
+        "maintenance",
+        "performance figures, each as a ratio to a reference measured in the same run",
+        "commands:Perf",
+    ),
+)
+#: Every command, by name, in the help's order within its group.
+COMMANDS: dict[str, CommandEntry] = {
+    name: CommandEntry(name, group, help, f"benchmarks.{target}") for name, group, help, target in _BUILT_IN
+}
+
+
+def register_command(name: str, target: str, help: str, group: str = "studies") -> None:
+    """Add a command of one's own (``target``: ``"module:Class"``) to :data:`COMMANDS`."""
+    if group not in GROUPS:
+        raise ValueError(f"group must be one of {list(GROUPS)}, got {group!r}")
+    if name in COMMANDS and COMMANDS[name].target != target:
+        raise ValueError(f"two commands are called {name!r}: {COMMANDS[name].target} and {target}")
+    COMMANDS[name] = CommandEntry(name, group, help, target)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -28,25 +198,81 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """The parser of every registered command, in their order."""
-    from . import commands, doctables, model_figures, studies  # noqa: F401  (importing them registers the commands)
-    from .studies.base import COMMANDS
+def _listing() -> str:
+    width = max(len(name) for name in COMMANDS) + 2
+    lines = []
+    for group in GROUPS:
+        entries = [entry for entry in COMMANDS.values() if entry.group == group]
+        if entries:
+            lines.append(f"{group}:")
+            lines += [f"  {entry.name:<{width}}{entry.help}" for entry in entries]
+            lines.append("")
+    return "\n".join(lines)
 
+
+def build_parser(commands: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The command line's parser, with the arguments of ``commands`` (default: every command;
+    their modules are imported) and only the names of the others."""
     parser = OneLineParser(
-        prog="mimo-radar-bench",
-        description="Monte-Carlo benchmarks of transmitter/receiver selection for distributed MIMO radar.",
+        prog=PROG,
+        description="Monte-Carlo benchmarks of transmitter/receiver selection for distributed MIMO radar.\n\n"
+        + _listing(),
         epilog=EPILOG,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
-    sub = parser.add_subparsers(dest="command", required=True)
-    for command in sorted(COMMANDS.values(), key=lambda c: c.order):
-        child = sub.add_parser(
-            command.name, help=command.help, description=command.description or command.help
-        )
+    parser.add_argument(
+        "--import",
+        dest="imports",
+        action="append",
+        default=[],
+        metavar="MODULE",
+        help="import MODULE first (a module of one's own that calls register_command)",
+    )
+    sub = parser.add_subparsers(
+        dest="command",
+        required=True,
+        metavar="COMMAND",
+        help="one of the commands above",
+        parser_class=OneLineParser,
+    )
+    chosen = set(COMMANDS) if commands is None else set(commands)
+    for entry in COMMANDS.values():
+        if entry.name not in chosen:
+            sub.add_parser(entry.name, add_help=False)
+            continue
+        command = entry.load()
+        child = sub.add_parser(entry.name, description=command.description or entry.help)
         command.add_arguments(child)
         child.set_defaults(command_class=command)
     return parser
+
+
+def _import_modules(argv: list[str]) -> None:
+    """Import the ``--import MODULE`` modules named before the command (they register theirs)."""
+    for i, word in enumerate(argv):
+        if not word.startswith("-"):
+            return
+        module = argv[i + 1] if word == "--import" and i + 1 < len(argv) else None
+        if word.startswith("--import="):
+            module = word.partition("=")[2]
+        if module is not None:
+            try:
+                importlib.import_module(module)
+            except ImportError as exc:
+                raise SystemExit(f"{PROG}: error: --import {module}: {exc}") from None
+
+
+def _command_name(argv: list[str]) -> str | None:
+    """The first word that is neither an option nor an option's value."""
+    skip = False
+    for word in argv:
+        if skip:
+            skip = False
+        elif word == "--import":
+            skip = True
+        elif not word.startswith("-"):
+            return word
+    return None
 
 
 def foreign_packages() -> list[str]:
@@ -54,18 +280,20 @@ def foreign_packages() -> list[str]:
 
     ``agents`` and ``benchmarks`` are common names (openai-agents installs an ``agents``
     package; torchrl a top-level ``benchmarks`` folder); in one environment they collide.
+    Each package's ``__init__.py`` is read for mimo-radar-env's marker, not imported.
     """
-    import importlib
-
     foreign = []
     for name in ("agents", "benchmarks"):
-        try:
-            module = importlib.import_module(name)
-        except ImportError:
+        spec = importlib.util.find_spec(name)
+        if spec is None or spec.origin is None:
             foreign.append(f"{name} (cannot be imported)")
             continue
-        if getattr(module, "DISTRIBUTION", None) != "mimo-radar-env":
-            where = getattr(module, "__file__", None) or list(getattr(module, "__path__", []))
+        try:
+            marked = 'DISTRIBUTION = "mimo-radar-env"' in Path(spec.origin).read_text()
+        except OSError:
+            marked = False
+        if not marked:
+            where = spec.origin or list(spec.submodule_search_locations or [])
             foreign.append(f"{name} (resolves to {where})")
     return foreign
 
@@ -74,14 +302,22 @@ def main(argv: Sequence[str] | None = None) -> int:
     foreign = foreign_packages()
     if foreign:
         print(
-            f"mimo-radar-bench: error: another installed distribution provides {', '.join(foreign)}; "
+            f"{PROG}: error: another installed distribution provides {', '.join(foreign)}; "
             "mimo-radar-env needs its own 'agents' and 'benchmarks' packages: install it in a "
             "dedicated virtual environment",
             file=sys.stderr,
         )
         raise SystemExit(2)
-    parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    _import_modules(argv)
+    name = _command_name(argv)
+    parser = build_parser([name] if name in COMMANDS else [])
     args = parser.parse_args(argv)
+    return run(parser, args)
+
+
+def run(parser: argparse.ArgumentParser, args: Any) -> int:
+    """Run the parsed command; its failures as one line and an exit code."""
     from mimo_radar_env import ScenarioError
 
     from .errors import BenchError
@@ -90,9 +326,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
-        parser.exit(130, f"mimo-radar-bench: {exc}\n")
+        parser.exit(130, f"{PROG}: {exc}\n")
     except KeyboardInterrupt:
-        parser.exit(130, "mimo-radar-bench: interrupted\n")
+        parser.exit(130, f"{PROG}: interrupted\n")
     except (BenchError, ScenarioError) as exc:
-        parser.exit(2, f"mimo-radar-bench: error: {exc}\n")
+        parser.exit(2, f"{PROG}: error: {exc}\n")
     return 0

@@ -9,15 +9,13 @@ from pathlib import Path
 from agents.ppo import LEARNERS
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
+from .cli import Command
 from .errors import BenchError
-from .studies.base import Command
 from .studies.settings import add_env_options, env_options_from, integer
 
 
 class TrainPPO(Command):
     name = "train-ppo"
-    order = 6
-    help = "train PPO, MaskablePPO or RecurrentPPO, one seed or several (needs the rl extra)"
     description = (
         "Train a learner (--algo) on the native vector env; saves DIR/model.zip, the observation "
         "normalisation (DIR/vecnormalize.npz, and SB3's DIR/vecnormalize.pkl), the learning curve "
@@ -128,8 +126,6 @@ class TrainPPO(Command):
 
 class Perf(Command):
     name = "perf"
-    order = 7
-    help = "performance figures, each as a ratio to a reference measured in the same run"
     description = (
         "Measure the tracker against filterpy, BPSO against the kernel it replaced, the v1 vector env "
         "against its numpy paths, and the v1 claims and tracking studies timed whole; write "
@@ -156,8 +152,6 @@ class Perf(Command):
 
 class CompareClaims(Command):
     name = "compare-claims"
-    order = 5
-    help = "the verdicts of several scorecards side by side"
     description = (
         "Print one row per claim and one verdict column per scorecard (LABEL=PATH, PATH a claims.json "
         "written by 'claims' or 'calibrate-layout', or its folder)."
@@ -190,8 +184,6 @@ class CompareClaims(Command):
 
 class Agents(Command):
     name = "agents"
-    order = 8
-    help = "list the registered agents and their parameters"
 
     def main(self) -> int:
         import agents
@@ -204,8 +196,6 @@ class Agents(Command):
 
 class Demo(Command):
     name = "demo"
-    order = 9
-    help = "one episode of a scenario with a random policy and the oracle"
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -227,8 +217,6 @@ class Demo(Command):
 
 class Compile(Command):
     name = "compile"
-    order = 12
-    help = "compile every numba kernel once into numba's cache, so that no run compiles (fast extra)"
     description = (
         "A fresh install has no numba cache: a run compiles the kernels it calls on their first call. "
         "This compiles all of them up front (the env's fusions and bound, the tracking search, BPSO), "

@@ -3,13 +3,15 @@ numbers, each reading the committed artefacts it names under ``docs/results``.""
 
 from __future__ import annotations
 
+import json
 import shlex
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from . import model_figures, verdicts
-from .doctables import generator, read_json, value_source
 from .errors import BenchError
 from .model_figures import FIGURES_FILE, format_figure
 from .report import (
@@ -36,6 +38,39 @@ READINGS = {
     "v1": "claims/v1.json",
     "v1, centralised": "claims/v1-centralized.json",
 }
+
+Generator = Callable[[Path], str]
+GENERATORS: dict[str, Generator] = {}
+#: Value sources: name -> function(docs, key) giving the text of one quoted number.
+VALUE_SOURCES: dict[str, Callable[[Path, str], str]] = {}
+
+
+def generator(name: str) -> Callable[[Generator], Generator]:
+    """Register a block generator under ``name``."""
+
+    def register(function: Generator) -> Generator:
+        GENERATORS[name] = function
+        return function
+
+    return register
+
+
+def value_source(name: str) -> Callable[[Callable[[Path, str], str]], Callable[[Path, str], str]]:
+    """Register the source of value spans ``<!-- value: NAME KEY -->``."""
+
+    def register(function: Callable[[Path, str], str]) -> Callable[[Path, str], str]:
+        VALUE_SOURCES[name] = function
+        return function
+
+    return register
+
+
+def read_json(docs: Path, relative: str) -> Any:
+    path = docs / "results" / relative
+    try:
+        return json.loads(path.read_text())
+    except (OSError, json.JSONDecodeError) as exc:
+        raise BenchError(f"the docs read {path}, which is missing or not JSON ({exc})") from None
 
 
 def _scorecards(docs: Path, files: dict[str, str]) -> dict[str, list]:
@@ -798,7 +833,7 @@ def _rate_with_interval(rate: float, trials: int) -> str:
 
 @generator("bpso-parts")
 def bpso_parts_table(docs: Path) -> str:
-    """``python -m benchmarks.speed.bpso_parts``: under each position rule, what each part of the
+    """``bpso_parts.json`` (measured at commit 0b8e389): under each position rule, what each part of the
     whole swarm costs, how many iterations the kernel's trials run before their stop, and whether
     the kernel, or one with the same numbers whose eq21 decision cost nothing, is within the speed
     target's budget over the kernel it replaced."""

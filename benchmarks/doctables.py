@@ -10,7 +10,7 @@ A page marks a generated block with two HTML comments (invisible on the site)::
 ``mimo-radar-bench docs`` rewrites every block of every page of ``--docs`` from the artefacts
 under ``DOCS/results``; ``--check`` changes nothing and fails, naming the blocks, where a page
 differs from what the artefacts give (CI runs it). A generator is a function of the docs folder
-registered with :func:`generator`; each names the artefacts it reads.
+registered with :func:`benchmarks.docs_generators.generator`; each names the artefacts it reads.
 
 A number quoted in a sentence is a *value span* on one line::
 
@@ -28,21 +28,15 @@ from __future__ import annotations
 
 import argparse
 import difflib
-import json
 import re
-from collections.abc import Callable
 from pathlib import Path
-from typing import Any
 
+from .cli import Command
+from .docs_generators import GENERATORS, VALUE_SOURCES
 from .errors import BenchError
-from .studies.base import Command
 
 BLOCK = re.compile(r"(<!-- generated: ([\w.-]+) -->\n)(.*?)(<!-- end generated -->)", re.DOTALL)
 VALUE = re.compile(r"(<!-- value: ([\w.-]+) ([\w.+-]+) -->)(.*?)(<!-- end value -->)")
-Generator = Callable[[Path], str]
-GENERATORS: dict[str, Generator] = {}
-#: Value sources: name -> function(docs, key) giving the text of one quoted number.
-VALUE_SOURCES: dict[str, Callable[[Path, str], str]] = {}
 #: Numbers shaped like measurements; a match outside a generated block or value span is unsourced.
 MEASUREMENT = re.compile(
     r"(?<![\w.])(?:"
@@ -64,26 +58,6 @@ _NOT_PROSE = [
 ]
 
 
-def generator(name: str) -> Callable[[Generator], Generator]:
-    """Register a block generator under ``name``."""
-
-    def register(function: Generator) -> Generator:
-        GENERATORS[name] = function
-        return function
-
-    return register
-
-
-def value_source(name: str) -> Callable[[Callable[[Path, str], str]], Callable[[Path, str], str]]:
-    """Register the source of value spans ``<!-- value: NAME KEY -->``."""
-
-    def register(function: Callable[[Path, str], str]) -> Callable[[Path, str], str]:
-        VALUE_SOURCES[name] = function
-        return function
-
-    return register
-
-
 def unsourced_numbers(text: str) -> list[tuple[int, str]]:
     """The measurement-shaped numbers of ``text`` outside generated blocks and value spans,
     as ``(line, number)``; code, maths and link targets are not prose."""
@@ -94,14 +68,6 @@ def unsourced_numbers(text: str) -> list[tuple[int, str]]:
     for pattern in _NOT_PROSE:
         text = pattern.sub(blank, text)
     return [(text.count("\n", 0, match.start()) + 1, match.group(0)) for match in MEASUREMENT.finditer(text)]
-
-
-def read_json(docs: Path, relative: str) -> Any:
-    path = docs / "results" / relative
-    try:
-        return json.loads(path.read_text())
-    except (OSError, json.JSONDecodeError) as exc:
-        raise BenchError(f"the docs read {path}, which is missing or not JSON ({exc})") from None
 
 
 def render(text: str, docs: Path) -> str:
@@ -130,8 +96,6 @@ def pages(docs: Path) -> list[Path]:
 def regenerate(docs: Path, check: bool = False) -> list[str]:
     """Rewrite every page's blocks (or, with ``check``, only compare); the differences found,
     as unified diffs (empty when the pages match the artefacts)."""
-    from . import docs_generators  # noqa: F401  (registers the generators)
-
     differences = []
     for page in pages(docs):
         old = page.read_text()
@@ -164,8 +128,6 @@ def unsourced(docs: Path) -> list[str]:
 
 class DocsCommand(Command):
     name = "docs"
-    order = 10
-    help = "regenerate the docs' tables and numbers from the committed artefacts (--check: compare only)"
     description = (
         "Rewrite every '<!-- generated: NAME -->' block of DOCS/*.md from the artefacts under DOCS/results; "
         "with --check, change nothing and fail where a page differs from its artefacts."

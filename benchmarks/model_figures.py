@@ -31,8 +31,9 @@ from mimo_radar_env.core.simulation import RadarSimulation
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms, subset_masks
 
+from .cli import Command
 from .errors import BenchError
-from .studies.base import Command, machine
+from .studies.base import machine
 from .uncertainty import estimate
 
 FIGURES_FILE = "model/figures.json"
@@ -441,8 +442,6 @@ def measure(names: list[str] | None = None, progress: Callable[[str], None] = pr
 
 class ModelFigures(Command):
     name = "model-figures"
-    order = 11
-    help = "measure the figures docs/model.md and docs/agents.md quote (solvers, tracker, bound)"
     description = (
         "Measure every figure the model and agent pages quote (search optimality rates, tracker "
         "consistency, the bound's tightness and cost) with its 95 % interval, and write them with "

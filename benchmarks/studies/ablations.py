@@ -200,12 +200,7 @@ def maneuver(paper: dict[str, TrialMetrics], values: NDArray, seed: int) -> dict
 class AblationsStudy(Study):
     name = "ablations"
     min_trials = 2
-    order = 46
     paper_study = True
-    help = (
-        "the learners with one parameter changed, paired with v1's paper study: mechanisms of "
-        "S1.7, S1.8, S2.2 and MG-CRB-CL's ASR"
-    )
     description = __doc__
 
     @classmethod

@@ -1,11 +1,8 @@
 """The study engine: commands, studies, and the one loop that runs a study's runs.
 
-A :class:`Command` is a subcommand of ``mimo-radar-bench``: it declares its name, help and
-arguments and runs from parsed arguments. Defining a subclass with a ``name`` registers it
-(:data:`COMMANDS`), so a new command or study is one module that defines one class; the
-command line builds its parser and dispatches from the registry.
-
-A :class:`Study` is a command that runs Monte-Carlo runs and judges or reports them:
+A :class:`Study` is a :class:`~benchmarks.cli.Command` (a subcommand of ``mimo-radar-bench``,
+listed in :data:`benchmarks.cli.COMMANDS`) that runs Monte-Carlo runs and judges or reports
+them:
 
 1. :meth:`Study.runs` lists its runs (scenario x policies x options -> folder);
 2. :func:`configure` validates every run before anything is written (a bad policy, parameter or
@@ -34,44 +31,9 @@ from typing import Any, ClassVar
 
 from mimo_radar_env import EnvOptions, Scenario
 
-from .. import harness, report
+from .. import harness
+from ..cli import Command
 from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments
-
-#: Every registered command, by name, in the order of registration.
-COMMANDS: dict[str, type[Command]] = {}
-
-
-class Command:
-    """A subcommand of ``mimo-radar-bench``.
-
-    Subclasses set :attr:`name` (which registers them), :attr:`help` and optionally
-    :attr:`description`, declare their arguments in :meth:`add_arguments`, and run in
-    :meth:`main`.
-    """
-
-    name: ClassVar[str] = ""
-    help: ClassVar[str] = ""
-    description: ClassVar[str | None] = None
-    #: Where the command stands in the command line's help (lower first).
-    order: ClassVar[int] = 100
-
-    def __init_subclass__(cls, **kwargs: Any) -> None:
-        super().__init_subclass__(**kwargs)
-        if "name" in cls.__dict__ and cls.name:
-            if cls.name in COMMANDS and COMMANDS[cls.name].__qualname__ != cls.__qualname__:
-                raise TypeError(f"two commands are called {cls.name!r}: {COMMANDS[cls.name]} and {cls}")
-            COMMANDS[cls.name] = cls
-
-    def __init__(self, args: argparse.Namespace) -> None:
-        self.args = args
-
-    @classmethod
-    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        """Declare the command's arguments."""
-
-    def main(self) -> int:
-        """Run the command; its exit code."""
-        raise NotImplementedError
 
 
 @dataclass(frozen=True)
@@ -134,6 +96,8 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     """Configure every run, then run them all (resumably) on one set of workers
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
     soon as its last task is saved, while the workers go on with the next run's tasks."""
+    from .. import report  # scipy's statistics: imported when a study runs, not for its --help
+
     configs = configure(runs, settings)
     written: dict[int, Finished] = {}
 

@@ -318,8 +318,6 @@ def calibration_markdown(report: dict[str, Any]) -> str:
 class CalibrationStudy(Study):
     name = "calibrate-layout"
     min_trials = 2
-    order = 4
-    help = "search station layouts under which the most of the paper's claims hold"
     description = (
         "Jitter the reference layout into candidates (seeded), reject those that break the paper's "
         "text (region, 2 km from every nominal track, Best's selections in Scenario 1), rank the rest "

@@ -410,8 +410,6 @@ def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings
 class ClaimsStudy(Study):
     name = "claims"
     min_trials = 2
-    order = 2
-    help = "judge the paper's claims on paper studies (holds / consistent / contradicted)"
     description = (
         "Evaluate the paper's claims (docs/results.md) on finished 'paper' runs, or run the paper "
         "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."

@@ -212,9 +212,7 @@ def agreement(checks: dict[str, bool], results: list[dict[str, Any]]) -> dict[st
 class LayoutSearch(Study):
     name = "search-layouts"
     min_trials = 2
-    order = 46
     paper_study = True
-    help = "differential evolution over every layout the paper's text allows, then full scorecards"
     description = __doc__
 
     @classmethod

@@ -51,8 +51,9 @@ from mimo_radar_env.core.superarm import all_super_arms
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
 from .. import uncertainty
+from ..cli import Command
 from ..report import paired_difference
-from .base import Command, machine, write_timing
+from .base import machine, write_timing
 from .settings import integer
 
 #: Swerling-I samples per channel of the sampling oracles.
@@ -231,9 +232,7 @@ def paper_asr(claims: list[dict[str, Any]]) -> dict[str, dict[str, float]]:
 
 class MechanismsStudy(Command):
     name = "mechanisms"
-    help = "measure why the paper's ASR and ARMSE claims fail under v1 (gap, sampling oracles, bound vs SINR)"
     description = __doc__
-    order = 45
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:

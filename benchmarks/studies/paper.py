@@ -20,8 +20,6 @@ class _OneRun(Study):
 
 class RunStudy(_OneRun):
     name = "run"
-    order = 1
-    help = "any scenario, any registered policies"
     description = (
         "Run registered agents (ppo:PATH for a trained PPO model) on a scenario and print the table."
     )
@@ -42,8 +40,6 @@ class RunStudy(_OneRun):
 
 class PaperStudy(_OneRun):
     name = "paper"
-    order = 0
-    help = "the paper's study: six policies on a paper scenario"
     description = (
         f"Run {', '.join(PAPER_POLICIES)} on a paper scenario with common random numbers and print the table."
     )

@@ -67,9 +67,7 @@ def planning_policies() -> tuple[str, ...]:
 class PlanningStudy(Study):
     name = "planning"
     min_trials = 2
-    order = 5
     default_trials = DEFAULT_TRIALS
-    help = "the planning study: looking ahead in tracking, against the one-step policies and the best bound"
     description = (
         f"Run {', '.join(planning_policies())} on the v1 paper scenarios under both fusions (into "
         "OUT/<scenario>-<fusion>, resumable), compute the best achievable bound of the same trials, "

@@ -86,10 +86,8 @@ def learned_policy(out: str | Path, scenario: str, algo: str, reward: str, seed:
 class RLStudy(Study):
     name = "rl"
     min_trials = 2
-    order = 4
     default_trials = DEFAULT_TRIALS
     paper_study = True
-    help = "the RL study: PPO, MaskablePPO and RecurrentPPO over several seeds beside the bandits"
     description = (
         "Train PPO (both rewards), MaskablePPO and RecurrentPPO (information reward) on the v1 paper "
         "scenarios over several seeds (OUT/train, resumable), run every seed beside MG-CRB-CL, "

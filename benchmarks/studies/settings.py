@@ -221,7 +221,7 @@ def add_env_options(parser: argparse.ArgumentParser) -> None:
 def env_options_from(args: argparse.Namespace) -> EnvOptions:
     """The :class:`EnvOptions` of parsed arguments."""
     given = {name: getattr(args, name) for name in option_names() if hasattr(args, name)}
-    return EnvOptions.for_version(args.env_version, **given)
+    return env_version(args.env_version).options(**given)
 
 
 # ------------------------------------------------------------------ agent parameters

@@ -109,11 +109,6 @@ def fusion_runs(study: Study, policies: tuple[str, ...]) -> list[Run]:
 class TrackingStudy(Study):
     name = "tracking"
     min_trials = 2
-    order = 3
-    help = (
-        f"the tracking study: tracking-aware policies beside the SINR-driven ones, and its targets "
-        f"(default {DEFAULT_TRIALS} trials)"
-    )
     description = (
         f"Run {', '.join(TRACKING_POLICIES)} on the paper scenarios under both fusions (into "
         "OUT/<scenario>-<fusion>, resumable); judge the targets on paired differences; write "

@@ -127,13 +127,6 @@ class EnvOptions:
         ``tracking=True``; no number of the env changes)""",
     )
 
-    @classmethod
-    def for_version(cls, version: str, **options: Any) -> EnvOptions:
-        """The options of env version ``version`` (``"v0"``, ``"v1"``) with some overridden."""
-        from .versions import env_version
-
-        return env_version(version).options(**options)
-
     def __post_init__(self) -> None:
         for name, choices in option_choices().items():
             value = getattr(self, name)

@@ -9,7 +9,7 @@ import pytest
 import agents
 from agents import env_options_for as policy_env_options
 from benchmarks.harness import make_policy
-from mimo_radar_env import EnvOptions, RadarModel, load_scenario
+from mimo_radar_env import VERSIONS, EnvOptions, RadarModel, load_scenario
 from mimo_radar_env.core.geometry import bistatic_measurement
 
 
@@ -180,7 +180,7 @@ def test_it_needs_the_predicted_covariance_and_checks_its_parameters():
 
 
 def test_the_harness_gives_it_the_runs_fusion_scale_and_observation():
-    options = EnvOptions.for_version("v0", fusion="centralized").to_dict()
+    options = VERSIONS["v0"].options(fusion="centralized").to_dict()
     sc = load_scenario("paper-1")
     agent = make_policy("tracking-ucb", sc, {}, seed=0, options=options)
     assert (agent.fusion, agent.lambda_scale, agent.measurement_quality) == ("centralized", "linear", None)

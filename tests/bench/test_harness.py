@@ -149,7 +149,9 @@ def test_agents_and_demo_subcommands(capsys):
     listing = capsys.readouterr().out
     assert "mg-crb-cl" in listing and "alpha_bar" in listing
     assert main(["demo", "--steps", "5"]) == 0
-    assert "oracle" in capsys.readouterr().out
+    rows = capsys.readouterr().out.splitlines()[2:]
+    assert [row.split()[0] for row in rows] == ["random", "best"]
+    assert float(rows[1].split()[3]) == 0.0  # the oracle's regret
 
 
 @pytest.mark.parametrize(

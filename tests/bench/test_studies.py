@@ -4,17 +4,17 @@ import json
 
 import pytest
 
-from benchmarks.cli import build_parser, main
-from benchmarks.studies import COMMANDS, Run, Settings, configure
-from benchmarks.studies.base import Command
+from benchmarks.cli import COMMANDS, GROUPS, Command, build_parser, main, register_command
+from benchmarks.studies import Run, Settings, configure
 
 
 def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsys):
-    from tests.bench import toy_study  # defining the class is all it takes
+    argv = ["--import", "tests.bench.toy_study", "toy", "--out", str(tmp_path / "toy"), "--steps", "20"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures"]) == 0
+    from tests.bench import toy_study
 
-    assert COMMANDS["toy"] is toy_study.ToyStudy
+    assert COMMANDS["toy"].load() is toy_study.ToyStudy and COMMANDS["toy"].group == "studies"
     out = tmp_path / "toy"
-    assert main(["toy", "--out", str(out), "--steps", "20", "--workers", "1", "--quiet", "--no-figures"]) == 0
     printed = capsys.readouterr().out
     judged = json.loads((out / "toy.json").read_text())
     for name in ("paper-1-v1", "paper-3-v1"):
@@ -45,13 +45,44 @@ def test_the_command_line_is_built_from_the_registry():
     parser = build_parser()
     choices = parser._subparsers._group_actions[0].choices  # argparse keeps them there
     assert set(COMMANDS) <= set(choices)
-    for name in ("paper", "run", "claims", "tracking", "calibrate-layout", "compare-claims", "perf"):
-        assert choices[name].get_default("command_class") is COMMANDS[name]
+    for name, entry in COMMANDS.items():
+        command = choices[name].get_default("command_class")
+        assert command is entry.load() and issubclass(command, Command)
+        assert command.name == name and entry.group in GROUPS
 
 
 def test_two_commands_may_not_share_a_name():
-    with pytest.raises(TypeError, match="two commands are called 'paper'"):
-        type("Another", (Command,), {"name": "paper"})
+    with pytest.raises(ValueError, match="two commands are called 'paper'"):
+        register_command("paper", "elsewhere:Another", "another paper")
+    with pytest.raises(ValueError, match="group must be one of"):
+        register_command("another", "elsewhere:Another", "another", group="extras")
+
+
+def test_help_and_a_mistyped_command_import_nothing_heavy():
+    """``--help`` lists the commands in their groups, and it and a mistyped command name answer
+    before numpy, numba, scipy, torch or matplotlib (or any command's module) are imported."""
+    import subprocess
+    import sys
+
+    heavy = ("numpy", "numba", "scipy", "torch", "matplotlib", "mimo_radar_env", "benchmarks.harness")
+    code = (
+        "import sys\nfrom benchmarks.cli import main\n"
+        "try:\n    main(sys.argv[1:])\nexcept SystemExit:\n    pass\n"
+        f"print(sorted(m for m in {heavy!r} if m in sys.modules))"
+    )
+    for argv in (["--help"], ["no-such-command"]):
+        result = subprocess.run(
+            [sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=60
+        )
+        assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
+    listing = subprocess.run(
+        [sys.executable, "-m", "benchmarks", "--help"], capture_output=True, text=True, timeout=60
+    ).stdout
+    positions = [listing.index(f"{group}:\n") for group in GROUPS]
+    assert positions == sorted(positions)
+    first_steps = listing[positions[0] : positions[1]]
+    for name in ("demo", "agents", "paper", "run", "compile", "train-ppo"):
+        assert f"  {name} " in first_steps
 
 
 def test_the_study_written_in_the_docs_runs_as_written(tmp_path):

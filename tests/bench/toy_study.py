@@ -1,6 +1,7 @@
-"""A study defined in one module, as a user would write one: importing it adds ``toy`` to the
-command line. It runs Best and a random policy on two paper scenarios and judges "Best's
-regret is below the random policy's" on each."""
+"""A study defined in one module, as a user would write one: it adds ``toy`` to the command
+line's registry (``mimo-radar-bench --import tests.bench.toy_study toy``). It runs Best and a
+random policy on two paper scenarios and judges "Best's regret is below the random policy's"
+on each."""
 
 from __future__ import annotations
 
@@ -8,13 +9,13 @@ import argparse
 import json
 
 from benchmarks import verdicts
+from benchmarks.cli import register_command
 from benchmarks.studies import Run, Study
 from benchmarks.studies.tracking import paired
 
 
 class ToyStudy(Study):
     name = "toy"
-    help = "a test-only study: Best against random"
     default_trials = 4
 
     @classmethod
@@ -37,3 +38,6 @@ class ToyStudy(Study):
         return "\n".join(
             f"{name}: best - random regret {j['estimate']:.1f} {j['verdict']}" for name, j in judged.items()
         )
+
+
+register_command("toy", f"{__name__}:ToyStudy", "a test-only study: Best against random")

@@ -8,10 +8,9 @@ import numpy as np
 import pytest
 
 import agents
-import benchmarks.harness as harness
 import mimo_radar_env
 from benchmarks.cli import main
-from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv
+from mimo_radar_env import VERSIONS, EnvOptions, MimoRadarSelectVectorEnv
 from mimo_radar_env.envs.options import option_choices, option_names
 from mimo_radar_env.tracking import FUSIONS
 
@@ -86,7 +85,7 @@ def test_every_option_round_trips_from_the_cli_to_the_env(name, tmp_path, monkey
             super().__init__(*args, **kwargs)
             built.append(self.options)
 
-    monkeypatch.setattr(harness, "MimoRadarSelectVectorEnv", Spy)
+    monkeypatch.setattr(agents.rollout, "MimoRadarSelectVectorEnv", Spy)  # where every run builds its envs
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "2", "--steps", "3"]
     argv += ["--workers", "1", "--no-figures", "--quiet", "--out", str(out), "--env-version", "v0", *flags]
@@ -187,7 +186,7 @@ def test_the_cli_starts_from_the_chosen_versions_defaults(tmp_path):
     argv += ["--workers", "1", "--no-figures", "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "v1")]) == 0  # v1 is the default
     v1 = json.loads((tmp_path / "v1" / "config.json").read_text())["env_options"]
-    assert v1 == EnvOptions.for_version("v1").to_dict() and v1["truth"] == "shared"
+    assert v1 == VERSIONS["v1"].options().to_dict() and v1["truth"] == "shared"
     assert main([*argv, "--env-version", "v1", "--truth", "per-trial", "--out", str(tmp_path / "mix")]) == 0
     mixed = json.loads((tmp_path / "mix" / "config.json").read_text())["env_options"]
     assert mixed == {**v1, "truth": "per-trial"}
