@@ -5,14 +5,15 @@ Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
 against ``exact``, and the alternating solver's gap on a 10 x 12 layout. With numba, it also
-times, in one thread and side by side for both position rules, the agents' BPSO selection, the
-selection it replaced (the numpy starting swarm and ``benchmarks.speed.bpso_reference``'s kernel,
-the speed reference) and the candidate SIMD kernel (``benchmarks.speed.bpso_simd``).
+times the agents' BPSO selection in one thread under both position rules. Earlier versions of
+the kernel are compared across commits (:mod:`benchmarks.speed.across_commits`), not with copies
+kept in the tree.
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import time
 
 import numpy as np
@@ -21,9 +22,6 @@ from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
 from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
-from mimo_radar_env.core.counter_hash import Stream
-
-from . import bpso_reference, bpso_simd
 
 
 def paper_index(trials: int) -> np.ndarray:
@@ -49,54 +47,27 @@ def optimality(index, tx, rx, etx, erx) -> tuple[float, float]:
 
 
 def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
-    """One thread, the paper's swarm, the same index: the pre-rework selection kept as the
-    reference (the numpy starting swarm and :mod:`benchmarks.speed.bpso_reference`'s kernel), the
-    agents' selection and the SIMD candidate; each
-    one's best time of ``repeats`` and its optimality rate against ``exact``, and the agents'
-    and the candidate's speed-ups over the reference, all measured in this run."""
+    """The agents' BPSO selection in one thread, the paper's swarm, under position rule ``rule``:
+    its best time of ``repeats`` (``bpso_1thread_ms_RULE``) and its optimality rate against
+    ``exact`` (``bpso_optimality_rate_RULE``)."""
     solver = BPSOSolver(2, 3, rule=rule)  # the paper's swarm: the solver's defaults
-    # the selection as it was before the rework: the numpy starting swarm, the reference kernel
-    before = BPSOSolver(2, 3, rule=rule, use_numba=False)
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, len(index)))
-
-    def reference(random: TrialRandom) -> tuple:
-        positions, keys = before.initial_swarm(random, 4, 6)
-        best = bpso_reference.run_reference(index, 2, 3, positions, keys, *solver.swarm_arguments())
-        return best[:, :4].astype(bool), best[:, 4:].astype(bool)
-
-    def candidate(random: TrialRandom) -> tuple:
-        keys = random.keys_for(Stream.BPSO_KEYS)
-        best = bpso_simd.run_numba(index, 2, 3, keys, solver.population, *solver.swarm_arguments())
-        return best[:, :4].astype(bool), best[:, 4:].astype(bool)
-
-    kernels = {"reference": reference, "agents": lambda r: solver.solve(index, r), "candidate": candidate}
     threads = numba.get_num_threads()
     numba.set_num_threads(1)
     try:
-        out: dict[str, float] = {}
-        seconds: dict[str, list[float]] = {name: [] for name in kernels}
-        rates: dict[str, list[float]] = {name: [] for name in kernels}
-        for run in kernels.values():
-            run(TrialRandom.for_batch(0, len(index)))  # compilation
-        for r in range(repeats):  # interleaved, so that a change of the machine's load hits all three
-            for name, run in kernels.items():
-                random = TrialRandom.for_batch(r, len(index))
-                start = time.perf_counter()
-                tx, rx = run(random)
-                seconds[name].append(time.perf_counter() - start)
-                rates[name].append(float(((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()))
-        for name in kernels:
-            key = "bpso" if name == "agents" else f"bpso_{name}"
-            out[f"{key}_1thread_ms_{rule}"] = min(seconds[name]) * 1e3
-            out[f"{key}_optimality_rate_{rule}"] = float(np.mean(rates[name]))
+        solver.solve(index, TrialRandom.for_batch(0, len(index)))  # compilation
+        seconds, rates = [], []
+        for r in range(repeats):
+            start = time.perf_counter()
+            tx, rx = solver.solve(index, TrialRandom.for_batch(r, len(index)))
+            seconds.append(time.perf_counter() - start)
+            rates.append(float(((tx == etx).all(axis=1) & (rx == erx).all(axis=1)).mean()))
     finally:
         numba.set_num_threads(threads)
-    reference_ms = out[f"bpso_reference_1thread_ms_{rule}"]
-    out[f"bpso_speedup_vs_reference_{rule}"] = reference_ms / out[f"bpso_1thread_ms_{rule}"]
-    out[f"bpso_candidate_speedup_vs_reference_{rule}"] = (
-        reference_ms / out[f"bpso_candidate_1thread_ms_{rule}"]
-    )
-    return out
+    return {
+        f"bpso_1thread_ms_{rule}": min(seconds) * 1e3,
+        f"bpso_optimality_rate_{rule}": float(np.mean(rates)),
+    }
 
 
 def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
@@ -122,11 +93,12 @@ def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
     }
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="super-arm solver speed and optimality")
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--repeats", type=int, default=5)
-    args = parser.parse_args()
+    parser.add_argument("--json", action="store_true", help="end with the figures as one JSON line")
+    args = parser.parse_args(argv)
     r = measure(args.trials, args.repeats)
     if HAVE_NUMBA:
         index = paper_index(args.trials)
@@ -150,14 +122,11 @@ def main() -> None:
         print("  one thread, the paper's swarm (best of the repeats; optimal fraction against exact):")
         for rule in BPSO_RULES:
             print(
-                f"    rule {rule}: pre-rework kernel {r[f'bpso_reference_1thread_ms_{rule}']:.1f} ms"
-                f" ({100 * r[f'bpso_reference_optimality_rate_{rule}']:.1f} %), agents' kernel"
-                f" {r[f'bpso_1thread_ms_{rule}']:.1f} ms ({100 * r[f'bpso_optimality_rate_{rule}']:.1f} %):"
-                f" {r[f'bpso_speedup_vs_reference_{rule}']:.2f}x; SIMD candidate"
-                f" {r[f'bpso_candidate_1thread_ms_{rule}']:.1f} ms"
-                f" ({100 * r[f'bpso_candidate_optimality_rate_{rule}']:.1f} %):"
-                f" {r[f'bpso_candidate_speedup_vs_reference_{rule}']:.2f}x"
+                f"    rule {rule}: {r[f'bpso_1thread_ms_{rule}']:.1f} ms"
+                f" ({100 * r[f'bpso_optimality_rate_{rule}']:.1f} %)"
             )
+    if args.json:
+        print(json.dumps(r))
 
 
 if __name__ == "__main__":

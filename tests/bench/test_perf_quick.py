@@ -1,8 +1,8 @@
 """The perf command's quick mode: every figure is produced, as a positive number."""
 
 import json
+import sys
 
-import numpy as np
 import pytest
 
 from benchmarks.cli import main
@@ -15,8 +15,8 @@ FIGURES = {
     "env_trial_steps_per_s_centralized",
     "env_compiled_speedup_average",
     "env_compiled_speedup_centralized",
-    "bpso_speedup_vs_reference_xor",
-    "bpso_speedup_vs_reference_set",
+    "bpso_1thread_ms_xor",
+    "bpso_1thread_ms_set",
     "claims_v1_average_wall_s",
     "claims_v1_centralized_wall_s",
     "tracking_study_wall_s",
@@ -37,8 +37,9 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
     assert result["claims_v1_both_fusions_wall_s"] == pytest.approx(
         result["claims_v1_average_wall_s"] + result["claims_v1_centralized_wall_s"]
     )
-    for rule in ("xor", "set"):  # the rework kept the numbers: the same selections, the same rate
-        assert result[f"bpso_optimality_rate_{rule}"] == result[f"bpso_reference_optimality_rate_{rule}"]
+    for rule in ("xor", "set"):
+        assert 0 <= result[f"bpso_optimality_rate_{rule}"] <= 1
+    assert not any("reference" in key or "candidate" in key for key in result if key.startswith("bpso"))
     assert "tracker_speedup_vs_filterpy" in capsys.readouterr().out
     # every policy's cost beside its declaration, at 4 x 6 (K = 1 and 5) in quick mode
     cost = json.loads((tmp_path / "policy_cost.json").read_text())
@@ -104,88 +105,43 @@ def test_first_run_refuses_no_repeats(capsys):
     assert "--repeats must be at least 1" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("argument", ["--trials", "--repeats"])
-def test_the_bpso_breakdown_refuses_no_trials_or_repeats(argument, capsys):
-    from benchmarks.speed import bpso_parts
+def test_a_figure_is_compared_across_two_commits_of_a_repository(tmp_path):
+    """Two commits of a small repository whose benchmark prints a known number: the comparison
+    checks each out, runs it there and takes the number from its JSON line."""
+    import subprocess
 
-    with pytest.raises(SystemExit):
-        bpso_parts.main([argument, "0"])
-    assert f"argument {argument}: must be an integer >= 1, got 0" in capsys.readouterr().err
+    from benchmarks.speed import across_commits
 
+    repo = tmp_path / "repo"
+    repo.mkdir()
 
-def test_the_bpso_breakdown_knocks_out_each_part_and_refuses_a_stale_one(monkeypatch):
-    from agents.solvers import _bpso_kernels
-    from benchmarks.speed import bpso_parts
+    def git(*args):
+        subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
 
-    result = bpso_parts.measure(trials=4, repeats=1, rule="xor")
-    assert result["rule"] == "xor" and result["q_max"] == 100
-    assert 0 <= result["mean_iterations"] <= 100 and 0 <= result["share_all_iterations"] <= 1
-    assert [row["part"] for row in result["parts"]] == list(bpso_parts.PARTS)
-    assert result["kernel_ms"] > 0 and result["reference_ms"] > 0 and result["whole_swarm_ms"] > 0
-    for row in result["parts"]:
-        assert row["without_ms"] > 0
-        assert row["cost_ms"] == pytest.approx(result["whole_swarm_ms"] - row["without_ms"])
-    # the whole swarm (the kernel without its stop at the optimum) selects what the kernel does
-    args = bpso_parts.kernel_arguments(60, "set")
-    np.testing.assert_array_equal(bpso_parts.variant()(*args), _bpso_kernels.run_numba_serial(*args))
-    stale = {"a part the kernel no longer has": [("e = exp(-v)", "e = 1.0")]}
-    monkeypatch.setattr(bpso_parts, "PARTS", stale)
-    with pytest.raises(RuntimeError, match="no longer holds 'a part the kernel no longer has'"):
-        bpso_parts.variant("a part the kernel no longer has")
-
-
-def test_the_iteration_count_is_where_the_kernel_stops(monkeypatch):
-    """The counting variant selects what the kernel does, and its count is the iteration at which
-    the global best first holds the eq19 optimum (the exact solver's value), q_max where it never
-    does: checked against the numpy kernel run for 1, 2, ... iterations, which runs every one."""
-    from agents.solvers import ExactSolver, _bpso_kernels
-    from benchmarks.speed import bpso_parts
-
-    counting = bpso_parts.counting_variant()
-    for rule in ("set", "xor"):
-        index, tx, rx, positions, keys, _, c1, c2, _, _, clamp, set_rule = bpso_parts.kernel_arguments(
-            30, rule
+    git("init", "-q")
+    commits = []
+    for value in (6.0, 2.0):
+        (repo / "bench.py").write_text(
+            f"import json\nprint('warming up')\nprint(json.dumps({{'ms': {value}}}))\n"
         )
-        # a constant inertia, so that a run of q iterations is the first q of a longer run
-        swarm = (c1, c2, 0.65, 0.65, clamp, set_rule)
-        iterations = 12
-        args = (index, tx, rx, positions, keys, iterations, *swarm)
-        counted = counting(*args)
-        np.testing.assert_array_equal(counted[:, :-1], _bpso_kernels.run_numba_serial(*args))
-        optimum = np.einsum("bm,bn,bmn->b", *ExactSolver(tx, rx).solve(index, None), index)
-        first = np.full(len(index), iterations)
-        for q in range(iterations, -1, -1):
-            if q == 0:  # the starting swarm alone: the best of its valid particles
-                fit, valid = _bpso_kernels._fitness_np(index, positions, 4, tx, rx)
-                best = positions[np.arange(len(index)), np.argmax(np.where(valid, fit, -np.inf), axis=1)]
-                value = np.einsum("bm,bn,bmn->b", best[:, :4], best[:, 4:], index)
-            else:
-                best = _bpso_kernels.run_numpy(index, tx, rx, positions, keys, q, *swarm)
-                value = np.einsum("bm,bn,bmn->b", best[:, :4], best[:, 4:], index)
-            first = np.where(value >= optimum, q, first)
-        np.testing.assert_array_equal(counted[:, -1], first)
-        assert 0 < np.mean(first < iterations) and (rule == "xor" or np.mean(first < iterations) > 0.5)
-    monkeypatch.setattr(bpso_parts, "COUNTING", [("e = exp(-v)", "e = 1.0")])
-    with pytest.raises(RuntimeError, match="iteration count"):
-        bpso_parts.counting_variant()
-
-
-def test_the_float32_transcription_selects_valid_super_arms_and_refuses_a_stale_replacement(monkeypatch):
-    from agents.solvers import _bpso_kernels
-    from benchmarks.speed import bpso_parts
-
-    float32 = bpso_parts.float32_variant()
-    for rule in ("set", "xor"):
-        args = bpso_parts.kernel_arguments(200, rule)
-        selected, kernel = float32(*args), _bpso_kernels.run_numba_serial(*args)
-        assert (selected[:, :4].sum(axis=1) == 2).all() and (selected[:, 4:].sum(axis=1) == 3).all()
-        # the same uniforms decide nearly every flip the same way in float32 and float64
-        assert (selected == kernel).all(axis=1).mean() > 0.9
-    result = bpso_parts.float32_comparison(trials=40, repeats=1)
-    assert set(result["rules"]) == {"set", "xor"}
-    for row in result["rules"].values():
-        assert all(row[f"{k}_ms"] > 0 for k in ("kernel", "float32", "reference"))
-        assert all(0 <= row[f"{k}_optimality_rate"] <= 1 for k in ("kernel", "float32", "reference"))
-    monkeypatch.setattr(bpso_parts, "FLOAT32", [("e = exp(-v)", "e = 1.0")])
-    with pytest.raises(RuntimeError, match="float32 transcription"):
-        bpso_parts.float32_variant()
+        git("add", "bench.py")
+        git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", f"ms {value}")
+        commits.append(
+            subprocess.run(
+                ["git", "-C", str(repo), "rev-parse", "HEAD"], capture_output=True, text=True
+            ).stdout.strip()
+        )
+    out = tmp_path / "compare.json"
+    argv = [commits[0], commits[1], "--key", "ms", "--repeats", "2", "--repo", str(repo), "--json", str(out)]
+    result = across_commits.main([*argv, "--", sys.executable, "bench.py"])
+    assert result["values"] == {commits[0]: [6.0, 6.0], commits[1]: [2.0, 2.0]}
+    assert result["ratio"] == pytest.approx(3.0)
+    assert json.loads(out.read_text())["ratio"] == pytest.approx(3.0)
+    assert (
+        subprocess.run(
+            ["git", "-C", str(repo), "worktree", "list"], capture_output=True, text=True
+        ).stdout.count("\n")
+        == 1
+    )
+    with pytest.raises(RuntimeError, match="did not end with a JSON object holding 'nope'"):
+        across_commits.compare(repo, (commits[0], commits[1]), [sys.executable, "bench.py"], "nope", 1)
