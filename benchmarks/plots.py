@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env.metrics import TrialMetrics
+from benchmarks.metrics import TrialMetrics
 from mimo_radar_env.rendering import draw_scenario
 
 from . import uncertainty

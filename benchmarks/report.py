@@ -10,9 +10,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks.metrics import EXTRA_METRICS, TrialMetrics
 from mimo_radar_env import EnvOptions
 from mimo_radar_env.envs.versions import paper_key
-from mimo_radar_env.metrics import TrialMetrics
 
 from . import uncertainty
 from .harness import HarnessError, RunConfig, load_per_trial
@@ -74,7 +74,7 @@ PAPER_ASR = {
 
 
 def trial_metrics(config: RunConfig, per_trial: dict[str, dict[str, NDArray]]) -> dict[str, TrialMetrics]:
-    """Every policy's :class:`~mimo_radar_env.metrics.TrialMetrics`: the one source of every
+    """Every policy's :class:`~benchmarks.metrics.TrialMetrics`: the one source of every
     number the run reports."""
     channels = config.scenario_object.num_channels_per_step
     return {policy: TrialMetrics(per_trial[policy], channels) for policy in config.policies}
@@ -201,7 +201,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
     paper_asr = PAPER_ASR.get(paper_key(name), {})
     targets = [f"ARMSE T{k + 1} (m)" for k in range(num_targets)] if num_targets > 1 else []
     head = ["policy", "ARMSE (m)", *targets, "bound (m)", "ARMSE / bound"]
-    head += ["ASR (%)", "final regret", "mean SINR (dB)", "wall (s)"]
+    head += ["ASR (%)", "final regret", "mean SINR (dB)", *EXTRA_METRICS, "wall (s)"]
     if paper_key(name) in PAPER_ARMSE:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
     lines = [
@@ -228,6 +228,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
             format_cell(row, "asr", "{:.2f}", scale=100),
             format_cell(row, "final_regret", "{:.1f}"),
             format_cell(row, "mean_sinr_db", "{:.2f}"),
+            *(format_cell(row, extra, "{:.4g}") for extra in EXTRA_METRICS),
             f"{row['wall_s']:.1f}",
         ]
         if paper_key(name) in PAPER_ARMSE:

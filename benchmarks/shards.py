@@ -24,7 +24,7 @@ A shard holds what the reports of one policy need about a block of trials, each 
 and three fields that make it self-describing: ``shard_trials`` (its trial range),
 ``config_hash`` (the hash of the run configuration, the policy and :data:`SHARD_FORMAT`) and
 ``checksum`` (of its data). Every reported number is computed from the per-trial arrays
-(:class:`mimo_radar_env.metrics.TrialMetrics`). A shard that fails any check (unreadable,
+(:class:`benchmarks.metrics.TrialMetrics`). A shard that fails any check (unreadable,
 truncated, another run's or format's, another block's, altered) is named, set aside and
 computed again; it never enters a result.
 """
@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mimo_radar_env.metrics import TRIAL_FIELDS
+from benchmarks.metrics import TRIAL_FIELDS
 
 #: The layout of the fields above; part of every shard's identity, so that shards of an older
 #: layout are recomputed rather than read.

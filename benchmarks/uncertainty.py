@@ -1,6 +1,6 @@
 """95 % intervals over trials, by the bootstrap, for every number a run reports.
 
-A metric is a function of trial weights (:class:`mimo_radar_env.metrics.TrialMetrics`): its
+A metric is a function of trial weights (:class:`benchmarks.metrics.TrialMetrics`): its
 value is the function at equal weights, and its interval is ``scipy.stats.bootstrap`` over
 resamples of the trials, each resample a vector of weights fed to the *same* function. The
 method:
@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from mimo_radar_env.metrics import TrialMetrics, trial_weights
+from benchmarks.metrics import TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
 RESAMPLES = 2000

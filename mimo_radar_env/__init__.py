@@ -35,24 +35,23 @@ from .scenarios import (
     random_scenario,
 )
 
-ENV_ID = ENV_IDS["v0"]
+#: The env id of the default version (``MimoRadarSelect-v1``).
+ENV_ID = ENV_IDS[DEFAULT_VERSION]
 
 for _version in VERSIONS.values():
-    if _version.env_id not in registry:
-        register(
-            id=_version.env_id,
-            entry_point="mimo_radar_env.envs:MimoRadarSelectEnv",
-            vector_entry_point="mimo_radar_env.envs:MimoRadarSelectVectorEnv",
-            kwargs=_version.registration_kwargs(),
-        )
-    if _version.flat_env_id not in registry:
-        register(
-            id=_version.flat_env_id,
-            entry_point="mimo_radar_env.wrappers:make_flat_env",
-            vector_entry_point="mimo_radar_env.wrappers:MimoRadarSelectFlatVectorEnv",
-            kwargs=_version.registration_kwargs(),
-        )
+    for _id, _entry, _vector in (
+        (_version.env_id, "envs:MimoRadarSelectEnv", "envs:MimoRadarSelectVectorEnv"),
+        (_version.flat_env_id, "wrappers:make_flat_env", "wrappers:MimoRadarSelectFlatVectorEnv"),
+    ):
+        if _id not in registry:
+            register(
+                id=_id,
+                entry_point=f"mimo_radar_env.{_entry}",
+                vector_entry_point=f"mimo_radar_env.{_vector}",
+                kwargs=_version.registration_kwargs(),
+            )
 
+#: The package's version: written here only (pyproject.toml reads it).
 __version__ = "0.1.0"
 
 __all__ = [

@@ -84,7 +84,7 @@ MODULE_TESTS = {
     "mimo_radar_env/envs/options.py": ("tests/env/test_options.py", r"option_names"),
     "mimo_radar_env/envs/versions.py": ("tests/env/test_versions.py", r"VERSIONS"),
     "mimo_radar_env/extras.py": ("tests/agents/test_ppo.py", r"DependencyNotInstalled|extras"),
-    "mimo_radar_env/metrics.py": ("tests/bench/test_metrics.py", r"TrialMetrics"),
+    "benchmarks/metrics.py": ("tests/bench/test_metrics.py", r"TrialMetrics"),
     "mimo_radar_env/rendering.py": ("tests/env/test_env.py", r"rgb_array"),
     "mimo_radar_env/sb3.py": ("tests/agents/test_ppo.py", r"make_ppo_env"),
     "mimo_radar_env/scenarios/files.py": ("tests/env/test_scenario.py", r"yaml|toml"),

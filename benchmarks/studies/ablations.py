@@ -32,9 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks.metrics import TrialMetrics
 from mimo_radar_env import env_version
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
-from mimo_radar_env.metrics import TrialMetrics
 
 from .. import harness, uncertainty
 from ..report import trial_metrics

@@ -22,9 +22,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks.metrics import TrialMetrics
 from mimo_radar_env import Scenario, env_version
 from mimo_radar_env.envs.versions import SCENARIO_SETS
-from mimo_radar_env.metrics import TrialMetrics
 
 from .. import uncertainty, verdicts
 from ..errors import BenchError

@@ -125,7 +125,7 @@ def best_bound(
     are (``TrialMetrics.bound``, with its interval over trials), and every policy's ARMSE as a
     ratio to it, paired on the trials (``armse_over_best``); ``per_trial``: the run's
     (:func:`~benchmarks.harness.load_per_trial`), read from its folder when not given."""
-    from mimo_radar_env.metrics import TrialMetrics
+    from benchmarks.metrics import TrialMetrics
     from mimo_radar_env.tracking.planning import Planner, position_traces
 
     from .. import harness, uncertainty
@@ -165,7 +165,7 @@ def best_bound(
 
 
 def _first_trials(per_trial: dict[str, np.ndarray], trials: int) -> dict[str, np.ndarray]:
-    from mimo_radar_env.metrics import TRIAL_FIELDS
+    from benchmarks.metrics import TRIAL_FIELDS
 
     return {key: per_trial[key][:trials] for key in TRIAL_FIELDS}
 
@@ -185,7 +185,7 @@ def cross_run_differences(
     scenario, seed, steps and fusion, and ``witness``'s squared errors identical on the trials
     both ran (checked), so that trial ``i`` is the same truth, observed and tracked alike, in
     both. ``ours``: this run's per-trial data, read from its folder when not given."""
-    from mimo_radar_env.metrics import TrialMetrics
+    from benchmarks.metrics import TrialMetrics
 
     from .. import harness, uncertainty
     from ..errors import BenchError

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main as cli_main
+from benchmarks.metrics import TrialMetrics
 from benchmarks.studies import ablations
 from mimo_radar_env import VERSIONS, load_scenario
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
-from mimo_radar_env.metrics import TrialMetrics
 
 
 def metrics(expected, optimal=None, squared=None, bound=None) -> TrialMetrics:

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from mimo_radar_env.metrics import TrialMetrics, trial_weights
+from benchmarks.metrics import TrialMetrics, trial_weights
 
 
 def test_metrics_on_a_hand_made_case():

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from benchmarks import uncertainty, verdicts
+from benchmarks.metrics import TrialMetrics
 from benchmarks.studies import calibration, claims, tracking
-from mimo_radar_env.metrics import TrialMetrics
 
 
 def test_the_rule_on_intervals():

@@ -55,5 +55,14 @@ def test_citation_file_cites_the_project_and_the_paper():
     paper = cff["preferred-citation"]
     assert paper["type"] == "article" and paper["title"].startswith("Combinatorial-restless-bandit-based")
     assert [a["family-names"] for a in paper["authors"]] == ["Hao", "Wang", "Fu", "Bai", "Li", "Pan"]
-    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    assert cff["version"] == project["version"]
+    # the version is written once, in mimo_radar_env/__init__.py: pyproject.toml reads it, the
+    # citation file (where a version is optional) does not repeat it
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())
+    assert "version" not in cff and "version" not in project["project"]
+    assert "version" in project["project"]["dynamic"]
+    assert project["tool"]["setuptools"]["dynamic"]["version"] == {"attr": "mimo_radar_env.__version__"}
+    from importlib.metadata import version
+
+    import mimo_radar_env
+
+    assert version("mimo-radar-env") == mimo_radar_env.__version__

@@ -26,6 +26,7 @@ def test_the_views_are_derived_from_the_versions():
     assert mimo_radar_env.ENV_IDS == {n: v.env_id for n, v in VERSIONS.items()}
     assert mimo_radar_env.FLAT_ENV_IDS == {n: v.flat_env_id for n, v in VERSIONS.items()}
     assert mimo_radar_env.PAPER_SCENARIOS == {n: v.paper_scenarios for n, v in VERSIONS.items()}
+    assert mimo_radar_env.ENV_ID == VERSIONS[mimo_radar_env.DEFAULT_VERSION].env_id == "MimoRadarSelect-v1"
     assert VERSIONS["v1"].options(truth="per-trial").truth == "per-trial"
 
 

@@ -10,7 +10,7 @@ from two computations. Curves are the same functions before the average over ste
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,6 +25,23 @@ TRIAL_FIELDS = (
     "trial_bound_squared",
     "trial_matches",
 )
+
+
+#: Metrics of one's own, reported beside the built-in ones: ``name -> function(metrics, w)``
+#: (:func:`register_metric`).
+EXTRA_METRICS: dict[str, Callable[[TrialMetrics, NDArray], NDArray]] = {}
+
+
+def register_metric(name: str, function: Callable[[TrialMetrics, NDArray], NDArray]) -> None:
+    """Report ``function(metrics, w)`` as metric ``name`` in every run's summary, with its 95 %
+    interval from the same bootstrap as the built-in metrics: a function of one policy's
+    :class:`TrialMetrics` and of trial weights ``w`` (..., N) summing to 1 over the trials,
+    giving one value per row of ``w``."""
+    if not name.isidentifier():
+        raise ValueError(f"a metric's name is an identifier (it is a key of summary.json), got {name!r}")
+    if name in _BUILT_IN or (name in EXTRA_METRICS and EXTRA_METRICS[name] is not function):
+        raise ValueError(f"a metric called {name!r} is already reported")
+    EXTRA_METRICS[name] = function
 
 
 def trial_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
@@ -148,13 +165,16 @@ class TrialMetrics:
     # ------------------------------------------------------------ the table
     def scalar_metrics(self) -> dict:
         """The table's metrics, ``{name: w -> value}`` (ARMSE only with a tracker; the bound and
-        ARMSE / bound only where the bound was recorded)."""
+        ARMSE / bound only where the bound was recorded), then the registered ones
+        (:func:`register_metric`)."""
         metrics = {"asr": self.asr, "final_regret": self.final_regret, "mean_sinr_db": self.mean_sinr_db}
         if self.tracked:
             metrics["armse"] = self.armse
         if self.bounded:
             metrics["bound"] = self.bound
             metrics["armse_over_bound"] = self.armse_over_bound
+        for name, function in EXTRA_METRICS.items():
+            metrics[name] = lambda w, function=function: function(self, w)
         return metrics
 
     def per_target_metrics(self) -> dict:
@@ -165,6 +185,9 @@ class TrialMetrics:
         if self.bounded:
             out["bound_per_target"] = [self.bound_target(k) for k in range(self.num_targets)]
         return out
+
+
+_BUILT_IN = ("asr", "final_regret", "mean_sinr_db", "armse", "bound", "armse_over_bound")
 
 
 def _root_mean_square(squared: NDArray, w: NDArray, target: int, span: slice = slice(None)) -> NDArray:
