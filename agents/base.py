@@ -29,9 +29,9 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario, load_scenario
 from mimo_radar_env.core.counter_hash import Stream
+from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
 
-from .random_streams import TrialRandom
 from .solvers import SuperArmSolver, make_solver
 
 Observation = dict[str, NDArray[Any]]
@@ -68,7 +68,7 @@ class Agent(ABC):
         The scenario (its public geometry is all an agent may use).
     seed : int, optional
         Seed of the agent's random streams: trial ``i`` of a batch draws from ``seed + i``
-        (:class:`~agents.random_streams.TrialRandom`), as trial ``i`` of the vector env does.
+        (:class:`~mimo_radar_env.core.streams.TrialRandom`), as trial ``i`` of the vector env does.
     """
 
     #: Registry name.

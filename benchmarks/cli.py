@@ -320,7 +320,7 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     """Run the parsed command; its failures as one line and an exit code."""
     from mimo_radar_env import ScenarioError
 
-    from .errors import BenchError
+    from .errors import BenchError, HarnessError
     from .harness import RunInterrupted
 
     try:
@@ -330,5 +330,6 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     except KeyboardInterrupt:
         parser.exit(130, f"{PROG}: interrupted\n")
     except (BenchError, ScenarioError) as exc:
-        parser.exit(2, f"{PROG}: error: {exc}\n")
+        message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
+        parser.exit(2, f"{PROG}: error: {message}\n")
     return 0

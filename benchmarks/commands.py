@@ -86,8 +86,8 @@ class TrainPPO(Command):
         add_env_options(parser)
 
     def main(self) -> int:
-        from .ppo import seed_folder, train_ppo
         from .studies.settings import local_workers
+        from .training import seed_folder, train_ppo
 
         args = self.args
         version = VERSIONS[args.env_version]

@@ -42,7 +42,7 @@ from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
 from . import backends
-from .errors import BenchError
+from .errors import HarnessError
 from .shards import (
     TRIAL_FIELDS,
     TRUTH_FIELD,
@@ -56,11 +56,6 @@ from .shards import (
 CONFIG_FILE = "config.json"
 LOCK_FILE = ".lock"
 PAPER_POLICIES = ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2")
-
-
-#: The harness's name for :class:`~benchmarks.errors.BenchError` (a run cannot start: a bad
-#: configuration, or a different one already in DIR).
-HarnessError = BenchError
 
 
 @dataclass(frozen=True)
@@ -132,11 +127,11 @@ def make_config(
 
     Each policy is built and reset on a one-trial env with the run's options, so a bad
     parameter, a missing model or an agent that needs the tracker fails here, with a
-    one-line :class:`HarnessError`, before any output exists. The memory a task needs
-    (:func:`fit_shard_size`) is checked against the machine for ``workers`` tasks at once: the
-    shard size is lowered until it fits, and ``say`` says so, or the run is refused. Its time
-    (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is said
-    when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
+    one-line :class:`HarnessError` naming the argument, before any output exists. The memory a
+    task needs (:func:`fit_shard_size`) is checked against the machine for ``workers`` tasks at
+    once: the shard size is lowered until it fits, and ``say`` says so, or the run is refused.
+    Its time (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is
+    said when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
     ``shard_size`` None is :func:`auto_shard_size` for those tasks.
     """
     try:
@@ -144,66 +139,19 @@ def make_config(
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
     options = options or EnvOptions()
-    given = [("--trials", trials, 1), ("--seed", seed, 0)]
-    if shard_size is not None:
-        given.append(("--shard-size", shard_size, 1))
-    for name, value, low in given:
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise HarnessError(f"{name} must be an integer >= {low}, got {value!r}")
-    if shard_size is None:
-        shard_size = auto_shard_size(trials, parallel or workers, len(policies or ()))
-    steps = sc.horizon if steps is None else steps
-    if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
-        raise HarnessError(f"--steps must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
-    if not policies:
-        raise HarnessError("give at least one policy")
-    if len(set(policies)) != len(policies):
-        raise HarnessError(f"policies are listed twice: {list(policies)}")
-    params = agent_params or {}
-    for policy, values in params.items():
-        if "seed" in values:
-            raise HarnessError(
-                f"--agent-param {policy}.seed: agents' seeds are set by the run (--seed), not per agent"
-            )
-        if policy not in policies:
-            raise HarnessError(
-                f"--agent-param names policy {policy!r}, which is not in the run {list(policies)}"
-            )
-    available = agents.available_agents()
-    for policy in policies:
-        if policy.partition(":")[0] not in available:
-            raise HarnessError(
-                f"unknown policy {policy!r}; available policies are {available} "
-                "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
-            )
-    per_trial, operations, fixed, built = {}, {}, {}, {}
-    for policy in policies:
-        try:
-            agent = built[policy] = make_policy(
-                policy, sc, params.get(policy, {}), seed=seed, options=options.to_dict()
-            )
-            per_trial[policy] = agent.memory_per_trial()
-            operations[policy] = agent.operations_per_trial_step()
-            fixed[policy] = agent.seconds_per_step()
-            agents.Rollout(agent, agents.make_env(agent, 1, options.to_dict(), sc), seed=seed)
-        except (ValueError, TypeError, OSError) as exc:
-            raise HarnessError(f"policy {policy!r}: {exc}") from exc
-    shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
     parallel = parallel or workers
-    alone = {
-        p: estimate_seconds(sc, options, {p: operations[p]}, trials, steps, shard_size, 1, fixed)
-        for p in policies
-    }
-    where = (
-        f"{trials} trials x {steps} steps of {len(policies)} polic{'y' if len(policies) == 1 else 'ies'} "
-        f"on {sc.name!r}, {parallel} task(s) at once"
-    )
-    seconds = estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
-    check_time(seconds, where, max(alone, key=alone.__getitem__), max_hours, say)
+    steps = _check_sizes(sc, trials, steps, seed, shard_size)
+    params = _check_policies(policies, agent_params or {})
+    if shard_size is None:
+        shard_size = auto_shard_size(trials, parallel, len(policies))
+    built = {policy: _probe(policy, sc, params.get(policy, {}), seed, options) for policy in policies}
+    per_trial = {policy: agent.memory_per_trial() for policy, agent in built.items()}
+    shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
+    _check_run_time(sc, options, built, trials, steps, shard_size, parallel, max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
         json.dumps(params, allow_nan=False)
     except (TypeError, ValueError) as exc:
-        raise HarnessError(f"--agent-param: a value cannot be recorded in config.json ({exc})") from None
+        raise HarnessError(f"`agent_params`: a value cannot be recorded in config.json ({exc})") from None
     return RunConfig(
         policy_files={p: files for p in policies if (files := _policy_files(p, built[p]))},
         scenario=sc.to_dict(),
@@ -215,6 +163,83 @@ def make_config(
         env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
+
+
+def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_size: int | None) -> int:
+    """Refuses a count that is not a whole number in its range; the run's steps."""
+    given = [("trials", trials, 1), ("seed", seed, 0)]
+    if shard_size is not None:
+        given.append(("shard_size", shard_size, 1))
+    for name, value, low in given:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise HarnessError(f"`{name}` must be an integer >= {low}, got {value!r}")
+    steps = sc.horizon if steps is None else steps
+    if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
+        raise HarnessError(f"`steps` must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
+    return steps
+
+
+def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Refuses no policy, a policy twice, an unknown one, and parameters of a policy not in the
+    run or setting the agent's seed; the parameters."""
+    if not policies:
+        raise HarnessError("give at least one policy")
+    if len(set(policies)) != len(policies):
+        raise HarnessError(f"policies are listed twice: {list(policies)}")
+    for policy, values in params.items():
+        if "seed" in values:
+            raise HarnessError(
+                f"`agent_params` {policy}.seed: agents' seeds are set by the run (`seed`), not per agent"
+            )
+        if policy not in policies:
+            raise HarnessError(
+                f"`agent_params` names policy {policy!r}, which is not in the run {list(policies)}"
+            )
+    available = agents.available_agents()
+    for policy in policies:
+        if policy.partition(":")[0] not in available:
+            raise HarnessError(
+                f"unknown policy {policy!r}; available policies are {available} "
+                "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
+            )
+    return params
+
+
+def _probe(policy: str, sc: Scenario, params: dict[str, Any], seed: int, options: EnvOptions) -> agents.Agent:
+    """The policy's agent, built and reset on a one-trial env of the run (a bad parameter, a
+    missing model or a missing env option fails here)."""
+    try:
+        agent = make_policy(policy, sc, params, seed=seed, options=options.to_dict())
+        agents.Rollout(agent, agents.make_env(agent, 1, options, sc), seed=seed)
+    except (ValueError, TypeError, OSError) as exc:
+        raise HarnessError(f"policy {policy!r}: {exc}") from exc
+    return agent
+
+
+def _check_run_time(
+    sc: Scenario,
+    options: EnvOptions,
+    built: dict[str, agents.Agent],
+    trials: int,
+    steps: int,
+    shard_size: int,
+    parallel: int,
+    max_hours: float | None,
+    say: Callable[[str], None],
+) -> None:
+    """Says the run's estimated time, or refuses it beyond ``max_hours`` (:func:`check_time`)."""
+    operations = {policy: agent.operations_per_trial_step() for policy, agent in built.items()}
+    fixed = {policy: agent.seconds_per_step() for policy, agent in built.items()}
+    alone = {
+        p: estimate_seconds(sc, options, {p: operations[p]}, trials, steps, shard_size, 1, fixed)
+        for p in built
+    }
+    where = (
+        f"{trials} trials x {steps} steps of {len(built)} polic{'y' if len(built) == 1 else 'ies'} "
+        f"on {sc.name!r}, {parallel} task(s) at once"
+    )
+    seconds = estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
+    check_time(seconds, where, max(alone, key=alone.__getitem__), max_hours, say)
 
 
 #: The share of the machine's memory the tasks running at once may take together.
@@ -265,7 +290,7 @@ def fit_shard_size(
             f"one trial of {policy!r} on {scenario.name!r} ({scenario.num_tx} x {scenario.num_rx} "
             f"stations, {scenario.num_targets} targets) needs about {(fixed + per_trial) / gib:.2f} GiB "
             f"per task; {workers} task(s) at once may use {budget * workers / gib:.1f} GiB of this "
-            f"machine's {available / gib:.1f} GiB: use fewer --workers, a smaller layout or fewer targets"
+            f"machine's {available / gib:.1f} GiB: use fewer `workers`, a smaller layout or fewer targets"
         )
     if fits < shard_size:
         say(
@@ -336,8 +361,8 @@ def check_time(
     if max_hours is not None and seconds > 3600 * max_hours:
         raise HarnessError(
             f"{where} would take about {duration(seconds)} (the slowest policy: {slowest!r}), more than "
-            f"--max-hours {max_hours:g}: use fewer --trials or --steps, more --workers, a smaller layout, "
-            "or a larger --max-hours"
+            f"`max_hours` {max_hours:g}: use fewer `trials` or `steps`, more `workers`, a smaller layout, "
+            "or a larger `max_hours`"
         )
     if seconds >= 60:
         say(f"{where}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
@@ -457,12 +482,12 @@ def prepare_output(out: Path, config: RunConfig) -> None:
                 changed = sorted(k for k in set(existing) | set(wanted) if existing.get(k) != wanted.get(k))
                 raise HarnessError(
                     f"{out} holds a run with a different configuration (differs in {changed}); "
-                    "resume it with the same arguments or choose another --out"
+                    "resume it with the same arguments or choose another `out`"
                 )
         else:
             path.write_text(json.dumps(wanted, indent=2, allow_nan=False))
     except (OSError, json.JSONDecodeError) as exc:
-        raise HarnessError(f"cannot use --out {out}: {getattr(exc, 'strerror', None) or exc}") from exc
+        raise HarnessError(f"cannot use `out` {out}: {getattr(exc, 'strerror', None) or exc}") from exc
 
 
 @contextlib.contextmanager
@@ -472,13 +497,13 @@ def output_lock(out: Path) -> Iterator[None]:
         out.mkdir(parents=True, exist_ok=True)
         handle = open(out / LOCK_FILE, "a+")  # held (and locked) for the whole run
     except OSError as exc:
-        raise HarnessError(f"cannot write into --out {out}: {exc.strerror or exc}") from exc
+        raise HarnessError(f"cannot write into `out` {out}: {exc.strerror or exc}") from exc
     try:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             raise HarnessError(
-                f"another run is writing into {out}; wait for it to finish or choose another --out"
+                f"another run is writing into {out}; wait for it to finish or choose another `out`"
             ) from None
         yield
     finally:
@@ -564,49 +589,21 @@ def run_many(
     the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
     and Ctrl-C as in :func:`run`.
     """
-    if backend not in ("local", "ray"):
-        raise HarnessError(f"--backend must be 'local' or 'ray', got {backend!r}")
-    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
-        raise HarnessError(f"--workers must be an integer >= 1, got {workers!r}")
-    if backend == "ray":
-        try:
-            backends.check_ray_address(address)
-        except ValueError as exc:
-            raise HarnessError(str(exc)) from exc
     folders = [Path(out) for _, out in runs]
-    if len({f.resolve() for f in folders}) != len(folders):
-        raise HarnessError(f"two runs write into one folder: {[str(f) for f in folders]}")
+    _check_execution(backend, workers, address, folders)
     configs = [config for config, _ in runs]
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
             prepare_output(out, config)
         payloads = [config.to_json() for config in configs]
-        todo: list[tuple[int, str, int]] = []
-        for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
-            tasks = _tasks_to_run(out, config, tqdm.write)
-            if len(tasks) > 1:
-                cost = task_seconds(config)
-                tasks.sort(key=lambda task: -cost[task])  # stable: ties keep the shard order
-            todo += [(number, policy, shard) for policy, shard in tasks]
-        if max_tasks is not None:
-            todo = todo[:max_tasks]
+        todo = _queue(configs, folders, max_tasks)
         left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
         steps_of = [
             [len(c.shard_trials(s)) * c.steps for s in range(c.num_shards)] for c in configs
         ]  # trial-steps of each run's shards
-        total = sum(sum(steps) * len(c.policies) for steps, c in zip(steps_of, configs, strict=True))
-        bar = tqdm(
-            total=total,
-            initial=total - sum(steps_of[n][s] for n, _, s in todo),
-            unit="trial-step",
-            disable=not progress,
-            smoothing=0.1,
-            desc=configs[0].scenario["name"] if len(configs) == 1 else f"{len(configs)} runs",
-        )
         threads = 1 if workers > 1 or backend == "ray" else None
-        if any(uncached(run_kernels(configs[n], threads)) for n in {n for n, _, _ in todo}):
-            bar.set_postfix_str("compiling numba kernels (first run only; or once: mimo-radar-bench compile)")
+        bar = _progress_bar(configs, todo, steps_of, progress, threads)
         saved = []
         complete = [False] * len(configs)
 
@@ -651,6 +648,60 @@ def run_many(
         finally:
             bar.close()
         return complete
+
+
+def _check_execution(backend: str, workers: int, address: str | None, folders: list[Path]) -> None:
+    """Refuses an unknown backend, a worker count that is not a whole number >= 1, an
+    unreachable Ray address and two runs into one folder."""
+    if backend not in ("local", "ray"):
+        raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise HarnessError(f"`workers` must be an integer >= 1, got {workers!r}")
+    if backend == "ray":
+        try:
+            backends.check_ray_address(address)
+        except ValueError as exc:
+            raise HarnessError(str(exc)) from exc
+    if len({f.resolve() for f in folders}) != len(folders):
+        raise HarnessError(f"two runs write into one folder: {[str(f) for f in folders]}")
+
+
+def _queue(
+    configs: list[RunConfig], folders: list[Path], max_tasks: int | None
+) -> list[tuple[int, str, int]]:
+    """The (run, policy, shard) tasks not yet saved, each run's longest first
+    (:func:`task_seconds`), run after run; the first ``max_tasks`` of them."""
+    todo: list[tuple[int, str, int]] = []
+    for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
+        tasks = _tasks_to_run(out, config, tqdm.write)
+        if len(tasks) > 1:
+            cost = task_seconds(config)
+            tasks.sort(key=lambda task: -cost[task])  # stable: ties keep the shard order
+        todo += [(number, policy, shard) for policy, shard in tasks]
+    return todo if max_tasks is None else todo[:max_tasks]
+
+
+def _progress_bar(
+    configs: list[RunConfig],
+    todo: list[tuple[int, str, int]],
+    steps_of: list[list[int]],
+    progress: bool,
+    threads: int | None,
+) -> tqdm:
+    """The runs' progress in trial-steps, from what is already saved; it says when the tasks
+    will compile numba kernels first."""
+    total = sum(sum(steps) * len(c.policies) for steps, c in zip(steps_of, configs, strict=True))
+    bar = tqdm(
+        total=total,
+        initial=total - sum(steps_of[n][s] for n, _, s in todo),
+        unit="trial-step",
+        disable=not progress,
+        smoothing=0.1,
+        desc=configs[0].scenario["name"] if len(configs) == 1 else f"{len(configs)} runs",
+    )
+    if any(uncached(run_kernels(configs[n], threads)) for n in {n for n, _, _ in todo}):
+        bar.set_postfix_str("compiling numba kernels (first run only; or once: mimo-radar-bench compile)")
+    return bar
 
 
 def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, NDArray]:

@@ -108,8 +108,8 @@ def format_figure(figure: Figure) -> str:
 # ---------------------------------------------------------------- solvers
 @figure("bpso-set-optimal", "bpso-xor-optimal")
 def bpso_rules() -> dict[str, Figure]:
-    from agents.random_streams import TrialRandom
     from agents.solvers import BPSOSolver, ExactSolver
+    from mimo_radar_env.core.streams import TrialRandom
 
     index = np.random.default_rng(1).exponential(size=(500, 4, 6))
     streams = TrialRandom.for_batch(0, len(index))
@@ -128,8 +128,8 @@ def bpso_rules() -> dict[str, Figure]:
 
 @figure("alternating-optimal", "alternating-gap")
 def alternating() -> dict[str, Figure]:
-    from agents.random_streams import TrialRandom
     from agents.solvers import AlternatingSolver, ExactSolver
+    from mimo_radar_env.core.streams import TrialRandom
 
     index = np.random.default_rng(3).exponential(size=(400, 10, 12))
     streams = TrialRandom.for_batch(0, len(index))

@@ -43,8 +43,8 @@ def _env_and_tracking_search(fusion: str) -> None:
 def _bpso(threads: int) -> None:
     """One paper-size BPSO selection (2 of 4 TX, 3 of 6 RX) with the kernel for ``threads``
     numba threads: a harness worker's one-thread kernel, or a one-process run's parallel one."""
-    from agents.random_streams import TrialRandom
     from agents.solvers import BPSOSolver, _bpso_kernels
+    from mimo_radar_env.core.streams import TrialRandom
 
     from .speed.solver_speed import paper_index
 

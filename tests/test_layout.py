@@ -17,7 +17,6 @@ MODULE_TESTS = {
     "agents/oracle.py": ("tests/agents/test_agents.py", r'"best"'),
     "agents/parameters.py": ("tests/agents/test_solvers.py", r"must be an integer in"),
     "agents/ppo.py": ("tests/agents/test_ppo.py", r"ppo:"),
-    "agents/random_streams.py": ("tests/agents/test_rbe_cts.py", r"TrialRandom"),
     "agents/recency.py": ("tests/agents/test_rbe_cts.py", r'"rbe"'),
     "agents/rollout.py": ("tests/agents/test_rollout.py", r"Rollout"),
     "agents/registry.py": ("tests/agents/test_agents.py", r"available_agents"),
@@ -40,7 +39,7 @@ MODULE_TESTS = {
     "benchmarks/errors.py": ("tests/bench/test_settings.py", r"BenchError"),
     "benchmarks/harness.py": ("tests/bench/test_harness.py", r"make_config"),
     "benchmarks/plots.py": ("tests/bench/test_plots.py", r"plots\.palette"),
-    "benchmarks/ppo.py": ("tests/agents/test_ppo.py", r"train_ppo"),
+    "benchmarks/training.py": ("tests/agents/test_ppo.py", r"train_ppo"),
     "benchmarks/report.py": ("tests/bench/test_report.py", r"format_estimate"),
     "benchmarks/shards.py": ("tests/bench/test_shards.py", r"read_shard"),
     "benchmarks/uncertainty.py": ("tests/bench/test_uncertainty.py", r"uncertainty\.estimate"),
@@ -119,7 +118,9 @@ MODULE_TESTS = {
     "mimo_radar_env/tracking/information.py": ("tests/tracking/test_selection.py", r"channel_information"),
     "mimo_radar_env/tracking/selection.py": ("tests/tracking/test_selection.py", r"super_arm_criterion"),
     "mimo_radar_env/tracking/unscented.py": ("tests/tracking/test_imm_ukf_reference.py", r"unscented|UKF"),
-    "mimo_radar_env/wrappers.py": ("tests/clients/test_clients.py", r"SuperArmDiscreteAction"),
+    "mimo_radar_env/wrappers/actions.py": ("tests/clients/test_clients.py", r"SuperArmDiscreteAction"),
+    "mimo_radar_env/wrappers/features.py": ("tests/agents/test_ppo.py", r"features"),
+    "mimo_radar_env/wrappers/flat.py": ("tests/env/test_flat_vector.py", r"MimoRadarSelectFlatVectorEnv"),
 }
 
 

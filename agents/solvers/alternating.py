@@ -6,10 +6,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env.core.counter_hash import Stream
+from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import alternating_operations, alternating_super_arm, top_mask
 
 from ..parameters import check_integer
-from ..random_streams import TrialRandom
 from .base import SuperArmSolver
 
 

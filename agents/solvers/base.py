@@ -12,7 +12,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 from numpy.typing import NDArray
 
-from ..random_streams import TrialRandom
+from mimo_radar_env.core.streams import TrialRandom
 
 
 class SuperArmSolver(ABC):

@@ -6,10 +6,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env.core.counter_hash import Stream
+from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
 
 from ..parameters import check_integer, check_parameter
-from ..random_streams import TrialRandom
 from . import _bpso_kernels as _kernels
 from .base import SuperArmSolver
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import (
     MAX_EXACT_SUBSETS,
     exact_operations,
@@ -14,7 +15,6 @@ from mimo_radar_env.core.superarm import (
     is_exact_affordable,
 )
 
-from ..random_streams import TrialRandom
 from .base import SuperArmSolver
 
 

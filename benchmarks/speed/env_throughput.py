@@ -115,7 +115,7 @@ def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int =
 
     from mimo_radar_env.sb3 import NativeVecEnv
 
-    from ..ppo import _NOT_FOR_PPO, load_hyperparams
+    from ..training import _NOT_FOR_PPO, load_hyperparams
 
     torch.set_num_threads(1)
     params = {k: v for k, v in load_hyperparams().items() if k not in _NOT_FOR_PPO}

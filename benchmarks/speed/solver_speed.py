@@ -18,10 +18,10 @@ import time
 
 import numpy as np
 
-from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
 from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
+from mimo_radar_env.core.streams import TrialRandom
 
 
 def paper_index(trials: int) -> np.ndarray:

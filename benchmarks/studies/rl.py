@@ -78,7 +78,7 @@ def training_folder(out: str | Path, scenario: str, algo: str, reward: str) -> P
 
 def learned_policy(out: str | Path, scenario: str, algo: str, reward: str, seed: int) -> str:
     """The harness policy of one trained seed: ``ALGO:PATH/model.zip``."""
-    from ..ppo import seed_folder
+    from ..training import seed_folder
 
     return f"{algo}:{seed_folder(training_folder(out, scenario, algo, reward), seed) / 'model.zip'}"
 
@@ -141,7 +141,7 @@ class RLStudy(Study):
 
     def train(self) -> None:
         """Every training of the study, resumably, ``--workers`` at once."""
-        from ..ppo import train_jobs, training_job
+        from ..training import train_jobs, training_job
 
         tasks = []
         for scenario, algo, reward, seeds in self.trainings():
@@ -157,7 +157,7 @@ class RLStudy(Study):
     def estimate_training_seconds(self) -> float:
         """The wall time of the trainings still to do (a resumed study keeps its finished
         seeds), roughly: their timesteps at :data:`TRAINING_STEPS_PER_S`, ``--workers`` at once."""
-        from ..ppo import META_FILE, seed_folder
+        from ..training import META_FILE, seed_folder
 
         seconds = 0.0
         for scenario, algo, reward, seeds in self.trainings():
@@ -286,7 +286,7 @@ def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[st
 def training_seconds(out: Path) -> float:
     """The trainings' compute: the sum of every seed's training wall time (``ppo.json``'s
     ``train_wall_s``), whichever invocation of the study trained it."""
-    from ..ppo import META_FILE
+    from ..training import META_FILE
 
     metas = sorted(out.glob(f"train/*/*/seed-*/{META_FILE}"))
     return float(sum(json.loads(path.read_text())["train_wall_s"] for path in metas))
@@ -294,7 +294,7 @@ def training_seconds(out: Path) -> float:
 
 def read_curves(folder: Path) -> list[dict[str, np.ndarray]]:
     """The learning curve of every seed in ``folder`` (``seed-S/curve.csv``)."""
-    from ..ppo import CURVE_FILE
+    from ..training import CURVE_FILE
 
     curves = []
     for path in sorted(folder.glob(f"seed-*/{CURVE_FILE}")):

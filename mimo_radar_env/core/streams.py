@@ -1,4 +1,5 @@
-"""Counter-based random streams of the simulation, vectorised over Monte-Carlo trials.
+"""Counter-based random streams, vectorised over Monte-Carlo trials: the simulation's
+(:class:`TrialStreams`) and the agents' (:class:`TrialRandom`), on one hash.
 
 Every random number of the simulation is a pure function of
 ``(trial key, stream, step, element index)`` through :mod:`.counter_hash`. This gives
@@ -14,6 +15,12 @@ three properties at once, with no Python loop over trials:
 
 SplitMix64 passes BigCrush on sequential inputs; the tests check the laws the
 simulation relies on (uniform, normal, exponential) with fixed seeds.
+
+An agent's draws (:class:`TrialRandom`) follow the same rule: trial ``i`` of an agent seeded
+``s`` draws from the key of ``s + i``, as trial ``i`` of the vector env does, so a trial's draws
+depend only on its key, the stream, how many times the agent drew from that stream, and the
+element, never on the other trials of the batch. A benchmark's numbers therefore do not depend
+on how its trials are cut into shards, on the worker count or on the backend.
 """
 
 from __future__ import annotations
@@ -80,3 +87,92 @@ def full_index(batch_size: int, shape: tuple[int, ...]) -> NDArray[np.int64]:
     """Element indices ``0..prod(shape)-1`` broadcast to (B, *shape)."""
     index = np.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape)
     return np.broadcast_to(index, (batch_size, *shape))
+
+
+#: Marsaglia-Tsang proposals drawn per Gamma variate in one batch (acceptance >= 95 % each);
+#: the rare variate with no accepted proposal is drawn by inverse CDF from its own uniform.
+GAMMA_PROPOSALS = 4
+
+
+class TrialRandom:
+    """Batch-first random draws with one key per trial.
+
+    Parameters
+    ----------
+    seed : int, optional
+        Trial ``i`` uses the key of ``seed + i``; ``None`` draws a fresh seed from the OS.
+    """
+
+    def __init__(self, seed: int | None) -> None:
+        if seed is None:
+            seed = int(np.random.SeedSequence().entropy % 2**62)
+        self.seed = int(seed)
+        self.keys = np.zeros(0, dtype=np.uint64)
+        self.calls: dict[Stream, int] = {}
+
+    @classmethod
+    def for_batch(cls, seed: int | None, batch_size: int) -> TrialRandom:
+        """Streams for ``batch_size`` trials, ready to draw (for solvers used on their own)."""
+        random = cls(seed)
+        random.reset(batch_size)
+        return random
+
+    def reset(self, batch_size: int) -> None:
+        """Keys for trials ``0..B-1`` (seeds ``seed..seed+B-1``); every stream starts again."""
+        seeds = (self.seed + np.arange(batch_size, dtype=np.uint64)).astype(np.uint64)
+        self.keys = mix(mix(seeds * GOLDEN) ^ np.uint64(Stream.AGENT_KEY))
+        self.calls = {}
+
+    @property
+    def batch_size(self) -> int:
+        return len(self.keys)
+
+    def bases(self, stream: Stream) -> NDArray[np.uint64]:
+        """One draw from ``stream`` left to a compiled kernel: the per-trial bases (B,) that
+        :meth:`uniform` hashes its elements with, so that ``to_unit(element_bits(bases[:, None],
+        i))`` is ``uniform(stream, shape)`` at flat index ``i``."""
+        call = self.calls.get(stream, 0)
+        self.calls[stream] = call + 1
+        return stream_base(self.keys, stream, call)
+
+    def _bits(self, stream: Stream, shape: tuple[int, ...]) -> NDArray[np.uint64]:
+        base = self.bases(stream).reshape((-1,) + (1,) * len(shape))
+        element = np.arange(int(np.prod(shape)), dtype=np.uint64).reshape(shape)
+        return element_bits(base, element[None])
+
+    def uniform(self, stream: Stream, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
+        """U[0, 1) draws of shape (B, *shape)."""
+        return to_unit(self._bits(stream, shape))
+
+    def normal(self, stream: Stream, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
+        """Standard normal draws of shape (B, *shape) (Box-Muller)."""
+        u = self.uniform(stream, (2, *shape))
+        return np.sqrt(-2.0 * np.log1p(-u[:, 0])) * np.cos(2.0 * np.pi * u[:, 1])
+
+    def keys_for(self, stream: Stream) -> NDArray[np.uint64]:
+        """One fresh 64-bit key per trial (for kernels with streams of their own)."""
+        return self._bits(stream, ())
+
+    def gamma(self, shape: NDArray[np.float64]) -> NDArray[np.float64]:
+        """``Gamma(shape, 1)`` draws for a shape array (B, ...) (Marsaglia & Tsang, 2000)."""
+        shape = np.asarray(shape, dtype=np.float64)
+        dims = shape.shape[1:]
+        boost = shape < 1.0
+        a = np.where(boost, shape + 1.0, shape)
+        d = a - 1.0 / 3.0
+        c = 1.0 / np.sqrt(9.0 * d)
+        x = self.normal(Stream.GAMMA_NORMAL, (GAMMA_PROPOSALS, *dims))  # (B, P, ...)
+        u = self.uniform(Stream.GAMMA_UNIFORM, (GAMMA_PROPOSALS + 2, *dims))
+        v = (1.0 + c[:, None] * x) ** 3
+        with np.errstate(invalid="ignore", divide="ignore"):
+            accept = (v > 0) & (
+                np.log(u[:, :GAMMA_PROPOSALS]) < 0.5 * x * x + d[:, None] * (1 - v + np.log(v))
+            )
+        first = np.argmax(accept, axis=1)[:, None]
+        value = d * np.take_along_axis(v, first, axis=1)[:, 0]
+        missing = ~accept.any(axis=1)
+        if missing.any():  # rare: inverse CDF from the variate's own spare uniform
+            import scipy.special
+
+            value[missing] = scipy.special.gammaincinv(a[missing], u[:, GAMMA_PROPOSALS][missing])
+        return np.where(boost, value * u[:, GAMMA_PROPOSALS + 1] ** (1.0 / shape), value)

@@ -10,7 +10,7 @@ import pytest
 pytest.importorskip("sb3_contrib", reason="MaskablePPO and RecurrentPPO need the rl extra")
 
 import agents  # noqa: E402
-from benchmarks.ppo import load_hyperparams, seed_folder, train_ppo  # noqa: E402
+from benchmarks.training import load_hyperparams, seed_folder, train_ppo  # noqa: E402
 from mimo_radar_env import MimoRadarSelectVectorEnv, load_scenario  # noqa: E402
 
 SHORT = dataclasses.replace(load_scenario("paper-1-v1"), horizon=20)

@@ -93,7 +93,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     import agents
     from agents import PPOAgent
     from benchmarks.cli import main
-    from benchmarks.ppo import train_ppo
+    from benchmarks.training import train_ppo
 
     meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
     assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
@@ -190,7 +190,7 @@ def test_native_training_vec_env_matches_the_checked_gym_wrapper():
 @pytest.fixture(scope="module")
 def small_model(tmp_path_factory):
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
-    from benchmarks.ppo import train_ppo
+    from benchmarks.training import train_ppo
 
     folder = tmp_path_factory.mktemp("ppo") / "small"
     train_ppo("paper-1-v1", 128, folder, seed=0, progress=False)

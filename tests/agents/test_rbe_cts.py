@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 import agents
-from agents.random_streams import TrialRandom
 from mimo_radar_env import load_scenario
+from mimo_radar_env.core.streams import TrialRandom
 
 PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4], 4 TX x 6 RX
 WEIGHTS = np.array([0.6, 0.4])

@@ -7,8 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from agents.random_streams import TrialRandom
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver, _bpso_kernels, make_solver
+from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
 
 

@@ -257,3 +257,37 @@ def test_outputs_regenerate_from_saved_shards(tmp_path):
     again = write_outputs(config, None, tmp_path, figures=False)
     assert first == again
     assert shard_path(tmp_path, "fix1", 1).exists()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "python", "flag"),
+    [
+        ({"trials": 0}, "trials must be an integer >= 1, got 0", "--trials must be"),
+        ({"seed": -1}, "seed must be an integer >= 0, got -1", "--seed must be"),
+        ({"steps": 5000}, "steps must be between 1 and the scenario horizon", "--steps must be"),
+        ({"shard_size": 0}, "shard_size must be an integer >= 1", "--shard-size must be"),
+        (
+            {"agent_params": {"ucb1": {"seed": 3}}},
+            "agent_params ucb1.seed: agents' seeds are set by the run (seed)",
+            "--agent-param ucb1.seed",
+        ),
+        (
+            {"agent_params": {"cts": {}}},
+            "agent_params names policy 'cts', which is not in the run",
+            "--agent-param names",
+        ),
+        (
+            {"max_hours": 1e-9, "trials": 500},
+            "more than max_hours 1e-09: use fewer trials or steps, more workers",
+            "more than --max-hours",
+        ),
+    ],
+)
+def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwargs, python, flag):
+    """make_config's refusals speak Python (its arguments); the command line translates them to
+    its flags, and nothing else in the message changes."""
+    given = {"trials": 2, **kwargs}
+    with pytest.raises(HarnessError) as caught:
+        make_config("paper-1-v1", ["ucb1"], say=lambda message: None, **given)
+    assert python in str(caught.value) and "--" not in str(caught.value)
+    assert flag in caught.value.for_command_line()

@@ -17,8 +17,8 @@ def test_alternating_optimality_equals_brute_force_over_every_super_arm():
     index = np.random.default_rng(3).exponential(size=(400, 10, 12))
     tx, rx = subset_masks(10, 3).astype(float), subset_masks(12, 4).astype(float)
     brute = np.einsum("sm,bmn,rn->bsr", tx, index, rx).reshape(400, -1).max(axis=1)
-    from agents.random_streams import TrialRandom
     from agents.solvers import AlternatingSolver
+    from mimo_radar_env.core.streams import TrialRandom
 
     atx, arx = AlternatingSolver(3, 4).solve(index, TrialRandom.for_batch(0, 400))
     found = np.einsum("bm,bmn,bn->b", atx.astype(float), index, arx.astype(float))

@@ -24,7 +24,7 @@ def test_the_shard_size_is_lowered_to_fit_or_the_run_refused():
     assert fit_shard_size(PAPER, {"a": 1000, "b": 10}, 50, 2, said.append, available=room) == 10
     assert "shards of 10 trials instead of 50: 'a' needs about" in said[0]
     assert fit_shard_size(PAPER, {"a": 1000}, 5, 2, said.append, available=room) == 5 and len(said) == 1
-    with pytest.raises(HarnessError, match=r"one trial of 'a' on 'paper-1-v1' .* use fewer --workers"):
+    with pytest.raises(HarnessError, match=r"one trial of .a. on .paper-1-v1. .* use fewer workers"):
         fit_shard_size(PAPER, {"a": 1000}, 50, 2, said.append, available=int(fixed + per_trial))
 
 

@@ -162,7 +162,7 @@ def test_ppo_files_run_no_code(tmp_path):
     import zipfile
 
     from agents import PPOAgent
-    from benchmarks.ppo import train_ppo
+    from benchmarks.training import train_ppo
 
     folder = tmp_path / "ppo"
     train_ppo("paper-1", 256, folder, seed=0, progress=False)
@@ -202,7 +202,7 @@ def test_ppo_files_run_no_code(tmp_path):
 
 def test_a_changed_model_file_is_a_different_run(tmp_path):
     pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra")
-    from benchmarks.ppo import train_ppo
+    from benchmarks.training import train_ppo
 
     folder = tmp_path / "ppo"
     train_ppo("paper-1", 256, folder, seed=0, progress=False)

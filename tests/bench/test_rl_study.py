@@ -159,8 +159,8 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
 def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
     import argparse
 
-    from benchmarks.ppo import seed_folder
     from benchmarks.studies.rl import RLStudy, training_folder
+    from benchmarks.training import seed_folder
 
     parser = argparse.ArgumentParser()
     RLStudy.add_arguments(parser)

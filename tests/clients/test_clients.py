@@ -130,7 +130,7 @@ def test_rl_zoo3_trains_with_the_shipped_hyperparameter_file(tmp_path):
 
 
 def test_train_ppo_reads_the_rl_zoo3_entries():
-    from benchmarks.ppo import load_hyperparams, normalize_kwargs
+    from benchmarks.training import load_hyperparams, normalize_kwargs
 
     for key in ("MimoRadarSelectFlat-v1", "MimoRadarSelectFlat-v0"):
         params = load_hyperparams(key=key)

@@ -27,7 +27,7 @@ def test_the_hyperparameters_are_package_data():
     assert "hyperparams/*.yml" in config["package-data"]["benchmarks"]
     # 'mimo-radar-bench perf' is an installed subcommand: its module ships with the wheel
     assert "exclude" not in config["packages"]["find"]
-    from benchmarks.ppo import load_hyperparams
+    from benchmarks.training import load_hyperparams
 
     assert load_hyperparams()["policy"] == "MlpPolicy"  # read through importlib.resources
 

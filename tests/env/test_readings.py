@@ -5,11 +5,10 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from agents.random_streams import TrialRandom
 from agents.solvers import BPSOSolver, ExactSolver
 from mimo_radar_env import EnvOptions, RadarModel, load_scenario
 from mimo_radar_env.core.simulation import RadarSimulation
-from mimo_radar_env.core.streams import keys_from_generator
+from mimo_radar_env.core.streams import TrialRandom, keys_from_generator
 
 
 def _simulation(scenario, batch, **options):
