@@ -12,6 +12,7 @@ import numpy as np
 
 import agents
 import mimo_radar_env
+from benchmarks.studies.settings import paper_study_params
 
 GOLDEN = Path(__file__).with_name("data") / "golden.npz"
 GOLDEN_V1 = Path(__file__).with_name("data") / "golden_v1.npz"
@@ -54,7 +55,7 @@ def record_v1() -> dict[str, np.ndarray]:
             scenario=scenario,
             fusion=fusion,
         )
-        params = version.paper_study_params()
+        params = paper_study_params("v1")
         for name in ("mg-crb-cl", "epsilon-greedy"):
             agent = agents.make_agent(name, venv.scenario, seed=7, **params.get(name, {}))
             recorded: dict[str, list] = {"track": [], "reward": [], "action": [], "bound": []}

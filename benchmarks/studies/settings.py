@@ -246,10 +246,25 @@ def parse_agent_params(items: Iterable[str]) -> dict[str, dict[str, Any]]:
     return params
 
 
+#: The agent parameters of each env version's paper study (``mimo-radar-bench paper`` and the
+#: studies built on it): v1 reads eq21 as the standard BPSO position rule (docs/model.md,
+#: section 13). The env versions themselves hold no agent parameters.
+PAPER_AGENT_PARAMS: dict[str, dict[str, dict[str, Any]]] = {
+    "v0": {},
+    "v1": {"mg-crb-cl": {"solver_params": {"rule": "set"}}},
+}
+
+
+def paper_study_params(version: str) -> dict[str, dict[str, Any]]:
+    """A copy of :data:`PAPER_AGENT_PARAMS` of env version ``version``."""
+    env_version(version)  # a version that does not exist is named
+    return {agent: dict(values) for agent, values in PAPER_AGENT_PARAMS[version].items()}
+
+
 def study_agent_params(version: str, items: Sequence[str]) -> dict[str, dict[str, Any]]:
     """The paper study's agent parameters: the version's, then ``--agent-param`` over them
     (key by key, so ``mg-crb-cl.solver_params={rule: xor}`` replaces v1's solver_params)."""
-    params = env_version(version).paper_study_params()
+    params = paper_study_params(version)
     for policy, values in parse_agent_params(items).items():
         params.setdefault(policy, {}).update(values)
     return params
@@ -259,7 +274,7 @@ def _over_paper_study() -> str:
     readings = "; ".join(
         f"{v.name}: "
         + (
-            ", ".join(f"{a}.{k}={val}" for a, p in v.paper_agent_params.items() for k, val in p.items())
+            ", ".join(f"{a}.{k}={val}" for a, p in PAPER_AGENT_PARAMS[v.name].items() for k, val in p.items())
             or "none"
         )
         for v in VERSIONS.values()

@@ -37,22 +37,16 @@ class EnvVersion:
         The option defaults that differ from :class:`EnvOptions`' (docs/model.md, section 13).
     paper_scenarios : tuple of str
         The paper's Scenarios 1, 2 and 3 as this version ships them; the first is its default.
-    paper_agent_params : mapping
-        ``{agent: {parameter: value}}`` of the version's paper study (``mimo-radar-bench paper``).
     """
 
     name: str
     summary: str
     option_defaults: Mapping[str, Any] = field(default_factory=dict)
     paper_scenarios: tuple[str, str, str] = ("paper-1", "paper-2", "paper-3")
-    paper_agent_params: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         EnvOptions(**self.option_defaults)  # the defaults are valid options
         object.__setattr__(self, "option_defaults", _frozen(self.option_defaults))
-        object.__setattr__(
-            self, "paper_agent_params", _frozen({k: _frozen(v) for k, v in self.paper_agent_params.items()})
-        )
 
     @property
     def env_id(self) -> str:
@@ -87,10 +81,6 @@ class EnvVersion:
         (highway-env's ``default_config``)."""
         return {"scenario": self.default_scenario, **self.options().to_dict()}
 
-    def paper_study_params(self) -> dict[str, dict[str, Any]]:
-        """A mutable copy of :attr:`paper_agent_params`."""
-        return {agent: dict(values) for agent, values in self.paper_agent_params.items()}
-
 
 VERSIONS: dict[str, EnvVersion] = {
     version.name: version
@@ -105,7 +95,6 @@ VERSIONS: dict[str, EnvVersion] = {
             "rule in the paper study, the calibrated layout)",
             option_defaults={"lambda_scale": "db", "truth": "shared"},
             paper_scenarios=("paper-1-v1", "paper-2-v1", "paper-3-v1"),
-            paper_agent_params={"mg-crb-cl": {"solver_params": {"rule": "set"}}},
         ),
     )
 }
@@ -183,13 +172,9 @@ def paper_key(name: str) -> str:
     return name
 
 
-def _literal(value: Any) -> str:
-    return repr(value).replace("'", '"')
-
-
 def versions_markdown(indent: str = "") -> str:
-    """A paragraph per version: its paper scenarios, the option defaults that differ and its
-    paper study's agent parameters (the env docstring's Arguments)."""
+    """A paragraph per version: its paper scenarios and the option defaults that differ (the env
+    docstring's Arguments)."""
     paragraphs = []
     for v in VERSIONS.values():
         defaults = (
@@ -202,11 +187,6 @@ def versions_markdown(indent: str = "") -> str:
         text += "Discrete super-arm action and a flat float32 observation, for deep-RL tools; " + (
             f"option defaults {defaults}" if defaults else "the options' own defaults"
         )
-        if v.paper_agent_params:
-            text += "; its paper study runs " + ", ".join(
-                f"``{agent}`` with ``{_literal(dict(params))}``"
-                for agent, params in v.paper_agent_params.items()
-            )
         paragraphs.append(
             textwrap.fill(
                 text + ".", width=92, initial_indent=indent, subsequent_indent=indent, break_on_hyphens=False

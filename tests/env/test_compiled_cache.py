@@ -5,6 +5,7 @@ import sys
 
 import pytest
 
+from benchmarks.studies.settings import paper_study_params
 from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
 
 pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed")
@@ -46,7 +47,7 @@ def test_a_run_lists_its_fusion_bound_and_solver_kernels():
         2,
         3,
         options=v1.options(),
-        agent_params=v1.paper_study_params(),
+        agent_params=paper_study_params("v1"),
         **quiet,
     )
     assert run_kernels(paper, threads=1) == [

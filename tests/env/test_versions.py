@@ -30,12 +30,19 @@ def test_the_views_are_derived_from_the_versions():
     assert VERSIONS["v1"].options(truth="per-trial").truth == "per-trial"
 
 
-def test_the_paper_study_parameters_come_from_the_version_and_are_copies():
+def test_the_paper_study_owns_its_parameters_and_hands_out_copies():
+    from benchmarks.studies.settings import PAPER_AGENT_PARAMS
+
     assert study_agent_params("v1", []) == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}
     assert study_agent_params("v0", []) == {}
     merged = study_agent_params("v1", ["mg-crb-cl.beta=1.5"])
     assert merged == {"mg-crb-cl": {"solver_params": {"rule": "set"}, "beta": 1.5}}
-    assert dict(VERSIONS["v1"].paper_agent_params["mg-crb-cl"]) == {"solver_params": {"rule": "set"}}
+    assert PAPER_AGENT_PARAMS["v1"]["mg-crb-cl"] == {"solver_params": {"rule": "set"}}
+    assert set(PAPER_AGENT_PARAMS) == set(VERSIONS)
+    # the env versions hold no agent parameters
+    assert not any("agent" in name for version in VERSIONS.values() for name in vars(version))
+    with pytest.raises(ValueError, match="env version must be one of"):
+        study_agent_params("v9", [])
 
 
 def test_the_command_line_offers_every_version_and_its_defaults():
