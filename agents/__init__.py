@@ -6,7 +6,9 @@ acts on the single env and on the vector env; :class:`Rollout` (with :func:`make
 one loop that runs an agent on an env.
 """
 
+from . import costs
 from .base import Agent, IndexPolicy
+from .costs import Needs
 from .fixed import PAPER_FIXED, FixedAgent
 from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
@@ -52,6 +54,7 @@ __all__ = [
     "EpsilonGreedy",
     "FixedAgent",
     "IndexPolicy",
+    "Needs",
     "MaskablePPOAgent",
     "PPOAgent",
     "RecurrentPPOAgent",
@@ -68,6 +71,7 @@ __all__ = [
     "agent_parameters",
     "agent_summary",
     "available_agents",
+    "costs",
     "env_options_for",
     "make_agent",
     "make_env",

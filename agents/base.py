@@ -32,6 +32,7 @@ from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
 
+from .costs import BOOKKEEPING, SOLVER, Cost, Needs
 from .solvers import SuperArmSolver, make_solver
 
 Observation = dict[str, NDArray[Any]]
@@ -73,19 +74,10 @@ class Agent(ABC):
 
     #: Registry name.
     name: ClassVar[str] = ""
-    #: True for agents that read the truth through the env (oracles).
-    needs_oracle: ClassVar[bool] = False
-    #: True for agents that need the tracker's keys in the observation.
-    needs_tracking: ClassVar[bool] = False
-    #: True for agents that score super arms with the tracking search (it has a numba kernel:
-    #: :func:`mimo_radar_env.tracking.selection.compiled_kernels`).
-    searches_for_tracking: ClassVar[bool] = False
-    #: Env options the agent needs set (they add observation keys and change no number);
-    #: the benchmark harness sets them on the envs the agent runs in.
-    observation_options: ClassVar[dict[str, Any]] = {}
-    #: Parameters named after env options (``"fusion"``...) that must match the env's; the
-    #: harness passes the run's values unless they are given.
-    env_option_params: ClassVar[tuple[str, ...]] = ()
+    #: What it needs from the env (:class:`~agents.costs.Needs`), and the parts of its cost
+    #: (:mod:`agents.costs`): declarations the rollout loop and the harness read.
+    needs: ClassVar[Needs] = Needs()
+    costs: ClassVar[tuple[Cost, ...]] = (BOOKKEEPING,)
 
     def __init__(self, scenario: Scenario | str, seed: int | None = None) -> None:
         self.scenario = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
@@ -106,7 +98,7 @@ class Agent(ABC):
     def reset(self, obs: Observation) -> None:
         """Start an episode from the reset observation (every channel probed once)."""
         batch, batched = self._batch(obs)
-        if self.needs_tracking and ("track" not in batch or "track_pred" not in batch):
+        if self.needs.tracking and ("track" not in batch or "track_pred" not in batch):
             raise ValueError(
                 f"{self.name} reads the tracker's estimates from the observation: "
                 "make the env with tracking=True"
@@ -130,26 +122,6 @@ class Agent(ABC):
         """Learn from the observation and reward of the step just taken."""
         batch, _ = self._batch(obs)
         self._update(batch, np.atleast_1d(np.asarray(reward, dtype=np.float64)))
-
-    def memory_per_trial(self) -> int:
-        """Bytes one trial of this agent needs at its peak within a step, roughly (an upper
-        estimate): its per-channel state and its selection's scratch. The harness adds it to
-        the env's to size shards before a run starts."""
-        sc = self.scenario
-        return 8 * 8 * sc.num_targets * sc.num_tx * sc.num_rx
-
-    def operations_per_trial_step(self) -> float:
-        """Arithmetic operations one trial of this agent does per step (act and update),
-        roughly (an upper estimate): its per-channel bookkeeping and its selection. The
-        harness adds it to the env's to estimate a run's time before it starts."""
-        sc = self.scenario
-        return 20.0 * sc.num_targets * sc.num_tx * sc.num_rx
-
-    def seconds_per_step(self) -> float:
-        """Time per step of a whole batch that does not grow with its trials (Python's share of a
-        search that loops over steps or simulations), roughly; 0 for most agents, whose per-step
-        calls are part of the harness's fixed cost per step."""
-        return 0.0
 
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
@@ -213,6 +185,7 @@ class IndexPolicy(Agent):
     """
 
     default_solver: ClassVar[str] = "exact"
+    costs: ClassVar[tuple[Cost, ...]] = (BOOKKEEPING, SOLVER)
     #: Multiplies the play counts every step (1: plain counts; < 1: discounted counts).
     count_discount: float = 1.0
 
@@ -230,13 +203,6 @@ class IndexPolicy(Agent):
             solver or self.default_solver, self.tx_count, self.rx_count, **(solver_params or {})
         )
         self.solver.check_layout(self.scenario.num_tx, self.scenario.num_rx)
-
-    def memory_per_trial(self) -> int:
-        return super().memory_per_trial() + self.solver.memory_per_trial(self.num_tx, self.num_rx)
-
-    def operations_per_trial_step(self) -> float:
-        solver = self.solver.operations_per_trial(self.num_tx, self.num_rx)
-        return super().operations_per_trial_step() + solver
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:

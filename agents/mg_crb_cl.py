@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
-from typing import Any
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,14 +13,34 @@ from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
 
 from .base import IndexPolicy, Observation, blend_samples, ucb_bonus
+from .costs import Needs
 from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
 
-def check_learning_parameters(alpha: float, alpha_bar: float, beta: float) -> None:
-    check_parameter("alpha", alpha, 0.0, 1.0)
-    check_parameter("alpha_bar", alpha_bar, 0.0, 1.0)
-    check_parameter("beta", beta, 0.0)
+@dataclass(frozen=True)
+class LearningParameters:
+    """MG-CRB-CL's estimator parameters, declared here once: MG-CRB-CL, tracking-ucb and the
+    learning planner take them as keywords (``make_agent("tracking-ucb", sc, beta=1.0)``).
+
+    Attributes
+    ----------
+    alpha : float
+        Weight of the geometric prediction in eq16 (paper 0.998), in [0, 1].
+    alpha_bar : float
+        Weight of the new sample in eq14 (paper 0.2), in [0, 1].
+    beta : float
+        Exploration constant of eq18 (paper 2), >= 0.
+    """
+
+    alpha: float = 0.998
+    alpha_bar: float = 0.2
+    beta: float = 2.0
+
+    def __post_init__(self) -> None:
+        check_parameter("alpha", self.alpha, 0.0, 1.0)
+        check_parameter("alpha_bar", self.alpha_bar, 0.0, 1.0)
+        check_parameter("beta", self.beta, 0.0)
 
 
 def geometric_prediction(
@@ -40,10 +62,10 @@ class MGCRBCLEstimator:
     per target) for it, :meth:`update` (eq15's counts, eq14's blend) after it.
     """
 
-    def __init__(self, scenario: Scenario, alpha: float = 0.998, alpha_bar: float = 0.2, beta: float = 2.0):
-        check_learning_parameters(alpha, alpha_bar, beta)
+    def __init__(self, scenario: Scenario, parameters: LearningParameters | None = None) -> None:
         self.scenario = scenario
-        self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
+        self.parameters = parameters or LearningParameters()
+        self.alpha, self.alpha_bar, self.beta = dataclasses.astuple(self.parameters)
 
     def reset(self, obs: Observation) -> None:
         self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
@@ -88,32 +110,28 @@ class MGCRBCL(IndexPolicy):
 
     Parameters
     ----------
-    alpha : float
-        Weight of the geometric prediction in eq16 (paper 0.998).
-    alpha_bar : float
-        Weight of the new sample in eq14 (paper 0.2).
-    beta : float
-        Exploration constant of eq18 (paper 2).
+    alpha, alpha_bar, beta : float
+        The estimator's parameters (:class:`LearningParameters`: eq16's weight 0.998, eq14's
+        step 0.2, eq18's exploration constant 2).
     solver, solver_params, seed : see :class:`~agents.base.IndexPolicy`.
     """
 
     name = "mg-crb-cl"
     default_solver = "bpso"
-    needs_tracking = True
+    needs = Needs(tracking=True)
+    #: Its keyword parameters beyond the signature's (the registry lists them).
+    keyword_parameters: ClassVar[type] = LearningParameters
 
     def __init__(
         self,
         scenario: Scenario | str,
         seed: int | None = None,
-        alpha: float = 0.998,
-        alpha_bar: float = 0.2,
-        beta: float = 2.0,
         solver: str | SuperArmSolver | None = None,
         solver_params: dict[str, Any] | None = None,
+        **learning: float,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        check_learning_parameters(alpha, alpha_bar, beta)
-        self.alpha, self.alpha_bar, self.beta = alpha, alpha_bar, beta
+        self.alpha, self.alpha_bar, self.beta = dataclasses.astuple(LearningParameters(**learning))
 
     def predict(self, obs: Observation) -> NDArray[np.float64]:
         """eq16 from the tracker's estimate and prediction."""

@@ -9,10 +9,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
-from mimo_radar_env.core.superarm import search_operations
 
 from .base import Agent, Observation
-from .tracking import TrackingSearchCost
+from .costs import BOOKKEEPING, ORACLE_SEARCH, TRACKING_SEARCH, Needs
 
 
 def oracle_env(env: Any, method: str) -> Any:
@@ -33,7 +32,8 @@ class BestAgent(Agent):
     """
 
     name = "best"
-    needs_oracle = True
+    needs = Needs(oracle=True)
+    costs = (BOOKKEEPING, ORACLE_SEARCH)
 
     def __init__(self, scenario: Scenario | str, seed: int | None = None, env: Any = None) -> None:
         super().__init__(scenario, seed)
@@ -45,12 +45,6 @@ class BestAgent(Agent):
         """Read the optimal super arm from ``env.oracle_action()`` (single or vector env)."""
         self._oracle = oracle_env(env, "oracle_action").oracle_action
 
-    def operations_per_trial_step(self) -> float:
-        """The env's search of the optimal super arm (its ``oracle_action()``)."""
-        sc = self.scenario
-        search = search_operations(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        return super().operations_per_trial_step() + search
-
     def _reset(self, obs: Observation) -> None:
         if self._oracle is None:
             raise RuntimeError("the best oracle needs the env: call agent.attach(env) first")
@@ -60,7 +54,7 @@ class BestAgent(Agent):
         return np.asarray(self._oracle(), dtype=np.int8).reshape(self.batch_size, -1)
 
 
-class BestTrackingAgent(TrackingSearchCost, BestAgent):
+class BestTrackingAgent(BestAgent):
     """The tracking oracle: the super arm with the smallest predicted posterior position error.
 
     Each step it minimises ``sum_k Omega_k trace`` (``criterion="trace"``, m^2) or ``log det``
@@ -71,6 +65,8 @@ class BestTrackingAgent(TrackingSearchCost, BestAgent):
     """
 
     name = "best-tracking"
+    needs = Needs(oracle=True, tracking_search=True)
+    costs = (BOOKKEEPING, TRACKING_SEARCH)
 
     def __init__(
         self, scenario: Scenario | str, seed: int | None = None, env: Any = None, criterion: str = "trace"

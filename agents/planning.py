@@ -10,68 +10,17 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
 from mimo_radar_env.core.motion import transition_matrix
-from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
 
 from .base import Agent, Observation, ucb_bonus
+from .costs import BOOKKEEPING, PLAN, TRACKING_SEARCH, Needs
 from .oracle import oracle_env
 from .parameters import check_integer
 from .tracking import TrackingUCB
 
 #: The longest plan the oracle looks at.
 MAX_HORIZON = 50
-
-
-def _plan_states(
-    scenario: Scenario, search: str, width: int, horizon: int, simulations: int
-) -> tuple[int, int]:
-    """The super arms, and the plans a search scores at once (the beam, one per super arm for
-    the rollout, one node at a time for MCTS) and how often (MCTS: each simulation's steps)."""
-    sc = scenario
-    arms = super_arm_count(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-    if search == "rollout":
-        return arms, arms
-    if search == "mcts":
-        return arms, 1
-    return arms, min(width, arms ** max(horizon - 1, 0))
-
-
-def _plan_memory(scenario: Scenario, search: str, width: int, horizon: int, simulations: int = 64) -> int:
-    """Bytes per trial of a plan's search: each plan scored at once scores every super arm of a
-    step (its 2 x 2 posteriors and their criterion: ``benchmarks.speed.policy_cost`` measured
-    about 14 float64 per plan, super arm and target), with its prior and the channels'
-    information; the horizon's information; MCTS's tree (a covariance and the candidates' costs
-    and counts per node)."""
-    sc = scenario
-    arms, states = _plan_states(sc, search, width, horizon, simulations)
-    channels = sc.num_targets * sc.num_tx * sc.num_rx
-    tree = 8 * (1 + simulations) * (16 * sc.num_targets + 5 * arms) if search == "mcts" else 0
-    return (
-        8 * states * (arms * (8 + 16 * sc.num_targets) + channels * 4 * 4)
-        + 8 * horizon * channels * 12
-        + tree
-    )
-
-
-def _plan_operations(
-    scenario: Scenario, search: str, width: int, horizon: int, simulations: int = 64
-) -> float:
-    """Every scored plan extended by every super arm at every planned step (MCTS: at every step
-    of every simulation)."""
-    sc = scenario
-    arms, states = _plan_states(sc, search, width, horizon, simulations)
-    repeats = simulations if search == "mcts" else 1
-    return repeats * horizon * states * arms * sc.num_targets * (2.0 * sc.num_tx * sc.num_rx + 60)
-
-
-#: Python's time per planned step of a batch, and per step of an MCTS simulation (s): the
-#: searches loop over them (``benchmarks.speed.policy_cost`` measures them at a few trials).
-PLAN_STEP_SECONDS = 1e-3
-
-
-def _plan_seconds(search: str, horizon: int, simulations: int) -> float:
-    return PLAN_STEP_SECONDS * horizon * (simulations if search == "mcts" else 1)
 
 
 class PlanTrackingAgent(Agent):
@@ -100,9 +49,9 @@ class PlanTrackingAgent(Agent):
     """
 
     name = "plan-tracking"
-    needs_oracle = True
-    searches_for_tracking = True  # a plan's first step is scored by the tracking search
-    needs_tracking = True
+    # a plan's first step is scored by the tracking search
+    needs = Needs(oracle=True, tracking=True, tracking_search=True)
+    costs = (BOOKKEEPING, PLAN)
 
     def __init__(
         self,
@@ -143,19 +92,6 @@ class PlanTrackingAgent(Agent):
             fusion, self.simulations, self.candidates,
         )  # fmt: skip
 
-    def memory_per_trial(self) -> int:
-        return super().memory_per_trial() + _plan_memory(
-            self.scenario, self.search, self.width, self.horizon, self.simulations
-        )
-
-    def operations_per_trial_step(self) -> float:
-        return super().operations_per_trial_step() + _plan_operations(
-            self.scenario, self.search, self.width, self.horizon, self.simulations
-        )
-
-    def seconds_per_step(self) -> float:
-        return _plan_seconds(self.search, self.horizon, self.simulations)
-
     def _reset(self, obs: Observation) -> None:
         if self.planner is None:
             raise RuntimeError("the planning oracle needs the env: call agent.attach(env) first")
@@ -187,6 +123,7 @@ class PlanTrackingUCB(TrackingUCB):
     """
 
     name = "plan-tracking-ucb"
+    costs = (BOOKKEEPING, TRACKING_SEARCH, PLAN)
 
     def __init__(
         self,
@@ -197,20 +134,18 @@ class PlanTrackingUCB(TrackingUCB):
         width: int = 5,
         simulations: int = 64,
         candidates: int = 8,
-        alpha: float = 0.998,
-        alpha_bar: float = 0.2,
-        beta: float = 2.0,
         criterion: str = "trace",
         fusion: str = "average",
         lambda_scale: str = "db",
         measurement_quality: float | None = None,
+        **learning: float,
     ) -> None:
         super().__init__(
-            scenario, seed, alpha, alpha_bar, beta, criterion, fusion, lambda_scale, 0.0, measurement_quality
+            scenario, seed, criterion, fusion, lambda_scale, 0.0, measurement_quality, **learning
         )
         check_integer("horizon", horizon, 1, MAX_HORIZON)
         sc = self.scenario
-        self.horizon = horizon
+        self.horizon, self.search, self.width, self.simulations = horizon, search, width, simulations
         self.planner = Planner(
             sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step, search, width, criterion, fusion,
             simulations, candidates,
@@ -218,24 +153,8 @@ class PlanTrackingUCB(TrackingUCB):
         self.planner.check_horizon(horizon)
         self.transition = transition_matrix(0.0, sc.sample_time)
 
-    def operations_per_trial_step(self) -> float:
-        planner = self.planner
-        return super().operations_per_trial_step() + _plan_operations(
-            self.scenario, planner.search, planner.width, self.horizon, planner.simulations
-        )
-
-    def memory_per_trial(self) -> int:
-        planner = self.planner
-        return super().memory_per_trial() + _plan_memory(
-            self.scenario, planner.search, planner.width, self.horizon
-        )
-
-    def seconds_per_step(self) -> float:
-        return _plan_seconds(self.planner.search, self.horizon, self.planner.simulations)
-
     def forecast(self, obs: Observation) -> Forecast:
         """The plan's inputs from the observation and the learnt estimates alone."""
-        model = self.selector.model
         sc = self.scenario
         predicted = [np.asarray(obs["track_pred"], dtype=np.float64)]
         for _ in range(1, self.horizon):
@@ -247,17 +166,16 @@ class PlanTrackingUCB(TrackingUCB):
         alpha = self.learning.alpha
         sinr = alpha * ahead / now * estimate + (1.0 - alpha) * estimate  # eq16 along the plan
         optimistic = sinr + ucb_bonus(self.learning.beta, self.t, self.learning.counts)[:, None, None]  # eq18
-        if self.measurement_quality is None:
-            quality = model.quality(optimistic, scale=self.lambda_scale)  # eq32
-        else:
-            quality = np.full(optimistic.shape, float(self.measurement_quality))
         return Forecast(
             covariance=np.asarray(obs["track_pred_cov"], dtype=np.float64),
             information=channel_information(
-                positions, sc.tx_positions, sc.rx_positions, model.measurement_variance(quality)
+                positions,
+                sc.tx_positions,
+                sc.rx_positions,
+                self.selector.variance(optimistic),  # eq32
             ),
             transition=self.transition,
-            process_cov=model.process_cov,
+            process_cov=self.selector.model.process_cov,
             weights=np.asarray(sc.weights, dtype=np.float64),
         )
 

@@ -21,6 +21,7 @@ from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers import RadarFeatures, SuperArmIndex, make_ppo_env, scores_to_action
 
 from .base import Agent, Observation
+from .costs import BOOKKEEPING, NETWORK, Needs
 
 #: Files written by ``mimo-radar-bench train-ppo`` into its output folder.
 MODEL_FILE = "model.zip"
@@ -271,7 +272,8 @@ class PPOAgent(Agent):
     """
 
     name = "ppo"
-    needs_tracking = True
+    needs = Needs(tracking=True)
+    costs = (BOOKKEEPING, NETWORK)
     learner: ClassVar[Learner] = LEARNERS["ppo"]
 
     def __init__(
@@ -324,11 +326,6 @@ class PPOAgent(Agent):
                     f"features, the scenario has {observation_space.shape}"
                 )
         self._features: NDArray[np.float32] | None = None
-
-    def operations_per_trial_step(self) -> float:
-        """Its features, and a forward pass of its network: about two operations per weight."""
-        weights = sum(int(p.numel()) for p in self.model.policy.parameters())
-        return super().operations_per_trial_step() + 2.0 * weights + 10.0 * self.features.size
 
     def _reset(self, obs: Observation) -> None:
         self._features = self.features.reset(obs)

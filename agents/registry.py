@@ -7,6 +7,7 @@ tracking-ucb's SINR weight: ``tracking-ucb:0.5``).
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -125,9 +126,16 @@ def available_agents() -> list[str]:
 
 
 def agent_parameters(name: str) -> list[str]:
-    """The parameters ``make_agent(name, ...)`` accepts (besides the scenario)."""
+    """The parameters ``make_agent(name, ...)`` accepts (besides the scenario): its signature's,
+    and the fields of its ``keyword_parameters`` (a dataclass its ``**`` keywords build)."""
     spec = _spec(name)
-    params = inspect.signature(spec.cls.__init__).parameters
+    params = [
+        p
+        for p, value in inspect.signature(spec.cls.__init__).parameters.items()
+        if value.kind is not inspect.Parameter.VAR_KEYWORD
+    ]
+    keyword = getattr(spec.cls, "keyword_parameters", None)
+    params += [f.name for f in dataclasses.fields(keyword)] if keyword is not None else []
     return [p for p in params if p not in ("self", "scenario") and p not in spec.preset]
 
 
@@ -138,7 +146,10 @@ def required_parameters(name: str) -> list[str]:
     return [
         p
         for p, value in params.items()
-        if p not in ("self", "scenario") and p not in spec.preset and value.default is inspect.Parameter.empty
+        if p not in ("self", "scenario")
+        and p not in spec.preset
+        and value.default is inspect.Parameter.empty
+        and value.kind not in (inspect.Parameter.VAR_KEYWORD, inspect.Parameter.VAR_POSITIONAL)
     ]
 
 

@@ -31,9 +31,9 @@ from .base import Agent, Observation
 
 def env_options_for(agent: Agent, options: EnvOptions | Mapping[str, Any] | None = None) -> dict[str, Any]:
     """The env options ``options`` with those ``agent`` needs for its observation
-    (``Agent.observation_options``; they add observation keys and change no number of the env)."""
+    (``Agent.needs.observation_options``; they add observation keys and change no number of the env)."""
     given = options.to_dict() if isinstance(options, EnvOptions) else dict(options or {})
-    return {**given, **agent.observation_options}
+    return {**given, **agent.needs.observation_options}
 
 
 def make_env(
@@ -75,7 +75,7 @@ class Rollout:
 
     def __init__(self, agent: Agent, env: Any, seed: int | None = None) -> None:
         self.agent, self.env = agent, env
-        if agent.needs_oracle:
+        if agent.needs.oracle:
             agent.attach(env)  # type: ignore[attr-defined]
         self.obs, self.info = env.reset(seed=seed)
         agent.reset(self.obs)

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 
 from .base import IndexPolicy, Observation
+from .costs import BOOKKEEPING, GAMMA_SAMPLER, SOLVER
 from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
@@ -39,6 +40,7 @@ class CombinatorialThompson(IndexPolicy):
     """
 
     name = "cts"
+    costs = (BOOKKEEPING, SOLVER, GAMMA_SAMPLER)
     default_discount = 1.0
 
     def __init__(
@@ -57,19 +59,6 @@ class CombinatorialThompson(IndexPolicy):
         check_parameter("prior_shape", prior_shape, 0.0, low_open=True)
         check_parameter("prior_rate", prior_rate, 0.0, low_open=True)
         self.count_discount, self.prior_shape, self.prior_rate = discount, prior_shape, prior_rate
-
-    def memory_per_trial(self) -> int:
-        """Its state, plus the Gamma sampler's scratch: its rejection rounds draw normals and
-        uniforms for every target and channel (``benchmarks.speed.policy_cost`` measured about
-        38 float64 per target and channel)."""
-        sc = self.scenario
-        return super().memory_per_trial() + 8 * 48 * sc.num_targets * sc.num_tx * sc.num_rx
-
-    def operations_per_trial_step(self) -> float:
-        """Its bookkeeping and solver, plus a Gamma draw (a few rejection rounds) per target
-        and channel."""
-        sc = self.scenario
-        return super().operations_per_trial_step() + 150.0 * sc.num_targets * sc.num_tx * sc.num_rx
 
     def posterior(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Shape and rate (B, K, M, N) of the Gamma posterior of every rate ``1/S``."""

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,36 +16,15 @@ from mimo_radar_env.tracking.selection import (
     CRITERIA,
     MAX_ENUMERATED_SUPER_ARMS,
     select_for_tracking,
-    selection_memory_per_trial,
-    selection_operations_per_trial,
 )
 
 from .base import Agent, Observation, fuse_targets
-from .mg_crb_cl import MGCRBCLEstimator
+from .costs import BOOKKEEPING, TRACKING_SEARCH, Needs
+from .mg_crb_cl import LearningParameters, MGCRBCLEstimator
 from .parameters import check_parameter
 
 #: The observation key the policy scores super arms with (env option ``prediction_covariance``).
 PREDICTED_COVARIANCE = "track_pred_pos_cov"
-
-
-class TrackingSearchCost:
-    """The cost declarations of an agent whose selection is the tracking search
-    (:func:`~mimo_radar_env.tracking.selection.select_for_tracking`) on its scenario."""
-
-    scenario: Scenario
-    searches_for_tracking: ClassVar[bool] = True
-
-    def _search_size(self) -> tuple[int, int, int, int, int]:
-        sc = self.scenario
-        return sc.num_tx, sc.num_rx, sc.num_targets, sc.tx_per_step, sc.rx_per_step
-
-    def memory_per_trial(self) -> int:
-        return super().memory_per_trial() + selection_memory_per_trial(*self._search_size())  # type: ignore[misc]
-
-    def operations_per_trial_step(self) -> float:
-        # Agent's own, not a parent's selection: the tracking search replaces it
-        search = selection_operations_per_trial(*self._search_size())
-        return Agent.operations_per_trial_step(self) + search  # type: ignore[arg-type]
 
 
 class TrackingSelector:
@@ -89,15 +68,20 @@ class TrackingSelector:
         self.sinr_weight = float(sinr_weight)
         self.model = RadarModel.from_scenario(scenario)
 
-    def select(
-        self, obs: Observation, sinr: NDArray[np.float64], sinr_index: NDArray[np.float64] | None = None
-    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
-        """TX and RX masks (B, M), (B, N) for the coming step."""
+    def variance(self, sinr: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The channels' measurement variances (..., 2) for SINR values: eq32's ``lambda`` (or the
+        constant ``measurement_quality``), then ``Sigma0 / lambda``."""
         if self.measurement_quality is None:
             quality = self.model.quality(sinr, scale=self.lambda_scale)  # eq32
         else:
             quality = np.full(sinr.shape, float(self.measurement_quality))
-        variance = self.model.measurement_variance(quality)
+        return self.model.measurement_variance(quality)
+
+    def select(
+        self, obs: Observation, sinr: NDArray[np.float64], sinr_index: NDArray[np.float64] | None = None
+    ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+        """TX and RX masks (B, M), (B, N) for the coming step."""
+        variance = self.variance(sinr)
         positions = np.asarray(obs["track_pred"])[..., [0, 2]]
         information = channel_information(positions, self.model.tx, self.model.rx, variance)
         return select_for_tracking(
@@ -113,7 +97,7 @@ class TrackingSelector:
         )
 
 
-class TrackingUCB(TrackingSearchCost, Agent):
+class TrackingUCB(Agent):
     """Tracking-UCB: learns the channels' SINR as MG-CRB-CL does and selects for tracking.
 
     It is composed of MG-CRB-CL's SINR learning (:class:`~agents.mg_crb_cl.MGCRBCLEstimator`:
@@ -132,7 +116,7 @@ class TrackingUCB(TrackingSearchCost, Agent):
     Parameters
     ----------
     alpha, alpha_bar, beta : float
-        MG-CRB-CL's eq16 weight (0.998), eq14 step (0.2) and eq18 exploration constant (2).
+        MG-CRB-CL's estimator parameters (:class:`~agents.mg_crb_cl.LearningParameters`).
     criterion : {"trace", "logdet"}
         The predicted position MSE (m^2) or the log-determinant of the position covariance.
     fusion : {"average", "centralized"}
@@ -156,41 +140,33 @@ class TrackingUCB(TrackingSearchCost, Agent):
     """
 
     name = "tracking-ucb"
-    needs_tracking = True
-    env_option_params: ClassVar[tuple[str, ...]] = ("fusion", "lambda_scale", "measurement_quality")
-    observation_options: ClassVar[dict[str, Any]] = {"prediction_covariance": True}
+    needs = Needs(
+        tracking=True,
+        observation_options={"prediction_covariance": True},
+        env_option_params=("fusion", "lambda_scale", "measurement_quality"),
+        tracking_search=True,
+    )
+    costs = (BOOKKEEPING, TRACKING_SEARCH)
+    #: Its keyword parameters beyond the signature's (the registry lists them).
+    keyword_parameters: ClassVar[type] = LearningParameters
 
     def __init__(
         self,
         scenario: Scenario | str,
         seed: int | None = None,
-        alpha: float = 0.998,
-        alpha_bar: float = 0.2,
-        beta: float = 2.0,
         criterion: str = "trace",
         fusion: str = "average",
         lambda_scale: str = "db",
         sinr_weight: float = 0.0,
         measurement_quality: float | None = None,
+        **learning: float,
     ) -> None:
         super().__init__(scenario, seed)
-        self.learning = MGCRBCLEstimator(self.scenario, alpha, alpha_bar, beta)
+        #: What it learns (MG-CRB-CL's estimates) and how it selects.
+        self.learning = MGCRBCLEstimator(self.scenario, LearningParameters(**learning))
         self.selector = TrackingSelector(
             self.scenario, criterion, fusion, lambda_scale, measurement_quality, sinr_weight
         )
-
-    # what it learns and how it selects, as read by users and tests
-    alpha = property(lambda self: self.learning.alpha)
-    alpha_bar = property(lambda self: self.learning.alpha_bar)
-    beta = property(lambda self: self.learning.beta)
-    estimate = property(lambda self: self.learning.estimate)
-    counts = property(lambda self: self.learning.counts)
-    predicted = property(lambda self: self.learning.predicted)
-    criterion = property(lambda self: self.selector.criterion)
-    fusion = property(lambda self: self.selector.fusion)
-    lambda_scale = property(lambda self: self.selector.lambda_scale)
-    measurement_quality = property(lambda self: self.selector.measurement_quality)
-    sinr_weight = property(lambda self: self.selector.sinr_weight)
 
     def _reset(self, obs: Observation) -> None:
         if PREDICTED_COVARIANCE not in obs:
@@ -203,7 +179,7 @@ class TrackingUCB(TrackingSearchCost, Agent):
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         self.learning.predict(obs)  # eq16
         optimistic = self.learning.optimistic(self.t)  # eq18, per target
-        index = fuse_targets(self.weights, optimistic) if self.sinr_weight > 0 else None  # eq34
+        index = fuse_targets(self.weights, optimistic) if self.selector.sinr_weight > 0 else None  # eq34
         tx, rx = self.selector.select(obs, optimistic, sinr_index=index)
         return self.actions_from_masks(tx, rx)
 

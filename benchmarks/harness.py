@@ -145,7 +145,7 @@ def make_config(
     if shard_size is None:
         shard_size = auto_shard_size(trials, parallel, len(policies))
     built = {policy: _probe(policy, sc, params.get(policy, {}), seed, options) for policy in policies}
-    per_trial = {policy: agent.memory_per_trial() for policy, agent in built.items()}
+    per_trial = {policy: agents.costs.memory_per_trial(agent) for policy, agent in built.items()}
     shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
     _check_run_time(sc, options, built, trials, steps, shard_size, parallel, max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
@@ -228,8 +228,8 @@ def _check_run_time(
     say: Callable[[str], None],
 ) -> None:
     """Says the run's estimated time, or refuses it beyond ``max_hours`` (:func:`check_time`)."""
-    operations = {policy: agent.operations_per_trial_step() for policy, agent in built.items()}
-    fixed = {policy: agent.seconds_per_step() for policy, agent in built.items()}
+    operations = {policy: agents.costs.operations_per_trial_step(agent) for policy, agent in built.items()}
+    fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
     alone = {
         p: estimate_seconds(sc, options, {p: operations[p]}, trials, steps, shard_size, 1, fixed)
         for p in built
@@ -433,7 +433,7 @@ def run_kernels(config: RunConfig, threads: int | None = None) -> list[Any]:
     kernels = compiled_kernels(config.options.fusion) if config.options.tracking else []
     for policy in config.policies:
         cls = agents.agent_class(agents.split_policy(policy)[0])
-        if cls.searches_for_tracking:
+        if cls.needs.tracking_search:
             kernels += selection_kernels()
         solver = config.agent_params.get(policy, {}).get("solver", getattr(cls, "default_solver", None))
         if isinstance(solver, str):
@@ -449,12 +449,12 @@ def make_policy(
     options: dict[str, Any] | None = None,
 ) -> agents.Agent:
     """The agent of a policy entry ``NAME`` or ``NAME:ARGUMENT`` with its parameters; the
-    parameters it names after env options (``Agent.env_option_params``) default to the
+    parameters it names after env options (``Agent.needs.env_option_params``) default to the
     run's ``options``."""
     name, argument = agents.split_policy(policy)
     from_env = {
         key: options[key]
-        for key in agents.agent_class(name).env_option_params
+        for key in agents.agent_class(name).needs.env_option_params
         if options is not None and key not in params
     }
     return agents.make_agent(name, scenario, seed=seed, **argument, **from_env, **params)
@@ -541,7 +541,10 @@ def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
     for policy in config.policies:
         params = config.agent_params.get(policy, {})
         agent = make_policy(policy, scenario, params, seed=config.seed, options=config.env_options)
-        operations, fixed = {policy: agent.operations_per_trial_step()}, {policy: agent.seconds_per_step()}
+        operations, fixed = (
+            {policy: agents.costs.operations_per_trial_step(agent)},
+            {policy: agents.costs.seconds_per_step(agent)},
+        )
         for shard in range(config.num_shards):
             n = len(config.shard_trials(shard))
             costs[policy, shard] = estimate_seconds(

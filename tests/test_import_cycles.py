@@ -1,6 +1,7 @@
 """No import cycles among the project's modules: every ``import`` statement, at the top of a
 module or inside a function, is an edge from the importing module to the module it names (a
-package's ``__init__`` for ``from package import name`` where ``name`` is not a module)."""
+package's ``__init__`` for ``from package import name`` where ``name`` is not a module). Imports
+for type checkers only (under ``if TYPE_CHECKING:``) never run and are no edge."""
 
 import ast
 from pathlib import Path
@@ -22,7 +23,7 @@ def _modules() -> dict[str, Path]:
 def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     edges = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in _runtime_nodes(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             targets = [alias.name for alias in node.names]
         elif isinstance(node, ast.ImportFrom):
@@ -40,6 +41,18 @@ def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
             if target and target != name:
                 edges.add(target)
     return edges
+
+
+def _runtime_nodes(tree: ast.AST):
+    """Every node but those under ``if TYPE_CHECKING:``."""
+    for child in ast.iter_child_nodes(tree):
+        if isinstance(child, ast.If) and "TYPE_CHECKING" in ast.unparse(child.test):
+            for other in child.orelse:
+                yield other
+                yield from _runtime_nodes(other)
+            continue
+        yield child
+        yield from _runtime_nodes(child)
 
 
 def cycles() -> list[list[str]]:

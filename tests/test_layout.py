@@ -11,6 +11,7 @@ ROOT = Path(__file__).resolve().parents[1]
 #: module -> (test file, a regular expression the test file must match)
 MODULE_TESTS = {
     "agents/base.py": ("tests/agents/test_agents.py", r"make_agent"),
+    "agents/costs.py": ("tests/bench/test_resources.py", r"agents\.costs\."),
     "agents/fixed.py": ("tests/agents/test_agents.py", r'"fix1"'),
     "agents/greedy.py": ("tests/agents/test_agents.py", r"epsilon-greedy"),
     "agents/mg_crb_cl.py": ("tests/agents/test_agents.py", r"mg-crb-cl"),

@@ -67,16 +67,16 @@ def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[
         tracemalloc.stop()
     env.close()
     _, env_per_trial = memory_parts(scenario)
-    declared = env_per_trial + agent.memory_per_trial()
-    options = dataclasses.replace(VERSIONS["v1"].options(), **agent.observation_options)
+    declared = env_per_trial + agents.costs.memory_per_trial(agent)
+    options = dataclasses.replace(VERSIONS["v1"].options(), **agent.needs.observation_options)
     estimate = estimate_seconds(
         scenario,
         options,
-        {policy: agent.operations_per_trial_step()},
+        {policy: agents.costs.operations_per_trial_step(agent)},
         trials,
         1,
         trials,
-        agent_seconds={policy: agent.seconds_per_step()},
+        agent_seconds={policy: agents.costs.seconds_per_step(agent)},
     )
     return {
         "policy": policy,

@@ -123,7 +123,7 @@ def measure(trials: int = 500, steps: int = 40) -> dict[str, Any]:
                 "fusion": "-",
                 "stage": label,
                 "ms_per_step": 1e3 * seconds,
-                **_rate(agent.operations_per_trial_step(), seconds, trials),
+                **_rate(agents.costs.operations_per_trial_step(agent), seconds, trials),
             }
         )
     return {"scenario": SCENARIO, "trials": trials, "steps": steps, "rows": rows}

@@ -167,7 +167,7 @@ def test_mg_crb_cl_needs_the_tracker():
 
 def _episode(agent_name, scenario, vector, steps):
     cls = agents.agent_class(agent_name)
-    kwargs = {"scenario": scenario, **cls.observation_options}
+    kwargs = {"scenario": scenario, **cls.needs.observation_options}
     if vector:
         env = gym.make_vec(
             "MimoRadarSelect-v0", num_envs=3, vectorization_mode="vector_entry_point", **kwargs
@@ -190,7 +190,7 @@ def _episode(agent_name, scenario, vector, steps):
             agents.make_agent(agent_name, sc, **params)
         return
     options = env.unwrapped.options if not vector else env.options
-    params.update({key: getattr(options, key) for key in cls.env_option_params})
+    params.update({key: getattr(options, key) for key in cls.needs.env_option_params})
     agent = agents.make_agent(agent_name, sc, **params)
     for step in agents.Rollout(agent, env, seed=1).run(steps or sc.horizon):
         assert np.all(step.info["action_valid"])

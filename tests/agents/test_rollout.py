@@ -12,7 +12,7 @@ from mimo_radar_env import MimoRadarSelectVectorEnv
 def _by_hand(policy, env, seed, steps):
     """The loop as every caller used to write it."""
     agent = agents.make_agent(policy, "paper-1-v1", seed=5)
-    if agent.needs_oracle:
+    if agent.needs.oracle:
         agent.attach(env)
     obs, _ = env.reset(seed=seed)
     agent.reset(obs)

@@ -34,7 +34,8 @@ def _quality_db(sinr, s_min, peak):
 def _brute_force(agent, obs, model, fusion):
     """Every super arm scored one by one: optimistic SINR -> lambda -> R -> information -> posterior."""
     sc = agent.scenario
-    optimistic = agent.predicted[0] + np.sqrt(agent.beta * np.log(agent.t) / agent.counts[0])  # eq18
+    learning = agent.learning
+    optimistic = learning.predicted[0] + np.sqrt(learning.beta * np.log(agent.t) / learning.counts[0])  # eq18
     sigma0 = np.diag(sc.measurement_covariance)
     scores = {}
     for tx_idx in itertools.combinations(range(sc.num_tx), sc.tx_per_step):
@@ -148,7 +149,7 @@ def test_it_reads_no_truth():
             env.unwrapped.engine.tracking_oracle_action = refuse
             env = _TruthWithheld(env)
         agent = agents.make_agent("tracking-ucb", env.unwrapped.scenario)
-        assert not agent.needs_oracle
+        assert not agent.needs.oracle
         obs, info = env.reset(seed=4)
         assert (info == {}) == withhold
         agent.reset(obs)
@@ -183,12 +184,17 @@ def test_the_harness_gives_it_the_runs_fusion_scale_and_observation():
     options = VERSIONS["v0"].options(fusion="centralized").to_dict()
     sc = load_scenario("paper-1")
     agent = make_policy("tracking-ucb", sc, {}, seed=0, options=options)
-    assert (agent.fusion, agent.lambda_scale, agent.measurement_quality) == ("centralized", "linear", None)
+    selector = agent.selector
+    assert (selector.fusion, selector.lambda_scale, selector.measurement_quality) == (
+        "centralized",
+        "linear",
+        None,
+    )
     constant = make_policy("tracking-ucb", sc, {}, seed=0, options=options | {"measurement_quality": 0.5})
-    assert constant.measurement_quality == 0.5
+    assert constant.selector.measurement_quality == 0.5
     assert policy_env_options(agent, options) == {**options, "prediction_covariance": True}
     given = make_policy("tracking-ucb", sc, {"fusion": "average"}, seed=0, options=options)
-    assert given.fusion == "average"  # a parameter given wins over the run's option
+    assert given.selector.fusion == "average"  # a parameter given wins over the run's option
     ucb = make_policy("ucb1", sc, {}, seed=0, options=options)
     assert policy_env_options(ucb, options) == options
 
@@ -228,9 +234,9 @@ def test_it_is_composed_of_mg_crb_cls_learning_and_the_tracking_selector():
     for _ in range(12):
         action = tracking.act(obs)
         mg.act(obs)  # MG-CRB-CL updates on the same (tracking-ucb's) observations
-        np.testing.assert_array_equal(tracking.predicted, mg.predicted)
+        np.testing.assert_array_equal(tracking.learning.predicted, mg.predicted)
         obs, reward, *_ = venv.step(action)
         tracking.update(obs, reward)
         mg.update(obs, reward)
-        np.testing.assert_array_equal(tracking.estimate, mg.estimate)
-        np.testing.assert_array_equal(tracking.counts, mg.counts)
+        np.testing.assert_array_equal(tracking.learning.estimate, mg.estimate)
+        np.testing.assert_array_equal(tracking.learning.counts, mg.counts)

@@ -41,7 +41,7 @@ def test_a_run_too_large_for_the_machine_is_refused_before_anything_is_written(t
 
 def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monkeypatch):
     fixed, env = memory_parts(PAPER)
-    agent = agents.make_agent("ucb1", PAPER).memory_per_trial()
+    agent = agents.costs.memory_per_trial(agents.make_agent("ucb1", PAPER))
     monkeypatch.setattr("benchmarks.harness.machine_memory", lambda: int((fixed + 3 * (env + agent)) * 2))
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "7", "--steps", "3"]
@@ -75,7 +75,7 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
         vectorization_mode="vector_entry_point",
         scenario=scenario,
         oracle_solver="alternating",
-        **agent.observation_options,
+        **agent.needs.observation_options,
     )
     episode = agents.Rollout(agent, env, seed=0)
     tracemalloc.start()
@@ -85,7 +85,7 @@ def test_declared_memory_bounds_what_a_step_allocates(policy):
     finally:
         tracemalloc.stop()
     _, env_per_trial = memory_parts(scenario)
-    declared = trials * (agent.memory_per_trial() + env_per_trial)
+    declared = trials * (agents.costs.memory_per_trial(agent) + env_per_trial)
     assert peak <= declared, (
         f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
     )
@@ -123,15 +123,15 @@ def test_declared_operations_follow_the_work():
     scenario = random_scenario(16, 16, 2, 4, 4, horizon=5, seed=0)
     small = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 10})
     large = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 20})
-    base = agents.Agent.operations_per_trial_step(small)
-    assert large.operations_per_trial_step() - base == pytest.approx(
-        2 * (small.operations_per_trial_step() - base)
+    base = agents.costs.BOOKKEEPING.operations_per_trial_step(small)
+    assert agents.costs.operations_per_trial_step(large) - base == pytest.approx(
+        2 * (agents.costs.operations_per_trial_step(small) - base)
     )
     # the tracking search: enumerated at 4 x 6, greedy at 64 x 64, more work for more targets
     costs = {
-        (m, k): agents.make_agent(
-            "best-tracking", random_scenario(m, m, k, 4, 4, horizon=5, seed=0)
-        ).operations_per_trial_step()
+        (m, k): agents.costs.operations_per_trial_step(
+            agents.make_agent("best-tracking", random_scenario(m, m, k, 4, 4, horizon=5, seed=0))
+        )
         for m in (8, 64)
         for k in (1, 5)
     }
@@ -194,7 +194,9 @@ def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
     env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point")
     agent.attach(env)
     learner = agents.make_agent("plan-tracking-ucb", "paper-1-v1", horizon=3, search=search)
-    assert learner.memory_per_trial() >= agent.memory_per_trial()  # the same plans, and its estimates
+    assert agents.costs.memory_per_trial(learner) >= agents.costs.memory_per_trial(
+        agent
+    )  # the same plans, and its estimates
     obs, _ = env.reset(seed=0)
     agent.reset(obs)
     obs, *_ = env.step(agent.act(obs))  # warm-up: first-call caches and imports
@@ -206,4 +208,4 @@ def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
     finally:
         tracemalloc.stop()
     _, env_per_trial = memory_parts(load_scenario("paper-1-v1"))
-    assert peak <= trials * (agent.memory_per_trial() + env_per_trial)
+    assert peak <= trials * (agents.costs.memory_per_trial(agent) + env_per_trial)

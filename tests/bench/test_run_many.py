@@ -4,6 +4,7 @@ no barrier between runs, a run's outputs written as soon as its last task is sav
 import numpy as np
 import pytest
 
+import agents
 from benchmarks import harness
 from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, task_seconds
 from mimo_radar_env.envs.cost import operations_per_trial_step
@@ -30,9 +31,9 @@ def test_task_estimates_follow_the_declared_operations_and_the_shards_trials():
     assert set(cost) == {(p, s) for p in config.policies for s in range(3)}
     env = operations_per_trial_step(config.scenario_object, True, config.options.fusion)
     ops = {
-        p: harness.make_policy(
-            p, config.scenario_object, {}, seed=0, options=config.env_options
-        ).operations_per_trial_step()
+        p: agents.costs.operations_per_trial_step(
+            harness.make_policy(p, config.scenario_object, {}, seed=0, options=config.env_options)
+        )
         for p in config.policies
     }
     assert ops["mg-crb-cl"] > ops["ucb1"]  # BPSO against the exact solver
