@@ -7,12 +7,12 @@ whose numbers are a promise).
 
 from pathlib import Path
 
-import gymnasium as gym
 import numpy as np
 
 import agents
 import mimo_radar_env
 from benchmarks.studies.settings import paper_study_params
+from tests.helpers import vector_env
 
 GOLDEN = Path(__file__).with_name("data") / "golden.npz"
 GOLDEN_V1 = Path(__file__).with_name("data") / "golden_v1.npz"
@@ -21,10 +21,9 @@ GOLDEN_V1 = Path(__file__).with_name("data") / "golden_v1.npz"
 def record() -> dict[str, np.ndarray]:
     out = {}
     for scenario, fusion in (("paper-3", "average"), ("paper-2", "centralized")):
-        venv = gym.make_vec(
+        venv = vector_env(
             "MimoRadarSelect-v0",
-            num_envs=6,
-            vectorization_mode="vector_entry_point",
+            6,
             scenario=scenario,
             fusion=fusion,
         )
@@ -48,10 +47,9 @@ def record_v1() -> dict[str, np.ndarray]:
     version = mimo_radar_env.VERSIONS["v1"]
     out = {}
     for scenario, fusion in (("paper-1-v1", "centralized"), ("paper-3-v1", "average")):
-        venv = gym.make_vec(
+        venv = vector_env(
             version.env_id,
-            num_envs=5,
-            vectorization_mode="vector_entry_point",
+            5,
             scenario=scenario,
             fusion=fusion,
         )

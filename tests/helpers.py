@@ -14,3 +14,11 @@ def random_valid_actions(rng: np.random.Generator, batch: int, num_tx: int, num_
 def large_scenario(num_tx=16, num_rx=16, num_targets=5, tx_per_step=4, rx_per_step=4, horizon=1000, seed=0):
     """A random layout of ``num_tx`` x ``num_rx`` stations and ``num_targets`` targets in 100 km x 100 km."""
     return random_scenario(num_tx, num_rx, num_targets, tx_per_step, rx_per_step, horizon=horizon, seed=seed)
+
+
+def vector_env(env_id: str, num_envs: int, **kwargs):
+    """``gym.make_vec`` of a registered id through its native vector entry point (B trials as
+    one batch)."""
+    import gymnasium as gym
+
+    return gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs)

@@ -78,12 +78,6 @@ class PlanningStudy(Study):
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
         add_fusion_run_arguments(parser)
         parser.add_argument(
-            "--ppo",
-            default=None,
-            metavar="PATTERN",
-            help="also run a trained PPO: its model path with {scenario} and {fusion} filled in",
-        )
-        parser.add_argument(
             "--rl",
             default=None,
             metavar="DIR",

@@ -75,12 +75,19 @@ def ppo_policy(pattern: str, number: int, fusion: str) -> str:
 
 
 def add_fusion_run_arguments(parser: argparse.ArgumentParser) -> None:
-    """``--scenarios`` and ``--fusions``, which :func:`fusion_runs` reads."""
+    """``--scenarios``, ``--fusions`` and ``--ppo``, which :func:`fusion_runs` reads."""
     add_scenarios_argument(parser)
     parser.add_argument(
         "--fusions",
         default=",".join(FUSIONS),
         help=f"fusions to run (default {','.join(FUSIONS)})",
+    )
+    parser.add_argument(
+        "--ppo",
+        default=None,
+        metavar="PATTERN",
+        help="also run a trained PPO: its model path with {scenario} and {fusion} filled in, e.g. "
+        "runs/ppo-info/paper-{scenario}-{fusion}/model.zip",
     )
 
 
@@ -120,13 +127,6 @@ class TrackingStudy(Study):
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
         add_fusion_run_arguments(parser)
-        parser.add_argument(
-            "--ppo",
-            default=None,
-            metavar="PATTERN",
-            help="also run a trained PPO: its model path with {scenario} and {fusion} filled in, e.g. "
-            "runs/ppo-info/paper-{scenario}-{fusion}/model.zip",
-        )
 
     def runs(self) -> list[Run]:
         return fusion_runs(self, TRACKING_POLICIES)

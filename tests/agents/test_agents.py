@@ -7,7 +7,7 @@ from scipy import stats
 
 import agents
 from mimo_radar_env import load_scenario
-from tests.helpers import large_scenario
+from tests.helpers import large_scenario, vector_env
 
 PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4]
 
@@ -92,9 +92,7 @@ def test_ucb1_and_epsilon_greedy_follow_eq29():
 
 
 def test_best_has_zero_regret_and_fixed_always_plays_its_arm():
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0", num_envs=8, vectorization_mode="vector_entry_point", scenario="paper-3"
-    )
+    venv = vector_env("MimoRadarSelect-v0", 8, scenario="paper-3")
     best = agents.make_agent("best", venv.scenario, env=venv)
     fix2 = agents.make_agent("fix2", venv.scenario)
     obs, _ = venv.reset(seed=0)
@@ -157,9 +155,7 @@ def test_registry_errors_list_what_exists():
 
 
 def test_mg_crb_cl_needs_the_tracker():
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point", tracking=False
-    )
+    venv = vector_env("MimoRadarSelect-v0", 2, tracking=False)
     obs, _ = venv.reset(seed=0)
     with pytest.raises(ValueError, match="tracking=True"):
         agents.make_agent("mg-crb-cl", venv.scenario).reset(obs)
@@ -169,9 +165,7 @@ def _episode(agent_name, scenario, vector, steps):
     cls = agents.agent_class(agent_name)
     kwargs = {"scenario": scenario, **cls.needs.observation_options}
     if vector:
-        env = gym.make_vec(
-            "MimoRadarSelect-v0", num_envs=3, vectorization_mode="vector_entry_point", **kwargs
-        )
+        env = vector_env("MimoRadarSelect-v0", 3, **kwargs)
         sc = env.scenario
     else:
         env = gym.make("MimoRadarSelect-v0", **kwargs)
@@ -223,7 +217,7 @@ def test_every_agent_runs_a_whole_episode(scenario, vector):
 def test_paper1_mg_crb_cl_beats_ucb1_and_best_has_the_highest_sinr():
     results = {}
     for name in ("best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"):
-        venv = gym.make_vec("MimoRadarSelect-v0", num_envs=50, vectorization_mode="vector_entry_point")
+        venv = vector_env("MimoRadarSelect-v0", 50)
         agent = agents.make_agent(name, venv.scenario, seed=0)
         regret = sinr = 0.0
         for step in agents.Rollout(agent, venv, seed=0).run(1000):

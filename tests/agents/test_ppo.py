@@ -17,7 +17,7 @@ from mimo_radar_env.wrappers import (
     SuperArmDiscreteAction,
     make_ppo_env,
 )
-from tests.helpers import large_scenario
+from tests.helpers import large_scenario, vector_env
 
 
 def test_discrete_super_arm_index_is_a_bijection():
@@ -110,7 +110,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
         agent.update(obs, reward)
         assert info["action_valid"]
     # vector env
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point")
+    venv = vector_env("MimoRadarSelect-v0", 5)
     obs, _ = venv.reset(seed=0)
     agent.reset(obs)
     for _ in range(20):

@@ -11,6 +11,7 @@ from agents import env_options_for as policy_env_options
 from benchmarks.harness import make_policy
 from mimo_radar_env import VERSIONS, EnvOptions, RadarModel, load_scenario
 from mimo_radar_env.core.geometry import bistatic_measurement
+from tests.helpers import vector_env
 
 
 def _jacobian(position, tx, rx):
@@ -77,9 +78,7 @@ def test_selection_is_the_brute_force_minimum_with_optimistic_sinr(fusion):
 
 
 def test_sinr_weight_one_is_mg_crb_cl_with_exact_search():
-    venv = gym.make_vec(
-        "MimoRadarSelect-v1", num_envs=4, vectorization_mode="vector_entry_point", prediction_covariance=True
-    )
+    venv = vector_env("MimoRadarSelect-v1", 4, prediction_covariance=True)
     tucb = agents.make_agent("tracking-ucb", venv.scenario, sinr_weight=1.0)
     mg = agents.make_agent("mg-crb-cl", venv.scenario, solver="exact")
     obs, _ = venv.reset(seed=0)
@@ -221,9 +220,7 @@ def test_it_is_composed_of_mg_crb_cls_learning_and_the_tracking_selector():
     from agents.base import IndexPolicy
     from agents.tracking import TrackingSelector
 
-    venv = gym.make_vec(
-        "MimoRadarSelect-v1", num_envs=3, vectorization_mode="vector_entry_point", prediction_covariance=True
-    )
+    venv = vector_env("MimoRadarSelect-v1", 3, prediction_covariance=True)
     tracking = agents.make_agent("tracking-ucb", venv.scenario, alpha_bar=0.3)
     mg = agents.make_agent("mg-crb-cl", venv.scenario, seed=0, solver="exact", alpha_bar=0.3)
     assert not isinstance(tracking, IndexPolicy) and not hasattr(tracking, "solver")

@@ -12,6 +12,7 @@ from benchmarks.cli import main
 from benchmarks.harness import HarnessError, fit_shard_size
 from mimo_radar_env import load_scenario, random_scenario
 from mimo_radar_env.envs.cost import memory_parts
+from tests.helpers import vector_env
 
 PAPER = load_scenario("paper-1-v1")
 
@@ -63,16 +64,14 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
 def test_declared_memory_bounds_what_a_step_allocates(policy):
     """The declared memory per trial is an upper estimate of what one step of the policy
     allocates (tracemalloc), on a layout where the tracking search is greedy."""
-    import gymnasium as gym
 
     scenario = random_scenario(24, 24, 2, 4, 4, horizon=5, seed=0)
     trials = 3
     params = {"solver": "alternating"} if issubclass(agents.agent_class(policy), agents.IndexPolicy) else {}
     agent = agents.make_agent(policy, scenario, seed=0, **params)
-    env = gym.make_vec(
+    env = vector_env(
         "MimoRadarSelect-v1",
-        num_envs=trials,
-        vectorization_mode="vector_entry_point",
+        trials,
         scenario=scenario,
         oracle_solver="alternating",
         **agent.needs.observation_options,
@@ -187,11 +186,10 @@ def test_max_hours_takes_a_positive_number_or_none(tmp_path, capsys, value):
 
 @pytest.mark.parametrize("search", ["beam", "rollout", "mcts"])
 def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
-    import gymnasium as gym
 
     trials = 3
     agent = agents.make_agent("plan-tracking", "paper-1-v1", seed=0, horizon=3, search=search)
-    env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point")
+    env = vector_env("MimoRadarSelect-v1", trials)
     agent.attach(env)
     learner = agents.make_agent("plan-tracking-ucb", "paper-1-v1", horizon=3, search=search)
     assert agents.costs.memory_per_trial(learner) >= agents.costs.memory_per_trial(

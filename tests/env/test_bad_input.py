@@ -10,6 +10,7 @@ from hypothesis import strategies as st
 
 from mimo_radar_env import EnvOptions, RadarModel, Scenario, ScenarioError, load_scenario
 from mimo_radar_env.core.geometry import MIN_RANGE
+from tests.helpers import vector_env
 
 PAPER = load_scenario("paper-1").to_dict()
 
@@ -104,12 +105,12 @@ def test_bad_env_arguments_are_named():
     with pytest.raises(ValueError, match="measurement_quality"):
         EnvOptions(measurement_quality=True)
     with pytest.raises(ValueError, match="num_envs must be an integer >= 1, got 2.5"):
-        gym.make_vec("MimoRadarSelect-v0", num_envs=2.5, vectorization_mode="vector_entry_point")
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        vector_env("MimoRadarSelect-v0", 2.5)
+    venv = vector_env("MimoRadarSelect-v0", 2)
     with pytest.raises(ValueError, match="seed must be an integer >= 0"):
         venv.reset(seed=1.5)
     with pytest.raises(ValueError, match=r"need about .* GiB; this machine has"):
-        gym.make_vec("MimoRadarSelect-v0", num_envs=10**7, vectorization_mode="vector_entry_point")
+        vector_env("MimoRadarSelect-v0", 10**7)
 
 
 _FIELDS = {
@@ -160,10 +161,9 @@ _FIELDS = {
 def test_fuzzed_scenarios_are_refused_by_name_or_run_finite(changes):
     data = {**PAPER, "horizon": 60, **changes}
     try:
-        env = gym.make_vec(
+        env = vector_env(
             "MimoRadarSelect-v0",
-            num_envs=2,
-            vectorization_mode="vector_entry_point",
+            2,
             scenario=Scenario.from_dict(data),
         )
     except ScenarioError as exc:

@@ -7,7 +7,7 @@ from gymnasium.utils.env_checker import check_env
 from gymnasium.vector import AutoresetMode, VectorEnv
 
 from mimo_radar_env import MimoRadarSelectEnv
-from tests.helpers import random_valid_actions
+from tests.helpers import random_valid_actions, vector_env
 
 
 @pytest.mark.parametrize("scenario", ["paper-1", "paper-2", "paper-3"])
@@ -32,9 +32,7 @@ def test_quickstart_and_registration_is_idempotent():
     assert obs["probed"].all() and obs["sinr"].shape == (1, 4, 6)
     obs, reward, terminated, truncated, info = env.step(env.action_space.sample())
     assert set(info) >= {"mean_sinr", "true_state", "expected_reward", "optimal_reward", "action_valid"}
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0", num_envs=5, vectorization_mode="vector_entry_point", scenario="paper-3"
-    )
+    venv = vector_env("MimoRadarSelect-v0", 5, scenario="paper-3")
     assert isinstance(venv, VectorEnv)
     assert venv.metadata["autoreset_mode"] == AutoresetMode.NEXT_STEP
     obs, info = venv.reset(seed=0)
@@ -56,9 +54,7 @@ def test_vector_env_equals_single_envs_trial_for_trial():
     rng = np.random.default_rng(0)
     actions = [random_valid_actions(rng, batch, 4, 6, 2, 3) for _ in range(steps)]
     actions[4][1, :] = 0  # an invalid action in trial 1
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0", num_envs=batch, vectorization_mode="vector_entry_point", scenario="paper-3"
-    )
+    venv = vector_env("MimoRadarSelect-v0", batch, scenario="paper-3")
     obs, info = venv.reset(seed=40)
     vector = [(obs, np.zeros(batch), info)]
     for action in actions:
@@ -120,9 +116,7 @@ def test_rewards_and_expected_rewards_follow_eq17_and_eq13():
 
 
 def test_oracle_action_is_the_optimum_of_the_coming_step():
-    venv = gym.make_vec(
-        "MimoRadarSelect-v0", num_envs=4, vectorization_mode="vector_entry_point", scenario="paper-3"
-    )
+    venv = vector_env("MimoRadarSelect-v0", 4, scenario="paper-3")
     venv.reset(seed=1)
     for _ in range(5):
         oracle = venv.oracle_action()
@@ -165,7 +159,7 @@ def test_actions_outside_the_space_raise(action, message):
 
 
 def test_vector_env_bad_actions_and_float_actions():
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point")
+    venv = vector_env("MimoRadarSelect-v0", 2)
     venv.reset(seed=0)
     with pytest.raises(ValueError, match=r"shape \(2, 10\)"):
         venv.step(np.zeros((3, 10), dtype=np.int8))
@@ -175,7 +169,7 @@ def test_vector_env_bad_actions_and_float_actions():
 
 
 def test_truncation_and_autoreset():
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point", horizon=3)
+    venv = vector_env("MimoRadarSelect-v0", 2, horizon=3)
     obs, _ = venv.reset(seed=0)
     action = np.array([[1, 1, 0, 0, 1, 1, 1, 0, 0, 0]] * 2, dtype=np.int8)
     for t in range(3):
@@ -247,7 +241,7 @@ def test_spec_max_episode_steps_is_the_horizon_and_the_repr_names_the_setup():
     assert gym.make("MimoRadarSelect-v0").spec.max_episode_steps == 1000
     remade = gym.make(env.spec)  # a spec recreates the env; its TimeLimit agrees with the horizon
     assert remade.spec.max_episode_steps == 37
-    vec = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point")
+    vec = vector_env("MimoRadarSelect-v1", 2)
     assert repr(vec).endswith("truth='shared', num_envs=2>")
 
 

@@ -10,15 +10,15 @@ import pytest
 
 import mimo_radar_env  # noqa: F401  (registers the ids)
 from mimo_radar_env.wrappers import MimoRadarSelectFlatVectorEnv
+from tests.helpers import vector_env
 
 
 @pytest.mark.parametrize("action", ["discrete", "scores"])
 def test_the_flat_vector_env_equals_single_flat_envs_trial_for_trial(action):
     trials, horizon, seed = 3, 4, 11
-    venv = gym.make_vec(
+    venv = vector_env(
         "MimoRadarSelectFlat-v1",
-        num_envs=trials,
-        vectorization_mode="vector_entry_point",
+        trials,
         horizon=horizon,
         action=action,
     )
@@ -133,10 +133,9 @@ def test_check_env_warns_on_the_raw_id_only_as_the_docs_explain():
 
 
 def test_with_autoreset_disabled_the_caller_resets_every_trial_at_once():
-    venv = gym.make_vec(
+    venv = vector_env(
         "MimoRadarSelectFlat-v1",
-        num_envs=2,
-        vectorization_mode="vector_entry_point",
+        2,
         horizon=2,
         autoreset_mode="disabled",
     )
@@ -152,6 +151,4 @@ def test_with_autoreset_disabled_the_caller_resets_every_trial_at_once():
     again, _ = venv.reset(seed=3, options={"reset_mask": np.array([True, True])})
     np.testing.assert_array_equal(first, again)
     with pytest.raises(ValueError, match=r"autoreset_mode must be one of \['next-step', 'disabled'\]"):
-        gym.make_vec(
-            "MimoRadarSelectFlat-v1", num_envs=2, vectorization_mode="vector_entry_point", autoreset_mode="x"
-        )
+        vector_env("MimoRadarSelectFlat-v1", 2, autoreset_mode="x")

@@ -11,6 +11,7 @@ import mimo_radar_env  # noqa: F401
 from mimo_radar_env import Scenario, ScenarioError, load_scenario
 from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.tracking.unscented import repair_covariance
+from tests.helpers import vector_env
 
 BASE = load_scenario("paper-1-v1")
 EXTENT = BASE.extent
@@ -18,10 +19,9 @@ EXTENT = BASE.extent
 
 def _episode(scenario: Scenario, fusion: str, steps: int = 40, trials: int = 6, **options) -> dict:
     """A short episode of random selections; every output array of every step."""
-    env = gym.make_vec(
+    env = vector_env(
         "MimoRadarSelect-v1",
-        num_envs=trials,
-        vectorization_mode="vector_entry_point",
+        trials,
         scenario=scenario,
         fusion=fusion,
         horizon=steps,

@@ -9,6 +9,7 @@ from agents.solvers import BPSOSolver, ExactSolver
 from mimo_radar_env import EnvOptions, RadarModel, load_scenario
 from mimo_radar_env.core.simulation import RadarSimulation
 from mimo_radar_env.core.streams import TrialRandom, keys_from_generator
+from tests.helpers import vector_env
 
 
 def _simulation(scenario, batch, **options):
@@ -38,7 +39,7 @@ def test_lambda_scale_db_is_eq32_on_decibels():
 
 def test_shared_truth_is_one_trajectory_and_estimates_start_at_p1_hat_spread():
     batch = 3000
-    venv = gym.make_vec("MimoRadarSelect-v1", num_envs=batch, vectorization_mode="vector_entry_point")
+    venv = vector_env("MimoRadarSelect-v1", batch)
     obs, info = venv.reset(seed=0)
     scenario = venv.scenario
     x1, p1 = scenario.targets[0].initial_state, scenario.targets[0].initial_covariance
@@ -53,9 +54,7 @@ def test_shared_truth_is_one_trajectory_and_estimates_start_at_p1_hat_spread():
         _, _, _, _, info = venv.step(action)
     truth = info["true_state"]
     assert np.all(truth == truth[0]) and not np.allclose(truth[0], x1)  # one noisy trajectory
-    other = gym.make_vec(
-        "MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point", truth_seed=1
-    )
+    other = vector_env("MimoRadarSelect-v1", 2, truth_seed=1)
     other.reset(seed=0)
     for _ in range(20):
         _, _, _, _, info_other = other.step(action[:2])
@@ -63,7 +62,7 @@ def test_shared_truth_is_one_trajectory_and_estimates_start_at_p1_hat_spread():
 
 
 def test_per_trial_truth_is_v0s():
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=200, vectorization_mode="vector_entry_point")
+    venv = vector_env("MimoRadarSelect-v0", 200)
     obs, info = venv.reset(seed=0)
     x1 = venv.scenario.targets[0].initial_state
     np.testing.assert_array_equal(obs["track"][:, 0], np.broadcast_to(x1, (200, 4)))

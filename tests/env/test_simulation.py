@@ -8,6 +8,7 @@ from mimo_radar_env import RadarModel, load_scenario
 from mimo_radar_env.core.simulation import RadarSimulation
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import exact_super_arm
+from tests.helpers import vector_env
 
 
 def spec_mean_sinr(scenario, constant, positions):
@@ -75,7 +76,7 @@ def test_optimal_super_arms_on_the_noise_free_track():
 
 
 def test_sinr_samples_are_exponential_with_the_mean_sinr():
-    venv = gym.make_vec("MimoRadarSelect-v0", num_envs=400, vectorization_mode="vector_entry_point")
+    venv = vector_env("MimoRadarSelect-v0", 400)
     obs, info = venv.reset(seed=11)
     ratio = (obs["sinr"] / info["mean_sinr"]).ravel()  # every channel probed at reset
     assert stats.kstest(ratio, "expon").pvalue > 0.01

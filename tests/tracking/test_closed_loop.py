@@ -1,13 +1,12 @@
 """Closed-loop tracking behaviour: consistency, maneuvers, the loop itself, robustness."""
 
-import gymnasium as gym
 import numpy as np
 import pytest
 from scipy import stats
 
 from benchmarks.model_figures import nees_per_step, vector_run
 from mimo_radar_env import load_scenario
-from tests.helpers import large_scenario, random_valid_actions
+from tests.helpers import large_scenario, random_valid_actions, vector_env
 
 
 def test_nees_is_consistent_on_ncv_trajectories():
@@ -54,10 +53,9 @@ def test_estimated_filter_noise_tracks_too():
 
 
 def _robustness(scenario, batch, steps, seed):
-    venv = gym.make_vec(
+    venv = vector_env(
         "MimoRadarSelect-v0",
-        num_envs=batch,
-        vectorization_mode="vector_entry_point",
+        batch,
         scenario=scenario,
         horizon=steps,
     )
@@ -102,7 +100,7 @@ def test_robust_over_one_20000_step_episode(scenario):
 
 def test_a_numerical_failure_is_repaired_in_its_trial_alone():
     def run(corrupt):
-        venv = gym.make_vec("MimoRadarSelect-v0", num_envs=2, vectorization_mode="vector_entry_point")
+        venv = vector_env("MimoRadarSelect-v0", 2)
         venv.reset(seed=5)
         action = np.array([[1, 1, 0, 0, 1, 1, 1, 0, 0, 0]] * 2, dtype=np.int8)
         venv.step(action)

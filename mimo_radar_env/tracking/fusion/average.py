@@ -22,7 +22,7 @@ from ...core.geometry import station_geometry
 from ..imm import logsumexp
 from ..information import inverse_2x2, woodbury_gain
 from ..unscented import symmetrize, unscented_update
-from .base import CHANNEL_OPERATIONS, Fusion, Posterior, Prior
+from .base import CHANNEL_OPERATIONS, Fusion
 
 
 class AverageFusion(Fusion):
@@ -36,21 +36,15 @@ class AverageFusion(Fusion):
     compiled_posterior = "mean"
 
     @staticmethod
-    def channel_terms(
-        prior_info: NDArray[np.float64], information: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def channel_terms(prior_info, information):
         return inverse_2x2(prior_info[:, :, None, None] + information)[0]
 
     @staticmethod
-    def posterior_from_sum(
-        prior_info: NDArray[np.float64], total: NDArray[np.float64], count: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def posterior_from_sum(prior_info, total, count):
         return total / count
 
     @staticmethod
-    def planning_gain(
-        information: NDArray[np.float64], position_cov: NDArray[np.float64], selected: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def planning_gain(information, position_cov, selected):
         count = selected.sum(axis=(1, 2))
         if (count == 0).any():
             raise ValueError("the average fusion needs at least one selected channel in every state")
@@ -58,37 +52,21 @@ class AverageFusion(Fusion):
         return np.einsum("smn,skmnij->skij", selected / count[:, None, None], each)
 
     @staticmethod
-    def update_operations(channels: int) -> float:
+    def update_operations(channels):
         return channels * (CHANNEL_OPERATIONS + 300)  # one update per channel, then eq22's average
 
     @classmethod
     def compiled_kernels(cls) -> list:
         return [_update_numba] if HAVE_NUMBA else []
 
-    def update(
-        self,
-        prior: Prior,
-        tx_positions: NDArray[np.float64],
-        rx_positions: NDArray[np.float64],
-        measurement: NDArray[np.float64],
-        noise_variance: NDArray[np.float64],
-    ) -> Posterior:
+    def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
         path = _update_numba if self.use_numba else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
 def _update_numpy(
-    sigmas: NDArray[np.float64],
-    pred_means: NDArray[np.float64],
-    pred_covs: NDArray[np.float64],
-    log_c: NDArray[np.float64],
-    wm: NDArray[np.float64],
-    wc: NDArray[np.float64],
-    tx_positions: NDArray[np.float64],
-    rx_positions: NDArray[np.float64],
-    measurement: NDArray[np.float64],
-    noise_variance: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], ...]:
+    sigmas, pred_means, pred_covs, log_c, wm, wc, tx_positions, rx_positions, measurement, noise_variance
+):
     """The numpy path (the reference of the numba path); same arguments and results."""
     B, K, R, S = sigmas.shape[:4]
     num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]

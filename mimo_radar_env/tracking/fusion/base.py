@@ -149,26 +149,11 @@ class Fusion(ABC):
 
     @staticmethod
     def run_path(
-        path: Callable[..., tuple[NDArray[np.float64], ...]],
-        prior: Prior,
-        tx_positions: NDArray[np.float64],
-        rx_positions: NDArray[np.float64],
-        measurement: NDArray[np.float64],
-        noise_variance: NDArray[np.float64],
+        path: Callable[..., tuple[NDArray[np.float64], ...]], prior: Prior, *channels: NDArray[np.float64]
     ) -> Posterior:
-        """The posterior of a numpy or compiled path taking the prior's arrays one by one (the
-        layout both a fusion's paths share)."""
+        """The posterior of a numpy or compiled path that takes the prior's arrays one by one, then
+        the channels' (``tx_positions``, ``rx_positions``, ``measurement``, ``noise_variance``
+        of :meth:`update`): the layout both a fusion's paths share."""
         return Posterior(
-            *path(
-                prior.sigmas,
-                prior.means,
-                prior.covs,
-                prior.log_c,
-                prior.wm,
-                prior.wc,
-                tx_positions,
-                rx_positions,
-                measurement,
-                noise_variance,
-            )
+            *path(prior.sigmas, prior.means, prior.covs, prior.log_c, prior.wm, prior.wc, *channels)
         )

@@ -13,7 +13,6 @@ numpy path runs.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import NDArray
 
 from ...core.compiled import HAVE_NUMBA
 from ...core.geometry import station_geometry
@@ -21,7 +20,7 @@ from .. import unscented
 from ..imm import combine, logsumexp
 from ..information import inverse_2x2, woodbury_gain
 from ..unscented import symmetrize, unscented_update
-from .base import CHANNEL_OPERATIONS, SIGMA_POINTS, Fusion, Posterior, Prior
+from .base import CHANNEL_OPERATIONS, SIGMA_POINTS, Fusion
 
 
 class CentralizedFusion(Fusion):
@@ -34,25 +33,19 @@ class CentralizedFusion(Fusion):
     compiled_posterior = "information"
 
     @staticmethod
-    def channel_terms(
-        prior_info: NDArray[np.float64], information: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def channel_terms(prior_info, information):
         return information
 
     @staticmethod
-    def posterior_from_sum(
-        prior_info: NDArray[np.float64], total: NDArray[np.float64], count: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def posterior_from_sum(prior_info, total, count):
         return inverse_2x2(prior_info + total)[0]
 
     @staticmethod
-    def planning_gain(
-        information: NDArray[np.float64], position_cov: NDArray[np.float64], selected: NDArray[np.float64]
-    ) -> NDArray[np.float64]:
+    def planning_gain(information, position_cov, selected):
         return woodbury_gain(np.einsum("smn,skmnij->skij", selected, information), position_cov)
 
     @staticmethod
-    def update_operations(channels: int) -> float:
+    def update_operations(channels):
         size = 2 * channels  # range and azimuth of every probed channel, stacked
         woodbury = size >= unscented.WOODBURY_MIN_DIMENSION
         inverse = SIGMA_POINTS**2 * size if woodbury else size**3 / 3
@@ -63,14 +56,7 @@ class CentralizedFusion(Fusion):
     def compiled_kernels(cls) -> list:
         return [_update_numba] if HAVE_NUMBA else []
 
-    def update(
-        self,
-        prior: Prior,
-        tx_positions: NDArray[np.float64],
-        rx_positions: NDArray[np.float64],
-        measurement: NDArray[np.float64],
-        noise_variance: NDArray[np.float64],
-    ) -> Posterior:
+    def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
         dimension = 2 * tx_positions.shape[1] * rx_positions.shape[1]
         compiled = self.use_numba and dimension < unscented.WOODBURY_MIN_DIMENSION
         path = _update_numba if compiled else _update_numpy
@@ -78,17 +64,8 @@ class CentralizedFusion(Fusion):
 
 
 def _update_numpy(
-    sigmas: NDArray[np.float64],
-    pred_means: NDArray[np.float64],
-    pred_covs: NDArray[np.float64],
-    log_c: NDArray[np.float64],
-    wm: NDArray[np.float64],
-    wc: NDArray[np.float64],
-    tx_positions: NDArray[np.float64],
-    rx_positions: NDArray[np.float64],
-    measurement: NDArray[np.float64],
-    noise_variance: NDArray[np.float64],
-) -> tuple[NDArray[np.float64], ...]:
+    sigmas, pred_means, pred_covs, log_c, wm, wc, tx_positions, rx_positions, measurement, noise_variance
+):
     """The numpy path (the reference of the numba path); same arguments and results."""
     B, K, R, S = sigmas.shape[:4]
     C = tx_positions.shape[1] * rx_positions.shape[1]
