@@ -48,38 +48,61 @@ def plot_all(
     selection_<policy>.png and geometry.png; every curve is a :class:`TrialMetrics` curve at equal
     weights, its band the same curve's bootstrap."""
     scenario = config.scenario_object
+    written = _curve_figures(config, metrics, out)
+    if config.options.tracking:
+        written.append(_rmse_figure(config, metrics, out))
+    written += _selection_figures(config, per_trial, metrics, out)
+    fig = _figure(6.0, 6.0)
+    draw_scenario(
+        fig.add_subplot(),
+        scenario,
+        true_tracks=per_trial[config.policies[0]][TRUTH_FIELD],
+        title=f"{scenario.name}: stations and the true tracks of trial 0",
+    )
+    written.append(_save(fig, out / "geometry.png"))
+    return written
+
+
+def _draw(ax: Any, config: RunConfig, curve: Any, m: TrialMetrics) -> Any:
+    """A curve at equal weights, with its 95 % band over the trials (bootstrap)."""
     t = np.arange(1, config.steps + 1)
+    line = ax.plot(t, curve(m.equal()), lw=1)[0]
+    low, high = uncertainty.band(curve, config.trials, config.seed)
+    ax.fill_between(t, low, high, color=line.get_color(), alpha=0.2, lw=0)
+    return line
+
+
+def _curve_figures(config: RunConfig, metrics: dict[str, TrialMetrics], out: Path) -> list[Path]:
+    """sinr.png and regret.png: every policy's curve with its band."""
     written = []
-    n = config.trials
-    colours = palette(len(metrics))
-
-    def draw(ax: Any, curve: Any, m: TrialMetrics) -> Any:
-        line = ax.plot(t, curve(m.equal()), lw=1)[0]
-        low, high = uncertainty.band(curve, n, config.seed)
-        ax.fill_between(t, low, high, color=line.get_color(), alpha=0.2, lw=0)
-        return line
-
     for name, curve_of, ylabel, title in (
         ("sinr", "sinr_db_curve", "average SINR (dB)", "average SINR, 95 % bands"),
         ("regret", "regret_curve", "cumulative SINR regret", "regret (eq13), 95 % bands"),
     ):
         fig = _figure()
         ax = fig.add_subplot()
-        ax.set_prop_cycle(color=colours)
+        ax.set_prop_cycle(color=palette(len(metrics)))
         for policy, m in metrics.items():
-            draw(ax, getattr(m, curve_of), m).set_label(short_label(policy))
-        ax.set(xlabel="time (s)", ylabel=ylabel, title=f"{scenario.name}: {title}")
+            _draw(ax, config, getattr(m, curve_of), m).set_label(short_label(policy))
+        ax.set(xlabel="time (s)", ylabel=ylabel, title=f"{config.scenario_object.name}: {title}")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
         written.append(_save(fig, out / f"{name}.png"))
+    return written
 
+
+def _rmse_figure(config: RunConfig, metrics: dict[str, TrialMetrics], out: Path) -> Path:
+    """rmse.png: each target's RMSE curves with their bands, and the bound of each policy's own
+    selections (dashed)."""
+    scenario = config.scenario_object
     K = scenario.num_targets
-    fig = _figure(7.0, 3.0 * K) if config.options.tracking else None
-    for k in range(K if fig is not None else 0):
+    t = np.arange(1, config.steps + 1)
+    fig = _figure(7.0, 3.0 * K)
+    for k in range(K):
         ax = fig.add_subplot(K, 1, k + 1)
-        ax.set_prop_cycle(color=colours)
+        ax.set_prop_cycle(color=palette(len(metrics)))
         for policy, m in metrics.items():
-            line = draw(ax, lambda w, m=m, k=k: m.rmse_curve(w, k), m)
+            line = _draw(ax, config, lambda w, m=m, k=k: m.rmse_curve(w, k), m)
             line.set_label(short_label(policy))
             if m.bounded:  # the floor the policy's own selections allow
                 ax.plot(t, m.bound_curve(m.equal(), k), lw=0.8, ls="--", color=line.get_color())
@@ -91,11 +114,17 @@ def plot_all(
         ax.set_yscale("log")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=7)
-    if fig is not None:
-        fig.tight_layout()
-        written.append(_save(fig, out / "rmse.png"))
+    fig.tight_layout()
+    return _save(fig, out / "rmse.png")
 
+
+def _selection_figures(
+    config: RunConfig, per_trial: dict[str, dict[str, NDArray]], metrics: dict[str, TrialMetrics], out: Path
+) -> list[Path]:
+    """selection_<policy>.png: the fraction of trials selecting each station at each step."""
+    scenario = config.scenario_object
     labels = [f"TX{m + 1}" for m in range(scenario.num_tx)] + [f"RX{n + 1}" for n in range(scenario.num_rx)]
+    written = []
     for policy in metrics:
         fig = _figure(7.0, 0.25 * len(labels) + 1.5)
         ax = fig.add_subplot()
@@ -114,15 +143,6 @@ def plot_all(
         )
         fig.colorbar(image, ax=ax)
         written.append(_save(fig, out / f"selection_{policy_folder(policy)}.png"))
-
-    fig = _figure(6.0, 6.0)
-    draw_scenario(
-        fig.add_subplot(),
-        scenario,
-        true_tracks=per_trial[config.policies[0]][TRUTH_FIELD],
-        title=f"{scenario.name}: stations and the true tracks of trial 0",
-    )
-    written.append(_save(fig, out / "geometry.png"))
     return written
 
 

@@ -410,7 +410,16 @@ class Planner:
                 rows = every[on]
                 edge_visits[rows, path_node[on, d], path_edge[on, d]] += 1
                 edge_cost[rows, path_node[on, d], path_edge[on, d]] += below[on, d]
-        # the plan: the most visited child at each depth, greedy where the tree ends
+        plans = self._most_visited(forecast, edge_visits, arms, child)
+        return plans, plan_cost(self, forecast, plans[:, None])[:, 0]
+
+    def _most_visited(
+        self, forecast: Forecast, edge_visits: NDArray, arms: NDArray, child: NDArray
+    ) -> NDArray[np.int64]:
+        """The plan of each trial's tree: the most visited child at each depth, greedy where the
+        tree ends (B, H)."""
+        batch, horizon = forecast.covariance.shape[0], forecast.horizon
+        every = np.arange(batch)
         plans = np.zeros((batch, horizon), dtype=np.int64)
         node = np.zeros(batch, dtype=np.int64)
         in_tree = np.ones(batch, dtype=bool)
@@ -427,7 +436,7 @@ class Planner:
             node = np.where(in_tree, nxt, 0)
             if d + 1 < horizon:
                 state = self._advance_rows(state, forecast, np.full(batch, d), every, plans[:, d])
-        return plans, plan_cost(self, forecast, plans[:, None])[:, 0]
+        return plans
 
     def first_arm(self, forecast: Forecast) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """The super arm to play now, masks (B, M), (B, N): the first of the cheapest plan."""
