@@ -1368,7 +1368,13 @@ def mechanisms_per_claim(docs: Path) -> str:
     m = read_json(docs, MECHANISMS)
     v1 = _verdicts(docs, SCORECARDS["v1"])
     rows = ["| claim | v1 | mechanism, measured (v1, eq22 average fusion) |", "|---|---|---|"]
+    rows += [_exploration_row(a, v1), _windows_row(a, v1), *_armse_rows(m, v1), *_asr_rows(a, m, v1)]
+    rows.append(_maneuver_row(a, v1))
+    return "\n".join(rows)
 
+
+def _exploration_row(a: dict, v1: dict) -> str:
+    """S1.7: what exploring costs UCB1 and epsilon-greedy."""
     explore = a["paper-1-v1"]["exploration"]
     at = min(explore["at"], key=int)
     early = explore["at"][at]
@@ -1378,13 +1384,17 @@ def mechanisms_per_claim(docs: Path) -> str:
         else "Exploring costs"
     )
     crossing = explore["crossing"]
-    rows.append(
+    return (
         f"| S1.7 | {v1['S1.7']} | {lead}: by {at} s UCB1's regret is above its greedy core's (UCB1 with "
         f"beta = 0) by {_m(early['ucb1_minus_greedy'], '{:.0f}')}, epsilon-greedy's by "
         f"{_m(early['epsilon_greedy_minus_greedy'], '{:.0f}')}"
         + (f"; UCB1's mean regret stays above epsilon-greedy's from step {crossing} on" if crossing else "")
         + " |"
     )
+
+
+def _windows_row(a: dict, v1: dict) -> str:
+    """S1.8: in each window, whether the extreme ARMSE is the extreme bound's."""
     windows = a["paper-1-v1"]["rmse_windows"]
     parts = []
     for row in windows:
@@ -1409,11 +1419,16 @@ def mechanisms_per_claim(docs: Path) -> str:
             )
         parts.append(text)
     follow = sum(r["armse_extreme"] == r["bound_extreme"] for r in windows)
-    rows.append(
+    return (
         f"| S1.8 | {v1['S1.8']} | The windows' extreme ARMSE is the extreme bound's in {follow} of "
         f"{len(windows)} windows: " + "; ".join(parts) + " |"
     )
+
+
+def _armse_rows(m: dict, v1: dict) -> list[str]:
+    """The ARMSE claims: how many comparisons go the way the position bounds go."""
     s = m["armse_summary"]
+    rows = []
     for claim in ("S1.9", "S2.4", "S3.2", "S3.3"):
         mine = [r for r in m["armse_comparisons"] if r["claim"] == claim]
         broken = [r for r in mine if r["verdict"] == "contradicted"]
@@ -1423,6 +1438,12 @@ def mechanisms_per_claim(docs: Path) -> str:
             f"({sum(r['follows_bound'] for r in broken)} of the {len(broken)} contradicted; over all the "
             f"claims {s['follow_bound']} of {s['comparisons']}) |"
         )
+    return rows
+
+
+def _asr_rows(a: dict, m: dict, v1: dict) -> list[str]:
+    """The ASR claims: MG-CRB-CL's ASR without eq18's optimism, and the probing oracle's cap."""
+    rows = []
     for scenario, claim in ASR_CLAIM_OF.items():
         asr = a[scenario]["asr"]
         greedy = asr["mg-crb-cl, exact, beta = 0"]
@@ -1436,13 +1457,18 @@ def mechanisms_per_claim(docs: Path) -> str:
             f"(alpha_bar = 0.05) by {_pp(asr['mg-crb-cl, exact, alpha_bar = 0.05']['asr_minus_paper'])} pp; "
             f"the probing window oracle's cap is {_m(cap, '{:.1f}', 100)} % (W = {cap_width}) |"
         )
+    return rows
+
+
+def _maneuver_row(a: dict, v1: dict) -> str:
+    """S2.2: the SINR before and after the maneuver."""
     man = a["paper-2-v1"]["maneuver"]
     pol = man["policies"]
     mg = pol["mg-crb-cl"]
     behind = mg["below_best_after_db"]["ci"][0] > mg["below_best_before_db"]["ci"][1]
     rising = [p for p in ("fix1", "fix2") if pol[p]["change_db"]["ci"][0] > 0]
     among = {2: "fix1's and fix2's among them", 1: f"{''.join(rising)}'s among them", 0: "neither fixed one"}
-    rows.append(
+    return (
         f"| S2.2 | {v1['S2.2']} | Along the true track {man['super_arms_rising']} of the {man['super_arms']} "
         f"super arms gain mean reward after the maneuver, {among[len(rising)]} (their SINR changes by "
         f"{_m(pol['fix1']['change_db'], '{:+.2f}')} and {_m(pol['fix2']['change_db'], '{:+.2f}')} dB); "
@@ -1451,7 +1477,6 @@ def mechanisms_per_claim(docs: Path) -> str:
         f"{_m(mg['below_best_before_db'])} to {_m(mg['below_best_after_db'])} dB"
         + (": it falls further behind Best after the maneuver |" if behind else " |")
     )
-    return "\n".join(rows)
 
 
 # ------------------------------------------------------------------ the global layout search
