@@ -5,7 +5,7 @@ figures and the tests) goes through it, so they all build the env with what the 
 needs, attach the oracle and run act, step and update the same way, batched over trials::
 
     agent = agents.make_agent("best-tracking", "paper-1-v1", seed=0)
-    env = agents.make_env(agent, num_envs=500, options={"fusion": "centralized"})
+    env = agents.make_env(agent, num_envs=500, options={"fusion": "centralized"})  # over v1's
     episode = agents.Rollout(agent, env, seed=0)  # resets the env and the agent
     for step in episode.run(100):
         step.info["position_error"]  # (500, K)
@@ -24,7 +24,7 @@ from typing import Any
 
 from numpy.typing import NDArray
 
-from mimo_radar_env import EnvOptions, MimoRadarSelectVectorEnv, Scenario
+from mimo_radar_env import DEFAULT_VERSION, EnvOptions, MimoRadarSelectVectorEnv, Scenario, env_version
 
 from .base import Agent, Observation
 
@@ -41,10 +41,14 @@ def make_env(
     num_envs: int,
     options: EnvOptions | Mapping[str, Any] | None = None,
     scenario: Scenario | str | Path | None = None,
+    version: str = DEFAULT_VERSION,
 ) -> MimoRadarSelectVectorEnv:
     """The native vector env of ``num_envs`` trials of ``scenario`` (default: the agent's) with
-    env ``options`` (an :class:`~mimo_radar_env.EnvOptions` or a mapping; default: the env
-    class's) and the options the agent needs."""
+    the options the agent needs: ``options`` an :class:`~mimo_radar_env.EnvOptions` (as it is) or
+    a mapping of options over env version ``version``'s defaults (default: v1's, as
+    ``gym.make_vec("MimoRadarSelect-v1", ...)`` has them)."""
+    if not isinstance(options, EnvOptions):
+        options = env_version(version).options(**(options or {}))
     return MimoRadarSelectVectorEnv(
         num_envs=num_envs,
         scenario=agent.scenario if scenario is None else scenario,

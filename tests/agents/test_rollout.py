@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import agents
-from mimo_radar_env import MimoRadarSelectVectorEnv
+from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv
 
 
 def _by_hand(policy, env, seed, steps):
@@ -34,8 +34,9 @@ def test_a_rollout_is_the_loop_written_out(policy):
     steps = list(agents.Rollout(agent, env, seed=9).run(6))
     assert [step.t for step in steps] == list(range(1, 7))
     assert all(step.act_seconds >= 0 for step in steps)
+    assert env.options == VERSIONS["v1"].options(fusion="centralized", **agent.needs.observation_options)
     reference_env = MimoRadarSelectVectorEnv(
-        num_envs=4, scenario="paper-1-v1", **agents.env_options_for(agent, {"fusion": "centralized"})
+        num_envs=4, scenario="paper-1-v1", **agents.env_options_for(agent, env.options)
     )
     actions, rewards = _by_hand(policy, reference_env, 9, 6)
     np.testing.assert_array_equal(np.array([step.action for step in steps]), actions)
@@ -61,9 +62,7 @@ def test_a_rollout_runs_on_the_single_env_as_the_batch_of_one():
     step = episode.step()
     assert step.action.shape == (10,)
     np.testing.assert_array_equal(step.action, step.info["optimal_action"])
-    vector = agents.make_env(
-        agents.make_agent("best", "paper-1-v1"), 1, {"lambda_scale": "db", "truth": "shared"}
-    )
+    vector = agents.make_env(agents.make_agent("best", "paper-1-v1"), 1)  # v1's options, as gym.make's
     batch = agents.Rollout(agents.make_agent("best", "paper-1-v1"), vector, seed=3).step()
     np.testing.assert_array_equal(batch.action[0], step.action)
     assert batch.reward[0] == pytest.approx(step.reward, rel=1e-12)
