@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import DEFAULT_VERSION, EnvOptions, MimoRadarSelectVectorEnv, Scenario, env_version
 
+from . import base
 from .base import Agent, Observation
 
 
@@ -77,7 +78,7 @@ class Rollout:
 
     ``obs`` and ``info`` are the latest the env returned (the reset's until the first step)."""
 
-    def __init__(self, agent: Agent, env: Any, seed: int | None = None) -> None:
+    def __init__(self, agent: base.Agent, env: Any, seed: int | None = None) -> None:
         self.agent, self.env = agent, env
         if agent.needs.oracle:
             agent.attach(env)  # type: ignore[attr-defined]

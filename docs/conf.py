@@ -33,6 +33,8 @@ autodoc_default_options = {"members": True, "show-inheritance": True}
 autodoc_typehints = "description"
 autodoc_inherit_docstrings = False  # Gymnasium's own docstrings are not ours to render
 autodoc_member_order = "bysource"
+# the agents package re-exports Agent: an annotation names the class where it is defined
+autodoc_type_aliases = {"Agent": "agents.base.Agent"}
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 nitpicky = False
