@@ -79,7 +79,7 @@ MODULE_TESTS = {
     "mimo_radar_env/core/streams.py": ("tests/env/test_streams.py", r"TrialStreams"),
     "mimo_radar_env/core/superarm.py": ("tests/env/test_simulation.py", r"superarm"),
     "mimo_radar_env/envs/cost.py": ("tests/bench/test_resources.py", r"memory_parts"),
-    "mimo_radar_env/envs/engine.py": ("tests/env/test_env.py", r"make_vec"),
+    "mimo_radar_env/envs/engine.py": ("tests/env/test_env.py", r"vector_env"),
     "mimo_radar_env/envs/mimo_radar_select.py": ("tests/env/test_env.py", r"MimoRadarSelect-v"),
     "mimo_radar_env/envs/options.py": ("tests/env/test_options.py", r"option_names"),
     "mimo_radar_env/envs/versions.py": ("tests/env/test_versions.py", r"VERSIONS"),

@@ -24,7 +24,7 @@ from mimo_radar_env.core.counter_hash import (
 )
 
 if HAVE_NUMBA:  # pragma: no branch
-    from mimo_radar_env.core.counter_hash import element_bits_nb, stream_base_nb, to_unit_nb
+    from mimo_radar_env.core._counter_hash_kernels import element_bits_nb, stream_base_nb, to_unit_nb
 
 # numba reads module globals as compile-time constants
 _R1, _R2, _FLIP = int(Stream.BPSO_R1), int(Stream.BPSO_R2), int(Stream.BPSO_FLIP)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from types import ModuleType
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -10,7 +12,6 @@ from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
 
 from ..parameters import check_integer, check_parameter
-from . import _bpso_kernels as _kernels
 from .base import SuperArmSolver
 
 #: BPSO position-update rules (docs/agents.md).
@@ -19,6 +20,14 @@ BPSO_RULES = ("xor", "set")
 #: selection of a 500-trial batch would take minutes.
 MAX_POPULATION = 10_000
 MAX_ITERATIONS = 20_000
+
+
+def _bpso_kernels() -> ModuleType:
+    """The swarm's kernels (:mod:`._bpso_kernels`), imported when a selection first runs: they
+    define numba functions at import."""
+    from . import _bpso_kernels
+
+    return _bpso_kernels
 
 
 class BPSOSolver(SuperArmSolver):
@@ -127,10 +136,10 @@ class BPSOSolver(SuperArmSolver):
         """A call's starting swarm from the agent's per-trial streams: every particle a uniformly
         random valid super arm, (B, population, M + N) int8, and one key per trial for the
         iteration streams (the kernels' ``positions`` and ``keys``). With numba, a compiled
-        twin (``_bpso_kernels.initial_positions``) hashes the same draws."""
-        if self.use_numba and _kernels.HAVE_NUMBA:
+        twin (``_bpso_bpso_kernels().initial_positions``) hashes the same draws."""
+        if self.use_numba and _bpso_kernels().HAVE_NUMBA:
             tx_bases, rx_bases = random.bases(Stream.BPSO_INIT_TX), random.bases(Stream.BPSO_INIT_RX)
-            positions = _kernels.initial_positions(
+            positions = _bpso_kernels().initial_positions(
                 tx_bases, rx_bases, self.population, num_tx, num_rx, self.tx_count, self.rx_count
             )
         else:
@@ -164,6 +173,10 @@ class BPSOSolver(SuperArmSolver):
         if random.batch_size != batch:
             raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
         positions, keys = self.initial_swarm(random, num_tx, num_rx)
-        kernel = _kernels.numba_kernel() if (self.use_numba and _kernels.HAVE_NUMBA) else _kernels.run_numpy
+        kernel = (
+            _bpso_kernels().numba_kernel()
+            if (self.use_numba and _bpso_kernels().HAVE_NUMBA)
+            else _bpso_kernels().run_numpy
+        )
         best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
         return best[:, :num_tx].astype(bool), best[:, num_tx:].astype(bool)

@@ -96,9 +96,9 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     """Configure every run, then run them all (resumably) on one set of workers
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
     soon as its last task is saved, while the workers go on with the next run's tasks."""
-    from .. import report  # scipy's statistics: imported when a study runs, not for its --help
-
     configs = configure(runs, settings)
+    from .. import report  # scipy's statistics: imported once the runs are checked
+
     written: dict[int, Finished] = {}
 
     def write(number: int) -> None:

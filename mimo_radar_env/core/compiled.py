@@ -1,17 +1,56 @@
 """numba, when installed (the ``fast`` extra): the compiled twins of the hot paths use it, and
-every one of them has a numpy path that runs without it."""
+every one of them has a numpy path that runs without it.
 
+numba is imported the first time a compiled twin is needed (``compiled.numba`` is then the
+module, or ``None`` without it), not when the package is imported: ``HAVE_NUMBA`` only asks
+whether it is installed, so the command line's help and its argument errors answer without it.
+"""
+
+import importlib
+import importlib.util
 import os
+import sys
 from collections.abc import Iterable
 from typing import Any
 
-try:  # pragma: no cover - exercised when numba is installed
-    import numba
+HAVE_NUMBA = importlib.util.find_spec("numba") is not None
 
-    HAVE_NUMBA = True
-except ImportError:  # pragma: no cover
-    numba = None
-    HAVE_NUMBA = False
+
+def __getattr__(name: str) -> Any:
+    if name == "numba":
+        if not HAVE_NUMBA:  # pragma: no cover
+            return None
+        import numba
+
+        return numba
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+class LazyKernels:
+    """A module's compiled kernels, imported the first time one is asked for.
+
+    ``LazyKernels(__name__, _update_numba="._average_kernels:update")``: :meth:`get` gives the
+    kernel (importing its module, and numba, once, then keeping it as the module's attribute, so
+    that an attribute set on the module, a test's stand-in say, is what runs), and
+    :meth:`module_getattr` is the module's ``__getattr__``, so ``module._update_numba`` works
+    from outside as a plain attribute did.
+    """
+
+    def __init__(self, module: str, **kernels: str) -> None:
+        self.module, self.kernels = module, kernels
+
+    def get(self, name: str) -> Any:
+        namespace = sys.modules[self.module].__dict__
+        if name not in namespace:
+            where, _, attribute = self.kernels[name].partition(":")
+            package = self.module.rpartition(".")[0]
+            namespace[name] = getattr(importlib.import_module(where, package), attribute)
+        return namespace[name]
+
+    def module_getattr(self, name: str) -> Any:
+        if name in self.kernels and HAVE_NUMBA:
+            return self.get(name)
+        raise AttributeError(f"module {self.module!r} has no attribute {name!r}")
 
 
 def uncached(kernels: Iterable[Any]) -> list[str]:
@@ -29,4 +68,4 @@ def uncached(kernels: Iterable[Any]) -> list[str]:
     return names
 
 
-__all__ = ["HAVE_NUMBA", "numba", "uncached"]
+__all__ = ["HAVE_NUMBA", "LazyKernels", "uncached"]

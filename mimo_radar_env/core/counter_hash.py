@@ -11,8 +11,8 @@ Every stream has one identifier in :class:`Stream`; the env's truth and observat
 streams and the BPSO solver's streams share the layout, so no two of them can collide.
 Identifiers never change once published: they are part of every recorded number.
 
-numba is optional: the ``*_nb`` twins exist when it is installed and compute the same
-integers as the numpy functions.
+numba is optional: its twins (:mod:`._counter_hash_kernels`, which the compiled kernels import)
+compute the same integers as the numpy functions.
 """
 
 from __future__ import annotations
@@ -21,8 +21,6 @@ from enum import IntEnum
 
 import numpy as np
 from numpy.typing import NDArray
-
-from .compiled import HAVE_NUMBA, numba
 
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 MUL1 = np.uint64(0xBF58476D1CE4E5B9)
@@ -88,25 +86,3 @@ def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDAr
 def to_unit(bits: NDArray[np.uint64]) -> NDArray[np.float64]:
     """The top 53 bits as a uniform double in [0, 1)."""
     return (bits >> np.uint64(11)).astype(np.float64) * TWO_POW_M53
-
-
-if HAVE_NUMBA:  # pragma: no branch
-
-    @numba.njit(cache=True, inline="always")
-    def mix_nb(z):
-        z = (z ^ (z >> np.uint64(30))) * np.uint64(0xBF58476D1CE4E5B9)
-        z = (z ^ (z >> np.uint64(27))) * np.uint64(0x94D049BB133111EB)
-        return z ^ (z >> np.uint64(31))
-
-    @numba.njit(cache=True, inline="always")
-    def stream_base_nb(key, stream, step):
-        count = np.uint64((stream << 32) + step + 1)
-        return mix_nb(key ^ mix_nb(count * np.uint64(0x9E3779B97F4A7C15)))
-
-    @numba.njit(cache=True, inline="always")
-    def element_bits_nb(base, element):
-        return mix_nb(base + (np.uint64(element) + np.uint64(1)) * np.uint64(0x9E3779B97F4A7C15))
-
-    @numba.njit(cache=True, inline="always")
-    def to_unit_nb(bits):
-        return np.float64(bits >> np.uint64(11)) * 2.0**-53

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.compiled import HAVE_NUMBA
+from ..core.compiled import HAVE_NUMBA, LazyKernels
 from .unscented import MAX_CONDITION, repair_covariance
 
 
@@ -35,7 +35,7 @@ def bound_step(
     if use_numba and HAVE_NUMBA:
         # writable C arrays always: numba compiles a read-only array (a one-trial env's
         # broadcast initial bound) as another signature, a second compilation of the same kernel
-        out, healthy = _compiled_step(
+        out, healthy = _KERNELS.get("_compiled_step")(
             *(np.require(a, np.float64, ["C", "W"]) for a in (covariance, transition, process_cov, measured)),
             MAX_CONDITION,
         )
@@ -52,5 +52,5 @@ def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     return np.sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
 
 
-if HAVE_NUMBA:  # pragma: no branch
-    from ._bound_kernels import bound_step as _compiled_step
+_KERNELS = LazyKernels(__name__, _compiled_step="._bound_kernels:bound_step")
+__getattr__ = _KERNELS.module_getattr

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.compiled import HAVE_NUMBA
+from ..core.compiled import HAVE_NUMBA, LazyKernels
 from ..core.superarm import all_super_arms, super_arm_count
 from .fusion import Fusion, fusion_class
 from .information import det_2x2, inverse_2x2
@@ -96,7 +96,7 @@ def super_arm_criterion(
         # the channel sums, the posteriors and their traces or determinants in one pass: the same
         # numbers as the numpy path below, without its (B, K, A, 2, 2) intermediates
         values = np.empty((batch, terms.shape[1], tx_masks.shape[1]))
-        _compiled_posteriors(
+        _KERNELS.get("_compiled_posteriors")(
             tx_masks,
             rx_masks,
             np.ascontiguousarray(terms, dtype=np.float64),
@@ -311,8 +311,8 @@ def _swap_search(
 
 def compiled_kernels() -> list:
     """The numba kernels the tracking search runs (none without numba)."""
-    return [_compiled_posteriors] if HAVE_NUMBA else []
+    return [_KERNELS.get("_compiled_posteriors")] if HAVE_NUMBA else []
 
 
-if HAVE_NUMBA:  # pragma: no branch
-    from ._selection_kernels import posterior_values as _compiled_posteriors
+_KERNELS = LazyKernels(__name__, _compiled_posteriors="._selection_kernels:posterior_values")
+__getattr__ = _KERNELS.module_getattr

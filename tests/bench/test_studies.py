@@ -60,7 +60,8 @@ def test_two_commands_may_not_share_a_name():
 
 def test_help_and_a_mistyped_command_import_nothing_heavy():
     """``--help`` lists the commands in their groups, and it and a mistyped command name answer
-    before numpy, numba, scipy, torch or matplotlib (or any command's module) are imported."""
+    before numpy, numba, scipy, torch or matplotlib (or any command's module) are imported; a
+    command's help and its argument errors before numba, scipy, torch or matplotlib."""
     import subprocess
     import sys
 
@@ -75,6 +76,21 @@ def test_help_and_a_mistyped_command_import_nothing_heavy():
             [sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=60
         )
         assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
+    # a command's own help and its refusals of arguments and policy names come before numba,
+    # scipy, torch and matplotlib (the env's compiled kernels load when a run first steps)
+    compiled = ("numba", "scipy", "torch", "matplotlib")
+    code = code.replace(repr(heavy), repr(compiled))
+    run = ["run", "--scenario", "paper-1-v1", "--out", "never-written"]
+    for argv, said in (
+        (["run", "--help"], ""),
+        ([*run, "--policies", "ucb1", "--trials", "abc"], "argument --trials"),
+        ([*run, "--policies", "no-such-policy"], "unknown policy 'no-such-policy'"),
+    ):
+        result = subprocess.run(
+            [sys.executable, "-c", code, *argv], capture_output=True, text=True, timeout=60
+        )
+        assert result.stdout.strip().splitlines()[-1] == "[]", result.stdout + result.stderr
+        assert said in result.stderr
     listing = subprocess.run(
         [sys.executable, "-m", "benchmarks", "--help"], capture_output=True, text=True, timeout=60
     ).stdout

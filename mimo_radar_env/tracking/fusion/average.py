@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from ...core.compiled import HAVE_NUMBA
+from ...core.compiled import HAVE_NUMBA, LazyKernels
 from ...core.geometry import station_geometry
 from ..imm import logsumexp
 from ..information import inverse_2x2, woodbury_gain
@@ -57,10 +57,10 @@ class AverageFusion(Fusion):
 
     @classmethod
     def compiled_kernels(cls) -> list:
-        return [_update_numba] if HAVE_NUMBA else []
+        return [_KERNELS.get("_update_numba")] if HAVE_NUMBA else []
 
     def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
-        path = _update_numba if self.use_numba else _update_numpy
+        path = _KERNELS.get("_update_numba") if self.use_numba else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
@@ -149,5 +149,5 @@ def average_channels(
     return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
 
 
-if HAVE_NUMBA:  # pragma: no branch
-    from ._average_kernels import update as _update_numba
+_KERNELS = LazyKernels(__name__, _update_numba="._average_kernels:update")
+__getattr__ = _KERNELS.module_getattr

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...core.compiled import HAVE_NUMBA
+from ...core.compiled import HAVE_NUMBA, LazyKernels
 from ...core.geometry import station_geometry
 from .. import unscented
 from ..imm import combine, logsumexp
@@ -54,12 +54,12 @@ class CentralizedFusion(Fusion):
 
     @classmethod
     def compiled_kernels(cls) -> list:
-        return [_update_numba] if HAVE_NUMBA else []
+        return [_KERNELS.get("_update_numba")] if HAVE_NUMBA else []
 
     def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
         dimension = 2 * tx_positions.shape[1] * rx_positions.shape[1]
         compiled = self.use_numba and dimension < unscented.WOODBURY_MIN_DIMENSION
-        path = _update_numba if compiled else _update_numpy
+        path = _KERNELS.get("_update_numba") if compiled else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
@@ -99,5 +99,5 @@ def _update_numpy(
     return means, covs, log_post, estimate, covariance
 
 
-if HAVE_NUMBA:  # pragma: no branch
-    from ._centralized_kernels import update as _update_numba
+_KERNELS = LazyKernels(__name__, _update_numba="._centralized_kernels:update")
+__getattr__ = _KERNELS.module_getattr
