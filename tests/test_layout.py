@@ -71,6 +71,7 @@ MODULE_TESTS = {
     "benchmarks/studies/settings.py": ("tests/bench/test_settings.py", r"Settings\.from_args"),
     "benchmarks/studies/tracking.py": ("tests/bench/test_tracking_study.py", r"TRACKING_POLICIES"),
     "mimo_radar_env/core/compiled.py": ("tests/tracking/test_average_kernels.py", r"HAVE_NUMBA"),
+    "mimo_radar_env/core/_counter_hash_kernels.py": ("tests/env/test_streams.py", r"_nb\b|numba"),
     "mimo_radar_env/core/counter_hash.py": ("tests/env/test_streams.py", r"Stream"),
     "mimo_radar_env/core/geometry.py": ("tests/env/test_geometry.py", r"measurement_jacobian"),
     "mimo_radar_env/core/model.py": ("tests/env/test_simulation.py", r"RadarModel"),
