@@ -12,6 +12,7 @@ observation and reward::
         obs, reward, terminated, truncated, info = env.step(action)
         agent.update(obs, reward)
 
+:class:`agents.Rollout` runs this loop (and attaches the env to an oracle agent).
 Observations with a leading trial axis (vector env) give actions (B, M + N);
 unbatched observations (single env) give actions (M + N,). An agent sees only the
 observation and the scenario's public geometry (station positions, Ms, Ns, target

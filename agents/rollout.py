@@ -99,5 +99,7 @@ class Rollout:
 
     def run(self, steps: int) -> Iterator[Step]:
         """The next ``steps`` steps, one at a time."""
+        if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
+            raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
         for _ in range(steps):
             yield self.step()

@@ -66,3 +66,12 @@ def test_a_rollout_runs_on_the_single_env_as_the_batch_of_one():
     batch = agents.Rollout(agents.make_agent("best", "paper-1-v1"), vector, seed=3).step()
     np.testing.assert_array_equal(batch.action[0], step.action)
     assert batch.reward[0] == pytest.approx(step.reward, rel=1e-12)
+
+
+def test_a_rollout_refuses_a_step_count_that_is_not_a_whole_number():
+    agent = agents.make_agent("ucb1", "paper-1-v1")
+    episode = agents.Rollout(agent, agents.make_env(agent, 2), seed=0)
+    for bad in (-1, 2.5, True, "3"):
+        with pytest.raises(ValueError, match=r"steps must be an integer >= 0, got"):
+            next(episode.run(bad))
+    assert episode.t == 0 and list(episode.run(0)) == []
