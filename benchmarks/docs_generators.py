@@ -833,7 +833,7 @@ def _rate_with_interval(rate: float, trials: int) -> str:
 
 @generator("bpso-parts")
 def bpso_parts_table(docs: Path) -> str:
-    """``bpso_parts.json`` (measured at commit 0b8e389): under each position rule, what each part of the
+    """``bpso_parts.json`` (measured at commit bb595a0): under each position rule, what each part of the
     whole swarm costs, how many iterations the kernel's trials run before their stop, and whether
     the kernel, or one with the same numbers whose eq21 decision cost nothing, is within the speed
     target's budget over the kernel it replaced."""

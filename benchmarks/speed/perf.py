@@ -10,8 +10,9 @@ Figures (``perf.json``), on v1's paper scenarios, the tracker's position bound i
   in one thread, the paper's swarm, 500 trials, under each position rule, and its optimal
   fraction against ``exact``. The kernel is compared with its earlier versions across commits
   (``python -m benchmarks.speed.across_commits``); ``bpso_speedup_vs_reference_*`` and
-  ``bpso_candidate_speedup_vs_reference_*``, in perf.json files measured up to commit 0b8e389,
-  came from copies of the replaced kernel and of a float32 candidate then kept in the tree;
+  ``bpso_candidate_speedup_vs_reference_*``, in perf.json files measured before commit 0b8e389
+  left them (the committed one at 0d8834b), came from copies of the replaced kernel and of a
+  float32 candidate then kept in the tree;
 * ``env_trial_steps_per_s_{average,centralized}``: the v1 vector env with the tracker and the
   bound, 500 trials, ``paper-1-v1``, random valid actions, and
   ``env_compiled_speedup_{average,centralized}`` over the same env on the numpy twins of its
@@ -78,7 +79,7 @@ QUICK = {
 }
 TARGETS = {
     "tracker_speedup_vs_filterpy": (">=", 300.0),
-    # measured in perf.json files up to commit 0b8e389 (the in-tree copy of the replaced kernel)
+    # in perf.json files measured while the replaced kernel's copy was in the tree (up to 0b8e389)
     "bpso_speedup_vs_reference_xor": (">=", 5.0),
     "bpso_speedup_vs_reference_set": (">=", 5.0),
     "claims_v1_average_wall_s": ("<=", 120.0),

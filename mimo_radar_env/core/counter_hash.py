@@ -36,7 +36,7 @@ class Stream(IntEnum):
     BPSO_R1 = 1  #: BPSO's ``r1`` of eq20, per particle and iteration
     BPSO_R2 = 2  #: BPSO's ``r2`` of eq20
     BPSO_FLIP = 3  #: BPSO's position draws of eq21 (four 16-bit lanes per hash)
-    BPSO_INIT = 4  #: reserved: the initial particles of a candidate BPSO kernel measured until 0b8e389
+    BPSO_INIT = 4  #: reserved: the initial particles of a candidate BPSO kernel (in the tree to 0b8e389)
     INITIAL_STATE = 0x100  #: the truth: initial states
     PROCESS_NOISE = 0x200  #: the truth: process noise
     SINR = 0x300  #: observations: Swerling-I SINR samples
