@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
 from mimo_radar_env.core.motion import transition_matrix
+from mimo_radar_env.tracking.fusion import DEFAULT_FUSION
 from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
 
@@ -73,7 +74,7 @@ class PlanTrackingAgent(Agent):
         self.horizon, self.search, self.width, self.criterion = horizon, search, width, criterion
         self.simulations, self.candidates = simulations, candidates
         # checks the layout, the search and its parameters now (the fusion is the env's, at attach)
-        self._planner("centralized").check_horizon(horizon)
+        self._planner(DEFAULT_FUSION).check_horizon(horizon)
         self.planner: Planner | None = None
         self._forecast: Any = None
         if env is not None:
@@ -135,7 +136,7 @@ class PlanTrackingUCB(TrackingUCB):
         simulations: int = 64,
         candidates: int = 8,
         criterion: str = "trace",
-        fusion: str = "average",
+        fusion: str = DEFAULT_FUSION,
         lambda_scale: str = "db",
         measurement_quality: float | None = None,
         **learning: float,

@@ -11,6 +11,7 @@ from mimo_radar_env import Scenario
 from mimo_radar_env.core.model import RadarModel
 from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.envs.options import option_choices
+from mimo_radar_env.tracking.fusion import DEFAULT_FUSION
 from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.selection import (
     CRITERIA,
@@ -42,7 +43,7 @@ class TrackingSelector:
         self,
         scenario: Scenario,
         criterion: str = "trace",
-        fusion: str = "average",
+        fusion: str = DEFAULT_FUSION,
         lambda_scale: str = "db",
         measurement_quality: float | None = None,
         sinr_weight: float = 0.0,
@@ -155,7 +156,7 @@ class TrackingUCB(Agent):
         scenario: Scenario | str,
         seed: int | None = None,
         criterion: str = "trace",
-        fusion: str = "average",
+        fusion: str = DEFAULT_FUSION,
         lambda_scale: str = "db",
         sinr_weight: float = 0.0,
         measurement_quality: float | None = None,

@@ -8,7 +8,7 @@ import math
 
 from ..core.superarm import AUTO_EXACT_SUBSETS, search_operations
 from ..scenarios import Scenario
-from ..tracking.fusion import fusion_class
+from ..tracking.fusion import DEFAULT_FUSION, fusion_class
 from ..tracking.fusion.base import MODELS
 
 
@@ -36,7 +36,9 @@ def memory_parts(scenario: Scenario) -> tuple[int, int]:
     return model, per_trial
 
 
-def operations_per_trial_step(scenario: Scenario, tracking: bool = True, fusion: str = "average") -> float:
+def operations_per_trial_step(
+    scenario: Scenario, tracking: bool = True, fusion: str = DEFAULT_FUSION
+) -> float:
     """Arithmetic operations one trial of an env of ``scenario`` does per step, roughly (an
     upper estimate, to size runs in time as :func:`memory_parts` sizes them in memory): the
     channel draws and SINR of all ``K M N`` target-channels, the oracle's search of the

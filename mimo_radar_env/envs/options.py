@@ -17,7 +17,7 @@ from typing import Any, Literal
 
 from ..core.superarm import SUPER_ARM_METHODS
 from ..scenarios import Scenario, load_scenario
-from ..tracking import FUSIONS
+from ..tracking.fusion import DEFAULT_FUSION, FUSIONS
 
 #: The scenario of the env class made without a ``scenario`` keyword (each registered version
 #: names its own: :mod:`mimo_radar_env.envs.versions`).
@@ -46,7 +46,7 @@ class EnvOptions:
     # the docstring is built from the fields' metadata below the class (options_docstring)
 
     fusion: FusionName = _option(
-        "average",
+        DEFAULT_FUSION,
         "tracker fusion: the paper's eq22 'average' or 'centralized'",
         """``"average"`` (the paper's eq22 averaging of per-channel IMM-UKF updates) or
         ``"centralized"`` (one update with the stacked measurements)""",

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from . import imm
-from .fusion import Posterior, Prior, make_fusion
+from .fusion import DEFAULT_FUSION, Posterior, Prior, make_fusion
 from .unscented import SigmaPointParameters, repair_covariance, robust_cholesky, sigma_points
 
 #: The tracker's models and Markov chain (docs/model.md): NCV, NCT(+3 deg/s), NCT(-3 deg/s).
@@ -59,7 +59,7 @@ class IMMUKFTracker:
         self,
         model: RadarModel,
         batch_size: int,
-        fusion: str = "average",
+        fusion: str = DEFAULT_FUSION,
         turn_rates_deg: tuple[float, ...] = DEFAULT_TURN_RATES_DEG,
         initial_probabilities: tuple[float, ...] = DEFAULT_INITIAL_PROBABILITIES,
         stay_probability: float = DEFAULT_STAY_PROBABILITY,

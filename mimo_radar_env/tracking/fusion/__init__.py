@@ -12,6 +12,9 @@ from .base import Fusion, Posterior, Prior
 from .centralized import CentralizedFusion
 
 FUSIONS: dict[str, type[Fusion]] = {}
+#: The fusion the env, the tracker and the tracking policies take unless told otherwise: the
+#: paper's eq22.
+DEFAULT_FUSION = AverageFusion.name
 
 
 def register_fusion(cls: type[Fusion]) -> type[Fusion]:
@@ -56,6 +59,7 @@ def compiled_kernels(name: str) -> list[Any]:
 
 
 __all__ = [
+    "DEFAULT_FUSION",
     "FUSIONS",
     "compiled_kernels",
     "AverageFusion",
