@@ -33,6 +33,26 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
     assert FIGURES <= set(result) and result["quick"] is True
     for key in FIGURES:
         assert result[key] > 0, key
+    # each ratio is the quotient of the two figures measured beside it in the same run
+    quotients = {
+        "tracker_speedup_vs_filterpy": ("batched_channel_cycles_per_s", "filterpy_channel_cycles_per_s"),
+        "exact_vs_bpso_speedup": ("bpso_ms", "exact_ms"),
+        "env_compiled_speedup_average": (
+            "env_trial_steps_per_s_average",
+            "env_numpy_trial_steps_per_s_average",
+        ),
+        "env_compiled_speedup_centralized": (
+            "env_trial_steps_per_s_centralized",
+            "env_numpy_trial_steps_per_s_centralized",
+        ),
+        "flat_vector_vs_sync_speedup": ("flat_vector_trial_steps_per_s", "flat_sync_trial_steps_per_s"),
+        "ppo_training_native_vs_sync_speedup": (
+            "ppo_training_steps_per_s_native",
+            "ppo_training_steps_per_s_sync",
+        ),
+    }
+    for ratio, (numerator, denominator) in quotients.items():
+        assert result[ratio] == pytest.approx(result[numerator] / result[denominator], rel=1e-9), ratio
     assert 0 <= result["bpso_optimality_rate"] <= 1
     assert result["claims_v1_both_fusions_wall_s"] == pytest.approx(
         result["claims_v1_average_wall_s"] + result["claims_v1_centralized_wall_s"]
