@@ -74,7 +74,15 @@ class CommandEntry:
 
     def load(self) -> type[Command]:
         module, _, attribute = self.target.partition(":")
-        cls = getattr(importlib.import_module(module), attribute)
+        try:
+            cls = getattr(importlib.import_module(module), attribute)
+        except ModuleNotFoundError as exc:
+            if exc.name is None or not module.startswith(exc.name):
+                raise
+            raise SystemExit(
+                f"{PROG}: error: '{self.name}' runs from a source checkout of mimo-radar-env (git clone, "
+                f"then pip install -e .): its module {module} is not installed here"
+            ) from None
         if not (isinstance(cls, type) and issubclass(cls, Command)):
             raise TypeError(f"command {self.name!r}: {self.target} is not a Command class")
         return cls
@@ -161,7 +169,7 @@ _BUILT_IN = (
         "docs",
         "maintenance",
         "regenerate the docs' tables and numbers from the committed artefacts (--check: compare only)",
-        "doctables:DocsCommand",
+        "docs_tooling.pages:DocsCommand",
     ),
     (
         "model-figures",

@@ -7,7 +7,7 @@ and returns its value with a 95 % interval (Wilson for a rate, the bootstrap ove
 :mod:`benchmarks.uncertainty` for a mean or ratio over trials) or, for a timing, the machine it
 ran on. The command writes them all to ``docs/results/model/figures.json``; the docs quote
 them through ``<!-- value: model NAME -->`` spans that ``mimo-radar-bench docs`` fills
-(:mod:`benchmarks.doctables`).
+(:mod:`benchmarks.docs_tooling.pages`).
 """
 
 from __future__ import annotations

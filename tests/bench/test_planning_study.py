@@ -39,7 +39,7 @@ def _the_docs_say_what_the_planning_json_shows(tmp_path, out, run):
     import shutil
 
     from benchmarks import verdicts
-    from benchmarks.docs_generators import PLANNING_LEARNERS, planning_findings, planning_tables
+    from benchmarks.docs_tooling.generators import PLANNING_LEARNERS, planning_findings, planning_tables
 
     docs = tmp_path / "docs"
     (docs / "results" / "planning").mkdir(parents=True)

@@ -111,7 +111,7 @@ def test_the_rl_study_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, 
 
 
 def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
-    from benchmarks.docs_generators import rl_findings, rl_tables
+    from benchmarks.docs_tooling.generators import rl_findings, rl_tables
 
     learned = {
         f"ppo:t/paper-1-v1/ppo-information/seed-{s}/model.zip": a for s, a in enumerate((1.0, 1.2, 1.1))

@@ -162,3 +162,18 @@ def test_without_a_shard_size_the_trials_are_split_over_the_workers_and_a_resume
         Settings(out=tmp_path, trials=6, steps=3, workers=3),
     )
     assert fresh[0].shard_size == 2
+
+
+def test_a_command_whose_module_is_not_installed_says_where_it_runs(monkeypatch, capsys):
+    """The wheel leaves the docs' tooling out: its command answers with one line, not a traceback."""
+    from benchmarks.cli import CommandEntry
+
+    monkeypatch.setitem(
+        COMMANDS,
+        "ghost",
+        CommandEntry("ghost", "maintenance", "not installed", "benchmarks.no_such_module:Ghost"),
+    )
+    with pytest.raises(SystemExit) as exit_:
+        main(["ghost"])
+    assert "'ghost' runs from a source checkout" in str(exit_.value)
+    assert "benchmarks.no_such_module is not installed" in str(exit_.value)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks import docs_generators as generators
+from benchmarks.docs_tooling import generators
 from benchmarks.errors import BenchError
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"

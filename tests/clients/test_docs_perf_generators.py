@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from benchmarks import docs_generators as generators
+from benchmarks.docs_tooling import generators
 from benchmarks.speed.perf import TARGETS
 
 

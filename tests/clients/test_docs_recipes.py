@@ -33,7 +33,7 @@ def test_recipe_runs_alone(recipe):
 def test_a_recipe_changed_since_it_was_timed_fails_the_docs_check(tmp_path):
     import shutil
 
-    from benchmarks.docs_generators import _recipe_costs
+    from benchmarks.docs_tooling.generators import _recipe_costs
     from benchmarks.errors import BenchError
     from benchmarks.speed.recipes import DOCS
 

@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.cli import main
-from benchmarks.doctables import regenerate
+from benchmarks.docs_tooling.pages import regenerate
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
@@ -46,7 +46,7 @@ def test_an_unknown_generator_is_named(tmp_path, capsys):
 
 
 def test_prose_numbers_need_an_artefact(tmp_path, capsys):
-    from benchmarks.doctables import unsourced_numbers
+    from benchmarks.docs_tooling.pages import unsourced_numbers
 
     text = (
         "It took 12.5 s and was 1.7x faster, 3 times more, optimal in 96.0 % [92.3, 98.0] of cases\n"
@@ -89,7 +89,7 @@ def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):
 def test_the_reading_moves_are_each_column_against_the_one_it_modifies(tmp_path):
     """Hand-made scorecards: each change lists exactly the claims whose verdict differs from the
     column it modifies (not from the column beside it), and the claims contradicted everywhere."""
-    from benchmarks import docs_generators as generators
+    from benchmarks.docs_tooling import generators
 
     docs = tmp_path / "docs"
     (docs / "results" / "claims").mkdir(parents=True)

@@ -10,7 +10,7 @@ A page marks a generated block with two HTML comments (invisible on the site)::
 ``mimo-radar-bench docs`` rewrites every block of every page of ``--docs`` from the artefacts
 under ``DOCS/results``; ``--check`` changes nothing and fails, naming the blocks, where a page
 differs from what the artefacts give (CI runs it). A generator is a function of the docs folder
-registered with :func:`benchmarks.docs_generators.generator`; each names the artefacts it reads.
+registered with :func:`benchmarks.docs_tooling.generators.generator`; each names the artefacts it reads.
 
 A number quoted in a sentence is a *value span* on one line::
 
@@ -31,9 +31,9 @@ import difflib
 import re
 from pathlib import Path
 
-from .cli import Command
-from .docs_generators import GENERATORS, VALUE_SOURCES
-from .errors import BenchError
+from ..cli import Command
+from ..errors import BenchError
+from .generators import GENERATORS, VALUE_SOURCES
 
 BLOCK = re.compile(r"(<!-- generated: ([\w.-]+) -->\n)(.*?)(<!-- end generated -->)", re.DOTALL)
 VALUE = re.compile(r"(<!-- value: ([\w.-]+) ([\w.+-]+) -->)(.*?)(<!-- end value -->)")

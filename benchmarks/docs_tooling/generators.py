@@ -1,4 +1,4 @@
-"""The generators of the docs' blocks (:mod:`benchmarks.doctables`), one per table or set of
+"""The generators of the docs' blocks (:mod:`benchmarks.docs_tooling.pages`), one per table or set of
 numbers, each reading the committed artefacts it names under ``docs/results``."""
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from . import model_figures, verdicts
-from .errors import BenchError
-from .model_figures import FIGURES_FILE, format_figure
-from .report import (
+from .. import model_figures, verdicts
+from ..errors import BenchError
+from ..model_figures import FIGURES_FILE, format_figure
+from ..report import (
     METHOD_LEGEND,
     PAPER_ARMSE,
     PAPER_ASR,
@@ -24,7 +24,7 @@ from .report import (
     paired_difference,
     paper_armse,
 )
-from .studies import claims, tracking
+from ..studies import claims, tracking
 
 #: The scorecards of the claims table: label -> artefact.
 SCORECARDS = {"v1": "claims/v1.json", "v1, centralised": "claims/v1-centralized.json", "v0": "claims/v0.json"}
@@ -585,7 +585,7 @@ def v0_findings(docs: Path) -> str:
 @generator("perf-figures")
 def perf_figures(docs: Path) -> str:
     """``mimo-radar-bench perf``'s figures and targets, from its committed perf.json."""
-    from .speed.perf import FIGURES, TARGETS, format_value, target_met
+    from ..speed.perf import FIGURES, TARGETS, format_value, target_met
 
     results = read_json(docs, "perf/perf.json")
     lines = ["| figure | what | measured | target |", "|---|---|---|---|"]
@@ -611,7 +611,7 @@ def study_floor(docs: Path) -> str:
     """The claims study with MG-CRB-CL's exact solver against the same study with the paper's
     BPSO, from perf.json: what BPSO's share is, and whether the study meets its time target or
     a faster BPSO kernel could make it."""
-    from .speed.perf import TARGETS
+    from ..speed.perf import TARGETS
 
     results = read_json(docs, "perf/perf.json")
     bpso, floor = results["claims_v1_average_wall_s"], results["claims_v1_average_exact_solver_wall_s"]
@@ -644,7 +644,7 @@ def study_floor(docs: Path) -> str:
 @generator("scaling")
 def scaling_table(docs: Path) -> str:
     """``python -m benchmarks.speed.scaling --json``'s rows and the fitted growth."""
-    from .speed.scaling import fitted_growth
+    from ..speed.scaling import fitted_growth
 
     rows = read_json(docs, "perf/scaling.json")
     lines = [
@@ -733,7 +733,7 @@ def policy_cost(docs: Path) -> str:
 def _recipe_costs(docs: Path, page: str) -> str:
     """``python -m benchmarks.speed.recipes``' rows of ``page``: each Python recipe's wall time
     when run alone in a fresh interpreter (the interpreter's start and imports included)."""
-    from .speed.recipes import recipes
+    from ..speed.recipes import recipes
 
     record = read_json(docs, "perf/recipes.json")
     rows = [r for r in record["rows"] if r["page"] == page]
@@ -761,7 +761,7 @@ for _page in ("clients.md", "ppo.md"):
 @generator("rl-tables")
 def rl_tables(docs: Path) -> str:
     """The RL study's tables (``mimo-radar-bench rl``'s rl.md), from its committed rl.json."""
-    from .studies.rl import rl_markdown
+    from ..studies.rl import rl_markdown
 
     text = rl_markdown(read_json(docs, "rl/rl.json"))
     body = text.split("\n", 2)[2].lstrip("\n")  # the page has its own heading
@@ -777,8 +777,8 @@ def _against(stat: dict) -> str:
 @generator("rl-findings")
 def rl_findings(docs: Path) -> str:
     """What the RL study shows, every number from rl.json and timing.json."""
-    from .harness import duration
-    from .studies.rl import FLAT_CHANGE, MINUS_ORDER
+    from ..harness import duration
+    from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
     judged = read_json(docs, "rl/rl.json")
     timing = read_json(docs, "rl/timing.json")
@@ -837,7 +837,7 @@ def bpso_parts_table(docs: Path) -> str:
     whole swarm costs, how many iterations the kernel's trials run before their stop, and whether
     the kernel, or one with the same numbers whose eq21 decision cost nothing, is within the speed
     target's budget over the kernel it replaced."""
-    from .speed.perf import TARGETS
+    from ..speed.perf import TARGETS
 
     r = read_json(docs, "perf/bpso_parts.json")
     breakdowns = r["breakdowns"]
@@ -918,7 +918,7 @@ def bpso_parts_table(docs: Path) -> str:
 def first_run_sentence(docs: Path) -> str:
     """``python -m benchmarks.speed.first_run``: the quickstart's first run against its second,
     after the README's compile step and without it, each from an empty numba cache."""
-    from .speed.first_run import TARGET as FIRST_RUN_TARGET
+    from ..speed.first_run import TARGET as FIRST_RUN_TARGET
 
     r = read_json(docs, "perf/first_run.json")
     repeats = r["repeats"]
@@ -942,7 +942,7 @@ def step_stages(docs: Path) -> str:
     """``python -m benchmarks.speed.stages``' rows: each stage's time per step, its share, the
     arithmetic it declares and the rate that makes, and the floor the same arithmetic would take
     at an assumed accelerator rate."""
-    from .speed.stages import ASSUMED_ACCELERATOR_OPS
+    from ..speed.stages import ASSUMED_ACCELERATOR_OPS
 
     record = read_json(docs, "perf/stages.json")
     rows = record["rows"]
@@ -1023,7 +1023,7 @@ def planning_cost(docs: Path) -> str:
 def planning_tables(docs: Path) -> str:
     """The planning study's tables (``mimo-radar-bench planning``'s planning.md), from its
     committed planning.json."""
-    from .studies.planning import planning_markdown
+    from ..studies.planning import planning_markdown
 
     text = planning_markdown(read_json(docs, "planning/planning.json"))
     body = text.split("\n", 2)[2].lstrip("\n")
@@ -1042,7 +1042,7 @@ def _signed(stat: dict) -> str:
 def planning_findings(docs: Path) -> str:
     """The planning targets, judged from planning.json (and rl.json for the learners that beat
     best-tracking), with the study's wall time from its timing.json."""
-    from .harness import duration
+    from ..harness import duration
 
     runs = read_json(docs, "planning/planning.json")
     timing = read_json(docs, "planning/timing.json")
