@@ -8,8 +8,9 @@ import numpy as np
 import agents
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
-#: The demo's policies: uniformly random valid super arms, and the oracle of the true mean SINR.
-POLICIES = ("random", "best")
+#: The demo's policies and their labels: uniformly random valid super arms, and the oracle of
+#: the true mean SINR.
+POLICIES = {"random": "random", "best": "best (oracle)"}
 
 
 def run_demo(
@@ -41,7 +42,8 @@ def print_demo(results: dict[str, dict[str, float]], scenario: str) -> None:
     print(f"{env_id}, scenario {scenario}: one episode per policy, same target trajectory")
     print(f"{'policy':<14}{'steps':>7}{'total reward':>15}{'regret':>12}{'mean pos. error (m)':>22}")
     for name, row in results.items():
+        label = POLICIES.get(name, name)
         print(
-            f"{name:<14}{row['steps']:>7d}{row['total_reward']:>15.1f}{row['final_regret']:>12.1f}"
+            f"{label:<14}{row['steps']:>7d}{row['total_reward']:>15.1f}{row['final_regret']:>12.1f}"
             f"{row['mean_position_error_m']:>22.2f}"
         )
