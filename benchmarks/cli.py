@@ -255,32 +255,30 @@ def build_parser(commands: Sequence[str] | None = None) -> argparse.ArgumentPars
     return parser
 
 
-def _import_modules(argv: list[str]) -> None:
-    """Import the ``--import MODULE`` modules named before the command (they register theirs)."""
-    for i, word in enumerate(argv):
-        if not word.startswith("-"):
-            return
-        module = argv[i + 1] if word == "--import" and i + 1 < len(argv) else None
-        if word.startswith("--import="):
-            module = word.partition("=")[2]
-        if module is not None:
-            try:
-                importlib.import_module(module)
-            except ImportError as exc:
-                raise SystemExit(f"{PROG}: error: --import {module}: {exc}") from None
-
-
-def _command_name(argv: list[str]) -> str | None:
-    """The first word that is neither an option nor an option's value."""
-    skip = False
+def _leading(argv: list[str]) -> tuple[list[str], str | None]:
+    """The ``--import MODULE`` (or ``--import=MODULE``) modules named before the command, and the
+    command: the first word that is neither an option nor an option's value."""
+    imports, expect_module = [], False
     for word in argv:
-        if skip:
-            skip = False
+        if expect_module:
+            imports.append(word)
+            expect_module = False
         elif word == "--import":
-            skip = True
+            expect_module = True
+        elif word.startswith("--import="):
+            imports.append(word.partition("=")[2])
         elif not word.startswith("-"):
-            return word
-    return None
+            return imports, word
+    return imports, None
+
+
+def _import_modules(modules: list[str]) -> None:
+    """Import the modules of one's own that register commands."""
+    for module in modules:
+        try:
+            importlib.import_module(module)
+        except ImportError as exc:
+            raise SystemExit(f"{PROG}: error: --import {module}: {exc}") from None
 
 
 def foreign_packages() -> list[str]:
@@ -317,8 +315,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         raise SystemExit(2)
     argv = list(sys.argv[1:] if argv is None else argv)
-    _import_modules(argv)
-    name = _command_name(argv)
+    imports, name = _leading(argv)
+    _import_modules(imports)
     parser = build_parser([name] if name in COMMANDS else [])
     args = parser.parse_args(argv)
     return run(parser, args)

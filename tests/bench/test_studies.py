@@ -1,6 +1,7 @@
 """The study engine: a new study is one module; every run is checked before any is written."""
 
 import json
+import sys
 
 import pytest
 
@@ -177,3 +178,20 @@ def test_a_command_whose_module_is_not_installed_says_where_it_runs(monkeypatch,
         main(["ghost"])
     assert "'ghost' runs from a source checkout" in str(exit_.value)
     assert "benchmarks.no_such_module is not installed" in str(exit_.value)
+
+
+def test_every_import_before_the_command_is_imported_and_a_missing_one_is_named(tmp_path, monkeypatch):
+    from benchmarks.cli import _leading
+
+    assert _leading(["--import", "a", "--import=b", "--import", "c", "toy", "--out", "x"]) == (
+        ["a", "b", "c"],
+        "toy",
+    )
+    (tmp_path / "first_module.py").write_text("LOADED = True\n")
+    monkeypatch.syspath_prepend(str(tmp_path))
+    argv = ["--import", "first_module", "--import", "tests.bench.toy_study", "toy", "--help"]
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    assert exit_.value.code == 0 and "first_module" in sys.modules and COMMANDS["toy"].group == "studies"
+    with pytest.raises(SystemExit, match="--import no_such_module_here: No module named"):
+        main(["--import", "no_such_module_here", "demo"])
