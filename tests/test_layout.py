@@ -52,6 +52,8 @@ MODULE_TESTS = {
     "agents/planning.py": ("tests/tracking/test_planning.py", r"plan-tracking"),
     "benchmarks/studies/planning.py": ("tests/bench/test_planning_study.py", r"planning"),
     "benchmarks/speed/planning_cost.py": ("tests/bench/test_planning_study.py", r"planning_cost"),
+    "benchmarks/speed/device.py": ("tests/env/test_device.py", r"episode_differences"),
+    "mimo_radar_env/core/arrays.py": ("tests/env/test_device.py", r"device_namespace"),
     "benchmarks/speed/stages.py": ("tests/bench/test_perf_quick.py", r"stages\.measure"),
     "benchmarks/speed/first_run.py": ("tests/bench/test_perf_quick.py", r"first_run"),
     "benchmarks/speed/env_throughput.py": ("tests/bench/test_perf_quick.py", r"env_trial_steps_per_s"),

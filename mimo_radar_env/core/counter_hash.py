@@ -22,6 +22,8 @@ from enum import IntEnum
 import numpy as np
 from numpy.typing import NDArray
 
+from .arrays import namespace
+
 GOLDEN = np.uint64(0x9E3779B97F4A7C15)
 MUL1 = np.uint64(0xBF58476D1CE4E5B9)
 MUL2 = np.uint64(0x94D049BB133111EB)
@@ -60,10 +62,12 @@ OBSERVATION_STREAMS = frozenset({Stream.SINR, Stream.MEASUREMENT, Stream.INITIAL
 
 
 def mix(z: NDArray[np.uint64]) -> NDArray[np.uint64]:
-    """SplitMix64 finaliser: a bijection of uint64 with good avalanche."""
-    z = (z ^ (z >> np.uint64(30))) * MUL1
-    z = (z ^ (z >> np.uint64(27))) * MUL2
-    return z ^ (z >> np.uint64(31))
+    """SplitMix64 finaliser: a bijection of 64-bit words with good avalanche (numpy ``uint64`` or
+    torch ``int64`` words, :mod:`.arrays`)."""
+    xp = namespace(z)
+    z = (z ^ xp.shift_right(z, 30)) * xp.word(int(MUL1))
+    z = (z ^ xp.shift_right(z, 27)) * xp.word(int(MUL2))
+    return z ^ xp.shift_right(z, 31)
 
 
 def counter(stream: int, step: int) -> np.uint64:
@@ -75,14 +79,18 @@ def counter(stream: int, step: int) -> np.uint64:
 
 def stream_base(keys: NDArray[np.uint64], stream: int, step: int) -> NDArray[np.uint64]:
     """``mix(key ^ mix(counter * GOLDEN))`` for every key."""
-    return mix(np.asarray(keys, dtype=np.uint64) ^ mix(np.array([counter(stream, step)]) * GOLDEN))
+    xp = namespace(keys)
+    salt = int(mix(np.array([counter(stream, step)]) * GOLDEN)[0])
+    return mix(xp.words(keys) ^ xp.word(salt))
 
 
 def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDArray[np.uint64]:
     """64 hashed bits per element: ``mix(base + (element + 1) * GOLDEN)``."""
-    return mix(base + (np.asarray(element).astype(np.uint64) + np.uint64(1)) * GOLDEN)
+    xp = namespace(base)
+    return mix(base + (xp.word_index(element) + xp.word(1)) * xp.word(int(GOLDEN)))
 
 
 def to_unit(bits: NDArray[np.uint64]) -> NDArray[np.float64]:
     """The top 53 bits as a uniform double in [0, 1)."""
-    return (bits >> np.uint64(11)).astype(np.float64) * TWO_POW_M53
+    xp = namespace(bits)
+    return xp.astype(xp.shift_right(bits, 11), np.float64) * TWO_POW_M53

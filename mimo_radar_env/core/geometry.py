@@ -5,17 +5,21 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from .arrays import namespace
+
 
 def wrap_angle(angle: NDArray[np.float64]) -> NDArray[np.float64]:
     """Wrap angles to (-pi, pi]."""
-    wrapped = np.mod(angle + np.pi, 2.0 * np.pi) - np.pi
-    return np.where(wrapped == -np.pi, np.pi, wrapped)
+    xp = namespace(angle)
+    wrapped = xp.mod(angle + xp.pi, 2.0 * xp.pi) - xp.pi
+    return xp.where(wrapped == -xp.pi, xp.pi, wrapped)
 
 
 def station_ranges(positions: NDArray[np.float64], stations: NDArray[np.float64]) -> NDArray[np.float64]:
     """Distances from positions (..., 2) to every station (S, 2): shape (..., S)."""
+    xp = namespace(positions)
     delta = positions[..., None, :] - stations
-    return np.sqrt(np.einsum("...i,...i->...", delta, delta))
+    return xp.sqrt(xp.einsum("...i,...i->...", delta, delta))
 
 
 #: Ranges below this (m) count as this in the SINR model, which stays finite by construction
@@ -30,8 +34,9 @@ def squared_range_products(
 
     The one home of eq5's range dependence: the mean SINR is ``gain / (R_tx R_rx)^2``.
     """
-    tx_sq = np.maximum(station_ranges(positions, tx), MIN_RANGE) ** 2
-    rx_sq = np.maximum(station_ranges(positions, rx), MIN_RANGE) ** 2
+    xp = namespace(positions)
+    tx_sq = xp.maximum(station_ranges(positions, tx), MIN_RANGE) ** 2
+    rx_sq = xp.maximum(station_ranges(positions, rx), MIN_RANGE) ** 2
     return tx_sq[..., :, None] * rx_sq[..., None, :]
 
 
@@ -50,11 +55,12 @@ def bistatic_measurement(
     ``positions``, ``tx`` and ``rx`` broadcast against each other, last axis (x, y).
     Returns shape (..., 2).
     """
+    xp = namespace(positions)
     to_tx = positions - tx
     to_rx = positions - rx
-    range_sum = np.hypot(to_tx[..., 0], to_tx[..., 1]) + np.hypot(to_rx[..., 0], to_rx[..., 1])
-    azimuth = np.arctan2(to_rx[..., 1], to_rx[..., 0])
-    return np.stack([range_sum, azimuth], axis=-1)
+    range_sum = xp.hypot(to_tx[..., 0], to_tx[..., 1]) + xp.hypot(to_rx[..., 0], to_rx[..., 1])
+    azimuth = xp.arctan2(to_rx[..., 1], to_rx[..., 0])
+    return xp.stack([range_sum, azimuth], axis=-1)
 
 
 def station_geometry(
@@ -70,11 +76,12 @@ def station_geometry(
     azimuth the receiver's: computing per station and broadcasting over channels saves the
     work of ``Ms * Ns`` channels on ``Ms + Ns`` stations.
     """
+    xp = namespace(points)
     tx_dx, tx_dy = points[..., 0] - tx[..., 0], points[..., 2] - tx[..., 1]
     rx_dx, rx_dy = points[..., 0] - rx[..., 0], points[..., 2] - rx[..., 1]
-    tx_range = np.sqrt(tx_dx * tx_dx + tx_dy * tx_dy)
-    rx_range = np.sqrt(rx_dx * rx_dx + rx_dy * rx_dy)
-    return tx_range, rx_range, np.arctan2(rx_dy, rx_dx), rx_dy / rx_range, rx_dx / rx_range
+    tx_range = xp.sqrt(tx_dx * tx_dx + tx_dy * tx_dy)
+    rx_range = xp.sqrt(rx_dx * rx_dx + rx_dy * rx_dy)
+    return tx_range, rx_range, xp.arctan2(rx_dy, rx_dx), rx_dy / rx_range, rx_dx / rx_range
 
 
 def channel_jacobian(
@@ -86,12 +93,13 @@ def channel_jacobian(
     Row 0 is the range sum's gradient, the sum of the unit vectors from the TX and the RX to
     the target; row 1 the azimuth's, ``(-dy, dx) / R_rx^2`` from the RX.
     """
+    xp = namespace(positions)
     to_tx, to_rx = positions - tx, positions - rx
-    tx_range = np.maximum(np.linalg.norm(to_tx, axis=-1, keepdims=True), MIN_RANGE)
-    rx_range = np.maximum(np.linalg.norm(to_rx, axis=-1, keepdims=True), MIN_RANGE)
+    tx_range = xp.maximum(xp.linalg.norm(to_tx, axis=-1, keepdims=True), MIN_RANGE)
+    rx_range = xp.maximum(xp.linalg.norm(to_rx, axis=-1, keepdims=True), MIN_RANGE)
     range_sum = to_tx / tx_range + to_rx / rx_range
-    azimuth = np.stack([-to_rx[..., 1], to_rx[..., 0]], axis=-1) / rx_range**2
-    return np.stack(np.broadcast_arrays(range_sum, azimuth), axis=-2)
+    azimuth = xp.stack([-to_rx[..., 1], to_rx[..., 0]], axis=-1) / rx_range**2
+    return xp.stack(xp.broadcast_arrays(range_sum, azimuth), axis=-2)
 
 
 def measurement_jacobian(

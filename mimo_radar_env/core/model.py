@@ -8,12 +8,14 @@ transition matrices and the noise-free nominal trajectories.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from ..scenarios import Scenario, ScenarioError, turn_rate_schedule
+from .arrays import NUMPY, NumpyNamespace, TorchNamespace
 from .geometry import squared_range_products
 from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
 
@@ -53,6 +55,20 @@ class RadarModel:
     noise_gain: NDArray[np.float64]
     initial_states: NDArray[np.float64]
     initial_cov_sqrt: NDArray[np.float64]
+    #: the targets' weights ``Omega_k`` (K,) and the diagonal of ``Sigma0`` (2,) of eq32
+    weights: NDArray[np.float64]
+    measurement_diagonal: NDArray[np.float64]
+    #: the array namespace its arrays live in (:mod:`.arrays`): numpy, or torch on a device
+    xp: NumpyNamespace | TorchNamespace = NUMPY
+
+    def to(self, xp: NumpyNamespace | TorchNamespace) -> RadarModel:
+        """The same model with its arrays in namespace ``xp`` (torch on a device, say)."""
+        arrays = {
+            f.name: xp.asarray(getattr(self, f.name))
+            for f in dataclasses.fields(self)
+            if isinstance(getattr(self, f.name), np.ndarray)
+        }
+        return dataclasses.replace(self, xp=xp, **arrays)
 
     @classmethod
     def from_scenario(cls, scenario: Scenario) -> RadarModel:
@@ -85,6 +101,8 @@ class RadarModel:
             noise_gain=noise_gain(sc.sample_time),
             initial_states=initial_states,
             initial_cov_sqrt=np.stack([np.linalg.cholesky(t.initial_covariance) for t in sc.targets]),
+            weights=np.asarray(sc.weights, dtype=np.float64),
+            measurement_diagonal=np.diagonal(sc.measurement_covariance).copy(),
         )
 
     # ----------------------------------------------------------- sizes
@@ -100,10 +118,6 @@ class RadarModel:
     def num_targets(self) -> int:
         return self.gain.shape[0]
 
-    @property
-    def weights(self) -> NDArray[np.float64]:
-        return self.scenario.weights
-
     # ---------------------------------------------------------- physics
     def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Mean SINR ``S[k, m, n]`` (eq5) for positions (..., K, 2): shape (..., K, M, N)."""
@@ -111,11 +125,11 @@ class RadarModel:
 
     def measurement_variance(self, quality: NDArray[np.float64]) -> NDArray[np.float64]:
         """eq32: the diagonal of ``Sigma0 / lambda`` for qualities ``lambda`` (...): shape (..., 2)."""
-        return np.diagonal(self.scenario.measurement_covariance) / quality[..., None]
+        return self.measurement_diagonal / quality[..., None]
 
     def channel_weights(self, mean_sinr: NDArray[np.float64]) -> NDArray[np.float64]:
         """``sum_k Omega_k S[k, m, n]``: the expected reward of each channel, (..., M, N)."""
-        return np.einsum("k,...kmn->...mn", self.weights, mean_sinr)
+        return self.xp.einsum("k,...kmn->...mn", self.weights, mean_sinr)
 
     def quality(
         self, sinr: NDArray[np.float64], target_axis: int = -3, scale: str = "linear"
@@ -126,17 +140,18 @@ class RadarModel:
         eq32 to linear SINRs (reading 0); ``"db"`` to SINRs in dB,
         ``(S_dB - S_min,dB) / (S_max,dB - S_min,dB) + 0.2`` (reading 1).
         """
+        xp = self.xp
         shape = [1] * sinr.ndim
         shape[target_axis] = self.num_targets
         s_min = self.min_sinr.reshape(shape)
-        peak = self.scenario.peak_sinr
+        peak = float(self.scenario.peak_sinr)
         if scale == "db":
             with np.errstate(divide="ignore"):
-                sinr, s_min, peak = 10 * np.log10(sinr), 10 * np.log10(s_min), 10 * np.log10(peak)
+                sinr, s_min, peak = 10 * xp.log10(sinr), 10 * xp.log10(s_min), float(10 * np.log10(peak))
         elif scale != "linear":
             raise ValueError(f"scale must be 'linear' or 'db', got {scale!r}")
         lam = (sinr - s_min) / (peak - s_min) + LAMBDA_FLOOR
-        return np.clip(lam, LAMBDA_FLOOR, 1.0 + LAMBDA_FLOOR)
+        return xp.clip(lam, LAMBDA_FLOOR, 1.0 + LAMBDA_FLOOR)
 
 
 def _sinr_extremes(

@@ -91,15 +91,15 @@ class RadarSimulation:
         if truth not in ("per-trial", "shared"):
             raise ValueError(f"truth must be 'per-trial' or 'shared', got {truth!r}")
         self.truth = truth
-        self.initial_estimates = np.broadcast_to(
-            model.initial_states, (batch_size, model.num_targets, 4)
-        ).copy()
+        self.xp = xp = model.xp
+        shape = (batch_size, model.num_targets, 4)
+        self.initial_estimates = xp.copy(xp.broadcast_to(model.initial_states, shape))
         self.step_index = 0
-        self.state = np.zeros((batch_size, model.num_targets, 4))
+        self.state = xp.zeros((batch_size, model.num_targets, 4))
         self._streams: TrialStreams | None = None
         self._upcoming: NDArray[np.float64] | None = None
         self._mean_sinr: NDArray[np.float64] | None = None
-        self._process_std = np.sqrt(model.scenario.process_noise)
+        self._process_std = float(np.sqrt(model.scenario.process_noise))
 
     # -------------------------------------------------------------- truth
     def reset(self, keys: NDArray[np.uint64]) -> None:
@@ -112,25 +112,26 @@ class RadarSimulation:
         keys = np.array(keys, dtype=np.uint64)
         if self.truth == "shared":
             keys[:, 0] = shared_truth_key(self.model.scenario.truth_seed)
-        self._streams = TrialStreams(keys)
+        xp = self.xp
+        self._streams = TrialStreams(keys, xp)
         if self._streams.batch_size != self.batch_size:
             raise ValueError(f"expected keys for {self.batch_size} trials, got {self._streams.batch_size}")
         model = self.model
         draws = self._streams.normal(
-            Stream.INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4))
+            Stream.INITIAL_STATE, 0, full_index(self.batch_size, (model.num_targets, 4), xp)
         )
-        offset = np.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
+        offset = xp.einsum("kij,bkj->bki", model.initial_cov_sqrt, draws)
         if self.truth == "shared":
             estimate_draws = self._streams.normal(
-                Stream.INITIAL_ESTIMATE, 0, full_index(self.batch_size, (model.num_targets, 4))
+                Stream.INITIAL_ESTIMATE, 0, full_index(self.batch_size, (model.num_targets, 4), xp)
             )
-            self.state = np.broadcast_to(model.initial_states, offset.shape).copy()
-            self.initial_estimates = model.initial_states + np.einsum(
+            self.state = xp.copy(xp.broadcast_to(model.initial_states, offset.shape))
+            self.initial_estimates = model.initial_states + xp.einsum(
                 "kij,bkj->bki", model.initial_cov_sqrt, estimate_draws
             )
         else:
             self.state = model.initial_states + offset
-            self.initial_estimates = np.broadcast_to(model.initial_states, offset.shape).copy()
+            self.initial_estimates = xp.copy(xp.broadcast_to(model.initial_states, offset.shape))
         self.step_index = 0
         self._upcoming = None
         self._mean_sinr = None
@@ -154,15 +155,16 @@ class RadarSimulation:
     def _next_state(self, state: NDArray[np.float64], t: int) -> NDArray[np.float64]:
         """The true state after step ``t`` from ``state`` (the step's transition and its draw of
         the process noise)."""
-        model = self.model
+        model, xp = self.model, self.xp
         if t < model.transitions.shape[1]:
             F = model.transitions[:, t]
         else:
-            F = np.broadcast_to(transition_matrix(0.0, model.scenario.sample_time), (model.num_targets, 4, 4))
+            straight = xp.asarray(transition_matrix(0.0, model.scenario.sample_time))
+            F = xp.broadcast_to(straight, (model.num_targets, 4, 4))
         noise = self._process_std * self.streams.normal(
-            Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2))
+            Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2), xp)
         )
-        return np.einsum("kij,bkj->bki", F, state) + noise @ model.noise_gain.T
+        return xp.einsum("kij,bkj->bki", F, state) + noise @ model.noise_gain.T
 
     def future_states(self, horizon: int) -> NDArray[np.float64]:
         """The true states at steps ``t + 1 .. t + horizon`` (B, H, K, 4), without advancing:
@@ -173,7 +175,7 @@ class RadarSimulation:
         states = [self.upcoming_state()]
         for h in range(1, horizon):
             states.append(self._next_state(states[-1], self.step_index + h))
-        return np.stack(states, axis=1)
+        return self.xp.stack(states, axis=1)
 
     def advance(self) -> None:
         """Move every trial's targets from step ``t`` to ``t + 1``."""
@@ -201,7 +203,9 @@ class RadarSimulation:
         """
         model = self.model
         shape = (model.num_targets, model.num_tx, model.num_rx)
-        draws = self.streams.exponential(Stream.SINR, self.step_index, full_index(self.batch_size, shape))
+        draws = self.streams.exponential(
+            Stream.SINR, self.step_index, full_index(self.batch_size, shape, self.xp)
+        )
         return self.mean_sinr() * draws
 
     def quality(self, mean_sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
@@ -209,7 +213,7 @@ class RadarSimulation:
         constant ``measurement_quality`` when it is set."""
         if self.measurement_quality is None:
             return self.model.quality(mean_sinr, target_axis=target_axis, scale=self.lambda_scale)
-        return np.full_like(mean_sinr, self.measurement_quality)
+        return self.xp.full_like(mean_sinr, self.measurement_quality)
 
     def observe(
         self, tx_index: NDArray[np.int64], rx_index: NDArray[np.int64], valid: NDArray[np.bool_]
@@ -219,12 +223,12 @@ class RadarSimulation:
         The draw of channel ``(k, m, n)`` depends only on the trial key, the step
         and ``(k, m, n)``, never on which other channels are probed.
         """
-        model = self.model
+        model, xp = self.model, self.xp
         num_targets, num_tx, num_rx = model.num_targets, model.num_tx, model.num_rx
-        batch = np.arange(self.batch_size)[:, None, None]
-        channel_tx = np.repeat(tx_index, rx_index.shape[1], axis=1)  # (B, C)
-        channel_rx = np.tile(rx_index, (1, tx_index.shape[1]))  # (B, C)
-        targets = np.arange(num_targets)[None, :, None]
+        batch = xp.arange(self.batch_size)[:, None, None]
+        channel_tx = xp.repeat(tx_index, rx_index.shape[1], axis=1)  # (B, C)
+        channel_rx = xp.tile(rx_index, (1, tx_index.shape[1]))  # (B, C)
+        targets = xp.arange(num_targets)[None, :, None]
         mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
         sinr = mean * self.streams.exponential(Stream.SINR, self.step_index, flat)
@@ -233,8 +237,8 @@ class RadarSimulation:
         clean = bistatic_measurement(
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
         )
-        noise_index = flat[..., None] * 2 + np.arange(2)
-        noise = np.sqrt(variance) * self.streams.normal(Stream.MEASUREMENT, self.step_index, noise_index)
+        noise_index = flat[..., None] * 2 + xp.arange(2)
+        noise = xp.sqrt(variance) * self.streams.normal(Stream.MEASUREMENT, self.step_index, noise_index)
         measurement = clean + noise
         measurement[..., 1] = wrap_angle(measurement[..., 1])
         return ChannelObservations(

@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .arrays import NUMPY, NumpyNamespace, TorchNamespace
 from .counter_hash import GOLDEN, OBSERVATION_STREAMS, Stream, element_bits, mix, stream_base, to_unit
 
 
@@ -49,13 +50,17 @@ class TrialStreams:
     keys : array of shape (B, 2), uint64
         Per-trial keys: column 0 drives the truth (initial state and process
         noise), column 1 the observations (SINR samples, measurement noise).
+    xp : array namespace
+        Where the draws are computed (:mod:`.arrays`): numpy (default) or torch on a device,
+        bit for bit the same.
     """
 
-    def __init__(self, keys: ArrayLike) -> None:
+    def __init__(self, keys: ArrayLike, xp: NumpyNamespace | TorchNamespace = NUMPY) -> None:
         keys = np.asarray(keys, dtype=np.uint64)
         if keys.ndim != 2 or keys.shape[1] != 2:
             raise ValueError(f"keys must have shape (B, 2), got {keys.shape}")
-        self.keys = keys
+        self.xp = xp
+        self.keys = xp.words(keys)
 
     @property
     def batch_size(self) -> int:
@@ -73,20 +78,23 @@ class TrialStreams:
 
     def exponential(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Exponential(1) draws."""
-        return -np.log1p(-self.uniform(stream, step, index))
+        return -self.xp.log1p(-self.uniform(stream, step, index))
 
     def normal(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Standard normal draws (Box-Muller on two hashed uniforms per element)."""
-        doubled = 2 * np.asarray(index, dtype=np.int64)
+        xp = self.xp
+        doubled = 2 * xp.astype(index, np.int64)
         u1 = self.uniform(stream, step, doubled)
         u2 = self.uniform(stream, step, doubled + 1)
-        return np.sqrt(-2.0 * np.log1p(-u1)) * np.cos(2.0 * np.pi * u2)
+        return xp.sqrt(-2.0 * xp.log1p(-u1)) * xp.cos(2.0 * np.pi * u2)
 
 
-def full_index(batch_size: int, shape: tuple[int, ...]) -> NDArray[np.int64]:
+def full_index(
+    batch_size: int, shape: tuple[int, ...], xp: NumpyNamespace | TorchNamespace = NUMPY
+) -> NDArray[np.int64]:
     """Element indices ``0..prod(shape)-1`` broadcast to (B, *shape)."""
-    index = np.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape)
-    return np.broadcast_to(index, (batch_size, *shape))
+    index = xp.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape)
+    return xp.broadcast_to(index, (batch_size, *shape))
 
 
 #: Marsaglia-Tsang proposals drawn per Gamma variate in one batch (acceptance >= 95 % each);
@@ -107,20 +115,25 @@ class TrialRandom:
         if seed is None:
             seed = int(np.random.SeedSequence().entropy % 2**62)
         self.seed = int(seed)
+        self.xp: NumpyNamespace | TorchNamespace = NUMPY
         self.keys = np.zeros(0, dtype=np.uint64)
         self.calls: dict[Stream, int] = {}
 
     @classmethod
-    def for_batch(cls, seed: int | None, batch_size: int) -> TrialRandom:
+    def for_batch(
+        cls, seed: int | None, batch_size: int, xp: NumpyNamespace | TorchNamespace = NUMPY
+    ) -> TrialRandom:
         """Streams for ``batch_size`` trials, ready to draw (for solvers used on their own)."""
         random = cls(seed)
-        random.reset(batch_size)
+        random.reset(batch_size, xp)
         return random
 
-    def reset(self, batch_size: int) -> None:
-        """Keys for trials ``0..B-1`` (seeds ``seed..seed+B-1``); every stream starts again."""
+    def reset(self, batch_size: int, xp: NumpyNamespace | TorchNamespace = NUMPY) -> None:
+        """Keys for trials ``0..B-1`` (seeds ``seed..seed+B-1``); every stream starts again. The
+        draws are computed in namespace ``xp`` (numpy, or torch on a device: the same bits)."""
         seeds = (self.seed + np.arange(batch_size, dtype=np.uint64)).astype(np.uint64)
-        self.keys = mix(mix(seeds * GOLDEN) ^ np.uint64(Stream.AGENT_KEY))
+        self.xp = xp
+        self.keys = xp.words(mix(mix(seeds * GOLDEN) ^ np.uint64(Stream.AGENT_KEY)))
         self.calls = {}
 
     @property
@@ -137,7 +150,7 @@ class TrialRandom:
 
     def _bits(self, stream: Stream, shape: tuple[int, ...]) -> NDArray[np.uint64]:
         base = self.bases(stream).reshape((-1,) + (1,) * len(shape))
-        element = np.arange(int(np.prod(shape)), dtype=np.uint64).reshape(shape)
+        element = self.xp.arange(int(np.prod(shape)), dtype=np.int64).reshape(shape)
         return element_bits(base, element[None])
 
     def uniform(self, stream: Stream, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
@@ -146,8 +159,9 @@ class TrialRandom:
 
     def normal(self, stream: Stream, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
         """Standard normal draws of shape (B, *shape) (Box-Muller)."""
+        xp = self.xp
         u = self.uniform(stream, (2, *shape))
-        return np.sqrt(-2.0 * np.log1p(-u[:, 0])) * np.cos(2.0 * np.pi * u[:, 1])
+        return xp.sqrt(-2.0 * xp.log1p(-u[:, 0])) * xp.cos(2.0 * np.pi * u[:, 1])
 
     def keys_for(self, stream: Stream) -> NDArray[np.uint64]:
         """One fresh 64-bit key per trial (for kernels with streams of their own)."""

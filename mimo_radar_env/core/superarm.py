@@ -21,6 +21,8 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from .arrays import namespace
+
 #: Largest number of subsets :func:`exact_super_arm` enumerates before refusing.
 MAX_EXACT_SUBSETS = 200_000
 #: Largest number of subsets :func:`best_super_arm` enumerates; beyond, alternating maximisation is used
@@ -57,9 +59,10 @@ def all_super_arms(
 
 def top_mask(scores: NDArray[np.float64], count: int) -> NDArray[np.bool_]:
     """Boolean mask of the ``count`` largest entries along the last axis (ties: lowest index)."""
-    order = np.argsort(-scores, axis=-1, kind="stable")[..., :count]
-    mask = np.zeros(scores.shape, dtype=bool)
-    np.put_along_axis(mask, order, True, axis=-1)
+    xp = namespace(scores)
+    order = xp.argsort(-scores, axis=-1, kind="stable")[..., :count]
+    mask = xp.zeros(scores.shape, dtype=bool)
+    xp.put_along_axis(mask, order, True, axis=-1)
     return mask
 
 
@@ -79,7 +82,10 @@ def super_arm_value(
     weights: NDArray[np.float64], tx: NDArray[np.bool_], rx: NDArray[np.bool_]
 ) -> NDArray[np.float64]:
     """``sum_{m in tx, n in rx} weights[..., m, n]``; shapes (..., M, N), (..., M), (..., N)."""
-    return np.einsum("...m,...mn,...n->...", tx.astype(weights.dtype), weights, rx.astype(weights.dtype))
+    xp = namespace(weights)
+    return xp.einsum(
+        "...m,...mn,...n->...", xp.astype(tx, weights.dtype), weights, xp.astype(rx, weights.dtype)
+    )
 
 
 def exact_super_arm(
@@ -98,10 +104,11 @@ def exact_super_arm(
     tx, rx : bool arrays (B, M), (B, N)
     value : array (B,)
     """
-    weights = np.asarray(weights, dtype=np.float64)
+    xp = namespace(weights)
+    weights = xp.asarray(weights, dtype=np.float64)
     num_tx, num_rx = weights.shape[-2:]
     if math.comb(num_rx, rx_count) < math.comb(num_tx, tx_count):
-        rx, tx, value = exact_super_arm(np.swapaxes(weights, -1, -2), rx_count, tx_count)
+        rx, tx, value = exact_super_arm(xp.swapaxes(weights, -1, -2), rx_count, tx_count)
         return tx, rx, value
     num_subsets = math.comb(num_tx, tx_count)
     if num_subsets > MAX_EXACT_SUBSETS:
@@ -109,16 +116,16 @@ def exact_super_arm(
             f"exact super-arm search would enumerate {num_subsets} subsets (> {MAX_EXACT_SUBSETS}) for "
             f"M={num_tx}, N={num_rx}, Ms={tx_count}, Ns={rx_count}; use the alternating solver instead"
         )
-    tx_subsets = subset_masks(num_tx, tx_count)  # (S, M)
+    tx_subsets = xp.asarray(subset_masks(num_tx, tx_count))  # (S, M)
     batch_size = weights.shape[0]
     # one BLAS product for the whole batch: (S, M) @ (M, B * N)
-    flat = np.ascontiguousarray(np.moveaxis(weights, 1, 0)).reshape(num_tx, batch_size * num_rx)
-    column_sums = (tx_subsets.astype(np.float64) @ flat).reshape(-1, batch_size, num_rx)  # (S, B, N)
+    flat = xp.ascontiguousarray(xp.moveaxis(weights, 1, 0)).reshape(num_tx, batch_size * num_rx)
+    column_sums = (xp.astype(tx_subsets, np.float64) @ flat).reshape(-1, batch_size, num_rx)  # (S, B, N)
     # the best Ns columns for each TX subset: their sum is the subset's value
-    top = np.sort(column_sums, axis=-1)[..., num_rx - rx_count :]  # sort beats partition on short rows
+    top = xp.sort(column_sums, axis=-1)[..., num_rx - rx_count :]  # sort beats partition on short rows
     subset_value = top.sum(axis=-1).T  # (B, S)
-    best = np.argmax(subset_value, axis=-1)
-    batch = np.arange(batch_size)
+    best = xp.argmax(subset_value, axis=-1)
+    batch = xp.arange(batch_size)
     tx = tx_subsets[best]
     rx = top_mask(column_sums[best, batch], rx_count)
     return tx, rx, subset_value[batch, best]

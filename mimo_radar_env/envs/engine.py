@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import device_namespace, namespace
 from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
@@ -34,27 +35,31 @@ from .options import EnvOptions
 def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.int8]:
     """Validate actions against ``MultiBinary``: shape, a real dtype, values 0/1 only.
 
-    Raises ``ValueError`` naming what is wrong; returns the actions as int8.
+    ``actions`` may be a numpy array (or anything ``np.asarray`` takes) or a torch tensor, checked
+    where it lives. Raises ``ValueError`` naming what is wrong; returns the actions as int8.
     """
-    arr = np.asarray(actions)
-    if arr.dtype.kind not in "biuf":
+    xp = namespace(actions)
+    arr = actions if xp.is_torch else np.asarray(actions)
+    kind = xp.dtype_kind(arr)
+    if kind not in "biuf":
         raise ValueError(f"action must be an array of 0/1 integers (MultiBinary), got dtype {arr.dtype}")
-    if arr.shape != expected_shape:
+    if tuple(arr.shape) != expected_shape:
         raise ValueError(
             f"action must have shape {expected_shape} (first M bits choose transmitters, "
-            f"the last N receivers), got shape {arr.shape}"
+            f"the last N receivers), got shape {tuple(arr.shape)}"
         )
-    if arr.dtype.kind == "f" and not np.all(np.isfinite(arr)):
+    if kind == "f" and not xp.all(xp.isfinite(arr)):
         raise ValueError("action contains NaN or infinite values; expected only 0 and 1")
-    if not np.all((arr == 0) | (arr == 1)):
-        bad = np.unique(arr[(arr != 0) & (arr != 1)])[:5]
+    if not xp.all((arr == 0) | (arr == 1)):
+        bad = np.unique(xp.to_numpy(arr[(arr != 0) & (arr != 1)]))[:5]
         raise ValueError(f"action values must be 0 or 1, got {bad.tolist()}")
-    return arr.astype(np.int8)
+    return xp.astype(arr, np.int8)
 
 
 def true_indices(mask: NDArray[np.bool_], count: int) -> NDArray[np.int64]:
     """Indices of the first ``count`` True entries of each row, ascending."""
-    return np.sort(np.argsort(~mask, axis=1, kind="stable")[:, :count], axis=1)
+    xp = namespace(mask)
+    return xp.sort(xp.argsort(~mask, axis=1, kind="stable")[:, :count], axis=1)
 
 
 class RadarEngine:
@@ -67,7 +72,9 @@ class RadarEngine:
     batch_size : int
     """
 
-    def __init__(self, options: EnvOptions, scenario: Scenario, batch_size: int) -> None:
+    def __init__(self, options: EnvOptions, scenario: Scenario, batch_size: int, device: Any = None) -> None:
+        self.xp = xp = device_namespace(device)
+        self.device = xp.device
         self.options = options
         self.scenario = scenario
         check_memory(scenario, batch_size)
@@ -79,7 +86,7 @@ class RadarEngine:
                     f"Sigma0 / lambda outside their physical ranges for scenario {scenario.name!r}; allowed: "
                     f"[{low:.3g}, {high:.3g}]"
                 )
-        self.model = RadarModel.from_scenario(scenario)
+        self.model = RadarModel.from_scenario(scenario).to(xp)
         self.batch_size = batch_size
         self.simulation = RadarSimulation(
             self.model, batch_size, options.measurement_quality, options.lambda_scale, options.truth
@@ -90,9 +97,9 @@ class RadarEngine:
         self.num_tx, self.num_rx = scenario.num_tx, scenario.num_rx
         self.action_size = self.num_tx + self.num_rx
         self.step_index = 0
-        self.last_action = np.zeros((batch_size, self.action_size), dtype=np.int8)
-        self.last_valid = np.zeros(batch_size, dtype=bool)
-        self.invalid_steps = np.zeros(batch_size, dtype=np.int64)  # this episode's, per trial
+        self.last_action = xp.zeros((batch_size, self.action_size), dtype=np.int8)
+        self.last_valid = xp.zeros(batch_size, dtype=bool)
+        self.invalid_steps = xp.zeros(batch_size, dtype=np.int64)  # this episode's, per trial
         self._warned_invalid = False
 
     @property
@@ -104,18 +111,23 @@ class RadarEngine:
         self, generators: Sequence[np.random.Generator]
     ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
         """Start an episode in every trial; trial i draws its keys from ``generators[i]``."""
-        keys = np.stack([keys_from_generator(g) for g in generators])
+        return self.reset_from_keys(np.stack([keys_from_generator(g) for g in generators]))
+
+    def reset_from_keys(self, keys: NDArray[np.uint64]) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
+        """Start an episode in every trial from its two keys (B, 2) (:func:`keys_from_generator`'s;
+        a benchmark of many trials draws them once and starts from them again)."""
+        xp = self.xp
         self.simulation.reset(keys)
         if self.tracker is not None:
             self.tracker.reset(self.simulation.initial_estimates)
-            initial_cov = np.stack([t.initial_covariance for t in self.scenario.targets])
-            self._bound_covariance = np.broadcast_to(initial_cov, (self.batch_size, *initial_cov.shape))
+            initial_cov = xp.asarray(np.stack([t.initial_covariance for t in self.scenario.targets]))
+            self._bound_covariance = xp.broadcast_to(initial_cov, (self.batch_size, *initial_cov.shape))
         self.step_index = 0
-        self.last_action[:] = 0
-        self.last_valid[:] = False
-        self.invalid_steps[:] = 0
+        self.last_action = xp.zeros((self.batch_size, self.action_size), dtype=np.int8)
+        self.last_valid = xp.zeros(self.batch_size, dtype=bool)
+        self.invalid_steps = xp.zeros(self.batch_size, dtype=np.int64)
         sinr = self.simulation.sinr_samples_all()  # Algorithm 1: every channel probed once
-        probed = np.ones((self.batch_size, self.num_tx, self.num_rx), dtype=np.int8)
+        probed = xp.ones((self.batch_size, self.num_tx, self.num_rx), dtype=np.int8)
         obs = self._observation(sinr, probed)
         info = self._truth_info()
         return obs, info
@@ -124,13 +136,14 @@ class RadarEngine:
         """Apply actions (B, M + N); returns obs, reward, terminated, truncated, info."""
         if self.step_index >= self.horizon:
             raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
-        actions = check_actions(actions, (self.batch_size, self.action_size))
-        tx_mask = actions[:, : self.num_tx].astype(bool)
-        rx_mask = actions[:, self.num_tx :].astype(bool)
+        xp = self.xp
+        actions = xp.asarray(check_actions(actions, (self.batch_size, self.action_size)))
+        tx_mask = xp.astype(actions[:, : self.num_tx], bool)
+        rx_mask = xp.astype(actions[:, self.num_tx :], bool)
         sc = self.scenario
         valid = (tx_mask.sum(axis=1) == sc.tx_per_step) & (rx_mask.sum(axis=1) == sc.rx_per_step)
         if self.options.invalid_action == "raise" and not valid.all():
-            bad = int(np.flatnonzero(~valid)[0])
+            bad = int(np.flatnonzero(~xp.to_numpy(valid))[0])
             num_tx, num_rx = int(tx_mask[bad].sum()), int(rx_mask[bad].sum())
             raise ValueError(
                 f"action of trial {bad} selects {num_tx} TX and {num_rx} RX; "
@@ -140,15 +153,15 @@ class RadarEngine:
         self.simulation.advance()
         self.step_index += 1
         # invalid trials get placeholder channels (the first stations) and are masked out
-        tx_index = np.where(valid[:, None], true_indices(tx_mask, sc.tx_per_step), np.arange(sc.tx_per_step))
-        rx_index = np.where(valid[:, None], true_indices(rx_mask, sc.rx_per_step), np.arange(sc.rx_per_step))
+        tx_index = xp.where(valid[:, None], true_indices(tx_mask, sc.tx_per_step), xp.arange(sc.tx_per_step))
+        rx_index = xp.where(valid[:, None], true_indices(rx_mask, sc.rx_per_step), xp.arange(sc.rx_per_step))
         channels = self.simulation.observe(tx_index, rx_index, valid)
 
-        sinr_reward = np.einsum("k,bkc->b", self.model.weights, channels.sinr) * valid
-        sinr = np.zeros((self.batch_size, self.model.num_targets, self.num_tx, self.num_rx))
-        probed = (tx_mask[:, :, None] & rx_mask[:, None, :] & valid[:, None, None]).astype(np.int8)
-        batch = np.arange(self.batch_size)[:, None, None]
-        targets = np.arange(self.model.num_targets)[None, :, None]
+        sinr_reward = xp.einsum("k,bkc->b", self.model.weights, channels.sinr) * valid
+        sinr = xp.zeros((self.batch_size, self.model.num_targets, self.num_tx, self.num_rx))
+        probed = xp.astype(tx_mask[:, :, None] & rx_mask[:, None, :] & valid[:, None, None], np.int8)
+        batch = xp.arange(self.batch_size)[:, None, None]
+        targets = xp.arange(self.model.num_targets)[None, :, None]
         sinr[batch, targets, channels.tx_index[:, None, :], channels.rx_index[:, None, :]] = channels.sinr
         sinr *= valid[:, None, None, None]
 
@@ -168,21 +181,21 @@ class RadarEngine:
             weights, sc.tx_per_step, sc.rx_per_step, self.options.oracle_solver
         )
         info["optimal_reward"] = best_value
-        info["optimal_action"] = np.concatenate([best_tx, best_rx], axis=1).astype(np.int8)
+        info["optimal_action"] = xp.astype(xp.concatenate([best_tx, best_rx], axis=1), np.int8)
         info["action_valid"] = valid
         info["reward_sinr"] = sinr_reward
         reward = sinr_reward
         if self.tracker is not None:
             info["position_bound"] = position_bound(self._bound_covariance)
-            info["tracker_repairs"] = self.tracker.repairs.copy()
+            info["tracker_repairs"] = xp.copy(self.tracker.repairs)
             info["reward_information"] = self._information_gain()
             if self.options.reward == "information":
                 reward = info["reward_information"]
         if self.options.measurements:
             info |= self._measurement_info(channels)
         obs = self._observation(sinr, probed)
-        terminated = np.zeros(self.batch_size, dtype=bool)
-        truncated = np.full(self.batch_size, self.step_index >= self.horizon)
+        terminated = xp.zeros(self.batch_size, dtype=bool)
+        truncated = xp.full(self.batch_size, self.step_index >= self.horizon)
         return obs, reward, terminated, truncated, info
 
     def _warn_if_invalid_dominated(self) -> None:
@@ -205,12 +218,13 @@ class RadarEngine:
 
     def oracle_action(self) -> NDArray[np.int8]:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
+        xp = self.xp
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
         tx, rx, _ = best_super_arm(
             weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.options.oracle_solver
         )
-        return np.concatenate([tx, rx], axis=1).astype(np.int8)
+        return xp.astype(xp.concatenate([tx, rx], axis=1), np.int8)
 
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """The super arm of the coming step that minimises the predicted posterior position
@@ -220,6 +234,7 @@ class RadarEngine:
         stations beyond; (B, M + N)."""
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
+        xp = self.xp
         sc = self.scenario
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(upcoming)))
@@ -229,7 +244,7 @@ class RadarEngine:
         tx, rx = select_for_tracking(
             position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
         )
-        return np.concatenate([tx, rx], axis=1).astype(np.int8)
+        return xp.astype(xp.concatenate([tx, rx], axis=1), np.int8)
 
     def tracking_forecast(self, horizon: int) -> Forecast:
         """What a receding-horizon tracking oracle scores plans of the next ``horizon`` steps on
@@ -239,6 +254,7 @@ class RadarEngine:
         truth (reads the truth: oracle only). Its first step is best-tracking's."""
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
+        self._numpy_only("the tracking forecast")
         if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
             raise ValueError(f"horizon must be an integer >= 1, got {horizon!r}")
         truth = self.simulation.future_states(horizon)[..., [0, 2]]  # (B, H, K, 2)
@@ -264,6 +280,7 @@ class RadarEngine:
         truth)."""
         if self.tracker is None:
             raise RuntimeError("the bound needs the tracker: make the env with tracking=True")
+        self._numpy_only("the bound's forecast")
         horizon = self.horizon - self.step_index
         if horizon < 1:
             raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
@@ -284,6 +301,13 @@ class RadarEngine:
         )
 
     # ----------------------------------------------------------- helpers
+    def _numpy_only(self, what: str) -> None:
+        if self.xp.is_torch:
+            raise NotImplementedError(
+                f"{what} runs on numpy only: make the env with device=None (this one has "
+                f"device={str(self.device)!r})"
+            )
+
     def _advance_bound(self, channels: ChannelObservations) -> None:
         """The PCRB of the step: the true motion, then the probed channels at the true
         positions with their true covariances (docs/model.md, section 14)."""
@@ -300,9 +324,10 @@ class RadarEngine:
     def _information_gain(self) -> NDArray[np.float64]:
         """``sum_k Omega_k (log det P_pos,pred - log det P_pos,post)`` of the last step, (B,) nats."""
         assert self.tracker is not None
+        xp = self.xp
         before = position_determinant(self.tracker.prior_covariance)
         after = position_determinant(self.tracker.covariance)
-        return np.log(before / after) @ self.model.weights
+        return xp.log(before / after) @ self.model.weights
 
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
         """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""
@@ -323,14 +348,15 @@ class RadarEngine:
         )
 
     def _measurement_info(self, channels: ChannelObservations) -> dict[str, NDArray]:
+        xp = self.xp
         invalid = ~channels.valid[:, None, None, None]
         variance = self._tracker_variance(channels)
-        covariance = variance[..., :, None] * np.eye(2)  # (B, K, C, 2, 2), diagonal
+        covariance = variance[..., :, None] * xp.eye(2)  # (B, K, C, 2, 2), diagonal
         return {
-            "measurement": np.where(invalid, np.nan, channels.measurement),
-            "measurement_covariance": np.where(invalid[..., None], np.nan, covariance),
-            "measurement_tx": channels.tx_index.copy(),
-            "measurement_rx": channels.rx_index.copy(),
+            "measurement": xp.where(invalid, xp.nan, channels.measurement),
+            "measurement_covariance": xp.where(invalid[..., None], xp.nan, covariance),
+            "measurement_tx": xp.copy(channels.tx_index),
+            "measurement_rx": xp.copy(channels.rx_index),
         }
 
     def _observation(self, sinr: NDArray, probed: NDArray) -> dict[str, NDArray]:
@@ -339,7 +365,7 @@ class RadarEngine:
         if tracker is None:
             return obs
         obs |= {
-            "track": tracker.estimate.copy(),
+            "track": self.xp.copy(tracker.estimate),
             "track_pred": tracker.predicted_state(),
             "track_pos_cov": tracker.covariance[..., [[0], [2]], [0, 2]],
             "mode_prob": tracker.model_probabilities,
@@ -357,9 +383,10 @@ class RadarEngine:
 
     def _truth_info(self) -> dict[str, NDArray]:
         state = self.simulation.state
-        info = {"mean_sinr": self.simulation.mean_sinr(), "true_state": state.copy()}
+        xp = self.xp
+        info = {"mean_sinr": self.simulation.mean_sinr(), "true_state": xp.copy(state)}
         if self.tracker is not None:
-            info["position_error"] = np.linalg.norm(
+            info["position_error"] = xp.linalg.norm(
                 self.tracker.estimate[..., [0, 2]] - state[..., [0, 2]], axis=-1
             )
         return info

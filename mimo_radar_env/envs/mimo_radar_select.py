@@ -18,6 +18,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
+from ..core.arrays import device_namespace
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
 from ..tracking.planning import Forecast
@@ -368,14 +369,19 @@ class MimoRadarSelectVectorEnv(VectorEnv):
 
     __repr__ = __str__
 
-    def __init__(self, num_envs: int = 1, render_mode: str | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self, num_envs: int = 1, render_mode: str | None = None, device: Any = None, **kwargs: Any
+    ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
         if render_mode is not None:
             raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
+        xp = device_namespace(device)  # a bad device is refused before the scenario is built
         self.options, self.scenario = resolve(kwargs)
         self.num_envs = num_envs
-        self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs)
+        self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs, device=device)
+        #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned
+        self.device = xp.device
         self.single_action_space = spaces.MultiBinary(self.engine.action_size)
         self.single_observation_space = _observation_space(self.engine)
         self.action_space = batch_space(self.single_action_space, num_envs)
@@ -415,10 +421,11 @@ class MimoRadarSelectVectorEnv(VectorEnv):
             raise RuntimeError("call reset() before step()")
         if self._needs_reset:
             obs, info = self.reset()
-            zeros = np.zeros(self.num_envs, dtype=bool)
-            return obs, np.zeros(self.num_envs), zeros, zeros.copy(), info
+            xp = self.engine.xp
+            zeros = xp.zeros(self.num_envs, dtype=bool)
+            return obs, xp.zeros(self.num_envs), zeros, xp.copy(zeros), info
         obs, reward, terminated, truncated, info = self.engine.step(actions)
-        self._needs_reset = bool(truncated.all())
+        self._needs_reset = bool(self.engine.step_index >= self.engine.horizon)
         return obs, reward, terminated, truncated, info
 
     def oracle_action(self) -> NDArray[np.int8]:

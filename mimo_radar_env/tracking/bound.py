@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.compiled import HAVE_NUMBA, LazyKernels
 from .unscented import MAX_CONDITION, repair_covariance
 
@@ -32,7 +33,8 @@ def bound_step(
     this path calls LAPACK, agreeing to round-off) runs while every matrix passes the guard's
     closed-form test, and this numpy path otherwise.
     """
-    if use_numba and HAVE_NUMBA:
+    xp = namespace(covariance, measured)
+    if use_numba and HAVE_NUMBA and not xp.is_torch:
         # writable C arrays always: numba compiles a read-only array (a one-trial env's
         # broadcast initial bound) as another signature, a second compilation of the same kernel
         out, healthy = _KERNELS.get("_compiled_step")(
@@ -41,15 +43,15 @@ def bound_step(
         )
         if healthy:
             return out
-    prior, _ = repair_covariance(transition @ covariance @ np.swapaxes(transition, -1, -2) + process_cov)
-    information = np.linalg.inv(prior)
+    prior, _ = repair_covariance(transition @ covariance @ xp.swapaxes(transition, -1, -2) + process_cov)
+    information = xp.linalg.inv(prior)
     information[..., 0::2, 0::2] += measured
-    return repair_covariance(np.linalg.inv(information))[0]
+    return repair_covariance(xp.linalg.inv(information))[0]
 
 
 def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     """``sqrt(trace)`` of the position block of the bound's ``J^-1`` (m): (B, K) from (B, K, 4, 4)."""
-    return np.sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
+    return namespace(covariance).sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
 
 
 _KERNELS = LazyKernels(__name__, _compiled_step="._bound_kernels:bound_step")

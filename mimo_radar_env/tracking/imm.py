@@ -10,14 +10,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from .unscented import symmetrize
 
 
 def logsumexp(values: NDArray[np.float64], axis: int, keepdims: bool = False) -> NDArray[np.float64]:
     """``log(sum(exp(values)))`` along an axis, stable for finite inputs."""
-    top = np.max(values, axis=axis, keepdims=True)
-    out = top + np.log(np.sum(np.exp(values - top), axis=axis, keepdims=True))
-    return out if keepdims else np.squeeze(out, axis=axis)
+    xp = namespace(values)
+    top = xp.max(values, axis=axis, keepdims=True)
+    out = top + xp.log(xp.sum(xp.exp(values - top), axis=axis, keepdims=True))
+    return out if keepdims else xp.squeeze(out, axis=axis)
 
 
 def markov_matrix(num_models: int, stay_probability: float) -> NDArray[np.float64]:
@@ -47,13 +49,14 @@ def mix(
     mixed_means, mixed_covs : (B, K, R, n), (B, K, R, n, n)
     log_c : (B, K, R) log predicted model probabilities ``log c_j``
     """
+    xp = namespace(means)
     joint = log_markov + log_probs[..., :, None]  # (B, K, i, j)
     log_c = logsumexp(joint, axis=-2)  # (B, K, j)
-    mixing = np.exp(joint - log_c[..., None, :])  # mu_{i|j}
-    mixed_means = np.einsum("bkij,bkid->bkjd", mixing, means)
+    mixing = xp.exp(joint - log_c[..., None, :])  # mu_{i|j}
+    mixed_means = xp.einsum("bkij,bkid->bkjd", mixing, means)
     spread = means[..., None, :, :] - mixed_means[..., :, None, :]  # (B, K, j, i, d)
     outer = spread[..., :, None] * spread[..., None, :]
-    mixed_covs = np.einsum("bkij,bkjide->bkjde", mixing, covs[..., None, :, :, :] + outer)
+    mixed_covs = xp.einsum("bkij,bkjide->bkjde", mixing, covs[..., None, :, :, :] + outer)
     return mixed_means, mixed_covs, log_c
 
 
@@ -64,8 +67,9 @@ def predict(
     process_cov: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Exact linear prediction of each model: ``F_r x``, ``F_r P F_r' + Q`` (transitions (R, n, n))."""
-    pred_means = np.einsum("rij,bkrj->bkri", transitions, means)
-    pred_covs = transitions @ covs @ np.swapaxes(transitions, -1, -2)
+    xp = namespace(means)
+    pred_means = xp.einsum("rij,bkrj->bkri", transitions, means)
+    pred_covs = transitions @ covs @ xp.swapaxes(transitions, -1, -2)
     return pred_means, symmetrize(pred_covs + process_cov)
 
 
@@ -73,7 +77,8 @@ def combine(
     means: NDArray[np.float64], covs: NDArray[np.float64], probs: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Moment-matched mixture of per-model Gaussians along the model axis (-2 / -3)."""
-    mean = np.einsum("...r,...ri->...i", probs, means)
+    xp = namespace(means)
+    mean = xp.einsum("...r,...ri->...i", probs, means)
     spread = means - mean[..., None, :]
-    cov = np.einsum("...r,...rij->...ij", probs, covs + spread[..., :, None] * spread[..., None, :])
+    cov = xp.einsum("...r,...rij->...ij", probs, covs + spread[..., :, None] * spread[..., None, :])
     return mean, symmetrize(cov)

@@ -21,6 +21,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from . import imm
@@ -74,42 +75,47 @@ class IMMUKFTracker:
         if not 0.0 < stay_probability <= 1.0:
             raise ValueError(f"stay_probability must be in (0, 1], got {stay_probability}")
         self.model = model
+        self.xp = xp = model.xp
         self.batch_size = batch_size
-        self.fusion = make_fusion(fusion, use_numba=use_numba)
+        # the compiled paths are numpy's; on torch the fusion's array path runs
+        self.fusion = make_fusion(fusion, use_numba=use_numba and not xp.is_torch)
         self.num_models = len(turn_rates_deg)
-        self.transitions = transition_matrix(np.radians(turn_rates_deg), model.scenario.sample_time)
-        self.log_markov = np.log(imm.markov_matrix(self.num_models, stay_probability))
-        self.log_initial = np.log(probs)
+        self.transitions = xp.asarray(
+            transition_matrix(np.radians(turn_rates_deg), model.scenario.sample_time)
+        )
+        self.log_markov = xp.asarray(np.log(imm.markov_matrix(self.num_models, stay_probability)))
+        self.log_initial = xp.asarray(np.log(probs))
         self.sigma_params = sigma_point_parameters or SigmaPointParameters()
-        self.wm, self.wc = self.sigma_params.weights(4)
-        self.repairs = np.zeros(batch_size, dtype=np.int64)
+        self.wm, self.wc = (xp.asarray(w) for w in self.sigma_params.weights(4))
+        self.repairs = xp.zeros(batch_size, dtype=np.int64)
         self.reset()
 
     # ------------------------------------------------------------ state
     def reset(self, initial_estimates: NDArray[np.float64] | None = None) -> None:
         """Every trial back to its initial estimate (default ``X1_hat``; (B, K, 4)) with ``P1_hat``."""
+        xp = self.xp
         B, K, R = self.batch_size, self.model.num_targets, self.num_models
-        initial_cov = np.stack([t.initial_covariance for t in self.model.scenario.targets])
-        start = self.model.initial_states if initial_estimates is None else np.asarray(initial_estimates)
-        start = np.broadcast_to(start, (B, K, 4))
-        self.means = np.broadcast_to(start[:, :, None, :], (B, K, R, 4)).copy()
-        self.covs = np.broadcast_to(initial_cov[None, :, None], (B, K, R, 4, 4)).copy()
-        self.log_probs = np.broadcast_to(self.log_initial, (B, K, R)).copy()
-        self.estimate = start.copy()
-        self.covariance = np.broadcast_to(initial_cov, (B, K, 4, 4)).copy()
+        initial_cov = xp.asarray(np.stack([t.initial_covariance for t in self.model.scenario.targets]))
+        start = self.model.initial_states if initial_estimates is None else xp.asarray(initial_estimates)
+        start = xp.broadcast_to(start, (B, K, 4))
+        self.means = xp.copy(xp.broadcast_to(start[:, :, None, :], (B, K, R, 4)))
+        self.covs = xp.copy(xp.broadcast_to(initial_cov[None, :, None], (B, K, R, 4, 4)))
+        self.log_probs = xp.copy(xp.broadcast_to(self.log_initial, (B, K, R)))
+        self.estimate = xp.copy(start)
+        self.covariance = xp.copy(xp.broadcast_to(initial_cov, (B, K, 4, 4)))
         #: the covariance of the last step's prediction (the IMM mixture), before its update
-        self.prior_covariance = self.covariance.copy()
+        self.prior_covariance = xp.copy(self.covariance)
         self.repairs[:] = 0
 
     @property
     def model_probabilities(self) -> NDArray[np.float64]:
         """Model probabilities (B, K, R)."""
-        return np.exp(self.log_probs)
+        return self.xp.exp(self.log_probs)
 
     def predicted_state(self) -> NDArray[np.float64]:
         """eq24: ``sum_i u_i F_i(X_hat)``, the one-step prediction (B, K, 4)."""
-        per_model = np.einsum("rij,bkj->bkri", self.transitions, self.estimate)
-        return np.einsum("bkr,bkri->bki", self.model_probabilities, per_model)
+        per_model = self.xp.einsum("rij,bkj->bkri", self.transitions, self.estimate)
+        return self.xp.einsum("bkr,bkri->bki", self.model_probabilities, per_model)
 
     def predicted_covariance(self) -> NDArray[np.float64]:
         """``P_bar``: the covariance of the IMM mixture of the one-step predictions (B, K, 4, 4):
@@ -159,12 +165,13 @@ class IMMUKFTracker:
         chol, repaired = robust_cholesky(scale * covs)
         self.repairs += repaired.reshape(self.batch_size, -1).sum(axis=1)
         if repaired.any():
-            rebuilt = chol @ np.swapaxes(chol, -1, -2) / scale
-            covs = np.where(repaired[..., None, None], rebuilt, covs)
+            rebuilt = chol @ self.xp.swapaxes(chol, -1, -2) / scale
+            covs = self.xp.where(repaired[..., None, None], rebuilt, covs)
         return Prior(means, covs, log_c, sigma_points(means, chol), self.wm, self.wc)
 
     def _keep(self, posterior: Posterior, prior: Prior, valid: NDArray[np.bool_]) -> None:
         """The update where it is valid and finite, the prediction elsewhere (per trial and target)."""
+        xp = self.xp
         finite = posterior.finite()  # (B, K)
         self.repairs += (~finite & valid[:, None]).sum(axis=1)
         use_update = finite & valid[:, None]
@@ -174,19 +181,19 @@ class IMMUKFTracker:
         everywhere = use_update.all()
         covs, covariance = posterior.covs, posterior.covariance
         if not everywhere:  # the others are not used: keep their NaN out of the guard
-            covs = np.where(use_update[..., None, None, None], covs, np.eye(4))
-            covariance = np.where(use_update[..., None, None], covariance, np.eye(4))
+            covs = xp.where(use_update[..., None, None, None], covs, xp.eye(4))
+            covariance = xp.where(use_update[..., None, None], covariance, xp.eye(4))
         posterior_covs, repaired_models = repair_covariance(covs)
         covariance, repaired_fused = repair_covariance(covariance)
         self.repairs += ((repaired_models.any(axis=-1) | repaired_fused) & use_update).sum(axis=1)
-        self.means = np.where(use_update[..., None, None], posterior.means, prior.means)
-        self.covs = np.where(use_update[..., None, None, None], posterior_covs, prior.covs)
-        self.log_probs = np.where(use_update[..., None], posterior.log_probs, log_pred)
+        self.means = xp.where(use_update[..., None, None], posterior.means, prior.means)
+        self.covs = xp.where(use_update[..., None, None, None], posterior_covs, prior.covs)
+        self.log_probs = xp.where(use_update[..., None], posterior.log_probs, log_pred)
         estimate = posterior.estimate
         if not use_update.all():
-            pred_est, pred_cov = imm.combine(prior.means, prior.covs, np.exp(log_pred))
-            estimate = np.where(use_update[..., None], estimate, pred_est)
-            covariance = np.where(use_update[..., None, None], covariance, pred_cov)
+            pred_est, pred_cov = imm.combine(prior.means, prior.covs, xp.exp(log_pred))
+            estimate = xp.where(use_update[..., None], estimate, pred_est)
+            covariance = xp.where(use_update[..., None, None], covariance, pred_cov)
         self.estimate = estimate
         self.covariance = covariance
 
@@ -195,5 +202,5 @@ def _mixture_covariance(
     means: NDArray[np.float64], covs: NDArray[np.float64], log_c: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """The covariance of the IMM mixture of predicted models weighted by ``c_j``."""
-    probs = np.exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
+    probs = namespace(log_c).exp(log_c - imm.logsumexp(log_c, axis=-1, keepdims=True))
     return imm.combine(means, covs, probs)[1]

@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.geometry import measurement_jacobian
 
 
@@ -33,7 +34,8 @@ def channel_information(
 def jacobian_information(jacobian: NDArray[np.float64], variance: NDArray[np.float64]) -> NDArray[np.float64]:
     """``H' R^-1 H`` of Jacobians (..., 2, 2) (rows: range sum, azimuth) with diagonal ``R``,
     variances (..., 2): shape (..., 2, 2)."""
-    return np.einsum("...ji,...jk->...ik", jacobian, jacobian / variance[..., :, None])
+    xp = namespace(jacobian)
+    return xp.einsum("...ji,...jk->...ik", jacobian, jacobian / variance[..., :, None])
 
 
 def det_2x2(a: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -48,9 +50,10 @@ def position_determinant(covariance: NDArray[np.float64]) -> NDArray[np.float64]
 
 def inverse_2x2(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Inverse and determinant of (..., 2, 2) matrices, in closed form."""
+    xp = namespace(a)
     det = det_2x2(a)
-    inv = np.stack(
-        [np.stack([a[..., 1, 1], -a[..., 0, 1]], -1), np.stack([-a[..., 1, 0], a[..., 0, 0]], -1)], -2
+    inv = xp.stack(
+        [xp.stack([a[..., 1, 1], -a[..., 0, 1]], -1), xp.stack([-a[..., 1, 0], a[..., 0, 0]], -1)], -2
     )
     return inv / det[..., None, None], det
 
@@ -60,6 +63,7 @@ def woodbury_gain(information: NDArray[np.float64], position_cov: NDArray[np.flo
     (..., 2, 2): what Woodbury's identity subtracts, ``(P^-1 + E J E')^-1 = P - P E G E' P``
     (``E`` picks the position), symmetrised; no inverse of a 4 x 4 matrix, and ``J`` may be
     singular."""
+    xp = namespace(information)
     j00, j01, j10, j11 = (information[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
     p00, p01, p10, p11 = (position_cov[..., i, k] for i, k in ((0, 0), (0, 1), (1, 0), (1, 1)))
     # M = I + J P, written out (products of 2 x 2 matrices by matmul are slower than this)
@@ -68,4 +72,4 @@ def woodbury_gain(information: NDArray[np.float64], position_cov: NDArray[np.flo
     det = m00 * m11 - m01 * m10
     g00, g11 = (m11 * j00 - m01 * j10) / det, (m00 * j11 - m10 * j01) / det
     g01 = 0.5 * ((m11 * j01 - m01 * j11) + (m00 * j10 - m10 * j00)) / det
-    return np.stack([np.stack([g00, g01], -1), np.stack([g01, g11], -1)], -2)
+    return xp.stack([xp.stack([g00, g01], -1), xp.stack([g01, g11], -1)], -2)

@@ -15,6 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
+
 _LOG_2PI = float(np.log(2.0 * np.pi))
 _TWO_PI = 2.0 * np.pi
 
@@ -48,7 +50,8 @@ class SigmaPointParameters:
 
 
 def symmetrize(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
-    return 0.5 * (matrix + np.swapaxes(matrix, -1, -2))
+    xp = namespace(matrix)
+    return 0.5 * (matrix + xp.swapaxes(matrix, -1, -2))
 
 
 #: The condition-number guard: a covariance whose eigenvalues spread more than this (estimated
@@ -62,14 +65,15 @@ def _floor_eigenvalues(
     """``(symmetrised, rebuilt, low)``: the re-symmetrised matrices (non-finite entries zeroed),
     the same with eigenvalues raised to ``relative_floor * max(|eigenvalue|)`` (at least a tiny
     absolute jitter), and where an eigenvalue was below that floor."""
+    xp = namespace(matrix)
     sym = symmetrize(matrix)
-    sym = np.where(np.isfinite(sym), sym, 0.0)
-    eigenvalues, eigenvectors = np.linalg.eigh(sym)
-    top = np.max(np.abs(eigenvalues), axis=-1, keepdims=True)
-    floor = np.maximum(relative_floor * top, 1e-12)
-    low = np.any(eigenvalues < floor, axis=-1)
-    clipped = np.maximum(eigenvalues, floor)
-    rebuilt = symmetrize(np.einsum("...ij,...j,...kj->...ik", eigenvectors, clipped, eigenvectors))
+    sym = xp.where(xp.isfinite(sym), sym, 0.0)
+    eigenvalues, eigenvectors = xp.linalg.eigh(sym)
+    top = xp.max(xp.abs(eigenvalues), axis=-1, keepdims=True)
+    floor = xp.maximum(relative_floor * top, 1e-12)
+    low = xp.any(eigenvalues < floor, axis=-1)
+    clipped = xp.maximum(eigenvalues, floor)
+    rebuilt = symmetrize(xp.einsum("...ij,...j,...kj->...ik", eigenvectors, clipped, eigenvectors))
     return sym, rebuilt, low
 
 
@@ -78,6 +82,7 @@ def _certainly_conditioned(matrix: NDArray[np.float64], max_condition: float) ->
     at most ``max_condition``: its leading principal minors are positive (Sylvester) and
     ``trace^4 / det``, an upper bound of the condition number, is within it. Closed forms, no
     factorisation; False only says "look closer"."""
+    xp = namespace(matrix)
     a = matrix
     minor2 = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
     cof = [
@@ -86,9 +91,9 @@ def _certainly_conditioned(matrix: NDArray[np.float64], max_condition: float) ->
         a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0],
     ]
     minor3 = a[..., 0, 0] * cof[0] - a[..., 0, 1] * cof[1] + a[..., 0, 2] * cof[2]
-    with np.errstate(all="ignore"):
+    with xp.errstate(all="ignore"):
         det = _det4(a)
-        trace = np.trace(a, axis1=-2, axis2=-1)
+        trace = xp.trace(a, axis1=-2, axis2=-1)
         return (
             (a[..., 0, 0] > 0) & (minor2 > 0) & (minor3 > 0) & (det > 0) & (trace**4 <= max_condition * det)
         )
@@ -120,20 +125,21 @@ def repair_covariance(
     from its Cholesky factor's diagonal) exceeds ``1 / relative_floor``, gets its eigenvalues
     raised to ``relative_floor`` times the largest; the others are returned as given.
     """
-    if matrix.shape[-1] == 4 and np.all(_certainly_conditioned(matrix, 1.0 / relative_floor)):
-        return matrix, np.zeros(matrix.shape[:-2], dtype=bool)  # the fast path of every healthy step
+    xp = namespace(matrix)
+    if matrix.shape[-1] == 4 and xp.all(_certainly_conditioned(matrix, 1.0 / relative_floor)):
+        return matrix, xp.zeros(matrix.shape[:-2], dtype=bool)  # the fast path of every healthy step
     try:
-        diagonal = np.diagonal(np.linalg.cholesky(matrix), axis1=-2, axis2=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            spread = (diagonal.max(axis=-1) / diagonal.min(axis=-1)) ** 2
+        diagonal = xp.diagonal(xp.linalg.cholesky(matrix), axis1=-2, axis2=-1)
+        with xp.errstate(divide="ignore", invalid="ignore"):
+            spread = (xp.max(diagonal, axis=-1) / xp.min(diagonal, axis=-1)) ** 2
         wanted = ~(spread <= 1.0 / relative_floor)
         if not wanted.any():
             return matrix, wanted
-    except np.linalg.LinAlgError:
-        wanted = np.zeros(matrix.shape[:-2], dtype=bool)
+    except xp.linalg.LinAlgError:
+        wanted = xp.zeros(matrix.shape[:-2], dtype=bool)
     _, rebuilt, low = _floor_eigenvalues(matrix, relative_floor)
     repaired = low | wanted
-    return np.where(repaired[..., None, None], rebuilt, matrix), repaired
+    return xp.where(repaired[..., None, None], rebuilt, matrix), repaired
 
 
 def robust_cholesky(
@@ -147,19 +153,21 @@ def robust_cholesky(
 
     Returns the factors and a mask (batch shape) of the repaired matrices.
     """
+    xp = namespace(matrix)
     try:
-        return np.linalg.cholesky(matrix), np.zeros(matrix.shape[:-2], dtype=bool)
-    except np.linalg.LinAlgError:
+        return xp.linalg.cholesky(matrix), xp.zeros(matrix.shape[:-2], dtype=bool)
+    except xp.linalg.LinAlgError:
         pass
     sym, rebuilt, repaired = _floor_eigenvalues(matrix, relative_floor)
-    return np.linalg.cholesky(np.where(repaired[..., None, None], rebuilt, sym)), repaired
+    return xp.linalg.cholesky(xp.where(repaired[..., None, None], rebuilt, sym)), repaired
 
 
 def sigma_points(mean: NDArray[np.float64], chol_scaled: NDArray[np.float64]) -> NDArray[np.float64]:
     """Sigma points (..., 2n + 1, n) from a mean (..., n) and the lower Cholesky
     factor of ``(n + lambda) P`` (..., n, n)."""
-    offsets = np.swapaxes(chol_scaled, -1, -2)  # rows = columns of L = rows of filterpy's U
-    return np.concatenate(
+    xp = namespace(mean)
+    offsets = xp.swapaxes(chol_scaled, -1, -2)  # rows = columns of L = rows of filterpy's U
+    return xp.concatenate(
         [mean[..., None, :], mean[..., None, :] + offsets, mean[..., None, :] - offsets], axis=-2
     )
 
@@ -175,21 +183,23 @@ def measurement_mean(
     linearly, odd ones (azimuths) as circular means. ``azimuth_sin_cos`` may give
     the sines and cosines of the azimuths (..., S, d/2) when they are at hand.
     """
-    mean = np.empty(sigmas_h.shape[:-2] + sigmas_h.shape[-1:])
-    mean[..., 0::2] = np.einsum("s,...sd->...d", wm, sigmas_h[..., 0::2])
+    xp = namespace(sigmas_h)
+    mean = xp.empty(sigmas_h.shape[:-2] + sigmas_h.shape[-1:])
+    mean[..., 0::2] = xp.einsum("s,...sd->...d", wm, sigmas_h[..., 0::2])
     if azimuth_sin_cos is None:
         angles = sigmas_h[..., 1::2]
-        azimuth_sin_cos = (np.sin(angles), np.cos(angles))
+        azimuth_sin_cos = (xp.sin(angles), xp.cos(angles))
     sin, cos = azimuth_sin_cos
-    mean[..., 1::2] = np.arctan2(np.einsum("s,...sd->...d", wm, sin), np.einsum("s,...sd->...d", wm, cos))
+    mean[..., 1::2] = xp.arctan2(xp.einsum("s,...sd->...d", wm, sin), xp.einsum("s,...sd->...d", wm, cos))
     return mean
 
 
 def measurement_residual(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
     """``a - b`` for (range sum, azimuth) pairs, azimuths wrapped into [-pi, pi]."""
+    xp = namespace(a)
     diff = a - b
     angles = diff[..., 1::2]
-    angles -= _TWO_PI * np.rint(angles / _TWO_PI)
+    angles -= _TWO_PI * xp.rint(angles / _TWO_PI)
     return diff
 
 
@@ -198,19 +208,20 @@ def _inverse_and_logdet(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Inverse and log-determinant of symmetric positive definite matrices (..., d, d)
     (``allow_indefinite``: of any invertible symmetric matrix, ``log |det|``)."""
+    xp = namespace(matrix)
     if matrix.shape[-1] == 2 and not allow_indefinite:  # closed form: the paper fusion's channels
         a, b, c = matrix[..., 0, 0], matrix[..., 0, 1], matrix[..., 1, 1]
         det = a * c - b * b
-        inverse = np.stack([np.stack([c, -b], -1), np.stack([-b, a], -1)], -2) / det[..., None, None]
-        return inverse, np.log(det)
-    sign, logdet = np.linalg.slogdet(matrix)
+        inverse = xp.stack([xp.stack([c, -b], -1), xp.stack([-b, a], -1)], -2) / det[..., None, None]
+        return inverse, xp.log(det)
+    sign, logdet = xp.linalg.slogdet(matrix)
     try:
-        return np.linalg.inv(matrix), logdet
-    except np.linalg.LinAlgError:  # singular in some trials: those get NaN, and the tracker
+        return xp.linalg.inv(matrix), logdet
+    except xp.linalg.LinAlgError:  # singular in some trials: those get NaN, and the tracker
         pass  # keeps their prediction (IMMUKFTracker counts it as a repair)
-    singular = ~((sign != 0) if allow_indefinite else (sign > 0)) | ~np.isfinite(logdet)
-    inverse = np.linalg.inv(np.where(singular[..., None, None], np.eye(matrix.shape[-1]), matrix))
-    return np.where(singular[..., None, None], np.nan, inverse), np.where(singular, np.nan, logdet)
+    singular = ~((sign != 0) if allow_indefinite else (sign > 0)) | ~xp.isfinite(logdet)
+    inverse = xp.linalg.inv(xp.where(singular[..., None, None], xp.eye(matrix.shape[-1]), matrix))
+    return xp.where(singular[..., None, None], xp.nan, inverse), xp.where(singular, xp.nan, logdet)
 
 
 @dataclass
@@ -255,25 +266,26 @@ def unscented_update(
         False skips forming the posterior covariances (callers that only need
         sums of them fold the correction ``gain @ cross_cov'`` themselves).
     """
+    xp = namespace(prior_mean)
     z_pred = measurement_mean(sigmas_h, wm, azimuth_sin_cos)
     dz = measurement_residual(sigmas_h, z_pred[..., None, :])
     dx = sigmas - prior_mean[..., None, :]
     weighted_dz = dz * wc[:, None]
     d = dz.shape[-1]
-    cross_cov = np.swapaxes(dx, -1, -2) @ weighted_dz
+    cross_cov = xp.swapaxes(dx, -1, -2) @ weighted_dz
     residual = measurement_residual(measurement, z_pred)
-    if d >= WOODBURY_MIN_DIMENSION and np.all(wc != 0):
+    if d >= WOODBURY_MIN_DIMENSION and xp.all(wc != 0):
         gain, mahalanobis, logdet = _woodbury(dz, wc, noise_variance, cross_cov, residual)
     else:
-        innovation_cov = np.swapaxes(weighted_dz, -1, -2) @ dz
-        diag = np.arange(d)
+        innovation_cov = xp.swapaxes(weighted_dz, -1, -2) @ dz
+        diag = xp.arange(d)
         innovation_cov[..., diag, diag] += noise_variance
         innovation_inv, logdet = _inverse_and_logdet(innovation_cov)
         gain = cross_cov @ innovation_inv
         mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
     mean = prior_mean + (gain @ residual[..., None])[..., 0]
     # K S K' = K Pxz' (as K S = Pxz); symmetric up to rounding: callers symmetrise what they keep
-    cov = prior_cov - gain @ np.swapaxes(cross_cov, -1, -2) if with_covariance else None
+    cov = prior_cov - gain @ xp.swapaxes(cross_cov, -1, -2) if with_covariance else None
     log_likelihood = -0.5 * (mahalanobis + logdet + d * _LOG_2PI)
     return UpdateResult(mean, cov, log_likelihood, gain, cross_cov)
 
@@ -296,18 +308,19 @@ def _woodbury(
     by ``S^-1 = R^-1 - R^-1 dz' M^-1 dz R^-1`` with ``M = Wc^-1 + dz R^-1 dz'`` and
     ``det S = det R det Wc det M``. A singular ``M`` gives NaN in that trial (the tracker keeps
     its prediction there and counts it)."""
+    xp = namespace(dz)
     inv_noise = 1.0 / noise_variance  # (..., d)
     scaled = dz * inv_noise[..., None, :]  # dz R^-1, (..., S, d)
-    inner = scaled @ np.swapaxes(dz, -1, -2)  # (..., S, S)
-    points = np.arange(wc.size)
+    inner = scaled @ xp.swapaxes(dz, -1, -2)  # (..., S, S)
+    points = xp.arange(wc.shape[0])
     inner[..., points, points] += 1.0 / wc
     inner_inv, inner_logdet = _inverse_and_logdet(inner, allow_indefinite=True)
     # K = Pxz R^-1 - (Pxz R^-1 dz') M^-1 (dz R^-1)
     cross_scaled = cross_cov * inv_noise[..., None, :]  # (..., n, d)
-    gain = cross_scaled - ((cross_scaled @ np.swapaxes(dz, -1, -2)) @ inner_inv) @ scaled
+    gain = cross_scaled - ((cross_scaled @ xp.swapaxes(dz, -1, -2)) @ inner_inv) @ scaled
     projected = (scaled @ residual[..., None])[..., 0]  # dz R^-1 r, (..., S)
-    mahalanobis = np.einsum("...d,...d->...", residual * inv_noise, residual) - np.einsum(
+    mahalanobis = xp.einsum("...d,...d->...", residual * inv_noise, residual) - xp.einsum(
         "...s,...st,...t->...", projected, inner_inv, projected
     )
-    logdet = np.log(noise_variance).sum(axis=-1) + np.log(np.abs(wc)).sum() + inner_logdet
+    logdet = xp.log(noise_variance).sum(axis=-1) + xp.log(xp.abs(wc)).sum() + inner_logdet
     return gain, mahalanobis, logdet

@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ...core.arrays import namespace
 from ...core.compiled import HAVE_NUMBA, LazyKernels
 from ...core.geometry import station_geometry
 from ..imm import logsumexp
@@ -68,6 +69,7 @@ def _update_numpy(
     sigmas, pred_means, pred_covs, log_c, wm, wc, tx_positions, rx_positions, measurement, noise_variance
 ):
     """The numpy path (the reference of the numba path); same arguments and results."""
+    xp = namespace(sigmas)
     B, K, R, S = sigmas.shape[:4]
     num_tx, num_rx = tx_positions.shape[1], rx_positions.shape[1]
     C = num_tx * num_rx
@@ -81,9 +83,9 @@ def _update_numpy(
     full = (B, K, num_tx, num_rx, R, S)
 
     def per_channel(a: NDArray[np.float64]) -> NDArray[np.float64]:
-        return np.broadcast_to(a, full).reshape(B, K, C, R, S)
+        return xp.broadcast_to(a, full).reshape(B, K, C, R, S)
 
-    h = np.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
+    h = xp.stack([per_channel(tx_range + rx_range), per_channel(azimuth)], axis=-1)
     result = unscented_update(
         pred_means[:, :, None],
         pred_covs[:, :, None],
@@ -99,9 +101,9 @@ def _update_numpy(
     log_post = result.log_likelihood + log_c[:, :, None]
     log_post -= logsumexp(log_post, axis=-1, keepdims=True)  # (B, K, C, R)
     post_means, post_covs, estimate, covariance = average_channels(
-        pred_covs, result.mean, np.exp(log_post), result.gain, result.cross_cov
+        pred_covs, result.mean, xp.exp(log_post), result.gain, result.cross_cov
     )
-    log_post = logsumexp(log_post, axis=2) - np.log(C)
+    log_post = logsumexp(log_post, axis=2) - float(np.log(C))
     return post_means, post_covs, log_post, estimate, covariance
 
 
@@ -131,21 +133,22 @@ def average_channels(
     The channel axis is folded into the inner dimension of one matrix product, so
     no per-channel (n, n) covariance is ever formed.
     """
+    xp = namespace(means)
     B, K, C, R, n = means.shape
     d = gain.shape[-1]
 
     def fold(a: NDArray[np.float64]) -> NDArray[np.float64]:  # (B, K, C, R, n, d) -> (B, K, R, n, C*d)
-        return np.moveaxis(a, 2, -2).reshape(B, K, R, n, C * d)
+        return xp.moveaxis(a, 2, -2).reshape(B, K, R, n, C * d)
 
-    folded_cross_t = np.swapaxes(fold(cross_cov), -1, -2)
+    folded_cross_t = xp.swapaxes(fold(cross_cov), -1, -2)
     model_covs = symmetrize(prior_covs - (fold(gain) @ folded_cross_t) / C)
     weights = probs / C  # each channel's combined estimate enters the mean with 1/C
-    channel_mean = np.einsum("bkcr,bkcri->bkci", probs, means)
+    channel_mean = xp.einsum("bkcr,bkcri->bkci", probs, means)
     spread = (means - channel_mean[..., None, :]).reshape(B, K, C * R, n)
     weighted_spread = spread * weights.reshape(B, K, C * R, 1)
-    covariance = np.einsum("bkr,bkrij->bkij", weights.sum(axis=2), prior_covs)
+    covariance = xp.einsum("bkr,bkrij->bkij", weights.sum(axis=2), prior_covs)
     covariance -= (fold(gain * weights[..., None, None]) @ folded_cross_t).sum(axis=2)
-    covariance += np.swapaxes(weighted_spread, -1, -2) @ spread
+    covariance += xp.swapaxes(weighted_spread, -1, -2) @ spread
     return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
 
 

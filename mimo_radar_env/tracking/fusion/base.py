@@ -24,6 +24,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import NDArray
 
+from ...core.arrays import namespace
 from ...core.compiled import HAVE_NUMBA
 
 
@@ -57,10 +58,11 @@ class Posterior:
 
     def finite(self) -> NDArray[np.bool_]:
         """(B, K): True where the update produced finite numbers."""
+        xp = namespace(self.means)
         return (
-            np.isfinite(self.means).all(axis=(-1, -2))
-            & np.isfinite(self.covs).all(axis=(-1, -2, -3))
-            & np.isfinite(self.log_probs).all(axis=-1)
+            xp.isfinite(self.means).all(axis=(-1, -2))
+            & xp.isfinite(self.covs).all(axis=(-1, -2, -3))
+            & xp.isfinite(self.log_probs).all(axis=-1)
         )
 
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...core.arrays import namespace
 from ...core.compiled import HAVE_NUMBA, LazyKernels
 from ...core.geometry import station_geometry
 from .. import unscented
@@ -67,6 +68,7 @@ def _update_numpy(
     sigmas, pred_means, pred_covs, log_c, wm, wc, tx_positions, rx_positions, measurement, noise_variance
 ):
     """The numpy path (the reference of the numba path); same arguments and results."""
+    xp = namespace(sigmas)
     B, K, R, S = sigmas.shape[:4]
     C = tx_positions.shape[1] * rx_positions.shape[1]
     # (B, K, R, S, Ms, Ns): channels innermost, stacked TX-major into one 2C measurement
@@ -77,7 +79,7 @@ def _update_numpy(
     )
     range_sum = tx_range + rx_range
     full = range_sum.shape
-    h = np.stack([range_sum, np.broadcast_to(azimuth, full)], axis=-1)
+    h = xp.stack([range_sum, xp.broadcast_to(azimuth, full)], axis=-1)
     result = unscented_update(
         pred_means,
         pred_covs,
@@ -88,14 +90,14 @@ def _update_numpy(
         wm,
         wc,
         (
-            np.broadcast_to(sin, full).reshape(B, K, R, S, C),
-            np.broadcast_to(cos, full).reshape(B, K, R, S, C),
+            xp.broadcast_to(sin, full).reshape(B, K, R, S, C),
+            xp.broadcast_to(cos, full).reshape(B, K, R, S, C),
         ),
     )
     log_post = result.log_likelihood + log_c
     log_post -= logsumexp(log_post, axis=-1, keepdims=True)
     means, covs = result.mean, symmetrize(result.covariance)
-    estimate, covariance = combine(means, covs, np.exp(log_post))
+    estimate, covariance = combine(means, covs, xp.exp(log_post))
     return means, covs, log_post, estimate, covariance
 
 

@@ -1,0 +1,378 @@
+"""The array namespace the batch engine computes with: numpy, or torch on a device.
+
+Each equation of the simulation, the tracker and the bound is written once, in numpy's
+spelling, against a namespace ``xp`` taken from its inputs (:func:`namespace`): numpy itself for
+numpy arrays, so the numpy path runs exactly the calls it always ran, or a :class:`TorchNamespace`
+that gives torch the numpy spellings the engine uses (``swapaxes``, ``concatenate``,
+``max(axis=, keepdims=)``, ``linalg.cholesky`` raising ``LinAlgError``...). torch is imported only
+when a tensor is met or a device is asked for, so ``device=None`` needs no torch.
+
+The counter-based hash works on 64-bit words: numpy's ``uint64``, and on torch (which has no
+shifts on ``uint64``) the same bits in ``int64`` with masked logical shifts (:meth:`shift_right`);
+products and sums wrap alike in both, so every draw is bit for bit the same on any device.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import math
+from typing import Any
+
+import numpy as np
+
+_MASK64 = (1 << 64) - 1
+
+
+class NumpyNamespace:
+    """numpy, with the few helpers the engine spells the same on every backend."""
+
+    is_torch = False
+    device = None
+    LinAlgError = np.linalg.LinAlgError
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(np, name)
+
+    @staticmethod
+    def copy(a: Any) -> Any:
+        return np.array(a, copy=True)
+
+    @staticmethod
+    def astype(a: Any, dtype: Any) -> Any:
+        return np.asarray(a).astype(dtype)
+
+    @staticmethod
+    def word(value: int) -> np.uint64:
+        """A 64-bit word of the hash (``uint64``)."""
+        return np.uint64(value & _MASK64)
+
+    @staticmethod
+    def words(a: Any) -> Any:
+        """An array of 64-bit words (``uint64``) from numpy ``uint64`` or ``int64`` bits."""
+        a = np.asarray(a)
+        return a.view(np.uint64) if a.dtype == np.int64 else a.astype(np.uint64)
+
+    @staticmethod
+    def shift_right(a: Any, bits: int) -> Any:
+        """The logical right shift of 64-bit words."""
+        return a >> np.uint64(bits)
+
+    @staticmethod
+    def word_index(a: Any) -> Any:
+        """Element indices as 64-bit words."""
+        return np.asarray(a).astype(np.uint64)
+
+    @staticmethod
+    def to_numpy(a: Any) -> Any:
+        return np.asarray(a)
+
+    @staticmethod
+    def dtype_kind(a: Any) -> str:
+        """numpy's one-letter kind of the array's dtype (``"b"``, ``"i"``, ``"u"``, ``"f"``...)."""
+        return np.asarray(a).dtype.kind
+
+
+NUMPY = NumpyNamespace()
+
+
+class _TorchLinalg:
+    def __init__(self, torch: Any) -> None:
+        self._torch = torch
+        self.LinAlgError = torch.linalg.LinAlgError
+
+    def cholesky(self, a: Any) -> Any:
+        return self._torch.linalg.cholesky(a)
+
+    def inv(self, a: Any) -> Any:
+        return self._torch.linalg.inv(a)
+
+    def eigh(self, a: Any) -> Any:
+        return self._torch.linalg.eigh(a)
+
+    def slogdet(self, a: Any) -> Any:
+        return self._torch.linalg.slogdet(a)
+
+    def norm(self, a: Any, axis: int | None = None, keepdims: bool = False) -> Any:
+        return self._torch.linalg.vector_norm(a, dim=axis, keepdim=keepdims)
+
+
+class TorchNamespace:
+    """torch on one device, in the numpy spellings the engine uses.
+
+    Arrays it creates are ``float64`` unless told otherwise, on its :attr:`device`.
+    """
+
+    is_torch = True
+
+    def __init__(self, device: Any) -> None:
+        import torch
+
+        self.torch = torch
+        self.device = torch.device(device)
+        self.linalg = _TorchLinalg(torch)
+        self.LinAlgError = torch.linalg.LinAlgError
+        self.pi, self.nan, self.inf = math.pi, math.nan, math.inf
+        self.newaxis = None
+        self.float64, self.int64, self.int8, self.bool_ = torch.float64, torch.int64, torch.int8, torch.bool
+        for name in (
+            "sqrt",
+            "log",
+            "log1p",
+            "log10",
+            "exp",
+            "sin",
+            "cos",
+            "abs",
+            "isfinite",
+            "hypot",
+            "einsum",
+            "swapaxes",
+            "moveaxis",
+            "broadcast_to",
+            "zeros_like",
+            "full_like",
+            "tile",
+        ):
+            setattr(self, name, getattr(torch, name))
+        self.arctan2 = torch.atan2
+        self.mod = torch.remainder
+        self.rint = torch.round
+
+    def __repr__(self) -> str:
+        return f"TorchNamespace({str(self.device)!r})"
+
+    # ------------------------------------------------------------ creation
+    def _dtype(self, dtype: Any) -> Any:
+        return (
+            TORCH_DTYPES[np.dtype(dtype)](self.torch)
+            if dtype is not None and not isinstance(dtype, self.torch.dtype)
+            else (dtype or self.torch.float64)
+        )
+
+    def asarray(self, a: Any, dtype: Any = None) -> Any:
+        torch = self.torch
+        if isinstance(a, np.ndarray) and a.dtype == np.uint64:
+            a = a.view(np.int64)
+        if isinstance(a, np.ndarray) and not a.flags.writeable:
+            a = a.copy()
+        return torch.as_tensor(a, dtype=self._dtype(dtype) if dtype is not None else None, device=self.device)
+
+    def zeros(self, shape: Any, dtype: Any = None) -> Any:
+        return self.torch.zeros(shape, dtype=self._dtype(dtype), device=self.device)
+
+    def ones(self, shape: Any, dtype: Any = None) -> Any:
+        return self.torch.ones(shape, dtype=self._dtype(dtype), device=self.device)
+
+    def empty(self, shape: Any, dtype: Any = None) -> Any:
+        return self.torch.empty(shape, dtype=self._dtype(dtype), device=self.device)
+
+    def full(self, shape: Any, value: Any, dtype: Any = None) -> Any:
+        if dtype is None and isinstance(value, bool | np.bool_):
+            dtype = self.torch.bool
+        return self.torch.full(
+            shape if isinstance(shape, tuple) else (shape,),
+            value,
+            dtype=self._dtype(dtype),
+            device=self.device,
+        )
+
+    def eye(self, n: int, dtype: Any = None) -> Any:
+        return self.torch.eye(n, dtype=self._dtype(dtype), device=self.device)
+
+    def arange(self, *args: int, dtype: Any = None) -> Any:
+        return self.torch.arange(
+            *args, dtype=self._dtype(dtype) if dtype is not None else self.torch.int64, device=self.device
+        )
+
+    @staticmethod
+    def copy(a: Any) -> Any:
+        return a.clone()
+
+    @staticmethod
+    def ascontiguousarray(a: Any) -> Any:
+        return a.contiguous()
+
+    def astype(self, a: Any, dtype: Any) -> Any:
+        return a.to(self._dtype(dtype))
+
+    # ------------------------------------------------------------ arithmetic
+    def where(self, condition: Any, a: Any, b: Any) -> Any:
+        torch = self.torch
+        if not isinstance(a, torch.Tensor):
+            a = torch.as_tensor(a, dtype=b.dtype if isinstance(b, torch.Tensor) else None, device=self.device)
+        if not isinstance(b, torch.Tensor):
+            b = torch.as_tensor(b, dtype=a.dtype, device=self.device)
+        return torch.where(condition, a, b)
+
+    def maximum(self, a: Any, b: Any) -> Any:
+        torch = self.torch
+        if not isinstance(b, torch.Tensor):
+            return torch.clamp(a, min=b)
+        return torch.maximum(a, b)
+
+    def minimum(self, a: Any, b: Any) -> Any:
+        torch = self.torch
+        if not isinstance(b, torch.Tensor):
+            return torch.clamp(a, max=b)
+        return torch.minimum(a, b)
+
+    def clip(self, a: Any, low: Any, high: Any) -> Any:
+        return self.torch.clamp(a, min=low, max=high)
+
+    def stack(self, arrays: Any, axis: int = 0) -> Any:
+        return self.torch.stack(list(arrays), dim=axis)
+
+    def concatenate(self, arrays: Any, axis: int = 0) -> Any:
+        return self.torch.cat(list(arrays), dim=axis)
+
+    def broadcast_arrays(self, *arrays: Any) -> Any:
+        return self.torch.broadcast_tensors(*arrays)
+
+    def diagonal(self, a: Any, offset: int = 0, axis1: int = 0, axis2: int = 1) -> Any:
+        return self.torch.diagonal(a, offset=offset, dim1=axis1, dim2=axis2)
+
+    def trace(self, a: Any, axis1: int = 0, axis2: int = 1) -> Any:
+        return self.torch.diagonal(a, dim1=axis1, dim2=axis2).sum(-1)
+
+    # ------------------------------------------------------------ reductions
+    def sum(self, a: Any, axis: Any = None, keepdims: bool = False) -> Any:
+        return a.sum() if axis is None else a.sum(dim=axis, keepdim=keepdims)
+
+    def max(self, a: Any, axis: Any = None, keepdims: bool = False) -> Any:
+        return a.max() if axis is None else self.torch.amax(a, dim=axis, keepdim=keepdims)
+
+    def min(self, a: Any, axis: Any = None, keepdims: bool = False) -> Any:
+        return a.min() if axis is None else self.torch.amin(a, dim=axis, keepdim=keepdims)
+
+    def any(self, a: Any, axis: Any = None) -> Any:
+        return a.any() if axis is None else a.any(dim=axis)
+
+    def all(self, a: Any, axis: Any = None) -> Any:
+        return a.all() if axis is None else a.all(dim=axis)
+
+    def argmax(self, a: Any, axis: int = -1) -> Any:
+        return self.torch.argmax(a, dim=axis)
+
+    def argmin(self, a: Any, axis: int = -1) -> Any:
+        return self.torch.argmin(a, dim=axis)
+
+    def argsort(self, a: Any, axis: int = -1, kind: str | None = None) -> Any:
+        return self.torch.argsort(a, dim=axis, stable=True)
+
+    def sort(self, a: Any, axis: int = -1) -> Any:
+        return self.torch.sort(a, dim=axis).values
+
+    def take_along_axis(self, a: Any, index: Any, axis: int) -> Any:
+        return self.torch.take_along_dim(a, index, dim=axis)
+
+    def put_along_axis(self, a: Any, index: Any, values: Any, axis: int) -> None:
+        source = self.torch.as_tensor(values, dtype=a.dtype, device=self.device)
+        a.scatter_(axis, index, source.expand_as(index))
+
+    def repeat(self, a: Any, repeats: int, axis: int) -> Any:
+        return self.torch.repeat_interleave(a, repeats, dim=axis)
+
+    @staticmethod
+    def reshape(a: Any, shape: Any) -> Any:
+        return a.reshape(shape)
+
+    def squeeze(self, a: Any, axis: int) -> Any:
+        return a.squeeze(axis)
+
+    def array_equal(self, a: Any, b: Any) -> bool:
+        return bool(self.torch.equal(a, b))
+
+    # ------------------------------------------------------------ the hash's words
+    @staticmethod
+    def word(value: int) -> int:
+        """A 64-bit word of the hash: its bits as a signed ``int64`` Python integer."""
+        value &= _MASK64
+        return value - (1 << 64) if value >= 1 << 63 else value
+
+    def words(self, a: Any) -> Any:
+        """An ``int64`` tensor of 64-bit words from numpy ``uint64`` (or ``int64``) bits."""
+        if isinstance(a, self.torch.Tensor):
+            return a.to(self.device)
+        a = np.asarray(a)
+        return self.torch.as_tensor(
+            a.view(np.int64) if a.dtype == np.uint64 else a.astype(np.int64), device=self.device
+        )
+
+    @staticmethod
+    def shift_right(a: Any, bits: int) -> Any:
+        """The logical right shift of 64-bit words held in ``int64``."""
+        return (a >> bits) & ((1 << (64 - bits)) - 1)
+
+    def word_index(self, a: Any) -> Any:
+        return self.asarray(a, dtype=np.int64)
+
+    @staticmethod
+    def to_numpy(a: Any) -> Any:
+        return a.detach().cpu().numpy()
+
+    def dtype_kind(self, a: Any) -> str:
+        torch = self.torch
+        if a.dtype == torch.bool:
+            return "b"
+        if a.dtype.is_complex:
+            return "c"
+        if a.dtype.is_floating_point:
+            return "f"
+        return "u" if a.dtype == torch.uint8 else "i"
+
+    @staticmethod
+    def errstate(**_: Any) -> contextlib.nullcontext:
+        return contextlib.nullcontext()
+
+
+TORCH_DTYPES = {
+    np.dtype(np.float64): lambda torch: torch.float64,
+    np.dtype(np.float32): lambda torch: torch.float32,
+    np.dtype(np.int64): lambda torch: torch.int64,
+    np.dtype(np.int8): lambda torch: torch.int8,
+    np.dtype(np.bool_): lambda torch: torch.bool,
+}
+
+
+@functools.lru_cache(maxsize=8)
+def _torch_namespace(device: str) -> TorchNamespace:
+    return TorchNamespace(device)
+
+
+def device_namespace(device: Any) -> NumpyNamespace | TorchNamespace:
+    """The namespace of ``device``: numpy for ``None``, else torch on that device (``"cpu"``,
+    ``"cuda"``, ``"cuda:1"``, a ``torch.device``). Raises ``ValueError`` when torch is not
+    installed or the device does not exist."""
+    if device is None:
+        return NUMPY
+    try:
+        import torch
+    except ImportError:  # pragma: no cover - the test environments have torch
+        raise ValueError(
+            f"device={device!r} needs torch (pip install torch); device=None runs on numpy"
+        ) from None
+    try:
+        resolved = torch.device(device)
+    except (RuntimeError, TypeError):
+        raise ValueError(f"device must be None, 'cpu', 'cuda' or 'cuda:N', got {device!r}") from None
+    if resolved.type == "cuda":
+        if not torch.cuda.is_available():
+            raise ValueError(f"device={device!r}: torch sees no CUDA device here; use 'cpu' or None")
+        index = resolved.index or 0
+        if index >= torch.cuda.device_count():
+            raise ValueError(
+                f"device={device!r}: torch sees {torch.cuda.device_count()} CUDA device(s) (0 .. "
+                f"{torch.cuda.device_count() - 1})"
+            )
+        resolved = torch.device("cuda", index)
+    return _torch_namespace(str(resolved))
+
+
+def namespace(*arrays: Any) -> NumpyNamespace | TorchNamespace:
+    """The namespace of the arrays: torch's (on the first tensor's device) if any is a torch
+    tensor, numpy's otherwise."""
+    for a in arrays:
+        if type(a).__module__.startswith("torch"):
+            return _torch_namespace(str(a.device))
+    return NUMPY
