@@ -29,6 +29,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario, load_scenario
+from mimo_radar_env.core.arrays import NUMPY, NumpyNamespace, TorchNamespace, namespace
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import top_mask
@@ -41,12 +42,13 @@ Observation = dict[str, NDArray[Any]]
 
 def ucb_bonus(scale: float, t: int, counts: NDArray[np.float64]) -> NDArray[np.float64]:
     """The UCB bonus ``sqrt(scale ln t / d[m, n])`` (B, M, N) of eq18 / UCB1."""
-    return np.sqrt(scale * np.log(t) / counts)
+    return namespace(counts).sqrt(scale * np.log(t) / counts)
 
 
 def fuse_targets(weights: NDArray[np.float64], per_target: NDArray[np.float64]) -> NDArray[np.float64]:
     """eq34: ``I[m, n] = sum_k Omega_k I[k, m, n]``, (B, M, N) from (B, K, M, N)."""
-    return np.einsum("k,bkmn->bmn", weights, per_target)
+    xp = namespace(per_target)
+    return xp.einsum("k,bkmn->bmn", xp.asarray(weights, dtype=np.float64), per_target)
 
 
 def blend_samples(
@@ -58,7 +60,7 @@ def blend_samples(
     """eq14's update: played channels ``(1 - w) Y_bar + w gamma``, the others ``Y_bar``
     (estimates (B, K, M, N), ``played`` (B, M, N))."""
     blended = (1.0 - weight) * predicted + weight * sample
-    return np.where(played[:, None], blended, predicted)
+    return namespace(predicted).where(played[:, None], blended, predicted)
 
 
 class Agent(ABC):
@@ -94,6 +96,9 @@ class Agent(ABC):
         self.weights = self.scenario.weights
         self.batch_size = 0
         self.t = 0
+        #: the array namespace of the observations it acts on (:mod:`mimo_radar_env.core.arrays`):
+        #: numpy, or torch on the device of an env made with ``device=``; set by :meth:`reset`
+        self.xp: NumpyNamespace | TorchNamespace = NUMPY
 
     # -------------------------------------------------------- public API
     def reset(self, obs: Observation) -> None:
@@ -105,7 +110,8 @@ class Agent(ABC):
                 "make the env with tracking=True"
             )
         self.batch_size = batch["sinr"].shape[0]
-        self.random.reset(self.batch_size)
+        self.xp = namespace(batch["sinr"])
+        self.random.reset(self.batch_size, self.xp)
         self._batched = batched
         self.t = 0
         self._reset(batch)
@@ -122,7 +128,7 @@ class Agent(ABC):
     def update(self, obs: Observation, reward: Any) -> None:
         """Learn from the observation and reward of the step just taken."""
         batch, _ = self._batch(obs)
-        self._update(batch, np.atleast_1d(np.asarray(reward, dtype=np.float64)))
+        self._update(batch, self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,)))
 
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
@@ -138,7 +144,7 @@ class Agent(ABC):
 
     # ------------------------------------------------------------ helpers
     def _batch(self, obs: Observation) -> tuple[Observation, bool]:
-        sinr = np.asarray(obs["sinr"])
+        sinr = obs["sinr"] if namespace(obs["sinr"]).is_torch else np.asarray(obs["sinr"])
         if sinr.ndim == 3:
             return {key: np.asarray(value)[None] for key, value in obs.items()}, False
         if sinr.ndim == 4:
@@ -146,7 +152,7 @@ class Agent(ABC):
         raise ValueError(f"observation 'sinr' must have shape (K, M, N) or (B, K, M, N), got {sinr.shape}")
 
     def actions_from_masks(self, tx: NDArray[np.bool_], rx: NDArray[np.bool_]) -> NDArray[np.int8]:
-        return np.concatenate([tx, rx], axis=1).astype(np.int8)
+        return self.xp.astype(self.xp.concatenate([tx, rx], axis=1), np.int8)
 
     def random_super_arms(self, count: int) -> NDArray[np.int8]:
         """``count`` uniformly random valid super arms, (count, M + N)."""
@@ -207,8 +213,8 @@ class IndexPolicy(Agent):
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:
-        self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
-        self.counts = np.array(obs["probed"], dtype=np.float64)  # d(0)
+        self.estimate = self.xp.astype(self.xp.copy(obs["sinr"]), np.float64)  # Y_hat(0)
+        self.counts = self.xp.astype(self.xp.copy(obs["probed"]), np.float64)  # d(0)
         self.predicted = self.estimate
 
     def predict(self, obs: Observation) -> NDArray[np.float64]:
@@ -217,7 +223,7 @@ class IndexPolicy(Agent):
 
     def step_size(self, counts: NDArray[np.float64]) -> float | NDArray[np.float64]:
         """Weight of a new sample in the estimate, given the updated counts (default: sample mean)."""
-        return 1.0 / np.maximum(counts, 1.0)[:, None]
+        return 1.0 / self.xp.maximum(counts, 1.0)[:, None]
 
     def index(self, obs: Observation) -> NDArray[np.float64]:
         """The fused index (B, M, N) for the coming step ``self.t``: a query that changes no
@@ -235,8 +241,8 @@ class IndexPolicy(Agent):
         return self.actions_from_masks(tx, rx)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
-        played = np.asarray(obs["probed"], dtype=bool)
-        sample = np.asarray(obs["sinr"], dtype=np.float64)
+        played = self.xp.astype(obs["probed"], bool)
+        sample = self.xp.astype(obs["sinr"], np.float64)
         self.counts = self.count_discount * self.counts + played  # eq15 (1.0 * d is exact)
         self.estimate = blend_samples(self.predicted, played, sample, self.step_size(self.counts))
 

@@ -46,7 +46,7 @@ class FixedAgent(Agent):
         self.action[self.num_tx + np.array(rx)] = 1
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
-        return np.tile(self.action, (self.batch_size, 1))
+        return self.xp.tile(self.xp.asarray(self.action), (self.batch_size, 1))
 
 
 def _indices(name: str, value: Any) -> list[int]:

@@ -54,4 +54,4 @@ class EpsilonGreedy(IndexPolicy):
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         greedy = super()._act(obs)
         self.explored = self.random.uniform(Stream.AGENT_EXPLORE) < self.epsilon
-        return np.where(self.explored[:, None], self.random_super_arms(self.batch_size), greedy)
+        return self.xp.where(self.explored[:, None], self.random_super_arms(self.batch_size), greedy)

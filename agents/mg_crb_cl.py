@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.geometry import path_gain
 
 from .base import IndexPolicy, Observation, blend_samples, ucb_bonus
@@ -48,9 +49,9 @@ def geometric_prediction(
 ) -> NDArray[np.float64]:
     """eq16: ``Y_bar = alpha L(X_bar) / L(X_hat) Y_hat + (1 - alpha) Y_hat`` from the tracker's
     estimate (``track``) and prediction (``track_pred``); the RCS ratio is 1."""
-    ratio = path_gain(
-        obs["track_pred"][..., [0, 2]], scenario.tx_positions, scenario.rx_positions
-    ) / path_gain(obs["track"][..., [0, 2]], scenario.tx_positions, scenario.rx_positions)
+    xp = namespace(estimate)
+    tx, rx = xp.asarray(scenario.tx_positions), xp.asarray(scenario.rx_positions)
+    ratio = path_gain(obs["track_pred"][..., [0, 2]], tx, rx) / path_gain(obs["track"][..., [0, 2]], tx, rx)
     return alpha * ratio * estimate + (1.0 - alpha) * estimate
 
 
@@ -68,8 +69,9 @@ class MGCRBCLEstimator:
         self.alpha, self.alpha_bar, self.beta = dataclasses.astuple(self.parameters)
 
     def reset(self, obs: Observation) -> None:
-        self.estimate = np.array(obs["sinr"], dtype=np.float64)  # Y_hat(0)
-        self.counts = np.array(obs["probed"], dtype=np.float64)  # d(0)
+        xp = namespace(obs["sinr"])
+        self.estimate = xp.astype(xp.copy(obs["sinr"]), np.float64)  # Y_hat(0)
+        self.counts = xp.astype(xp.copy(obs["probed"]), np.float64)  # d(0)
         self.predicted = self.estimate
 
     def predict(self, obs: Observation) -> NDArray[np.float64]:
@@ -82,11 +84,11 @@ class MGCRBCLEstimator:
         return self.predicted + ucb_bonus(self.beta, t, self.counts)[:, None]
 
     def update(self, obs: Observation) -> None:
-        played = np.asarray(obs["probed"], dtype=bool)
+        xp = namespace(obs["sinr"])
+        played = xp.astype(obs["probed"], bool)
         self.counts = self.counts + played  # eq15
-        self.estimate = blend_samples(
-            self.predicted, played, np.asarray(obs["sinr"], np.float64), self.alpha_bar
-        )
+        sample = xp.astype(obs["sinr"], np.float64)
+        self.estimate = blend_samples(self.predicted, played, sample, self.alpha_bar)
 
 
 class MGCRBCL(IndexPolicy):

@@ -51,7 +51,7 @@ class BestAgent(Agent):
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         assert self._oracle is not None
-        return np.asarray(self._oracle(), dtype=np.int8).reshape(self.batch_size, -1)
+        return self.xp.reshape(self.xp.asarray(self._oracle(), dtype=np.int8), (self.batch_size, -1))
 
 
 class BestTrackingAgent(BestAgent):

@@ -43,16 +43,19 @@ def make_env(
     options: EnvOptions | Mapping[str, Any] | None = None,
     scenario: Scenario | str | Path | None = None,
     version: str = DEFAULT_VERSION,
+    device: Any = None,
 ) -> MimoRadarSelectVectorEnv:
     """The native vector env of ``num_envs`` trials of ``scenario`` (default: the agent's) with
     the options the agent needs: ``options`` an :class:`~mimo_radar_env.EnvOptions` (as it is) or
     a mapping of options over env version ``version``'s defaults (default: v1's, as
-    ``gym.make_vec("MimoRadarSelect-v1", ...)`` has them)."""
+    ``gym.make_vec("MimoRadarSelect-v1", ...)`` has them). ``device`` (``"cuda"``, ``"cpu"``)
+    runs it on torch there, the agent acting on its tensors; ``None`` on numpy."""
     if not isinstance(options, EnvOptions):
         options = env_version(version).options(**(options or {}))
     return MimoRadarSelectVectorEnv(
         num_envs=num_envs,
         scenario=agent.scenario if scenario is None else scenario,
+        device=device,
         **env_options_for(agent, options),
     )
 

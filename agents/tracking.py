@@ -8,6 +8,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.core.arrays import NumpyNamespace, TorchNamespace, namespace
 from mimo_radar_env.core.model import RadarModel
 from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.envs.options import option_choices
@@ -68,25 +69,38 @@ class TrackingSelector:
         self.measurement_quality = measurement_quality
         self.sinr_weight = float(sinr_weight)
         self.model = RadarModel.from_scenario(scenario)
+        self._models: dict[str, RadarModel] = {}
+
+    def model_in(self, xp: NumpyNamespace | TorchNamespace) -> RadarModel:
+        """The scenario's model with its arrays in namespace ``xp`` (made once per device)."""
+        if not xp.is_torch:
+            return self.model
+        key = str(xp.device)
+        if key not in self._models:
+            self._models[key] = self.model.to(xp)
+        return self._models[key]
 
     def variance(self, sinr: NDArray[np.float64]) -> NDArray[np.float64]:
         """The channels' measurement variances (..., 2) for SINR values: eq32's ``lambda`` (or the
         constant ``measurement_quality``), then ``Sigma0 / lambda``."""
+        xp = namespace(sinr)
+        model = self.model_in(xp)
         if self.measurement_quality is None:
-            quality = self.model.quality(sinr, scale=self.lambda_scale)  # eq32
+            quality = model.quality(sinr, scale=self.lambda_scale)  # eq32
         else:
-            quality = np.full(sinr.shape, float(self.measurement_quality))
-        return self.model.measurement_variance(quality)
+            quality = xp.full(tuple(sinr.shape), float(self.measurement_quality))
+        return model.measurement_variance(quality)
 
     def select(
         self, obs: Observation, sinr: NDArray[np.float64], sinr_index: NDArray[np.float64] | None = None
     ) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
         """TX and RX masks (B, M), (B, N) for the coming step."""
         variance = self.variance(sinr)
-        positions = np.asarray(obs["track_pred"])[..., [0, 2]]
-        information = channel_information(positions, self.model.tx, self.model.rx, variance)
+        model = self.model_in(namespace(sinr))
+        positions = obs["track_pred"][..., [0, 2]]
+        information = channel_information(positions, model.tx, model.rx, variance)
         return select_for_tracking(
-            np.asarray(obs[PREDICTED_COVARIANCE]),
+            obs[PREDICTED_COVARIANCE],
             information,
             self.scenario.weights,
             self.scenario.tx_per_step,

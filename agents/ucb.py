@@ -122,8 +122,9 @@ class DiscountedUCB(IndexPolicy):
         self.count_discount, self.beta = discount, beta
 
     def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
-        total = np.maximum(self.counts.sum(axis=(1, 2), keepdims=True), np.e)
-        bonus = np.sqrt(self.beta * np.log(total) / self.counts)
+        xp = self.xp
+        total = xp.maximum(xp.sum(self.counts, axis=(1, 2), keepdims=True), np.e)
+        bonus = xp.sqrt(self.beta * xp.log(total) / self.counts)
         return self.fuse(predicted + bonus[:, None])
 
 
@@ -162,27 +163,30 @@ class SlidingWindowUCB(IndexPolicy):
         self.window, self.beta = int(window), beta
 
     def _reset(self, obs: Observation) -> None:
-        sinr = np.asarray(obs["sinr"], dtype=np.float64)
-        self.samples = np.zeros((sinr.shape[0], self.window) + sinr.shape[1:])
-        self.played = np.zeros((sinr.shape[0], self.window) + sinr.shape[2:])
+        xp = self.xp
+        sinr = xp.astype(obs["sinr"], np.float64)
+        self.samples = xp.zeros((sinr.shape[0], self.window) + tuple(sinr.shape[1:]))
+        self.played = xp.zeros((sinr.shape[0], self.window) + tuple(sinr.shape[2:]))
         self.slot = 0
         self._store(obs)
 
     def _store(self, obs: Observation) -> None:
         """The step's samples into the ring buffer; counts and means over the window."""
-        played = np.asarray(obs["probed"], dtype=np.float64)
-        self.samples[:, self.slot] = np.asarray(obs["sinr"]) * played[:, None]
+        xp = self.xp
+        played = xp.astype(obs["probed"], np.float64)
+        self.samples[:, self.slot] = obs["sinr"] * played[:, None]
         self.played[:, self.slot] = played
         self.slot = (self.slot + 1) % self.window
         self.counts = self.played.sum(axis=1)
-        self.estimate = self.samples.sum(axis=1) / np.maximum(self.counts, 1.0)[:, None]
+        self.estimate = self.samples.sum(axis=1) / xp.maximum(self.counts, 1.0)[:, None]
         self.predicted = self.estimate
 
     def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
-        safe = np.maximum(self.counts, 1.0)
-        bonus = np.sqrt(self.beta * np.log(max(min(self.t, self.window), 1)) / safe)
+        xp = self.xp
+        safe = xp.maximum(self.counts, 1.0)
+        bonus = xp.sqrt(self.beta * np.log(max(min(self.t, self.window), 1)) / safe)
         fused = self.fuse(predicted + bonus[:, None])
-        return np.where(self.counts > 0, fused, UNEXPLORED_INDEX)
+        return xp.where(self.counts > 0, fused, UNEXPLORED_INDEX)
 
     def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
         self._store(obs)

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.counter_hash import (
     Stream,
@@ -46,8 +47,11 @@ def _flip_uniform_np(
     base: NDArray[np.uint64], element: NDArray[np.uint64], shift: NDArray[np.uint64]
 ) -> NDArray[np.float64]:
     """16-bit uniforms, four per hash: ``(lane + 0.5) / 65536``."""
-    lane = (element_bits(base, element) >> shift) & np.uint64(0xFFFF)
-    return (lane.astype(np.float64) + 0.5) * (1.0 / 65536.0)
+    xp = namespace(base)
+    # the lane's 16 bits are below the shift's top (at most 48): an arithmetic shift of torch's
+    # int64 words keeps them as numpy's logical one does
+    lane = (element_bits(base, element) >> shift) & xp.word(0xFFFF)
+    return (xp.astype(lane, np.float64) + 0.5) * (1.0 / 65536.0)
 
 
 def run_numpy(
@@ -65,22 +69,23 @@ def run_numpy(
     set_rule: bool = False,
 ) -> NDArray[np.int8]:
     """All iterations, vectorised over trials and particles. Returns the global bests (B, L)."""
+    xp = namespace(index)
     batch, population, length = positions.shape
     num_tx = index.shape[1]
-    positions = positions.copy()
-    velocities = np.zeros(positions.shape)
+    positions = xp.copy(positions)
+    velocities = xp.zeros(positions.shape)
     fitness, valid = _fitness_np(index, positions, num_tx, tx_count, rx_count)
-    personal_best = positions.copy()
-    personal_fit = np.where(valid, fitness, -np.inf)
-    rows = np.arange(batch)
-    first = np.argmax(personal_fit, axis=1)
-    global_best = personal_best[rows, first].copy()
-    global_fit = personal_fit[rows, first].copy()
-    particle = np.arange(population, dtype=np.uint64)[None, :]
+    personal_best = xp.copy(positions)
+    personal_fit = xp.where(valid, fitness, -np.inf)
+    rows = xp.arange(batch)
+    first = xp.argmax(personal_fit, axis=1)
+    global_best = xp.copy(personal_best[rows, first])
+    global_fit = xp.copy(personal_fit[rows, first])
+    particle = xp.arange(population, dtype=np.int64)[None, :]
     lanes = (length + 3) // 4
-    bit = np.arange(length)
-    hash_element = (np.arange(population)[:, None] * lanes + bit // 4).astype(np.uint64)[None]  # (1, P, L)
-    lane_shift = (16 * (bit % 4)).astype(np.uint64)
+    bit = xp.arange(length, dtype=np.int64)
+    hash_element = (xp.arange(population, dtype=np.int64)[:, None] * lanes + bit // 4)[None]  # (1, P, L)
+    lane_shift = xp.words(16 * (bit % 4)) if not xp.is_torch else 16 * (bit % 4)
     steps = max(iterations - 1, 1)
     for q in range(iterations):
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
@@ -92,20 +97,20 @@ def run_numpy(
             + (c1 * r1)[..., None] * (personal_best - positions)
             + (c2 * r2)[..., None] * (global_best[:, None, :] - positions)
         )  # eq20
-        velocities = np.minimum(np.maximum(velocities, -velocity_clamp), velocity_clamp)
+        velocities = xp.minimum(xp.maximum(velocities, -velocity_clamp), velocity_clamp)
         draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
         if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
-            positions = draw.astype(np.int8)
+            positions = xp.astype(draw, np.int8)
         else:  # eq21 as written: the bit flips with probability sigmoid(V)
-            positions = np.where(draw, 1 - positions, positions).astype(np.int8)
+            positions = xp.astype(xp.where(draw, 1 - positions, positions), np.int8)
         fitness, valid = _fitness_np(index, positions, num_tx, tx_count, rx_count)
         improved = valid & (fitness > personal_fit)
-        personal_best = np.where(improved[..., None], positions, personal_best)
-        personal_fit = np.where(improved, fitness, personal_fit)
-        candidate = np.argmax(personal_fit, axis=1)
+        personal_best = xp.where(improved[..., None], positions, personal_best)
+        personal_fit = xp.where(improved, fitness, personal_fit)
+        candidate = xp.argmax(personal_fit, axis=1)
         better = personal_fit[rows, candidate] > global_fit
-        global_best = np.where(better[:, None], personal_best[rows, candidate], global_best)
-        global_fit = np.where(better, personal_fit[rows, candidate], global_fit)
+        global_best = xp.where(better[:, None], personal_best[rows, candidate], global_best)
+        global_fit = xp.where(better, personal_fit[rows, candidate], global_fit)
     return global_best
 
 
@@ -113,15 +118,16 @@ def _fitness_np(
     index: NDArray[np.float64], positions: NDArray[np.int8], num_tx: int, tx_count: int, rx_count: int
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
     """eq19: index sum over the selected channels (summed TX-major, as the numba kernel), 0 if invalid."""
-    tx = positions[..., :num_tx].astype(np.float64)
-    rx = positions[..., num_tx:].astype(np.float64)
+    xp = namespace(index)
+    tx = xp.astype(positions[..., :num_tx], np.float64)
+    rx = xp.astype(positions[..., num_tx:], np.float64)
     tx_ok = positions[..., :num_tx].sum(axis=-1) == tx_count
     valid = tx_ok & (positions[..., num_tx:].sum(axis=-1) == rx_count)
-    value = np.zeros(positions.shape[:2])
+    value = xp.zeros(positions.shape[:2])
     for m in range(num_tx):  # loops over stations (not trials or particles) fix the summation order
         for n in range(index.shape[2]):
             value += tx[..., m] * rx[..., n] * index[:, None, m, n]
-    return np.where(valid, value, 0.0), valid
+    return xp.where(valid, value, 0.0), valid
 
 
 #: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per

@@ -12,6 +12,7 @@ from abc import ABC, abstractmethod
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.streams import TrialRandom
 
 
@@ -51,14 +52,15 @@ class SuperArmSolver(ABC):
         return 4.0 * num_tx * num_rx
 
     def check(self, index: NDArray[np.float64]) -> NDArray[np.float64]:
-        index = np.asarray(index, dtype=np.float64)
+        xp = namespace(index)
+        index = xp.asarray(index, dtype=np.float64)
         if index.ndim != 3:
             raise ValueError(f"index must have shape (B, M, N), got {index.shape}")
         if index.shape[1] < self.tx_count or index.shape[2] < self.rx_count:
             raise ValueError(
                 f"index of shape {index.shape} has fewer stations than Ms={self.tx_count}, Ns={self.rx_count}"
             )
-        if not np.all(np.isfinite(index)):
+        if not xp.all(xp.isfinite(index)):
             raise ValueError("index contains NaN or infinite values")
         return index
 

@@ -137,19 +137,16 @@ class BPSOSolver(SuperArmSolver):
         random valid super arm, (B, population, M + N) int8, and one key per trial for the
         iteration streams (the kernels' ``positions`` and ``keys``). With numba, a compiled
         twin (``_bpso_bpso_kernels().initial_positions``) hashes the same draws."""
-        if self.use_numba and _bpso_kernels().HAVE_NUMBA:
+        xp = random.xp
+        if self.use_numba and _bpso_kernels().HAVE_NUMBA and not xp.is_torch:
             tx_bases, rx_bases = random.bases(Stream.BPSO_INIT_TX), random.bases(Stream.BPSO_INIT_RX)
             positions = _bpso_kernels().initial_positions(
                 tx_bases, rx_bases, self.population, num_tx, num_rx, self.tx_count, self.rx_count
             )
         else:
-            positions = np.concatenate(
-                [
-                    top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count),
-                    top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count),
-                ],
-                axis=-1,
-            ).astype(np.int8)
+            tx = top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count)
+            rx = top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count)
+            positions = xp.astype(xp.concatenate([tx, rx], axis=-1), np.int8)
         return positions, random.keys_for(Stream.BPSO_KEYS)
 
     def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool]:
@@ -173,10 +170,11 @@ class BPSOSolver(SuperArmSolver):
         if random.batch_size != batch:
             raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
         positions, keys = self.initial_swarm(random, num_tx, num_rx)
+        xp = random.xp
         kernel = (
             _bpso_kernels().numba_kernel()
-            if (self.use_numba and _bpso_kernels().HAVE_NUMBA)
+            if (self.use_numba and _bpso_kernels().HAVE_NUMBA and not xp.is_torch)
             else _bpso_kernels().run_numpy
         )
         best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
-        return best[:, :num_tx].astype(bool), best[:, num_tx:].astype(bool)
+        return xp.astype(best[:, :num_tx], bool), xp.astype(best[:, num_tx:], bool)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.compiled import HAVE_NUMBA, LazyKernels
 from ..core.superarm import all_super_arms, super_arm_count
 from .fusion import Fusion, fusion_class
@@ -85,14 +86,17 @@ def super_arm_criterion(
     infinite term is NaN in the einsum, so infinite terms take the numpy path).
     """
     posterior = _check_choices(criterion, fusion)
+    xp = namespace(position_cov)
+    tx_masks, rx_masks = xp.asarray(tx_masks), xp.asarray(rx_masks)
     prior_info, _ = inverse_2x2(position_cov)  # (B, K, 2, 2)
     batch = position_cov.shape[0]
     if tx_masks.ndim == 2:
-        tx_masks = np.broadcast_to(tx_masks, (batch, *tx_masks.shape))
-        rx_masks = np.broadcast_to(rx_masks, (batch, *rx_masks.shape))
+        tx_masks = xp.broadcast_to(tx_masks, (batch, *tx_masks.shape))
+        rx_masks = xp.broadcast_to(rx_masks, (batch, *rx_masks.shape))
     terms = posterior.channel_terms(prior_info, information)
     compiled = posterior.compiled_posterior
-    if use_numba and HAVE_NUMBA and compiled is not None and np.isfinite(terms).all():
+    numba_path = use_numba and HAVE_NUMBA and compiled is not None and not xp.is_torch
+    if numba_path and np.isfinite(terms).all():
         # the channel sums, the posteriors and their traces or determinants in one pass: the same
         # numbers as the numpy path below, without its (B, K, A, 2, 2) intermediates
         values = np.empty((batch, terms.shape[1], tx_masks.shape[1]))
@@ -107,12 +111,12 @@ def super_arm_criterion(
         )
         per_target = values if criterion == "trace" else np.log(values)
     else:
-        selected = tx_masks[..., :, None].astype(float) * rx_masks[..., None, :]  # (B, A, M, N)
-        total = np.einsum("bamn,bkmnij->bkaij", selected, terms)
-        count = (tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1)).astype(float)[:, None, :, None, None]
+        selected = xp.astype(tx_masks[..., :, None], np.float64) * rx_masks[..., None, :]  # (B, A, M, N)
+        total = xp.einsum("bamn,bkmnij->bkaij", selected, terms)
+        count = xp.astype(tx_masks.sum(axis=-1) * rx_masks.sum(axis=-1), np.float64)[:, None, :, None, None]
         covariance = posterior.posterior_from_sum(prior_info[:, :, None], total, count)  # (B, K, A, 2, 2)
         per_target = _per_target(covariance, criterion)
-    return np.einsum("k,bka->ba", np.asarray(weights, dtype=np.float64), per_target)
+    return xp.einsum("k,bka->ba", xp.asarray(weights, dtype=np.float64), per_target)
 
 
 def _check_choices(criterion: str, fusion: str) -> type[Fusion]:
@@ -126,7 +130,7 @@ def _per_target(posterior: NDArray[np.float64], criterion: str) -> NDArray[np.fl
     """The criterion of each target's posterior position covariance (..., 2, 2): trace or log det."""
     if criterion == "trace":
         return posterior[..., 0, 0] + posterior[..., 1, 1]
-    return np.log(det_2x2(posterior))
+    return namespace(posterior).log(det_2x2(posterior))
 
 
 def select_for_tracking(
@@ -156,23 +160,32 @@ def select_for_tracking(
                 f"sinr_weight > 0 scores every super arm, so it needs at most {MAX_ENUMERATED_SUPER_ARMS:,} "
                 f"of them; this layout has {super_arm_count(num_tx, num_rx, tx_count, rx_count):,}"
             )
+        if namespace(position_cov).is_torch:
+            raise NotImplementedError(
+                f"the greedy tracking search (layouts of more than {MAX_ENUMERATED_SUPER_ARMS:,} super "
+                "arms) runs on numpy only: make the env with device=None"
+            )
         return greedy_super_arm(position_cov, information, weights, tx_count, rx_count, criterion, fusion)
-    tx_masks, rx_masks = all_super_arms(num_tx, num_rx, tx_count, rx_count)
+    xp = namespace(position_cov)
+    tx_masks, rx_masks = (xp.asarray(m) for m in all_super_arms(num_tx, num_rx, tx_count, rx_count))
     scores = super_arm_criterion(position_cov, information, tx_masks, rx_masks, weights, criterion, fusion)
     if sinr_weight > 0:
         if sinr_index is None:
             raise ValueError("sinr_weight > 0 needs the SINR index of the channels (sinr_index)")
-        value = np.einsum("am,bmn,an->ba", tx_masks.astype(float), sinr_index, rx_masks.astype(float))
+        value = xp.einsum(
+            "am,bmn,an->ba", xp.astype(tx_masks, np.float64), sinr_index, xp.astype(rx_masks, np.float64)
+        )
         scores = (1.0 - sinr_weight) * _unit_range(scores) - sinr_weight * _unit_range(value)
-    best = np.argmin(scores, axis=1)
+    best = xp.argmin(scores, axis=1)
     return tx_masks[best], rx_masks[best]
 
 
 def _unit_range(scores: NDArray[np.float64]) -> NDArray[np.float64]:
     """Each row rescaled to [0, 1] by its range (a constant row becomes 0)."""
-    low = scores.min(axis=1, keepdims=True)
-    span = scores.max(axis=1, keepdims=True) - low
-    return np.divide(scores - low, span, out=np.zeros_like(scores), where=span > 0)
+    xp = namespace(scores)
+    low = xp.min(scores, axis=1, keepdims=True)
+    span = xp.max(scores, axis=1, keepdims=True) - low
+    return xp.where(span > 0, (scores - low) / xp.where(span > 0, span, 1.0), 0.0)
 
 
 def greedy_super_arm(
