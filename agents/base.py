@@ -111,6 +111,12 @@ class Agent(ABC):
             )
         self.batch_size = batch["sinr"].shape[0]
         self.xp = namespace(batch["sinr"])
+        if self.xp.is_torch and not self.needs.device:
+            raise ValueError(
+                f"{self.name or type(self).__name__} acts on numpy arrays only, and this observation is "
+                f"torch's on {self.xp.device}: make its env with device=None (agents that run on a "
+                "device declare needs = Needs(device=True))"
+            )
         self.random.reset(self.batch_size, self.xp)
         self._batched = batched
         self.t = 0

@@ -42,6 +42,10 @@ class Needs:
         the harness passes the run's unless they are given.
     tracking_search : bool
         It selects with the tracking search, whose numba kernel a run compiles.
+    device : bool
+        It acts on the torch tensors of an env made with ``device=`` (its state and draws on that
+        device, :attr:`agents.Agent.xp`); without it such an env is refused at ``reset``, and the
+        harness refuses ``--device`` runs of it before they start.
     """
 
     oracle: bool = False
@@ -49,6 +53,7 @@ class Needs:
     observation_options: Mapping[str, Any] = field(default_factory=dict)
     env_option_params: tuple[str, ...] = ()
     tracking_search: bool = False
+    device: bool = False
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "observation_options", MappingProxyType(dict(self.observation_options)))

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 
 from .base import Agent, Observation
+from .costs import Needs
 
 #: The paper's fixed selections (Section IV), 0-based: fix1 = {TX3, TX4; RX1, RX3, RX4},
 #: fix2 = {TX3, TX4; RX4, RX5, RX6}.
@@ -27,6 +28,7 @@ class FixedAgent(Agent):
     """
 
     name = "fixed"
+    needs = Needs(device=True)
 
     def __init__(
         self, scenario: Scenario | str, tx: Sequence[int], rx: Sequence[int], seed: int | None = None

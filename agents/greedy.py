@@ -11,6 +11,7 @@ from mimo_radar_env import Scenario
 from mimo_radar_env.core.counter_hash import Stream
 
 from .base import IndexPolicy, Observation
+from .costs import Needs
 from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
@@ -29,6 +30,7 @@ class EpsilonGreedy(IndexPolicy):
     """
 
     name = "epsilon-greedy"
+    needs = Needs(device=True)
 
     def __init__(
         self,

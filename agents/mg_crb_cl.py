@@ -120,7 +120,7 @@ class MGCRBCL(IndexPolicy):
 
     name = "mg-crb-cl"
     default_solver = "bpso"
-    needs = Needs(tracking=True)
+    needs = Needs(tracking=True, device=True)
     #: Its keyword parameters beyond the signature's (the registry lists them).
     keyword_parameters: ClassVar[type] = LearningParameters
 

@@ -32,7 +32,7 @@ class BestAgent(Agent):
     """
 
     name = "best"
-    needs = Needs(oracle=True)
+    needs = Needs(oracle=True, device=True)
     costs = (BOOKKEEPING, ORACLE_SEARCH)
 
     def __init__(self, scenario: Scenario | str, seed: int | None = None, env: Any = None) -> None:
@@ -65,7 +65,7 @@ class BestTrackingAgent(BestAgent):
     """
 
     name = "best-tracking"
-    needs = Needs(oracle=True, tracking_search=True)
+    needs = Needs(oracle=True, tracking_search=True, device=True)
     costs = (BOOKKEEPING, TRACKING_SEARCH)
 
     def __init__(

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from typing import Any
 
 import numpy as np
@@ -124,6 +125,7 @@ class PlanTrackingUCB(TrackingUCB):
     """
 
     name = "plan-tracking-ucb"
+    needs = dataclasses.replace(TrackingUCB.needs, device=False)  # the planner is numpy's
     costs = (BOOKKEEPING, TRACKING_SEARCH, PLAN)
 
     def __init__(

@@ -160,6 +160,7 @@ class TrackingUCB(Agent):
         observation_options={"prediction_covariance": True},
         env_option_params=("fusion", "lambda_scale", "measurement_quality"),
         tracking_search=True,
+        device=True,
     )
     costs = (BOOKKEEPING, TRACKING_SEARCH)
     #: Its keyword parameters beyond the signature's (the registry lists them).

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 
 from .base import IndexPolicy, Observation
+from .costs import Needs
 from .parameters import check_parameter
 from .solvers import SuperArmSolver
 
@@ -33,6 +34,7 @@ class UCB1(IndexPolicy):
     """
 
     name = "ucb1"
+    needs = Needs(device=True)
 
     def __init__(
         self,
@@ -70,6 +72,7 @@ class CUCB(IndexPolicy):
     """
 
     name = "cucb"
+    needs = Needs(device=True)
 
     def __init__(
         self,
@@ -106,6 +109,7 @@ class DiscountedUCB(IndexPolicy):
     """
 
     name = "discounted-ucb"
+    needs = Needs(device=True)
 
     def __init__(
         self,
@@ -145,6 +149,7 @@ class SlidingWindowUCB(IndexPolicy):
     """
 
     name = "sliding-window-ucb"
+    needs = Needs(device=True)
 
     def __init__(
         self,

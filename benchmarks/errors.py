@@ -24,6 +24,7 @@ FLAGS = {
     "workers": "--workers",
     "backend": "--backend",
     "max_hours": "--max-hours",
+    "device": "--device",
     "out": "--out",
 }
 

@@ -381,11 +381,12 @@ def _policy_files(policy: str, agent: Any) -> dict[str, str]:
 
 
 # ------------------------------------------------------------------ one task
-def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArray]:
+def run_task(config: dict[str, Any], policy: str, shard: int, device: Any = None) -> dict[str, NDArray]:
     """Run ``policy`` on shard ``shard`` of the run; the shard's fields
     (:mod:`benchmarks.shards` lists them): per-trial float64 arrays of the mean rewards, the
     squared position errors and bounds, the matches with the optimal super arm, the station
-    selection counts, the compute time and the first trial's truth."""
+    selection counts, the compute time and the first trial's truth. ``device`` runs the env and
+    the agent on torch there (the same numbers to rounding); the fields come back to numpy."""
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
     trials = cfg.shard_trials(shard)
@@ -397,9 +398,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         seed=cfg.seed + trials.start,
         options=cfg.env_options,
     )
-    episode = agents.Rollout(
-        agent, agents.make_env(agent, len(trials), cfg.env_options, scenario), seed=cfg.seed + trials.start
-    )
+    env = agents.make_env(agent, len(trials), cfg.env_options, scenario, device=device)
+    episode = agents.Rollout(agent, env, seed=cfg.seed + trials.start)
+    host = env.engine.xp.to_numpy
     n, T, K = len(trials), cfg.steps, scenario.num_targets
     out = {
         "trial_expected": np.zeros((n, T)),
@@ -410,9 +411,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
         "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
         TRUTH_FIELD: np.empty((T + 1, K, 2)),
     }
-    out[TRUTH_FIELD][0] = episode.info["true_state"][0][:, [0, 2]]
+    out[TRUTH_FIELD][0] = host(episode.info["true_state"][0][:, [0, 2]])
     for t, step in enumerate(episode.run(T)):
-        info, action = step.info, np.asarray(step.action)
+        info, action = {key: host(value) for key, value in step.info.items()}, host(step.action)
         out["trial_expected"][:, t] = info["expected_reward"]
         out["trial_optimal"][:, t] = info["optimal_reward"]
         out["trial_matches"][:, t] = np.all(action == info["optimal_action"], axis=1)
@@ -421,7 +422,7 @@ def run_task(config: dict[str, Any], policy: str, shard: int) -> dict[str, NDArr
             out["trial_bound_squared"][:, t] = info["position_bound"] ** 2
         out["selections"][t] = action.sum(axis=0)
         out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
-    info = episode.info
+    info = {key: host(value) for key, value in episode.info.items()}
     out["tracker_repairs"] = np.array(float(np.sum(info.get("tracker_repairs", 0))))
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
@@ -561,6 +562,7 @@ def run(
     address: str | None = None,
     progress: bool = True,
     max_tasks: int | None = None,
+    device: Any = None,
 ) -> dict[str, dict[str, NDArray]] | None:
     """Run every (policy, shard) task not yet in ``out``; return every policy's shard fields
     joined over trials (:func:`load_per_trial`).
@@ -569,7 +571,7 @@ def run(
     then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
     the finished tasks are saved.
     """
-    complete = run_many([(config, out)], workers, backend, address, progress, max_tasks)
+    complete = run_many([(config, out)], workers, backend, address, progress, max_tasks, device=device)
     return load_per_trial(Path(out), config) if complete[0] else None
 
 
@@ -581,6 +583,7 @@ def run_many(
     progress: bool = True,
     max_tasks: int | None = None,
     on_complete: Callable[[int], None] | None = None,
+    device: Any = None,
 ) -> list[bool]:
     """Run the tasks of several runs (a study's) on one set of workers; whether each run is
     complete.
@@ -590,11 +593,26 @@ def run_many(
     next starts, so that no worker idles at a run's end. ``on_complete(i)`` is called in this
     process as soon as run ``i`` has all its shards (at once for a run already complete), while
     the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
-    and Ctrl-C as in :func:`run`.
+    and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
+    process on torch on that device (``workers=1``, the local backend).
     """
     folders = [Path(out) for _, out in runs]
-    _check_execution(backend, workers, address, folders)
+    _check_execution(backend, workers, address, folders, device)
     configs = [config for config, _ in runs]
+    if device is not None:
+        numpy_only = sorted(
+            {
+                p
+                for c in configs
+                for p in c.policies
+                if not agents.agent_class(agents.split_policy(p)[0]).needs.device
+            }
+        )
+        if numpy_only:
+            raise HarnessError(
+                f"`device` {device!r}: {', '.join(numpy_only)} act(s) on numpy arrays only; run them without "
+                f"`device` (those that run on a device: {', '.join(device_agents())})"
+            )
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
@@ -632,7 +650,8 @@ def run_many(
             if left[number] == 0:
                 run_done(number)
 
-        tasks = [(payloads[number], policy, shard) for number, policy, shard in todo]
+        on_device = () if device is None else (str(device),)
+        tasks = [(payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
         try:
             for number in range(len(configs)):
                 if left[number] == 0:
@@ -653,13 +672,33 @@ def run_many(
         return complete
 
 
-def _check_execution(backend: str, workers: int, address: str | None, folders: list[Path]) -> None:
+def device_agents() -> list[str]:
+    """The registered agents that act on a device's tensors (``Needs.device``)."""
+    return [name for name in agents.available_agents() if agents.agent_class(name).needs.device]
+
+
+def _check_execution(
+    backend: str, workers: int, address: str | None, folders: list[Path], device: Any = None
+) -> None:
     """Refuses an unknown backend, a worker count that is not a whole number >= 1, an
-    unreachable Ray address and two runs into one folder."""
+    unreachable Ray address, two runs into one folder, and a device that is not there or with
+    other workers than this process."""
     if backend not in ("local", "ray"):
         raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise HarnessError(f"`workers` must be an integer >= 1, got {workers!r}")
+    if device is not None:
+        if backend != "local" or workers != 1:
+            raise HarnessError(
+                f"`device` {device!r} runs the tasks in this process, one after another: use `workers` 1 "
+                f"and the local backend (got workers={workers}, backend={backend!r})"
+            )
+        from mimo_radar_env.core.arrays import device_namespace
+
+        try:
+            device_namespace(device)
+        except ValueError as exc:
+            raise HarnessError(str(exc).replace("device", "`device`", 1)) from None
     if backend == "ray":
         try:
             backends.check_ray_address(address)

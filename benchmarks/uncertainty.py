@@ -5,10 +5,13 @@ value is the function at equal weights, and its interval is ``scipy.stats.bootst
 resamples of the trials, each resample a vector of weights fed to the *same* function. The
 method:
 
-* **BCa** with :data:`BCA_MIN_TRIALS` trials or more;
+* **BCa** from :data:`BCA_MIN_TRIALS` to :data:`BCA_MAX_TRIALS` trials;
 * **percentile** below that (BCa's acceleration is a jackknife over trials, unreliable on a
-  handful of them), where BCa is undefined, or where BCa's interval would exclude the value
-  (a strongly skewed resampling distribution);
+  handful of them), above it (the jackknife's ``n`` statistics of ``n - 1`` trials each would
+  take ``n^2`` memory, 80 GB at 100,000 trials, and BCa's correction shrinks towards the
+  percentile interval as trials grow; there resamples are also drawn in batches of at most
+  :data:`BATCH_WEIGHTS` weights), where BCa is undefined, or where BCa's interval would exclude
+  the value (a strongly skewed resampling distribution);
 * **constant**: a metric whose every resample gives the value (within floating-point
   rounding) is constant over trials, and its interval is the value itself (Best's zero regret,
   a fixed policy's regret under a shared truth).
@@ -38,13 +41,18 @@ RESAMPLES = 2000
 BAND_RESAMPLES = 1000
 #: Below this many trials intervals are percentile intervals, not BCa.
 BCA_MIN_TRIALS = 20
+#: Above this many trials too (a device's scorecards of 100,000 trials), with batched resamples.
+BCA_MAX_TRIALS = 20_000
+#: The most trial weights one batch of resamples holds above BCA_MAX_TRIALS (160 MB of float64).
+BATCH_WEIGHTS = 20_000_000
 #: Relative size (of the resamples' spread, or of the value where they do not spread) of a
 #: miss that is floating-point rounding.
 ROUNDING = 1e-9
 METHODS = {"BCa": "BCa", "percentile": "percentile", "constant": "constant over trials"}
 METHOD = (
     f"bootstrap over trials (scipy.stats.bootstrap, {RESAMPLES} resamples, {CONFIDENCE:.0%}): BCa from "
-    f"{BCA_MIN_TRIALS} trials, percentile below or where BCa is undefined or would exclude the value, "
+    f"{BCA_MIN_TRIALS} trials, percentile below or where BCa is undefined or would exclude the value "
+    f"(and above {BCA_MAX_TRIALS:,} trials), "
     f"the value itself for a metric constant over trials; differences paired on the same trials; "
     f"curve bands: percentile bootstrap per step ({BAND_RESAMPLES} resamples)"
 )
@@ -63,6 +71,7 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
         value = metric(trial_weights(index, num_trials))
         return np.moveaxis(value, -1, 0) if value.ndim > np.ndim(index) - 1 else value
 
+    batch = None if num_trials <= BCA_MAX_TRIALS else max(1, BATCH_WEIGHTS // num_trials)
     with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", stats.DegenerateDataWarning)
         return stats.bootstrap(
@@ -70,6 +79,7 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
             statistic,
             vectorized=True,
             n_resamples=resamples,
+            batch=batch,
             confidence_level=CONFIDENCE,
             method=method,
             random_state=np.random.default_rng(seed),
@@ -82,7 +92,7 @@ def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     value = float(metric(trial_weights(np.arange(num_trials), num_trials)))
     if num_trials < 2:
         return {"estimate": value, "ci": None, "method": "none (one trial)"}
-    method = "BCa" if num_trials >= BCA_MIN_TRIALS else "percentile"
+    method = "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"
     result = _bootstrap(metric, num_trials, RESAMPLES, method, seed)
     low, high = float(result.confidence_interval.low), float(result.confidence_interval.high)
     distribution = np.asarray(result.bootstrap_distribution, np.float64)

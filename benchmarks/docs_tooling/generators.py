@@ -980,6 +980,113 @@ def step_stages(docs: Path) -> str:
     return "\n".join(lines)
 
 
+# ------------------------------------------------------------------ the engine on a device
+DEVICE_FILE = "perf/device.json"
+DEVICE_CHECKS_FILE = "perf/device-checks.json"
+#: The speed rows' backends by a short key (value spans name them): the backend's label begins so.
+DEVICE_BACKENDS = {"numpy": "numpy + numba", "torch-cpu": "torch cpu", "device": "torch cuda"}
+
+
+def _rate(rate: float) -> str:
+    return f"{rate / 1e6:.2f} M" if rate >= 1e6 else f"{rate / 1e3:,.0f} k"
+
+
+@generator("device-equality")
+def device_equality(docs: Path) -> str:
+    """``python -m benchmarks.speed.device``'s equality: the largest normwise relative difference of
+    the torch engine on the device from the numpy engine over whole episodes, per version and
+    fusion, and the entry it was found in."""
+    record = read_json(docs, DEVICE_FILE)
+    lines = [
+        "| env | fusion | trials | steps | largest relative difference | in | oracle's actions |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for e in record["equality"]:
+        agree = "identical" if e["differences"]["oracle_action"] == 0 else "differ"
+        lines.append(
+            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e['trials']} | {e['steps']} | "
+            f"{e['largest']:.1e} | `{e['largest_entry']}` | {agree} |"
+        )
+    lines += ["", f"On {record['device_name']} ({record['device']}); tolerance {record['tolerance']:.0e}."]
+    return "\n".join(lines)
+
+
+@generator("device-speed")
+def device_speed(docs: Path) -> str:
+    """``python -m benchmarks.speed.device``'s speed rows: trial-steps per second of the whole v1
+    step per backend, fusion and trial count, with the time of a step and the device's peak
+    memory."""
+    record = read_json(docs, DEVICE_FILE)
+    sizes = sorted({r["trials"] for r in record["speed"]})
+    lines = [
+        "| backend | fusion | " + " | ".join(f"B = {b:,d}" for b in sizes) + " |",
+        "|---|---|" + "---|" * len(sizes),
+    ]
+    groups: dict[tuple[str, str], dict[int, dict]] = {}
+    for r in record["speed"]:
+        groups.setdefault((r["backend"], r["fusion"]), {})[r["trials"]] = r
+    for (backend, fusion), rows in groups.items():
+        cells = []
+        for b in sizes:
+            r = rows.get(b)
+            if r is None:
+                cells.append("—")
+            elif "skipped" in r:
+                cells.append(f"not run ({r['skipped']})")
+            else:
+                memory = r.get("peak_device_memory_gib")
+                extra = "" if memory is None else f", {memory:.1f} GiB"
+                cells.append(f"{_rate(r['trial_steps_per_s'])} ({1e3 * r['seconds_per_step']:.1f} ms{extra})")
+        lines.append(f"| {backend} | {fusion} | " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        f"Trial-steps per second (the time of one step; the device's peak memory); "
+        f"{record['scenario']}, random valid actions; {record['machine']}; {record['device_name']}.",
+    ]
+    return "\n".join(lines)
+
+
+@value_source("device")
+def device_value(docs: Path, key: str) -> str:
+    """A figure of ``python -m benchmarks.speed.device`` (results/perf/device.json):
+    ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS), ``ratio.BACKEND.BACKEND.
+    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference``, ``device``, and
+    ``checks.FIELD`` a field of results/perf/device-checks.json."""
+    if key.startswith("checks."):  # results/perf/device-checks.json: the claims study on both
+        checks = read_json(docs, DEVICE_CHECKS_FILE)
+        field = key.split(".", 1)[1]
+        if field not in checks:
+            raise BenchError(f"{DEVICE_CHECKS_FILE} has no {field!r}; it has: {', '.join(checks)}")
+        return f"{checks[field]:,}" if isinstance(checks[field], int) else str(checks[field])
+    record = read_json(docs, DEVICE_FILE)
+    if key == "largest-difference":
+        return f"{max(e['largest'] for e in record['equality']):.1e}"
+    if key == "device":
+        return record["device_name"]
+    kind, *parts = key.split(".")
+
+    def rate(backend: str, fusion: str, trials: str) -> float:
+        prefix = DEVICE_BACKENDS.get(backend)
+        for r in record["speed"]:
+            if (
+                prefix
+                and r["backend"].startswith(prefix)
+                and r["fusion"] == fusion
+                and r["trials"] == int(trials)
+            ):
+                if "trial_steps_per_s" in r:
+                    return r["trial_steps_per_s"]
+        raise BenchError(f"{DEVICE_FILE} has no measured row {backend}, {fusion}, B = {trials}")
+
+    if kind == "rate" and len(parts) == 3:
+        return _rate(rate(*parts))
+    if kind == "ratio" and len(parts) == 4:
+        return f"{rate(parts[0], *parts[2:]) / rate(parts[1], *parts[2:]):.1f}"
+    raise BenchError(
+        f"unknown device figure {key!r}: rate:BACKEND:FUSION:B, ratio:A:B:FUSION:B, largest-difference"
+    )
+
+
 # ------------------------------------------------------------------ the planning study
 #: The planners the planning targets judge, chosen before the study ran: the oracle and the
 #: learning planner at their default horizon and search.

@@ -132,6 +132,67 @@ def _pair(a: dict[str, Any], b: dict[str, Any]) -> tuple[dict[str, Any], dict[st
     return a, b
 
 
+#: Differences of a study's numbers below this are rounding (a zero regret is 1e-16 or 4e-16).
+ABSOLUTE_FLOOR = 1e-12
+#: Keys of a study's JSON that say how it ran, not what it found (times, the command, the machine,
+#: the shard size: a device runs a policy's trials as one batch).
+EXECUTION_KEYS = frozenset(
+    {"wall_s", "seconds", "created", "started", "finished", "command", "machine", "shard_size"}
+)
+
+
+def json_differences(a: Any, b: Any, path: str = "") -> list[tuple[str, Any, Any]]:
+    """``(path, a, b)`` of every leaf of two JSON documents that differs: numbers by more than a
+    relative TOLERANCE and ABSOLUTE_FLOOR, other leaves at all; execution keys are skipped."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        if set(a) != set(b):
+            return [(path, sorted(a), sorted(b))]
+        return [d for k in a if k not in EXECUTION_KEYS for d in json_differences(a[k], b[k], f"{path}.{k}")]
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return [(path, len(a), len(b))]
+        return [
+            d
+            for i, (x, y) in enumerate(zip(a, b, strict=True))
+            for d in json_differences(x, y, f"{path}[{i}]")
+        ]
+    numbers = (int, float)
+    if isinstance(a, numbers) and isinstance(b, numbers) and not isinstance(a, bool):
+        if np.isnan(a) and np.isnan(b):
+            return []
+        return [] if np.isclose(b, a, rtol=TOLERANCE, atol=ABSOLUTE_FLOOR) else [(path, a, b)]
+    return [] if a == b else [(path, a, b)]
+
+
+def study_differences(reference: Path, other: Path) -> dict[str, Any]:
+    """A study run twice (on numpy, ``reference``, and on a device, ``other``): every JSON file of
+    the first (the claims, each run's summary) compared with its twin (:func:`json_differences`),
+    and the largest relative difference of their numbers beyond ABSOLUTE_FLOOR."""
+    files = sorted(
+        p.relative_to(reference) for p in Path(reference).rglob("*.json") if p.name != "timing.json"
+    )
+    differing: list[tuple[str, Any, Any]] = []
+    largest = 0.0
+    for name in files:
+        a, b = json.loads((reference / name).read_text()), json.loads((Path(other) / name).read_text())
+        differing += [(f"{name}{path}", x, y) for path, x, y in json_differences(a, b)]
+        largest = max(largest, _largest_relative(a, b))
+    return {"files": [str(f) for f in files], "differing": differing, "largest_relative": largest}
+
+
+def _largest_relative(a: Any, b: Any) -> float:
+    if isinstance(a, dict) and isinstance(b, dict):
+        return max(
+            [_largest_relative(a[k], b[k]) for k in a if k not in EXECUTION_KEYS and k in b], default=0.0
+        )
+    if isinstance(a, list) and isinstance(b, list):
+        return max([_largest_relative(x, y) for x, y in zip(a, b, strict=False)], default=0.0)
+    if isinstance(a, int | float) and isinstance(b, int | float) and not isinstance(a, bool):
+        gap = abs(a - b)
+        return 0.0 if not gap > ABSOLUTE_FLOOR else gap / max(abs(a), ABSOLUTE_FLOOR)
+    return 0.0
+
+
 @contextmanager
 def one_core() -> Iterator[None]:
     """Pins the process to one core while the block runs (where the OS lets it)."""
@@ -253,7 +314,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--target-seconds", type=float, default=2.0, help="timed seconds per row")
     parser.add_argument("--skip-equality", action="store_true")
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument(
+        "--compare-studies",
+        nargs=2,
+        type=Path,
+        metavar=("NUMPY", "DEVICE"),
+        default=None,
+        help="only compare a study's folders run on numpy and on a device; print the JSON of "
+        "study_differences",
+    )
     args = parser.parse_args(argv)
+    if args.compare_studies:
+        print(json.dumps(study_differences(*args.compare_studies), indent=1, default=str))
+        return
     import torch
 
     from mimo_radar_env.core.arrays import device_namespace

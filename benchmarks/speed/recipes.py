@@ -82,9 +82,16 @@ def run_recipe(recipe: Recipe, timeout: float = 900) -> tuple[subprocess.Complet
         return result, time.perf_counter() - start
 
 
-def measure(progress: Any = print) -> list[dict[str, Any]]:
+def measure(progress: Any = print, known: list[dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """A row per recipe: its wall time run alone. A recipe with a row in ``known`` for the same
+    page, place and code keeps that row (not run again)."""
+    kept = {(r["page"], r["index"], r["sha256"]): r for r in known or []}
     rows = []
     for recipe in recipes():
+        if (recipe.page, recipe.index, recipe.digest) in kept:
+            rows.append(kept[(recipe.page, recipe.index, recipe.digest)])
+            progress(f"{recipe.key:<14} {recipe.section:<40} kept")
+            continue
         row: dict[str, Any] = {
             "page": recipe.page,
             "index": recipe.index,
@@ -107,10 +114,16 @@ def measure(progress: Any = print) -> list[dict[str, Any]]:
 def main() -> None:
     parser = argparse.ArgumentParser(description="what each Python recipe of the docs costs, run alone")
     parser.add_argument("--json", default=None, help="write the rows to this file")
+    parser.add_argument(
+        "--changed",
+        action="store_true",
+        help="time only the recipes that --json's file has no row for (new or edited ones)",
+    )
     args = parser.parse_args()
     from ..studies.base import machine
 
-    rows = measure()
+    known = json.loads(Path(args.json).read_text())["rows"] if args.changed and args.json else None
+    rows = measure(known=known)
     if args.json:
         record = {"command": "python -m benchmarks.speed.recipes", "machine": machine(), "rows": rows}
         Path(args.json).write_text(json.dumps(record, indent=1) + "\n")

@@ -78,14 +78,18 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
             settings.trials,
             settings.steps,
             settings.seed,
-            # without --shard-size, a run being resumed keeps its own (it may have had other workers)
-            settings.shard_size or harness.recorded_shard_size(run.folder),
+            # without --shard-size, a run being resumed keeps its own (it may have had other workers);
+            # on a device, a policy's trials are one batch
+            settings.shard_size
+            or harness.recorded_shard_size(run.folder)
+            or (settings.trials if settings.device is not None else None),
             settings.agent_params if run.agent_params is None else run.agent_params,
             options=run.options or settings.options,
             # tasks at once on this machine (a Ray task runs on a node: one at a time is checked)
             workers=settings.workers if settings.backend == "local" else 1,
             say=lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
-            max_hours=settings.max_hours,
+            # the time estimate is the CPU's (the agents' declared costs): not a device's
+            max_hours=settings.max_hours if settings.device is None else None,
             parallel=settings.workers,
         )
         for run in runs

@@ -90,6 +90,7 @@ class Settings:
     env_version: str = DEFAULT_VERSION
     options: EnvOptions = field(default_factory=lambda: VERSIONS[DEFAULT_VERSION].options())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
+    device: str | None = None
 
     @classmethod
     def from_args(cls, args: argparse.Namespace, paper_study: bool = False) -> Settings:
@@ -103,7 +104,9 @@ class Settings:
             steps=args.steps,
             seed=args.seed,
             shard_size=args.shard_size,
-            workers=local_workers(args.workers)
+            workers=1
+            if args.device is not None and args.workers is None
+            else local_workers(args.workers)
             if args.backend == "local"
             else (args.workers if args.workers is not None else default_workers()),
             backend=args.backend,
@@ -114,11 +117,17 @@ class Settings:
             env_version=args.env_version,
             options=env_options_from(args),
             agent_params=params,
+            device=args.device,
         )
 
     def execution(self) -> dict[str, Any]:
         """The keywords of :func:`benchmarks.harness.run` besides the configuration and folder."""
-        return {"workers": self.workers, "backend": self.backend, "address": self.address}
+        return {
+            "workers": self.workers,
+            "backend": self.backend,
+            "address": self.address,
+            "device": self.device,
+        }
 
 
 # ------------------------------------------------------------------ argument types
@@ -338,6 +347,13 @@ def add_run_arguments(
     )
     parser.add_argument(
         "--address", default=None, help="Ray cluster address (default: start a local Ray instance)"
+    )
+    parser.add_argument(
+        "--device",
+        default=None,
+        help="run every task in this process on torch on this device ('cuda', 'cuda:1', 'cpu'): the "
+        "same numbers as numpy to rounding; a policy's trials are one batch unless --shard-size, and "
+        "--max-hours (a CPU estimate) is not applied (default: numpy, no torch needed)",
     )
     parser.add_argument(
         "--max-hours",

@@ -21,7 +21,9 @@ def test_settings_come_from_the_arguments_once():
     assert (settings.trials, settings.workers, settings.progress, settings.figures) == (7, 2, False, True)
     assert settings.options.fusion == "centralized" and settings.options.lambda_scale == "db"
     assert settings.agent_params == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}
-    assert settings.execution() == {"workers": 2, "backend": "local", "address": None}
+    assert settings.execution() == {"workers": 2, "backend": "local", "address": None, "device": None}
+    on_device = Settings.from_args(build_parser().parse_args(["claims", "--out", "o", "--device", "cuda"]))
+    assert on_device.execution() == {"workers": 1, "backend": "local", "address": None, "device": "cuda"}
 
 
 def test_paper_numbers_are_checked():

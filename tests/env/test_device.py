@@ -2,6 +2,7 @@
 whole episodes against the numpy engine, the Gymnasium surface, and the errors."""
 
 import json
+import os
 import subprocess
 import sys
 
@@ -18,6 +19,8 @@ from mimo_radar_env.core.streams import TrialStreams, full_index  # noqa: E402
 from tests.helpers import random_valid_actions, vector_env  # noqa: E402
 
 CPU = device_namespace("cpu")
+#: The device of the equality checks: CPU torch in CI; .ci/device-check sets "cuda" on a GPU.
+DEVICE = os.environ.get("MIMO_RADAR_TEST_DEVICE", "cpu")
 
 
 def _words(rng, size):
@@ -71,7 +74,7 @@ def test_an_episode_on_torch_equals_the_numpy_engine(version, fusion, trials, st
     """Truth, observations, rewards, tracks and bounds within 1e-9 (normwise per trial), the oracle's
     actions identical; oracle and random valid actions, and a trial that probes nothing every
     fifth step."""
-    worst = device_bench.episode_differences(version, fusion, trials, "cpu", steps)
+    worst = device_bench.episode_differences(version, fusion, trials, DEVICE, steps)
     assert worst["oracle_action"] == 0
     assert {"obs.track", "obs.sinr", "info.true_state", "info.position_bound", "reward"} <= set(worst)
     too_far = {k: v for k, v in worst.items() if not v <= device_bench.TOLERANCE}
@@ -82,7 +85,7 @@ def test_an_episode_on_torch_equals_the_numpy_engine(version, fusion, trials, st
 @pytest.mark.parametrize("version", ["v1", "v0"])
 @pytest.mark.parametrize("fusion", ["average", "centralized"])
 def test_whole_episodes_of_many_trials_on_torch_equal_the_numpy_engine(version, fusion):
-    worst = device_bench.episode_differences(version, fusion, 16, "cpu")
+    worst = device_bench.episode_differences(version, fusion, 16, DEVICE)
     assert worst["oracle_action"] == 0
     assert max(worst.values()) <= device_bench.TOLERANCE, worst
 

@@ -1,0 +1,72 @@
+"""The harness and the studies on the torch engine (``--device``, checked on CPU torch): the same
+verdicts and estimates as on numpy, and the execution settings a device allows."""
+
+import json
+import re
+
+import pytest
+
+pytest.importorskip("torch")
+
+from benchmarks import harness  # noqa: E402
+from benchmarks.cli import main  # noqa: E402
+from benchmarks.speed import device as device_bench  # noqa: E402
+
+
+def test_the_claims_study_on_torch_gives_the_numpy_studys_verdicts_and_estimates(tmp_path, capsys):
+    common = ["claims", "--trials", "4", "--steps", "10", "--quiet", "--no-figures"]
+    assert main([*common, "--out", str(tmp_path / "numpy")]) == 0
+    text_numpy = capsys.readouterr().out
+    assert main([*common, "--out", str(tmp_path / "torch"), "--device", "cpu"]) == 0
+    text_torch = capsys.readouterr().out
+    assert text_torch.replace("torch", "numpy") == text_numpy  # the same tables, word for word
+    numpy_claims = json.loads((tmp_path / "numpy" / "claims.json").read_text())
+    torch_claims = json.loads((tmp_path / "torch" / "claims.json").read_text())
+    assert [c["verdict"] for c in torch_claims] == [c["verdict"] for c in numpy_claims]
+    compared = device_bench.study_differences(tmp_path / "numpy", tmp_path / "torch")
+    assert {"claims.json", "paper-1-v1/summary.json", "paper-3-v1/summary.json"} <= set(compared["files"])
+    assert not compared["differing"], compared["differing"][:5]
+    assert 0 < compared["largest_relative"] <= device_bench.TOLERANCE  # rounding, not identity
+
+
+def test_study_differences_find_a_changed_number_and_skip_the_times():
+    a = {"x": [1.0, 2.0], "wall_s": 3.0, "v": "holds", "zero": 6.7e-16}
+    assert not device_bench.json_differences(a, {**a, "wall_s": 9.0, "zero": 2.2e-16})
+    assert device_bench.json_differences(a, {**a, "x": [1.0, 2.0 + 1e-8]}) == [(".x[1]", 2.0, 2.0 + 1e-8)]
+    assert device_bench.json_differences(a, {**a, "v": "consistent"}) == [(".v", "holds", "consistent")]
+
+
+def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
+    common = ["run", "--scenario", "paper-1-v1", "--trials", "6", "--steps", "3", "--quiet", "--no-figures"]
+    common += ["--device", "cpu"]
+    assert main([*common, "--policies", "ucb1,random", "--out", str(tmp_path / "one")]) == 0
+    assert harness.recorded_shard_size(tmp_path / "one") == 6
+    assert main([*common, "--policies", "ucb1", "--out", str(tmp_path / "two"), "--shard-size", "4"]) == 0
+    assert harness.recorded_shard_size(tmp_path / "two") == 4
+
+
+@pytest.mark.parametrize(
+    ("extra", "message"),
+    [
+        (
+            ["--workers", "2"],
+            r"--device 'cpu' runs the tasks in this process, one after another: use --workers 1",
+        ),
+        (["--device", "gpu"], r"--device must be None, 'cpu', 'cuda' or 'cuda:N', got 'gpu'$"),
+        (
+            ["--device", "cpu", "--policies", "ucb1,cts"],
+            r"--device 'cpu': cts act\(s\) on numpy arrays only; run",
+        ),
+    ],
+)
+def test_a_device_run_that_cannot_be_is_refused_in_one_line(tmp_path, capsys, extra, message):
+    args = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "2", "--steps", "2"]
+    args += ["--quiet", "--out", str(tmp_path / "r")]
+    args += ["--device", "cpu", *extra] if extra[0] == "--workers" else extra
+    with pytest.raises(SystemExit) as exit_info:
+        main(args)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err
+    assert len([line for line in err.splitlines() if line.strip()]) == 1
+    assert re.search(message, err), err
+    assert not (tmp_path / "r").exists()  # refused before anything is written
