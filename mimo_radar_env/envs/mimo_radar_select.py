@@ -19,6 +19,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from ..core.arrays import device_namespace
+from ..core.superarm import random_super_arms
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
 from ..tracking.planning import Forecast
@@ -94,7 +95,9 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     nothing (reward 0, ``info["action_valid"] = False``, the tracker only
     predicts) unless the env is made with ``invalid_action="raise"``. An action
     outside the space (wrong shape, non-numeric dtype, values other than 0/1,
-    NaN) raises ``ValueError``.
+    NaN) raises ``ValueError``. ``env.unwrapped.sample_action()`` draws a valid
+    action uniformly over the super arms (``action_space.sample()`` draws any
+    ``MultiBinary`` vector, most of which probe nothing).
 
     ## Observation Space
 
@@ -246,6 +249,13 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         """The optimal super arm for the coming step (reads the truth: oracle only)."""
         return self.engine.oracle_action()[0]
 
+    def sample_action(self) -> NDArray[np.int8]:
+        """A uniformly random *valid* action, (M + N,): exactly ``tx_per_step`` transmitters and
+        ``rx_per_step`` receivers, drawn from the env's generator (``np_random``, seeded by
+        ``reset(seed=...)``). ``action_space.sample()`` draws any ``MultiBinary`` vector, and most
+        of those probe nothing."""
+        return random_super_arms(self.np_random, 1, *_layout(self.scenario))[0]
+
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """The super arm for the coming step with the smallest predicted posterior position
         error (``"trace"``, m^2, or ``"logdet"``), from the tracker's prediction and the
@@ -328,6 +338,11 @@ def describe(kind: str, spec: EnvSpec | None, scenario: Scenario, options: EnvOp
 def _observation_space(engine: RadarEngine) -> spaces.Dict:
     num_models = None if engine.tracker is None else engine.tracker.num_models
     return observation_space(engine.scenario, num_models, engine.options.prediction_covariance)
+
+
+def _layout(scenario: Scenario) -> tuple[int, int, int, int]:
+    """``M, N, Ms, Ns``: what a random super arm is drawn over."""
+    return scenario.num_tx, scenario.num_rx, scenario.tx_per_step, scenario.rx_per_step
 
 
 def _single_action(action: Any, size: int) -> NDArray:
@@ -431,6 +446,12 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     def oracle_action(self) -> NDArray[np.int8]:
         """Optimal super arms for the coming step, (B, M + N) (reads the truth: oracle only)."""
         return self.engine.oracle_action()
+
+    def sample_action(self) -> NDArray[np.int8]:
+        """Uniformly random *valid* actions, (B, M + N), drawn from the env's generator
+        (``np_random``, seeded by ``reset(seed=...)``); on a device, a tensor there."""
+        actions = random_super_arms(self.np_random, self.num_envs, *_layout(self.scenario))
+        return self.engine.xp.asarray(actions)
 
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """Super arms of the coming step with the smallest predicted posterior position error,

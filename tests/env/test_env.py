@@ -128,6 +128,32 @@ def test_oracle_action_is_the_optimum_of_the_coming_step():
     assert env.unwrapped.oracle_action().shape == (10,)
 
 
+def test_sample_action_draws_valid_super_arms_uniformly_and_reproducibly():
+    from math import comb
+
+    from scipy import stats
+
+    env = gym.make("MimoRadarSelect-v1")
+    sc = env.unwrapped.scenario
+    env.reset(seed=3)
+    draws = np.array([env.unwrapped.sample_action() for _ in range(3000)])
+    assert draws.dtype == np.int8 and draws.shape == (3000, sc.num_tx + sc.num_rx)
+    assert (draws[:, : sc.num_tx].sum(1) == sc.tx_per_step).all()
+    assert (draws[:, sc.num_tx :].sum(1) == sc.rx_per_step).all()
+    _, counts = np.unique(draws, axis=0, return_counts=True)
+    arms = comb(sc.num_tx, sc.tx_per_step) * comb(sc.num_rx, sc.rx_per_step)
+    assert len(counts) == arms  # every super arm drawn, as often as the others (chi-square)
+    assert stats.chisquare(counts).pvalue > 0.001
+    env.reset(seed=3)
+    np.testing.assert_array_equal(env.unwrapped.sample_action(), draws[0])
+    obs, reward, *_, info = env.step(env.unwrapped.sample_action())
+    assert info["action_valid"] and reward > 0
+    venv = vector_env("MimoRadarSelect-v1", 4)
+    venv.reset(seed=3)
+    batch = venv.sample_action()
+    assert batch.shape == (4, sc.num_tx + sc.num_rx) and venv.step(batch)[4]["action_valid"].all()
+
+
 def test_invalid_actions_probe_nothing_or_raise():
     env = gym.make("MimoRadarSelect-v0")
     env.reset(seed=0)
