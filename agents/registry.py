@@ -3,12 +3,24 @@
 A policy of a benchmark run is written ``NAME`` or ``NAME:ARGUMENT``; the argument goes to
 the agent's registered ``argument`` parameter (a trained PPO model: ``ppo:runs/ppo/model.zip``;
 tracking-ucb's SINR weight: ``tracking-ucb:0.5``).
+
+A user's agent needs no edit of this package, in three ways:
+
+* ``module:Class`` (Gymnasium's entry-point form, ``mypkg.agents:MyAgent``) names an
+  :class:`~agents.Agent` subclass; it is imported where it is first named, in every worker too;
+* an installed package lists agents in its entry-point group ``mimo_radar_env.agents``
+  (``my-agent = mypkg.agents:MyAgent``), registered under their entry-point names;
+* :func:`register_agent` in the calling process.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import functools
+import importlib
+import importlib.metadata
 import inspect
+import re
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -58,7 +70,10 @@ def register_agent(
 
 
 def _first_line(cls: type) -> str:
-    return (inspect.getdoc(cls) or "").splitlines()[0]
+    """The docstring's first paragraph, on one line (a summary that never stops mid-sentence)."""
+    paragraph = (inspect.getdoc(cls) or "").split("\n\n")[0]
+    paragraph = re.sub(r":\w+:`~?([^`]+)`", r"\1", paragraph).replace("``", "")  # reST roles, literals
+    return " ".join(paragraph.split())
 
 
 for _cls in (
@@ -120,8 +135,54 @@ for _name, (_tx, _rx) in PAPER_FIXED.items():
     )
 
 
+#: The entry-point group through which installed packages add agents by name.
+ENTRY_POINT_GROUP = "mimo_radar_env.agents"
+
+
+@functools.cache
+def load_plugins() -> list[str]:
+    """Registers the agents installed packages list in :data:`ENTRY_POINT_GROUP` (once per
+    process); their names."""
+    names = []
+    for entry in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP):
+        if entry.name in _REGISTRY:
+            continue  # a shipped name keeps its meaning
+        cls = _agent_subclass(entry.value, entry.load())
+        register_agent(entry.name, cls, _first_line(cls))
+        names.append(entry.name)
+    return names
+
+
+def _agent_subclass(reference: str, obj: Any) -> type[Agent]:
+    if not (isinstance(obj, type) and issubclass(obj, Agent)):
+        raise ValueError(f"{reference!r} is {obj!r}, not a subclass of agents.Agent")
+    return obj
+
+
+def _is_reference(name: str) -> bool:
+    """Whether ``name`` has the form ``module.path:Class`` (dotted identifiers on both sides)."""
+    module, sep, attribute = name.partition(":")
+    return bool(sep) and all(p.isidentifier() for p in (*module.split("."), *attribute.split(".")))
+
+
+def _load_reference(name: str) -> None:
+    """Imports and registers the agent class ``module:Class`` under that name."""
+    module_name, _, attribute = name.partition(":")
+    try:
+        obj: Any = importlib.import_module(module_name)
+    except ImportError as exc:
+        raise ValueError(f"policy {name!r}: cannot import module {module_name!r} ({exc})") from None
+    for part in attribute.split("."):
+        if not hasattr(obj, part):
+            raise ValueError(f"policy {name!r}: module {module_name!r} has no {attribute!r}")
+        obj = getattr(obj, part)
+    cls = _agent_subclass(name, obj)
+    register_agent(name, cls, _first_line(cls))
+
+
 def available_agents() -> list[str]:
-    """Names of the registered agents."""
+    """Names of the registered agents (the shipped ones and those of installed plugins)."""
+    load_plugins()
     return sorted(_REGISTRY)
 
 
@@ -137,6 +198,22 @@ def agent_parameters(name: str) -> list[str]:
     keyword = getattr(spec.cls, "keyword_parameters", None)
     params += [f.name for f in dataclasses.fields(keyword)] if keyword is not None else []
     return [p for p in params if p not in ("self", "scenario") and p not in spec.preset]
+
+
+def agent_parameter_defaults(name: str) -> dict[str, Any]:
+    """Each parameter of :func:`agent_parameters` with its default (``inspect.Parameter.empty``
+    for a required one)."""
+    spec = _spec(name)
+    signature = inspect.signature(spec.cls.__init__).parameters
+    keyword = getattr(spec.cls, "keyword_parameters", None)
+    fields = {f.name: f.default for f in dataclasses.fields(keyword)} if keyword is not None else {}
+    defaults = {
+        p: signature[p].default if p in signature else fields.get(p, inspect.Parameter.empty)
+        for p in agent_parameters(name)
+    }
+    if defaults.get("solver", "") is None:  # None: the class's own solver
+        defaults["solver"] = getattr(spec.cls, "default_solver", None)
+    return defaults
 
 
 def required_parameters(name: str) -> list[str]:
@@ -176,7 +253,14 @@ def agent_argument(name: str) -> str | None:
 
 def _spec(name: str) -> AgentSpec:
     if name not in _REGISTRY:
-        raise ValueError(f"unknown agent {name!r}; available agents are {available_agents()}")
+        load_plugins()
+    if name not in _REGISTRY and _is_reference(name):
+        _load_reference(name)
+    if name not in _REGISTRY:
+        raise ValueError(
+            f"unknown agent {name!r}; available agents are {available_agents()}, or an agents.Agent "
+            "subclass as module:Class"
+        )
     return _REGISTRY[name]
 
 
@@ -185,6 +269,11 @@ def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
     ``"tracking-ucb:0.5"`` -> ``("tracking-ucb", {"sinr_weight": 0.5})``;
     ``"ucb1"`` -> ``("ucb1", {})``."""
     name, sep, argument = policy.partition(":")
+    if name not in _REGISTRY and _is_reference(policy):
+        load_plugins()
+        if name not in _REGISTRY:  # module:Class, a user's agent
+            _spec(policy)
+            return policy, {}
     spec = _spec(name)
     if not sep:
         return name, {}

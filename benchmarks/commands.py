@@ -86,11 +86,13 @@ class TrainPPO(Command):
         add_env_options(parser)
 
     def main(self) -> int:
-        from .studies.settings import local_workers
+        from .studies.settings import local_workers, scenario_for_version
         from .training import seed_folder, train_ppo
 
         args = self.args
         version = VERSIONS[args.env_version]
+        if args.scenario is not None:
+            scenario_for_version(args.scenario, args.env_version)
         try:
             meta = train_ppo(
                 args.scenario or version.default_scenario,
@@ -186,11 +188,27 @@ class Agents(Command):
     name = "agents"
 
     def main(self) -> int:
+        import inspect
+        import textwrap
+
         import agents
 
         for name in agents.available_agents():
-            print(f"{name:<22}{agents.agent_summary(name)}")
-            print(f"{'':<22}parameters: {', '.join(agents.agent_parameters(name)) or '-'}")
+            print(
+                textwrap.fill(
+                    agents.agent_summary(name), 100, initial_indent=f"{name:<22}", subsequent_indent=" " * 22
+                )
+            )
+            defaults = agents.registry.agent_parameter_defaults(name)
+            listed = ", ".join(
+                f"{p} (required)" if d is inspect.Parameter.empty else f"{p}={d!r}"
+                for p, d in defaults.items()
+            )
+            print(
+                textwrap.fill(
+                    f"parameters: {listed or '-'}", 100, initial_indent=" " * 22, subsequent_indent=" " * 24
+                )
+            )
         return 0
 
 

@@ -22,6 +22,7 @@ import functools
 import hashlib
 import json
 import math
+import sys
 import time
 from collections.abc import Callable, Iterator, Sequence
 from dataclasses import asdict, dataclass, field
@@ -195,13 +196,17 @@ def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) 
             raise HarnessError(
                 f"`agent_params` names policy {policy!r}, which is not in the run {list(policies)}"
             )
-    available = agents.available_agents()
     for policy in policies:
-        if policy.partition(":")[0] not in available:
+        try:
+            agents.split_policy(policy)
+        except ValueError as exc:
+            if "unknown agent" not in str(exc):
+                raise HarnessError(str(exc)) from None
             raise HarnessError(
-                f"unknown policy {policy!r}; available policies are {available} "
-                "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip)"
-            )
+                f"unknown policy {policy!r}; available policies are {agents.available_agents()} "
+                "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip, or an agents.Agent "
+                "subclass as module:Class)"
+            ) from None
     return params
 
 
@@ -461,6 +466,26 @@ def make_policy(
     return agents.make_agent(name, scenario, seed=seed, **argument, **from_env, **params)
 
 
+# ------------------------------------------------------------------ the Python call
+def policy_name(policy: str | type[agents.Agent], workers: int = 1) -> str:
+    """The policy entry of a registered name (as it is) or of an :class:`agents.Agent` subclass:
+    its registered name, else ``module:Class``, which every worker imports. A class defined in
+    ``__main__`` is registered here and needs ``workers`` 1 (workers cannot import it)."""
+    if isinstance(policy, str):
+        return policy
+    if not (isinstance(policy, type) and issubclass(policy, agents.Agent)):
+        raise HarnessError(f"a policy must be a name or an agents.Agent subclass, got {policy!r}")
+    reference = f"{policy.__module__}:{policy.__qualname__}"
+    if policy.__module__ == "__main__":
+        if workers != 1:
+            raise HarnessError(
+                f"{policy.__qualname__} is defined in __main__, which worker processes cannot import: "
+                "put it in a module (then it runs as module:Class), or use `workers` 1"
+            )
+        agents.register_agent(reference, policy)
+    return reference
+
+
 # ------------------------------------------------------------------ storage
 def recorded_shard_size(out: str | Path) -> int | None:
     """The shard size of the run already in ``out`` (None: no readable run there), which a
@@ -620,6 +645,13 @@ def run_many(
         payloads = [config.to_json() for config in configs]
         todo = _queue(configs, folders, max_tasks)
         left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
+        for number, (config, folder) in enumerate(zip(configs, folders, strict=True)):
+            total = config.num_shards * len(config.policies)
+            if total - left[number] > 0 and max_tasks is None:
+                tqdm.write(
+                    f"resumed: {total - left[number]} of {total} tasks already done in {folder}",
+                    file=sys.stderr,
+                )
         steps_of = [
             [len(c.shard_trials(s)) * c.steps for s in range(c.num_shards)] for c in configs
         ]  # trial-steps of each run's shards

@@ -10,6 +10,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+import agents
 from benchmarks.metrics import EXTRA_METRICS, TrialMetrics
 from mimo_radar_env import EnvOptions
 from mimo_radar_env.envs.versions import paper_key
@@ -123,6 +124,7 @@ def summarize(
         "steps": config.steps,
         "seed": config.seed,
         "env_options": config.env_options,
+        "agent_params": config.agent_params,
         "policies": policies,
     }
     if config.trials >= 2:
@@ -157,6 +159,15 @@ def curves(config: RunConfig, metrics: dict[str, TrialMetrics]) -> list[dict[str
     return rows
 
 
+#: The paper's horizon (steps): its ARMSE and ASR are of whole 1000-step episodes.
+PAPER_HORIZON = 1000
+#: What every table's columns are, in one line (docs/benchmark.md, "Outputs", says more).
+LEGEND = (
+    "ARMSE: the position RMSE averaged over the steps and targets (m); bound: the same average of "
+    "the posterior Cramer-Rao bound of the selections made (m); ASR: the share of steps on the "
+    "optimal super arm (eq33, %); final regret: the expected SINR reward lost to the optimal super "
+    "arm, summed over the steps (eq13); mean SINR of the probed channels (dB)."
+)
 #: How a cell marks its interval's method (BCa is unmarked).
 METHOD_MARKS = {"percentile": "†", "constant over trials": "‡"}
 METHOD_LEGEND = (
@@ -194,32 +205,46 @@ def format_cell(
     return format_estimate(value, ci, fmt, scale, method)
 
 
-def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
+def comparable_to_the_paper(summary: dict[str, Any]) -> bool:
+    """Whether the paper's numbers belong beside a run's: one of its scenarios, its horizon."""
+    return paper_key(summary["scenario"]) in PAPER_ARMSE and summary["steps"] == PAPER_HORIZON
+
+
+def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "full") -> str:
     """The paper's Table 2/3/4 layout (ARMSE) plus the bound (the time-averaged posterior
-    Cramer-Rao bound of the selections made) and ARMSE / bound, ASR, final regret and mean SINR."""
+    Cramer-Rao bound of the selections made) and ARMSE / bound, ASR, final regret and mean SINR,
+    with the paper's numbers when the run is comparable (:func:`comparable_to_the_paper`).
+    ``intervals`` ``"full"`` says how the intervals are computed (table.md), ``"short"`` points
+    there (the terminal)."""
     name = summary["scenario"]
+    paper = comparable_to_the_paper(summary)
     paper_asr = PAPER_ASR.get(paper_key(name), {})
     targets = [f"ARMSE T{k + 1} (m)" for k in range(num_targets)] if num_targets > 1 else []
     head = ["policy", "ARMSE (m)", *targets, "bound (m)", "ARMSE / bound"]
     head += ["ASR (%)", "final regret", "mean SINR (dB)", *EXTRA_METRICS, "wall (s)"]
-    if paper_key(name) in PAPER_ARMSE:
+    if paper:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
+    how = f"(how: table.md). {METHOD_LEGEND}"
+    if intervals == "full":
+        how = f"({summary.get('uncertainty')}). {METHOD_LEGEND}"
+    how = f"Each cell: the value [its 95 % interval] {how}"
     lines = [
         f"# {name}, fusion {summary['env_options']['fusion']}: {', '.join(summary['policies'])}",
         "",
         f"Scenario `{name}`, {summary['trials']} trials, {summary['steps']} steps, seed {summary['seed']}, "
         f"fusion `{summary['env_options']['fusion']}`" + _changed_options(summary["env_options"]),
         "",
-        *(
-            [f"Each cell: the value [its 95 % interval] ({summary['uncertainty']}). {METHOD_LEGEND}", ""]
-            if "uncertainty" in summary
-            else []
-        ),
+        LEGEND,
+        "",
+        *([how, ""] if "uncertainty" in summary else []),
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]
     for policy, row in summary["policies"].items():
-        cells = [policy, format_cell(row, "armse", "{:.3f}")]
+        cells = [
+            policy_label(policy, summary.get("agent_params", {}).get(policy)),
+            format_cell(row, "armse", "{:.3f}"),
+        ]
         if num_targets > 1:
             cells += [format_cell(row, "armse_per_target", "{:.3f}", target=k) for k in range(num_targets)]
         cells += [
@@ -231,7 +256,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int) -> str:
             *(format_cell(row, extra, "{:.4g}") for extra in EXTRA_METRICS),
             f"{row['wall_s']:.1f}",
         ]
-        if paper_key(name) in PAPER_ARMSE:
+        if paper:
             ref = paper_armse(paper_key(name), policy)
             cells.append(f"{ref:.4f}" if ref is not None else "—")
             cells.append(f"{paper_asr[policy]:.2f}" if policy in paper_asr else "—")
@@ -254,22 +279,26 @@ def paired_difference(summary: dict[str, Any], a: str, b: str, metric: str) -> d
     return {"estimate": -d["estimate"], "ci": [-d["ci"][1], -d["ci"][0]], "method": d.get("method")}
 
 
-def paired_markdown(summary: dict[str, Any]) -> str:
-    """Paired differences ``A - B`` on the same trials, with their 95 % intervals."""
+def paired_markdown(summary: dict[str, Any], reference: str | None = None) -> str:
+    """Paired differences ``A - B`` on the same trials, with their 95 % intervals: those of the
+    ``reference`` policy against each other (``reference - B``), or every pair (None)."""
     pairs = summary.get("paired_differences")
     if not pairs:
         return ""
+    if reference is not None:
+        others = [p for p in summary["policies"] if p != reference]
+        pairs = {f"{reference} - {b}": _pair(summary, reference, b) for b in others}
     names = [("armse", "Δ ARMSE (m)", "{:.3f}", 1), ("asr", "Δ ASR (pp)", "{:.2f}", 100)]
     names += [
         ("final_regret", "Δ final regret", "{:.1f}", 1),
         ("mean_sinr_db", "Δ mean SINR (dB)", "{:.2f}", 1),
     ]
     present = [n for n in names if any(n[0] in d for d in pairs.values())]
+    which = "every pair" if reference is None else f"{reference} against each other policy"
     lines = [
         "",
-        "Paired differences `A - B` on the same trials, with their 95 % intervals "
-        f"({summary['uncertainty']}); an interval that excludes 0 is a significant difference. "
-        + METHOD_LEGEND,
+        f"Paired differences `A - B` on the same trials ({which}), with their 95 % intervals as "
+        "above; an interval that excludes 0 is a significant difference.",
         "",
         "| A - B | " + " | ".join(label for _, label, _, _ in present) + " |",
         "|" + "---|" * (len(present) + 1),
@@ -280,6 +309,41 @@ def paired_markdown(summary: dict[str, Any]) -> str:
         ]
         lines.append(f"| {pair} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def policy_label(policy: str, params: dict[str, Any] | None = None) -> str:
+    """A table's name of a policy: its entry with every parameter the run gives it (``mg-crb-cl
+    (solver_params.rule=set)``), so that a name means one thing in every table; a trained model by
+    its folder (``ppo (ppo-paper1)``), not its whole path."""
+    name, sep, argument = policy.partition(":")
+    label = policy
+    if sep and name in agents.learned_agents():
+        label = f"{name} ({Path(argument).parent.name or Path(argument).name})"
+    flat = _flatten(params or {})
+    return f"{label} ({', '.join(f'{k}={v}' for k, v in flat.items())})" if flat else label
+
+
+def _flatten(params: dict[str, Any], prefix: str = "") -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key, value in params.items():
+        if isinstance(value, dict):
+            out |= _flatten(value, f"{prefix}{key}.")
+        else:
+            out[f"{prefix}{key}"] = value
+    return out
+
+
+def _pair(summary: dict[str, Any], a: str, b: str) -> dict[str, Any]:
+    """Every metric's ``a - b`` (:func:`paired_difference`)."""
+    stored = summary["paired_differences"].get(f"{a} - {b}") or summary["paired_differences"][f"{b} - {a}"]
+    return {metric: paired_difference(summary, a, b, metric) for metric in stored}
+
+
+def outputs_line(out: Path, figures: bool) -> str:
+    """The last line a run prints: where its files are."""
+    files = ["table.md", "summary.json", "curves.csv"]
+    pngs = sorted(p.name for p in out.glob("*.png")) if figures else []
+    return f"outputs in {out}: " + ", ".join(files + ([f"{len(pngs)} figures (*.png)"] if pngs else []))
 
 
 def _changed_options(options: dict[str, Any]) -> str:
@@ -294,9 +358,12 @@ def write_outputs(
     per_trial: dict[str, dict[str, NDArray]] | None,
     out: str | Path,
     figures: bool = True,
+    pairs: str = "reference",
 ) -> dict[str, Any]:
     """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``,
-    from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None)."""
+    from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None). table.md's
+    paired differences are the first policy's against each other (``pairs`` ``"reference"``) or
+    every pair (``"all"``); summary.json holds every pair."""
     out = Path(out)
     per_trial = per_trial if per_trial is not None else load_per_trial(out, config)
     metrics = trial_metrics(config, per_trial)
@@ -308,7 +375,10 @@ def write_outputs(
         writer.writeheader()
         writer.writerows(rows)
     scenario = config.scenario_object
-    (out / "table.md").write_text(table_markdown(summary, scenario.num_targets) + paired_markdown(summary))
+    reference = config.policies[0] if pairs == "reference" else None
+    (out / "table.md").write_text(
+        table_markdown(summary, scenario.num_targets) + paired_markdown(summary, reference)
+    )
     if figures:
         from .plots import plot_all
 

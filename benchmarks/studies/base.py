@@ -33,7 +33,7 @@ from mimo_radar_env import EnvOptions, Scenario
 
 from .. import harness
 from ..cli import Command
-from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments
+from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments, scenario_for_version
 
 
 @dataclass(frozen=True)
@@ -71,6 +71,8 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
     keys = [run.key for run in runs]
     if len(set(keys)) != len(keys):
         raise harness.HarnessError(f"a study lists a run twice: {keys}")
+    for run in runs:
+        scenario_for_version(run.scenario, settings.env_version)
     return [
         harness.make_config(
             run.scenario,
@@ -108,7 +110,9 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     def write(number: int) -> None:
         run, config = runs[number], configs[number]
         per_trial = harness.load_per_trial(run.folder, config)
-        summary = report.write_outputs(config, per_trial, run.folder, figures=settings.figures)
+        summary = report.write_outputs(
+            config, per_trial, run.folder, figures=settings.figures, pairs=settings.pairs
+        )
         written[number] = Finished(run, config, summary)
 
     harness.run_many(

@@ -1,21 +1,37 @@
 """``run`` (any scenario, any policies) and ``paper`` (the paper's six policies on a paper
-scenario): one run each, printing its table."""
+scenario): one run each, printing its table; :func:`run_policies` is ``run`` as a Python call
+(``benchmarks.run``)."""
 
 from __future__ import annotations
 
 import argparse
-from collections.abc import Hashable
+import tempfile
+from collections.abc import Hashable, Sequence
+from pathlib import Path
+from typing import Any
 
-from mimo_radar_env import env_version
+from agents import Agent
+from mimo_radar_env import VERSIONS, EnvOptions, Scenario, env_version
+from mimo_radar_env.envs.versions import check_scenario_version
 
+from .. import harness
 from ..harness import PAPER_POLICIES
 from .base import Finished, Run, Study
 
 
 class _OneRun(Study):
     def report(self, finished: dict[Hashable, Finished], judged: object) -> str:
+        """table.md without how its intervals are computed (it is one file away), and where the
+        run's files are, on the last line."""
+        from ..report import outputs_line, paired_markdown, table_markdown
+
         (one,) = finished.values()
-        return (one.folder / "table.md").read_text()
+        reference = one.config.policies[0] if self.settings.pairs == "reference" else None
+        num_targets = one.config.scenario_object.num_targets
+        table = table_markdown(one.summary, num_targets, intervals="short") + paired_markdown(
+            one.summary, reference
+        )
+        return f"{table}\n{outputs_line(one.folder, self.settings.figures)}\n"
 
 
 class RunStudy(_OneRun):
@@ -54,3 +70,43 @@ class PaperStudy(_OneRun):
     def runs(self) -> list[Run]:
         scenario = env_version(self.settings.env_version).paper_scenario(self.args.scenario)
         return [Run("paper", scenario, PAPER_POLICIES, self.settings.out)]
+
+
+def run_policies(
+    scenario: str | Path | Scenario,
+    policies: Sequence[str | type[Agent]],
+    trials: int = 500,
+    out: str | Path | None = None,
+    steps: int | None = None,
+    seed: int = 0,
+    options: EnvOptions | dict[str, Any] | None = None,
+    version: str = "v1",
+    agent_params: dict[str, dict[str, Any]] | None = None,
+    workers: int = 1,
+    device: Any = None,
+    progress: bool = True,
+    figures: bool = False,
+) -> dict[str, Any]:
+    """``mimo-radar-bench run`` as a Python call: the policies (registered names, ``module:Class``
+    or :class:`agents.Agent` subclasses) on ``scenario``, on the same trials, resumably in ``out``
+    (default: a new temporary folder). Returns summary.json's content: every policy's metrics
+    with their 95 % intervals, the paired differences, and ``table`` (table.md's text) and
+    ``out``. ``options`` is an :class:`~mimo_radar_env.EnvOptions` or a mapping over env
+    ``version``'s defaults (v1's, as the command line's)."""
+    from .. import report
+
+    names = [harness.policy_name(p, workers) for p in policies]
+    if not isinstance(options, EnvOptions):
+        if version not in VERSIONS:
+            raise harness.HarnessError(f"`version` must be one of {sorted(VERSIONS)}, got {version!r}")
+        options = VERSIONS[version].options(**(options or {}))
+    try:
+        check_scenario_version(scenario, version)
+    except ValueError as exc:
+        raise harness.HarnessError(str(exc)) from None
+    shard = trials if device is not None else None
+    config = harness.make_config(scenario, names, trials, steps, seed, shard, agent_params, options, workers)
+    folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="mimo-radar-run-"))
+    harness.run_many([(config, folder)], workers, progress=progress, device=device)
+    summary = report.write_outputs(config, None, folder, figures=figures)
+    return {**summary, "table": (folder / "table.md").read_text(), "out": str(folder)}

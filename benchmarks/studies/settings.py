@@ -18,6 +18,7 @@ from typing import Any
 
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
+from mimo_radar_env.envs.versions import SCENARIO_SETS, check_scenario_version
 
 from ..errors import BenchError
 from ..harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
@@ -91,6 +92,7 @@ class Settings:
     options: EnvOptions = field(default_factory=lambda: VERSIONS[DEFAULT_VERSION].options())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
     device: str | None = None
+    pairs: str = "reference"
 
     @classmethod
     def from_args(cls, args: argparse.Namespace, paper_study: bool = False) -> Settings:
@@ -118,6 +120,7 @@ class Settings:
             options=env_options_from(args),
             agent_params=params,
             device=args.device,
+            pairs=args.pairs,
         )
 
     def execution(self) -> dict[str, Any]:
@@ -128,6 +131,28 @@ class Settings:
             "address": self.address,
             "device": self.device,
         }
+
+
+def scenario_for_version(scenario: Any, version: str) -> None:
+    """Refuses ``--scenario NAME`` of another version's paper scenarios (or scenario sets) under
+    ``--env-version`` (:func:`mimo_radar_env.envs.versions.check_scenario_version`), in the
+    command line's words."""
+    try:
+        check_scenario_version(scenario, version)
+    except ValueError:
+        own = VERSIONS[version]
+        for other in VERSIONS.values():
+            if scenario in other.paper_scenarios:
+                number = other.paper_scenarios.index(scenario) + 1
+                hint = f"use {own.paper_scenario(number)!r} or --env-version {other.name}"
+                break
+        else:
+            other = next(VERSIONS[s.version] for s in SCENARIO_SETS.values() if scenario in s.paper_scenarios)
+            hint = f"use --env-version {other.name}"
+        raise BenchError(
+            f"--scenario {scenario!r} is a scenario of {other.env_id}, not of --env-version {version}: "
+            f"{hint} (a scenario file runs as given under any version)"
+        ) from None
 
 
 # ------------------------------------------------------------------ argument types
@@ -362,6 +387,13 @@ def add_run_arguments(
         metavar="H",
         help="refuse a run estimated (from the policies' declared costs) to take longer; "
         "'none': no limit (default %(default)s)",
+    )
+    parser.add_argument(
+        "--pairs",
+        choices=("reference", "all"),
+        default="reference",
+        help="the paired differences table.md and the terminal show: the first policy's against each "
+        "other one (default), or every pair (summary.json holds every pair)",
     )
     parser.add_argument("--no-figures", action="store_true", help="skip the PNG figures")
     parser.add_argument("--quiet", action="store_true", help="no progress bar")

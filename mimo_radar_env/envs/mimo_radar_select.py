@@ -25,7 +25,7 @@ from ..scenarios import Scenario
 from ..tracking.planning import Forecast
 from .engine import RadarEngine
 from .options import EnvOptions, options_markdown, resolve
-from .versions import versions_markdown
+from .versions import check_scenario_version, versions_markdown
 
 
 def observation_space(
@@ -155,7 +155,8 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     ``gym.make("MimoRadarSelect-v1", scenario=..., render_mode=None, **options,
     **scenario_overrides)``. ``scenario`` is a shipped scenario (each version's paper scenarios
-    are listed below), a YAML/TOML file or a :class:`~mimo_radar_env.Scenario`. The options
+    are listed below; another version's is refused with this one's name), a YAML/TOML file or a
+    :class:`~mimo_radar_env.Scenario` (taken as given, under any version). The options
     (:class:`~mimo_radar_env.EnvOptions`, defaults first):
 
     {options}
@@ -196,7 +197,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
-        self.options, self.scenario = resolve(kwargs)
+        self.options, self.scenario = _resolve(kwargs)
         self.engine = RadarEngine(self.options, self.scenario, batch_size=1)
         self.action_space = spaces.MultiBinary(self.engine.action_size)
         self.observation_space = _observation_space(self.engine)
@@ -340,6 +341,14 @@ def _observation_space(engine: RadarEngine) -> spaces.Dict:
     return observation_space(engine.scenario, num_models, engine.options.prediction_covariance)
 
 
+def _resolve(kwargs: dict[str, Any]) -> tuple[EnvOptions, Scenario]:
+    """The options and scenario of the keywords; a registered id passes its version
+    (``env_version``), under which another version's paper scenario name is refused."""
+    kwargs = dict(kwargs)
+    check_scenario_version(kwargs.get("scenario"), kwargs.pop("env_version", None))
+    return resolve(kwargs)
+
+
 def _layout(scenario: Scenario) -> tuple[int, int, int, int]:
     """``M, N, Ms, Ns``: what a random super arm is drawn over."""
     return scenario.num_tx, scenario.num_rx, scenario.tx_per_step, scenario.rx_per_step
@@ -392,7 +401,7 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         if render_mode is not None:
             raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
         xp = device_namespace(device)  # a bad device is refused before the scenario is built
-        self.options, self.scenario = resolve(kwargs)
+        self.options, self.scenario = _resolve(kwargs)
         self.num_envs = num_envs
         self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs, device=device)
         #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned

@@ -73,8 +73,9 @@ class EnvVersion:
         return self.paper_scenarios[number - 1]
 
     def registration_kwargs(self) -> dict[str, Any]:
-        """The ``gym.make`` keywords the version's ids are registered with."""
-        return {**self.option_defaults, "scenario": self.default_scenario}
+        """The ``gym.make`` keywords the version's ids are registered with (``env_version``: which
+        version's paper scenarios a scenario name may be, :func:`check_scenario_version`)."""
+        return {**self.option_defaults, "scenario": self.default_scenario, "env_version": self.name}
 
     def default_config(self) -> dict[str, Any]:
         """Every ``gym.make`` keyword besides scenario fields, with the version's defaults
@@ -157,6 +158,31 @@ def env_version(name: str) -> EnvVersion:
     if name not in VERSIONS:
         raise ValueError(f"env version must be one of {sorted(VERSIONS)}, got {name!r}")
     return VERSIONS[name]
+
+
+def check_scenario_version(scenario: Any, version: str | None) -> None:
+    """Refuses a scenario *name* that is another version's paper scenario (or in another version's
+    scenario set) under env ``version``, naming the version's own: v0's ``paper-3`` under v1 would
+    run v0's layout with v1's options, a hybrid of the two. A :class:`Scenario` object or a file
+    is taken as given: the explicit way to run one version's layout under another's options."""
+    if version is None or not isinstance(scenario, str):
+        return
+    own = env_version(version)
+    for other in VERSIONS.values():
+        if other.name != version and scenario in other.paper_scenarios:
+            number = other.paper_scenarios.index(scenario) + 1
+            raise ValueError(
+                f"scenario {scenario!r} is {other.env_id}'s paper Scenario {number}; {own.env_id}'s is "
+                f"{own.paper_scenario(number)!r} (to run that layout under {own.env_id}'s "
+                f"options on purpose, pass the Scenario object: scenario=load_scenario({scenario!r}))"
+            )
+    for scenario_set in SCENARIO_SETS.values():
+        if scenario_set.version != version and scenario in scenario_set.paper_scenarios:
+            raise ValueError(
+                f"scenario {scenario!r} belongs to scenario set {scenario_set.name!r} of "
+                f"{env_version(scenario_set.version).env_id}, not of {own.env_id} (to run it anyway, pass "
+                f"the Scenario object: scenario=load_scenario({scenario!r}))"
+            )
 
 
 def paper_scenario(number: int, version: str) -> str:

@@ -53,11 +53,11 @@ def test_station_scores_give_valid_selections_on_paper_and_16x16_layouts():
     with pytest.raises(ValueError, match="use StationScoreAction"):
         SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario=large_scenario(16, 16, 5)))
     assert isinstance(make_ppo_env(large_scenario(16, 16, 5)).env, StationScoreAction)
-    assert isinstance(make_ppo_env("paper-1").env, SuperArmDiscreteAction)
+    assert isinstance(make_ppo_env("paper-1-v1").env, SuperArmDiscreteAction)
 
 
 def test_features_track_age_and_latest_samples():
-    env = make_ppo_env("paper-1")
+    env = make_ppo_env("paper-1-v1")
     assert isinstance(env, RadarFeatureObservation)
     obs, _ = env.reset(seed=0)
     assert obs.shape == env.observation_space.shape and obs.dtype == np.float32
@@ -77,11 +77,11 @@ def test_sb3_check_env_on_the_env_and_the_training_wrapper():
     # arrays for images), which the training wrapper flattens
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        check_env(gym.make("MimoRadarSelect-v1", scenario="paper-3").unwrapped)
+        check_env(gym.make("MimoRadarSelect-v1", scenario="paper-3-v1").unwrapped)
     shape_advice = ("unconventional shape", "is an image", "minimal resolution for an image")
     for w in caught:
         assert any(text in str(w.message) for text in shape_advice), str(w.message)
-    for env in (make_ppo_env("paper-3"), make_ppo_env(large_scenario(16, 16, 5))):
+    for env in (make_ppo_env("paper-3-v1"), make_ppo_env(large_scenario(16, 16, 5))):
         with warnings.catch_warnings():
             warnings.simplefilter("error")
             check_env(env)
@@ -95,7 +95,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     from benchmarks.cli import main
     from benchmarks.training import train_ppo
 
-    meta = train_ppo("paper-1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
+    meta = train_ppo("paper-1-v1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
     assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
     assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.npz").exists()
     assert json.loads((tmp_path / "ppo" / "ppo.json").read_text())["timesteps"] == 2048 == meta["timesteps"]
@@ -125,7 +125,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
             [
                 "run",
                 "--scenario",
-                "paper-1",
+                "paper-1-v1",
                 "--policies",
                 f"ppo:{model},ucb1",
                 "--trials",

@@ -17,11 +17,11 @@ from benchmarks.cli import main
         (["train-ppo", "--timesteps", "0", "--out", "X"], "argument --timesteps: must be an integer >= 1"),
         (["train-ppo", "--timesteps", "-5", "--out", "X"], "argument --timesteps: must be an integer >= 1"),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--workers", "0", "--out", "X"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--workers", "0", "--out", "X"],
             "argument --workers: must be an integer >= 1, got 0",
         ),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--seed", "-1", "--out", "X"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--seed", "-1", "--out", "X"],
             "argument --seed: must be an integer >= 0, got -1",
         ),
     ],
@@ -45,7 +45,7 @@ def test_cli_numbers_out_of_range(argv, message, capsys, tmp_path, monkeypatch):
 )
 def test_bad_values_fail_before_config_json_is_written(param, message, tmp_path, capsys):
     out = tmp_path / "run"
-    argv = ["run", "--scenario", "paper-1", "--policies", "mg-crb-cl", "--agent-param", param]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "mg-crb-cl", "--agent-param", param]
     with pytest.raises(SystemExit) as exit_info:
         main([*argv, "--out", str(out), "--quiet"])
     assert exit_info.value.code == 2
@@ -64,7 +64,7 @@ def test_bad_values_fail_before_config_json_is_written(param, message, tmp_path,
 def test_models_and_missing_parameters(policies, message, tmp_path, capsys):
     out = tmp_path / "run"
     with pytest.raises(SystemExit):
-        main(["run", "--scenario", "paper-1", "--policies", policies, "--out", str(out), "--quiet"])
+        main(["run", "--scenario", "paper-1-v1", "--policies", policies, "--out", str(out), "--quiet"])
     assert message in capsys.readouterr().err
     assert not out.exists()
 
@@ -72,7 +72,7 @@ def test_models_and_missing_parameters(policies, message, tmp_path, capsys):
 def test_an_unusable_out_is_one_line(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
-    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
     with pytest.raises(SystemExit) as exit_info:
         main([*argv, "--out", str(blocker / "out"), "--quiet", "--no-figures"])
     assert exit_info.value.code == 2
@@ -87,7 +87,7 @@ def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, capsys):
     with socket.socket() as probe:  # a loopback port nobody listens on
         probe.bind(("127.0.0.1", 0))
         port = probe.getsockname()[1]
-    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
     start = time.perf_counter()
     with pytest.raises(SystemExit) as exit_info:
         main([*argv, "--backend", "ray", "--address", f"127.0.0.1:{port}", "--out", str(tmp_path / "o")])
@@ -102,7 +102,7 @@ def test_ray_address_auto_without_a_cluster_is_named_before_anything_is_written(
     pytest.importorskip("ray", reason="the ray extra")
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     monkeypatch.setenv("RAY_TMPDIR", str(tmp_path / "no-ray"))  # no cluster file to find
-    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
     with pytest.raises(SystemExit) as exit_info:
         main([*argv, "--backend", "ray", "--address", "auto", "--out", str(tmp_path / "o")])
     assert exit_info.value.code == 2

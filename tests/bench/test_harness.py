@@ -58,7 +58,9 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
     )
     assert code == 0
     printed = capsys.readouterr().out
-    assert "| mg-crb-cl |" in printed and "paper ARMSE" in printed
+    # v1's paper study gives MG-CRB-CL the standard BPSO rule, and its label says so
+    assert "| mg-crb-cl (solver_params.rule=set) |" in printed
+    assert "paper ARMSE" not in printed  # 25 steps: not the paper's 1000
     for name in (
         "summary.json",
         "curves.csv",
@@ -147,7 +149,15 @@ def test_run_subcommand_with_agent_params_and_a_scenario_file(tmp_path, capsys):
 def test_agents_and_demo_subcommands(capsys):
     assert main(["agents"]) == 0
     listing = capsys.readouterr().out
-    assert "mg-crb-cl" in listing and "alpha_bar" in listing
+    assert "mg-crb-cl" in listing and "alpha_bar=0.2" in listing and "epsilon=0.1" in listing
+    assert "tx (required)" in listing and "solver='bpso'" in listing  # MG-CRB-CL's own solver
+    assert "``" not in listing and ":class:" not in listing  # plain text, no reST
+    # every summary is a whole paragraph: what ends an agent's entry ends a sentence
+    import agents
+
+    shipped = [n for n in agents.available_agents() if agents.agent_class(n).__module__.startswith("agents.")]
+    for name in shipped:
+        assert agents.agent_summary(name).endswith((".", ")", "]")), name
     assert main(["demo", "--steps", "5"]) == 0
     rows = capsys.readouterr().out.splitlines()[2:]
     assert [row.split()[0] for row in rows] == ["random", "best"]
@@ -159,26 +169,26 @@ def test_agents_and_demo_subcommands(capsys):
     [
         (["run", "--scenario", "paper-9", "--policies", "ucb1"], "unknown scenario 'paper-9'"),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb2"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb2"],
             "unknown policy 'ucb2'; available policies are",
         ),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--agent-param", "ucb1.gamma=2"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--agent-param", "ucb1.gamma=2"],
             r"unknown parameter\(s\) \['gamma'\] for agent 'ucb1'; allowed:",
         ),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--agent-param", "ucb1gamma"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--agent-param", "ucb1gamma"],
             "must look like agent.key=value",
         ),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--steps", "5000"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--steps", "5000"],
             "--steps must be between 1 and",
         ),
         (
-            ["run", "--scenario", "paper-1", "--policies", "ucb1", "--trials", "0"],
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "0"],
             "--trials: must be an integer >= 1, got 0",
         ),
-        (["run", "--scenario", "paper-1", "--policies", "ppo:/nonexistent.zip"], "does not exist"),
+        (["run", "--scenario", "paper-1-v1", "--policies", "ppo:/nonexistent.zip"], "does not exist"),
     ],
 )
 def test_bad_arguments_give_their_errors(argv, message, tmp_path, capsys):
@@ -214,7 +224,7 @@ def test_a_killed_run_restarted_gives_exactly_the_uninterrupted_numbers(tmp_path
     args = [
         "run",
         "--scenario",
-        "paper-1",
+        "paper-1-v1",
         "--policies",
         "ucb1,fix1",
         "--trials",

@@ -59,3 +59,61 @@ def test_the_table_shows_the_summary_with_marks(small_run):
     row = summary["policies"]["fix2"]
     assert f"{row['bound']:.3f} [{row['ci']['bound'][0]:.3f}, {row['ci']['bound'][1]:.3f}]‡" in table
     assert report.METHOD_LEGEND in table
+
+
+def test_the_run_output_explains_once_and_says_where_its_files_are(tmp_path, capsys):
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,random,fix1,best", "--trials", "3"]
+    argv += ["--steps", "4", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    printed = capsys.readouterr().out
+    lines = printed.strip().splitlines()
+    assert report.LEGEND in lines  # ASR, bound, regret and their units, in one line
+    assert "bootstrap over trials" not in printed  # how intervals are computed: in table.md
+    assert lines[-1] == f"outputs in {out}: table.md, summary.json, curves.csv"
+    assert [line.split(" |")[0] for line in lines if line.startswith("| ucb1 - ")] == [
+        "| ucb1 - random", "| ucb1 - fix1", "| ucb1 - best"
+    ]  # fmt: skip
+    assert "paper ARMSE" not in printed  # 4 steps are not the paper's 1000
+    table = (out / "table.md").read_text()
+    assert table.count("bootstrap over trials") == 1
+    summary = json.loads((out / "summary.json").read_text())
+    assert len(summary["paired_differences"]) == 6  # every pair is kept
+    assert main([*argv[:-1], str(tmp_path / "all"), "--pairs", "all"]) == 0
+    rows = [line for line in capsys.readouterr().out.splitlines() if line.startswith("| ") and " - " in line]
+    assert len(rows) == 1 + 6  # the header and every pair
+    assert main(argv) == 0  # again into the same folder: nothing left to run
+    assert "resumed: 4 of 4 tasks already done in" in capsys.readouterr().err
+
+
+def test_the_papers_numbers_stand_beside_a_run_only_at_its_horizon():
+    row = {key: None for key in report.VALUE_KEYS} | {"wall_s": 1.0}
+    summary = {"scenario": "paper-1-v1", "trials": 1, "seed": 0, "policies": {"mg-crb-cl": row}}
+    summary["env_options"] = {"fusion": "average"}
+    assert "paper ARMSE (m)" in report.table_markdown({**summary, "steps": 1000}, 1)
+    assert "paper ARMSE (m)" not in report.table_markdown({**summary, "steps": 999}, 1)
+    assert "paper ARMSE (m)" not in report.table_markdown({**summary, "scenario": "x", "steps": 1000}, 1)
+
+
+def test_a_policy_with_parameters_of_the_runs_own_is_labelled_with_them(tmp_path, capsys):
+    assert (
+        report.policy_label("mg-crb-cl", {"solver_params": {"rule": "set"}})
+        == "mg-crb-cl (solver_params.rule=set)"
+    )
+    assert report.policy_label("ppo:runs/ppo-paper1/model.zip") == "ppo (ppo-paper1)"
+    assert report.policy_label("tracking-ucb:0.5") == "tracking-ucb:0.5"
+    argv = ["--trials", "2", "--steps", "2", "--workers", "1", "--quiet", "--no-figures"]
+    assert main(["paper", "--scenario", "1", *argv, "--out", str(tmp_path / "paper")]) == 0
+    assert "| mg-crb-cl (solver_params.rule=set) |" in capsys.readouterr().out  # v1's paper study
+    run = [
+        "run",
+        "--scenario",
+        "paper-1-v1",
+        "--policies",
+        "mg-crb-cl,ucb1",
+        *argv,
+        "--out",
+        str(tmp_path / "run"),
+    ]
+    assert main(run) == 0
+    assert "| mg-crb-cl |" in capsys.readouterr().out  # the agent's defaults

@@ -61,7 +61,7 @@ def test_paired_differences_are_judged_right_on_synthetic_policies():
 
 def test_run_outputs_carry_intervals_that_hold_their_values(tmp_path):
     out = tmp_path / "run"
-    argv = ["run", "--scenario", "paper-3", "--policies", "ucb1,epsilon-greedy,best", "--trials", "12"]
+    argv = ["run", "--scenario", "paper-3-v1", "--policies", "ucb1,epsilon-greedy,best", "--trials", "12"]
     assert main([*argv, "--steps", "40", "--workers", "1", "--quiet", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert "BCa from 20 trials, percentile below" in summary["uncertainty"]
@@ -103,7 +103,7 @@ def _every_estimate(summary):
 @pytest.mark.parametrize("trials", [2, 5, 10, 24])
 def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
     out = tmp_path / "run"
-    argv = ["run", "--scenario", "paper-3", "--policies", "mg-crb-cl,ucb1,best,fix1,random"]
+    argv = ["run", "--scenario", "paper-3-v1", "--policies", "mg-crb-cl,ucb1,best,fix1,random"]
     argv += ["--trials", str(trials), "--steps", "30", "--workers", "1", "--quiet", "--no-figures"]
     assert main([*argv, "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())

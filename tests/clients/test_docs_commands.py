@@ -1,5 +1,6 @@
 """Every mimo-radar-bench command in the docs runs as written: bash would pass it unchanged (no
-brace expansion, no placeholder words) and the command line's parser accepts it."""
+brace expansion, no placeholder words), the command line's parser accepts it, and a scenario it
+names is one of its env version's."""
 
 import re
 import shlex
@@ -8,6 +9,7 @@ from pathlib import Path
 import pytest
 
 from benchmarks.cli import build_parser
+from benchmarks.studies.settings import scenario_for_version
 
 ROOT = Path(__file__).resolve().parents[2]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
@@ -28,7 +30,17 @@ def _commands():
                         yield f"{page.name}: {part}", part
 
 
-COMMANDS = dict(_commands())
+def _epilog_commands():
+    """The examples of ``mimo-radar-bench --help``."""
+    from benchmarks.cli import EPILOG
+
+    for line in EPILOG.replace("\\\n", " ").splitlines():
+        line = line.strip()
+        if line.startswith("mimo-radar-bench "):
+            yield f"--help: {line}", line
+
+
+COMMANDS = dict(_commands()) | dict(_epilog_commands())
 
 
 def test_the_docs_have_commands():
@@ -42,4 +54,6 @@ def test_each_command_parses_as_written(where):
     unquoted = " ".join(a for a in shlex.split(re.sub(r"'[^']*'|\"[^\"]*\"", "Q", line), comments=True))
     assert not UNQUOTED_BRACES.search(unquoted), f"bash would expand the braces of {line!r}"
     assert "..." not in argv and not any(a.isupper() and len(a) > 1 for a in argv), line
-    build_parser().parse_args(argv[1:])  # SystemExit (exit 2) on anything the parser refuses
+    args = build_parser().parse_args(argv[1:])  # SystemExit (exit 2) on anything the parser refuses
+    if isinstance(getattr(args, "scenario", None), str) and hasattr(args, "env_version"):
+        scenario_for_version(args.scenario, args.env_version)  # a v0 name under v1 is refused

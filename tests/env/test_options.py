@@ -99,7 +99,7 @@ def test_every_option_round_trips_from_the_cli_to_the_env(name, tmp_path, monkey
 
 def test_a_worker_process_builds_the_env_with_the_recorded_options(tmp_path):
     """Same numbers in a spawned worker as in process; different from the default fusion."""
-    base = ["run", "--scenario", "paper-3", "--policies", "ucb1", "--trials", "2", "--steps", "30"]
+    base = ["run", "--scenario", "paper-3-v1", "--policies", "ucb1", "--trials", "2", "--steps", "30"]
     base += ["--no-figures", "--quiet", "--shard-size", "1"]
     summaries = {}
     for label, extra in (
@@ -118,7 +118,7 @@ def test_a_bad_option_is_refused_before_anything_is_written(name, tmp_path, caps
     flag, text, value = BAD[name]
     out = tmp_path / "run"
     if flag is not None:
-        argv = ["run", "--scenario", "paper-1", "--policies", "ucb1", "--out", str(out), flag, text]
+        argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--out", str(out), flag, text]
         with pytest.raises(SystemExit) as exit_info:
             main(argv)
         assert exit_info.value.code == 2
@@ -152,7 +152,7 @@ def test_a_bad_agent_parameter_is_refused_before_anything_is_written(
     params = [p for p in params if not p.startswith(f"{agent}.{parameter}=")]
     learned = agent in agents.learned_agents()
     policy = f"{agent}:/nonexistent/model.zip" if learned else agent
-    argv = ["run", "--scenario", "paper-1", "--policies", policy, "--out", str(out), "--quiet"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", policy, "--out", str(out), "--quiet"]
     if not learned:
         params.append(f"{agent}.{parameter}={json.dumps(value)}")
     for item in params:
@@ -182,7 +182,7 @@ def test_options_are_typed_and_frozen():
 
 
 def test_the_cli_starts_from_the_chosen_versions_defaults(tmp_path):
-    argv = ["run", "--scenario", "paper-1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
     argv += ["--workers", "1", "--no-figures", "--quiet"]
     assert main([*argv, "--out", str(tmp_path / "v1")]) == 0  # v1 is the default
     v1 = json.loads((tmp_path / "v1" / "config.json").read_text())["env_options"]
@@ -190,6 +190,7 @@ def test_the_cli_starts_from_the_chosen_versions_defaults(tmp_path):
     assert main([*argv, "--env-version", "v1", "--truth", "per-trial", "--out", str(tmp_path / "mix")]) == 0
     mixed = json.loads((tmp_path / "mix" / "config.json").read_text())["env_options"]
     assert mixed == {**v1, "truth": "per-trial"}
+    argv[2] = "paper-1"  # v0's name of the scenario
     assert main([*argv, "--env-version", "v0", "--out", str(tmp_path / "v0")]) == 0
     v0 = json.loads((tmp_path / "v0" / "config.json").read_text())["env_options"]
     assert v0 == EnvOptions().to_dict()

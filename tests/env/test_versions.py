@@ -100,3 +100,46 @@ def test_the_claims_study_runs_a_scenario_set_and_refuses_another_version(tmp_pa
         main([*args, "--env-version", "v0", "--out", str(tmp_path / "v0")])
     assert exit_info.value.code == 2
     assert "made for env version v1, not v0" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    ("make", "scenario", "message"),
+    [
+        (
+            "MimoRadarSelect-v1",
+            "paper-3",
+            r"'paper-3' is MimoRadarSelect-v0's paper Scenario 3; MimoRadarSelect-v1's is 'paper-3-v1'",
+        ),
+        ("MimoRadarSelectFlat-v1", "paper-1", r"MimoRadarSelect-v1's is 'paper-1-v1'"),
+        ("MimoRadarSelect-v0", "paper-2-v1", r"MimoRadarSelect-v0's is 'paper-2'"),
+        ("MimoRadarSelect-v0", "paper-1-v1-search5", r"scenario set 'search-5' of MimoRadarSelect-v1"),
+    ],
+)
+def test_another_versions_scenario_name_is_refused_with_this_versions_name(make, scenario, message):
+    import gymnasium as gym
+
+    for build in (
+        lambda: gym.make(make, scenario=scenario),
+        lambda: gym.make_vec(make, 2, vectorization_mode="vector_entry_point", scenario=scenario),
+    ):
+        with pytest.raises(ValueError, match=message):
+            build()
+
+
+def test_a_scenario_object_runs_under_any_version_as_given():
+    import gymnasium as gym
+
+    from mimo_radar_env import load_scenario
+
+    env = gym.make("MimoRadarSelect-v1", scenario=load_scenario("paper-3"))
+    assert env.unwrapped.scenario.name == "paper-3" and env.unwrapped.options.lambda_scale == "db"
+    env.reset(seed=0)
+    assert gym.make("MimoRadarSelect-v1", scenario="paper-3-v1").unwrapped.scenario.name == "paper-3-v1"
+
+
+def test_the_command_line_refuses_another_versions_scenario_name(capsys):
+    from benchmarks.cli import main
+
+    with pytest.raises(SystemExit):
+        main(["run", "--scenario", "paper-2", "--policies", "ucb1", "--out", "never-written"])
+    assert "use 'paper-2-v1' or --env-version v0" in capsys.readouterr().err
