@@ -185,9 +185,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     @spec.setter
     def spec(self, value: EnvSpec | None) -> None:
-        if value is not None and value.max_episode_steps is None:
-            value = dataclasses.replace(value, max_episode_steps=self.scenario.horizon)
-        self._spec = value
+        self._spec = with_horizon(value, self.scenario)
 
     def __str__(self) -> str:
         return describe(type(self).__name__, self.spec, self.scenario, self.options)
@@ -341,6 +339,29 @@ def _observation_space(engine: RadarEngine) -> spaces.Dict:
     return observation_space(engine.scenario, num_models, engine.options.prediction_covariance)
 
 
+def with_horizon(spec: EnvSpec | None, scenario: Scenario) -> EnvSpec | None:
+    """``spec`` with ``max_episode_steps`` the scenario's horizon, where every env truncates (so
+    Gymnasium adds no ``TimeLimit`` of its own): the single and the vector envs alike."""
+    if spec is not None and spec.max_episode_steps is None:
+        spec = dataclasses.replace(spec, max_episode_steps=scenario.horizon)
+    return spec
+
+
+#: The autoreset modes of the native vector envs: Gymnasium's next-step (default), or none.
+AUTORESET_MODES = {"next-step": AutoresetMode.NEXT_STEP, "disabled": AutoresetMode.DISABLED}
+
+
+def autoreset_mode_of(value: str | AutoresetMode) -> AutoresetMode:
+    """The :class:`AutoresetMode` of ``value`` (a name of :data:`AUTORESET_MODES` or a member)."""
+    mode = AUTORESET_MODES.get(value, value) if isinstance(value, str) else value
+    if mode not in AUTORESET_MODES.values():
+        raise ValueError(
+            f"autoreset_mode must be one of {list(AUTORESET_MODES)} (or those AutoresetMode members), "
+            f"got {value!r}"
+        )
+    return mode
+
+
 def _resolve(kwargs: dict[str, Any]) -> tuple[EnvOptions, Scenario]:
     """The options and scenario of the keywords; a registered id passes its version
     (``env_version``), under which another version's paper scenario name is refused."""
@@ -377,10 +398,13 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     Observations, rewards and every ``info`` entry carry a leading trial axis.
     All trials run in lockstep and end together after ``T`` steps; the step
     after that resets them all (``AutoresetMode.NEXT_STEP``) and returns the
-    reset observation. ``reset(seed=s)`` seeds trial ``i`` with ``s + i``, exactly
-    like a single env reset with ``seed=s + i``; ``seed`` may also be a list of
-    per-trial seeds. :meth:`oracle_action` returns the optimal super arms of the
-    coming step, (B, M + N).
+    reset observation, or, with ``autoreset_mode="disabled"``, raises until the
+    caller resets. ``spec.max_episode_steps`` is the horizon. ``device="cuda"``
+    (or ``"cpu"``, ``"cuda:1"``) runs it on torch there, every array a tensor.
+    ``reset(seed=s)`` seeds trial ``i`` with ``s + i``, exactly like a single env
+    reset with ``seed=s + i``; ``seed`` may also be a list of per-trial seeds.
+    :meth:`oracle_action` returns the optimal super arms of the coming step,
+    (B, M + N); :meth:`sample_action` random valid ones.
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
@@ -393,8 +417,22 @@ class MimoRadarSelectVectorEnv(VectorEnv):
 
     __repr__ = __str__
 
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
+        """The registration spec, ``max_episode_steps`` the scenario's horizon (as the single env's)."""
+        return getattr(self, "_spec", None)
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = with_horizon(value, self.scenario)
+
     def __init__(
-        self, num_envs: int = 1, render_mode: str | None = None, device: Any = None, **kwargs: Any
+        self,
+        num_envs: int = 1,
+        render_mode: str | None = None,
+        device: Any = None,
+        autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
             raise ValueError(f"num_envs must be an integer >= 1, got {num_envs!r}")
@@ -406,6 +444,9 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs, device=device)
         #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned
         self.device = xp.device
+        #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).
+        self.autoreset_mode = autoreset_mode_of(autoreset_mode)
+        self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         self.single_action_space = spaces.MultiBinary(self.engine.action_size)
         self.single_observation_space = _observation_space(self.engine)
         self.action_space = batch_space(self.single_action_space, num_envs)
@@ -443,6 +484,10 @@ class MimoRadarSelectVectorEnv(VectorEnv):
         resets all trials (Gymnasium's next-step autoreset)."""
         if self._trial_generators is None:
             raise RuntimeError("call reset() before step()")
+        if self._needs_reset and self.autoreset_mode == AutoresetMode.DISABLED:
+            raise RuntimeError(
+                "the episode ended after the horizon; call reset() (autoreset_mode='disabled')"
+            )
         if self._needs_reset:
             obs, info = self.reset()
             xp = self.engine.xp

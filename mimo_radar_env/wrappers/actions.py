@@ -58,6 +58,28 @@ class SuperArmIndex:
             raise ValueError(f"super-arm index must be in [0, {self.size}), got {index}")
         return self.actions[index]
 
+    def to_index(self, action: Any) -> NDArray[np.int64]:
+        """The super-arm index(es) ``(...)`` of env action(s) ``(..., M + N)``, the inverse of
+        :meth:`to_action`; ``ValueError`` for an action that is not a valid super arm."""
+        action = np.asarray(action)
+        if action.shape[-1:] != (self.num_tx + self.num_rx,):
+            bits = self.num_tx + self.num_rx
+            raise ValueError(f"actions must end in {bits} bits (M + N), got shape {action.shape}")
+        keys = _row_keys(self.actions)
+        order = np.argsort(keys)
+        query = _row_keys(action.reshape(-1, action.shape[-1]).astype(np.int8))
+        found = np.minimum(np.searchsorted(keys, query, sorter=order), self.size - 1)
+        index = order[found]
+        if not np.array_equal(keys[index], query):
+            raise ValueError("an action is not a valid super arm (exactly Ms transmitters and Ns receivers)")
+        return index.reshape(action.shape[:-1])
+
+
+def _row_keys(bits: NDArray[np.int8]) -> NDArray[np.void]:
+    """One comparable key per row of 0/1 bits (their packed bytes)."""
+    packed = np.ascontiguousarray(np.packbits(bits.astype(bool), axis=-1))
+    return packed.view(np.dtype((np.void, packed.shape[-1])))[:, 0]
+
 
 class SuperArmDiscreteAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
     """``Discrete(C(M, Ms) * C(N, Ns))``: every action is one valid super arm (a bijection)."""
@@ -70,6 +92,11 @@ class SuperArmDiscreteAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs)
 
     def action(self, action: Any) -> NDArray[np.int8]:
         return self.index.to_action(action)
+
+    def oracle_action(self) -> int:
+        """The optimal super arm of the coming step as this wrapper's ``Discrete`` action (reads
+        the truth: oracle only; ``env.get_wrapper_attr("oracle_action")()`` from outside)."""
+        return int(self.index.to_index(self.env.unwrapped.oracle_action()))
 
     def action_masks(self) -> NDArray[np.bool_]:
         """Which Discrete actions are allowed: all of them, since each is a valid super arm.
@@ -105,3 +132,8 @@ class StationScoreAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
 
     def action(self, action: Any) -> NDArray[np.int8]:
         return scores_to_action(action, *self._sizes)
+
+    def oracle_action(self) -> NDArray[np.float32]:
+        """The optimal super arm of the coming step as station scores (+1 the selected stations,
+        -1 the others), which :meth:`action` maps back to it (reads the truth: oracle only)."""
+        return (2.0 * self.env.unwrapped.oracle_action() - 1.0).astype(np.float32)

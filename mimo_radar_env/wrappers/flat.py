@@ -13,6 +13,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
+from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
@@ -89,6 +90,17 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
 
+    @property
+    def spec(self) -> EnvSpec | None:  # type: ignore[override]
+        """The registration spec, ``max_episode_steps`` the scenario's horizon (as the single env's)."""
+        return getattr(self, "_spec", None)
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        from ..envs.mimo_radar_select import with_horizon
+
+        self._spec = with_horizon(value, self.scenario)
+
     def __init__(
         self,
         num_envs: int = 1,
@@ -97,17 +109,10 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         **kwargs: Any,
     ):
-        modes = {"next-step": AutoresetMode.NEXT_STEP, "disabled": AutoresetMode.DISABLED}
-        mode = (
-            modes.get(autoreset_mode, autoreset_mode) if isinstance(autoreset_mode, str) else autoreset_mode
-        )
-        if mode not in modes.values():
-            raise ValueError(
-                f"autoreset_mode must be one of {list(modes)} (or those AutoresetMode members), "
-                f"got {autoreset_mode!r}"
-            )
+        from ..envs.mimo_radar_select import autoreset_mode_of
+
         #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).
-        self.autoreset_mode = mode
+        self.autoreset_mode = autoreset_mode_of(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}
         from ..envs import MimoRadarSelectVectorEnv
 
@@ -175,6 +180,15 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
             raise ValueError("station-score actions have no mask; make the env with action='discrete'")
         return np.ones((self.num_envs, self.index.size), dtype=bool)
 
-    def oracle_action(self) -> NDArray[np.int8]:
-        """The env's optimal super arms of the coming step, (B, M + N) (reads the truth)."""
+    def oracle_action(self) -> NDArray:
+        """The optimal super arms of the coming step in this env's action space (reads the truth):
+        their ``Discrete`` indices (B,), or station scores (B, M + N), +1 the selected stations.
+        :meth:`oracle_env_action` gives them as the raw env's ``MultiBinary`` actions."""
+        actions = self.env.oracle_action()
+        if self.index is not None:
+            return self.index.to_index(actions)
+        return (2.0 * actions - 1.0).astype(np.float32)
+
+    def oracle_env_action(self) -> NDArray[np.int8]:
+        """The optimal super arms of the coming step as the raw env's actions, (B, M + N)."""
         return self.env.oracle_action()

@@ -7,6 +7,7 @@ from pathlib import Path
 import gymnasium as gym
 import numpy as np
 import pytest
+from gymnasium.vector import AutoresetMode
 
 import mimo_radar_env  # noqa: F401  (registers the ids)
 from mimo_radar_env.wrappers import MimoRadarSelectFlatVectorEnv
@@ -152,3 +153,76 @@ def test_with_autoreset_disabled_the_caller_resets_every_trial_at_once():
     np.testing.assert_array_equal(first, again)
     with pytest.raises(ValueError, match=r"autoreset_mode must be one of \['next-step', 'disabled'\]"):
         vector_env("MimoRadarSelectFlat-v1", 2, autoreset_mode="x")
+
+
+#: Gymnasium's check_env warnings, each explained in docs/clients.md: the checker's own notice
+#: that it was given a wrapped env, the Flat features' unbounded Box, and the headless notice.
+GYMNASIUM_EXPLAINED = {
+    "MimoRadarSelect-v1": ("render_mode='human' shows nothing here",),
+    "MimoRadarSelectFlat-v1": (
+        "is different from the unwrapped version",
+        "A Box observation space minimum value is -infinity",
+        "A Box observation space maximum value is infinity",
+        "render_mode='human' shows nothing here",
+    ),
+}
+
+
+@pytest.mark.parametrize("env_id", sorted(GYMNASIUM_EXPLAINED))
+def test_gymnasiums_check_env_warns_only_as_the_docs_explain(env_id):
+    from gymnasium.utils.env_checker import check_env
+
+    env = gym.make(env_id, horizon=5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        check_env(env.unwrapped if env_id == "MimoRadarSelect-v1" else env)
+    messages = {str(w.message) for w in caught}
+    unexplained = [m for m in messages if not any(e in m for e in GYMNASIUM_EXPLAINED[env_id])]
+    assert not unexplained
+    docs = (Path(__file__).parents[2] / "docs" / "clients.md").read_text()
+    assert "Gymnasium's own `check_env`" in docs and "unbounded" in docs
+
+
+def test_the_flat_ids_oracle_acts_in_their_own_action_space():
+    env = gym.make("MimoRadarSelectFlat-v1", horizon=5)
+    env.reset(seed=0)
+    for _ in range(3):
+        action = env.get_wrapper_attr("oracle_action")()
+        assert env.action_space.contains(action)
+        _, _, _, _, info = env.step(action)
+        assert np.isclose(info["expected_reward"], info["optimal_reward"])
+    scores = gym.make("MimoRadarSelectFlat-v1", horizon=5, action="scores")
+    scores.reset(seed=0)
+    assert scores.action_space.contains(scores.get_wrapper_attr("oracle_action")())
+    venv = vector_env("MimoRadarSelectFlat-v1", 3, horizon=5)
+    venv.reset(seed=0)
+    index = venv.oracle_action()
+    assert venv.action_space.contains(index) and index.shape == (3,)
+    np.testing.assert_array_equal(venv.to_env_actions(index), venv.oracle_env_action())
+    _, _, _, _, info = venv.step(index)
+    assert np.allclose(info["expected_reward"], info["optimal_reward"])
+
+
+def test_the_super_arm_index_converts_both_ways():
+    from mimo_radar_env import load_scenario
+    from mimo_radar_env.wrappers import SuperArmIndex
+
+    index = SuperArmIndex(load_scenario("paper-1-v1"))
+    every = np.arange(index.size)
+    np.testing.assert_array_equal(index.to_index(index.to_action(every)), every)
+    assert index.to_index(index.to_action(7)) == 7
+    with pytest.raises(ValueError, match="not a valid super arm"):
+        index.to_index(np.ones(10, dtype=np.int8))
+
+
+@pytest.mark.parametrize("env_id", ["MimoRadarSelect-v1", "MimoRadarSelectFlat-v1"])
+def test_every_vector_id_takes_autoreset_mode_and_has_the_horizon_in_its_spec(env_id):
+    venv = vector_env(env_id, 2, horizon=3, autoreset_mode="disabled")
+    assert venv.spec.max_episode_steps == 3 and venv.metadata["autoreset_mode"] == AutoresetMode.DISABLED
+    venv.reset(seed=0)
+    for _ in range(3):
+        venv.step(venv.action_space.sample() if "Flat" in env_id else venv.sample_action())
+    with pytest.raises(RuntimeError, match="call reset"):
+        venv.step(venv.action_space.sample() if "Flat" in env_id else venv.sample_action())
+    with pytest.raises(ValueError, match="autoreset_mode must be one of"):
+        vector_env(env_id, 2, autoreset_mode="sometimes")
