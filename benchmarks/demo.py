@@ -31,7 +31,7 @@ def run_demo(
         results[policy] = {
             "steps": horizon,
             "total_reward": reward_sum,
-            "final_regret": regret + 0.0,  # no "-0.0" for the oracle
+            "final_regret": float(f"{regret:.1f}") + 0.0,  # the oracle's rounding is no "-0.0"
             "mean_position_error_m": float(np.mean(errors)),
         }
     return results

@@ -90,7 +90,9 @@ def render(text: str, docs: Path) -> str:
 
 
 def pages(docs: Path) -> list[Path]:
-    return sorted(docs.glob("*.md"))
+    """The docs' pages, and the README beside the docs folder (its quickstart's times are generated too)."""
+    readme = docs.parent / "README.md"
+    return [*sorted(docs.glob("*.md")), *([readme] if readme.is_file() else [])]
 
 
 def regenerate(docs: Path, check: bool = False) -> list[str]:
@@ -117,11 +119,10 @@ def regenerate(docs: Path, check: bool = False) -> list[str]:
 def unsourced(docs: Path) -> list[str]:
     """Every measurement-shaped number of the pages (and of the README beside the docs folder)
     outside generated blocks and value spans."""
-    readme = docs.parent / "README.md"
     return [
         f"{page}:{line}: {number!r} is quoted without an artefact (put it in a value span or a "
         "generated block; write a model constant as code)"
-        for page in [*pages(docs), *([readme] if readme.is_file() else [])]
+        for page in pages(docs)
         for line, number in unsourced_numbers(page.read_text())
     ]
 

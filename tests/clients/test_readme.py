@@ -30,3 +30,17 @@ def test_the_first_example_acts_validly(tmp_path):
 @pytest.mark.slow
 def test_every_block_runs_in_order(tmp_path):
     _run("\n".join(BLOCKS), tmp_path)
+
+
+def test_the_demo_prints_what_the_readme_shows(tmp_path):
+    text = README.read_text()
+    shown = re.search(r"mimo-radar-bench demo\n```\n.*?```text\n(.*?)```", text, re.DOTALL).group(1)
+    result = subprocess.run(
+        [sys.executable, "-m", "benchmarks", "demo"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert result.stdout.strip() == shown.strip()
