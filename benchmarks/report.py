@@ -205,8 +205,26 @@ def format_cell(
     return format_estimate(value, ci, fmt, scale, method)
 
 
+def paper_study_parameters(scenario: str) -> dict[str, dict[str, Any]]:
+    """The agent parameters of the paper study of the env version ``scenario`` belongs to: a row
+    stands beside the paper's numbers only with those (v1's MG-CRB-CL is BPSO's standard rule)."""
+    from mimo_radar_env import VERSIONS
+    from mimo_radar_env.envs.versions import SCENARIO_SETS
+
+    from .studies.settings import paper_study_params
+
+    for version in VERSIONS.values():
+        if scenario in version.paper_scenarios:
+            return paper_study_params(version.name)
+    for scenario_set in SCENARIO_SETS.values():
+        if scenario in scenario_set.paper_scenarios:
+            return paper_study_params(scenario_set.version)
+    return {}
+
+
 def comparable_to_the_paper(summary: dict[str, Any]) -> bool:
-    """Whether the paper's numbers belong beside a run's: one of its scenarios, its horizon."""
+    """Whether the paper's numbers belong beside a run's: one of its scenarios, its horizon (and,
+    row by row, its policy: :func:`paper_study_parameters`)."""
     return paper_key(summary["scenario"]) in PAPER_ARMSE and summary["steps"] == PAPER_HORIZON
 
 
@@ -218,6 +236,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "
     there (the terminal)."""
     name = summary["scenario"]
     paper = comparable_to_the_paper(summary)
+    papers_params = paper_study_parameters(name) if paper else {}
     paper_asr = PAPER_ASR.get(paper_key(name), {})
     targets = [f"ARMSE T{k + 1} (m)" for k in range(num_targets)] if num_targets > 1 else []
     head = ["policy", "ARMSE (m)", *targets, "bound (m)", "ARMSE / bound"]
@@ -256,10 +275,12 @@ def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "
             *(format_cell(row, extra, "{:.4g}") for extra in EXTRA_METRICS),
             f"{row['wall_s']:.1f}",
         ]
-        if paper:
+        if paper and summary.get("agent_params", {}).get(policy, {}) == papers_params.get(policy, {}):
             ref = paper_armse(paper_key(name), policy)
             cells.append(f"{ref:.4f}" if ref is not None else "—")
             cells.append(f"{paper_asr[policy]:.2f}" if policy in paper_asr else "—")
+        elif paper:  # the paper's policy under another reading of its parameters: not comparable
+            cells += ["—", "—"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 

@@ -117,3 +117,23 @@ def test_a_policy_with_parameters_of_the_runs_own_is_labelled_with_them(tmp_path
     ]
     assert main(run) == 0
     assert "| mg-crb-cl |" in capsys.readouterr().out  # the agent's defaults
+
+
+def test_the_papers_numbers_stand_beside_its_policy_only_as_the_version_reads_it():
+    """Under v1 the paper's MG-CRB-CL is BPSO's standard rule: a row of the agent's default rule
+    (the same name, another policy) gets no paper numbers; under v0 the default is the paper's."""
+    row = {key: None for key in report.VALUE_KEYS} | {"wall_s": 1.0}
+    base = {"trials": 1, "seed": 0, "steps": 1000, "env_options": {"fusion": "average"}}
+    base["policies"] = {"mg-crb-cl": row}
+
+    def paper_cells(scenario, params):
+        table = report.table_markdown({**base, "scenario": scenario, "agent_params": params}, 1)
+        line = next(line for line in table.splitlines() if line.startswith("| mg-crb-cl"))
+        return line.split(" | ")[-2:]
+
+    assert paper_cells("paper-1-v1", {}) == ["—", "— |"]
+    assert paper_cells("paper-1-v1", {"mg-crb-cl": {"solver_params": {"rule": "set"}}}) == [
+        "1.1030",
+        "45.84 |",
+    ]
+    assert paper_cells("paper-1", {}) == ["1.1030", "45.84 |"]
