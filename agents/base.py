@@ -111,6 +111,14 @@ class Agent(ABC):
             )
         self.batch_size = batch["sinr"].shape[0]
         self.xp = namespace(batch["sinr"])
+        sc = self.scenario
+        if tuple(batch["sinr"].shape[1:]) != (sc.num_targets, sc.num_tx, sc.num_rx):
+            raise ValueError(
+                f"{self.name or type(self).__name__} was made for scenario {sc.name!r} (K={sc.num_targets} "
+                f"targets, M={sc.num_tx}, N={sc.num_rx}), and the observation's 'sinr' has shape "
+                f"{tuple(batch['sinr'].shape[1:])} per trial: make the agent with the env's scenario"
+            )
+        self._check_finite(batch)
         if self.xp.is_torch and not self.needs.device:
             raise ValueError(
                 f"{self.name or type(self).__name__} acts on numpy arrays only, and this observation is "
@@ -132,9 +140,20 @@ class Agent(ABC):
         return actions if batched else actions[0]
 
     def update(self, obs: Observation, reward: Any) -> None:
-        """Learn from the observation and reward of the step just taken."""
+        """Learn from the observation and reward of the step just taken; ``ValueError`` naming
+        the key of an observation entry (or the reward) that is not finite."""
         batch, _ = self._batch(obs)
-        self._update(batch, self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,)))
+        reward = self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,))
+        self._check_finite({**batch, "reward": reward})
+        self._update(batch, reward)
+
+    def _check_finite(self, entries: Observation) -> None:
+        xp = self.xp
+        for key, value in entries.items():
+            if xp.dtype_kind(value) == "f" and not bool(xp.all(xp.isfinite(value))):
+                raise ValueError(
+                    f"{self.name or type(self).__name__}: the {key!r} it was given is not finite"
+                )
 
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import re
 import sys
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass, field
@@ -253,9 +254,15 @@ def add_env_options(parser: argparse.ArgumentParser) -> None:
 
 
 def env_options_from(args: argparse.Namespace) -> EnvOptions:
-    """The :class:`EnvOptions` of parsed arguments."""
+    """The :class:`EnvOptions` of parsed arguments; a combination the options refuse
+    (``--reward information --no-tracking``) is a :class:`BenchError` in the flags' words."""
     given = {name: getattr(args, name) for name in option_names() if hasattr(args, name)}
-    return env_version(args.env_version).options(**given)
+    try:
+        return env_version(args.env_version).options(**given)
+    except ValueError as exc:
+        names = "|".join(option_names())
+        flagged = re.sub(rf"\b({names})=", lambda m: "--" + m.group(1).replace("_", "-") + "=", str(exc))
+        raise BenchError(f"env options: {flagged}") from None
 
 
 # ------------------------------------------------------------------ agent parameters

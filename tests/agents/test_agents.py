@@ -242,3 +242,24 @@ def test_paper1_mg_crb_cl_beats_ucb1_and_best_has_the_highest_sinr():
 def test_bad_agent_parameters_are_named(name, params, message):
     with pytest.raises(ValueError, match=message):
         agents.make_agent(name, PAPER, **params)
+
+
+@pytest.mark.parametrize("policy", ["tracking-ucb", "best-tracking", "rbe", "cts", "ucb1", "mg-crb-cl"])
+def test_an_agent_refuses_an_env_of_another_scenario_and_what_is_not_finite(policy):
+    import math
+
+    env = agents.make_env(agents.make_agent(policy, "paper-1-v1"), 2)  # K = 1
+    obs, _ = env.reset(seed=0)
+    stranger = agents.make_agent(policy, "paper-3-v1", seed=0)  # made for K = 2
+    with pytest.raises(ValueError, match=r"was made for scenario 'paper-3-v1' \(K=2 targets, M=4, N=6\)"):
+        stranger.reset(obs)
+    agent = agents.make_agent(policy, "paper-1-v1", seed=0)
+    if agent.needs.oracle:
+        agent.attach(env)
+    agent.reset(obs)
+    obs, reward, *_ = env.step(agent.act(obs))
+    with pytest.raises(ValueError, match="the 'reward' it was given is not finite"):
+        agent.update(obs, np.full_like(reward, math.nan))
+    bad = {**obs, "sinr": np.where(obs["sinr"] > 0, math.inf, obs["sinr"])}
+    with pytest.raises(ValueError, match="the 'sinr' it was given is not finite"):
+        agent.update(bad, reward)

@@ -252,3 +252,35 @@ def test_compare_claims_on_a_foreign_file_is_one_line(content, message, tmp_path
     with pytest.raises(SystemExit):
         main(["compare-claims", f"A={path}", f"A={path}"])
     assert "two scorecards are labelled 'A'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "command",
+    [
+        ["run", "--scenario", "paper-1-v1", "--policies", "ucb1"],
+        ["paper", "--scenario", "1"],
+        ["claims"],
+        ["tracking"],
+        ["train-ppo", "--timesteps", "16"],
+    ],
+)
+@pytest.mark.parametrize(
+    ("flags", "message"),
+    [
+        (
+            ["--reward", "information", "--no-tracking"],
+            "--reward='information' is the tracker's information gain",
+        ),
+        (["--prediction-covariance", "--no-tracking"], "--prediction-covariance=True observes the tracker's"),
+    ],
+)
+def test_env_option_combinations_are_refused_in_one_line_by_every_command(
+    command, flags, message, capsys, tmp_path
+):
+    out = tmp_path / "X"
+    with pytest.raises(SystemExit) as exit_info:
+        main([*command, *flags, "--out", str(out)])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0] and "needs --tracking=True" in err[0]
+    assert not out.exists()
