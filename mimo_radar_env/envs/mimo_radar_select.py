@@ -213,6 +213,7 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
         initialisation), and ``info`` with the truth (Info). ``options`` is accepted, as
         Gymnasium's API has it, and unused: the env's options are ``gym.make`` keywords.
         """
+        check_reset(seed, options)
         super().reset(seed=seed)
         obs, info = self.engine.reset([self.np_random])
         self._truth_history = [info["true_state"][0][:, [0, 2]]]
@@ -339,6 +340,26 @@ def _observation_space(engine: RadarEngine) -> spaces.Dict:
     return observation_space(engine.scenario, num_models, engine.options.prediction_covariance)
 
 
+def check_reset(seed: Any, options: Any, batch: int | None = None) -> None:
+    """Validate ``reset``'s arguments, for the single env and the vector envs alike: ``seed``
+    None or an integer >= 0 (for a vector env of ``batch`` trials also a list of ``batch`` of
+    them), ``options`` None or empty (the env's options are ``gym.make`` keywords). Raises
+    ``ValueError`` showing the value as given."""
+    seeds = seed if batch is not None and isinstance(seed, list | tuple) else [seed]
+    if seed is not None and not all(
+        isinstance(s, int | np.integer) and not isinstance(s, bool | np.bool_) and s >= 0 for s in seeds
+    ):
+        allowed = "an integer >= 0" + (" or a list of them" if batch is not None else "")
+        raise ValueError(f"seed must be None or {allowed}, got {seed!r}")
+    if batch is not None and isinstance(seed, list | tuple) and len(seed) != batch:
+        raise ValueError(f"seed must be an int or a list of {batch} ints, got {len(seed)}")
+    if options:
+        raise ValueError(
+            f"reset takes no options here, got {options!r}: the env's options are gym.make keywords "
+            "(the Flat vector env takes reset_mask)"
+        )
+
+
 def with_horizon(spec: EnvSpec | None, scenario: Scenario) -> EnvSpec | None:
     """``spec`` with ``max_episode_steps`` the scenario's horizon, where every env truncates (so
     Gymnasium adds no ``TimeLimit`` of its own): the single and the vector envs alike."""
@@ -460,6 +481,7 @@ class MimoRadarSelectVectorEnv(VectorEnv):
     ) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
         """Start every trial: trial ``i`` seeded ``seed + i`` (or ``seed[i]`` for a list), as the
         single env reset with that seed. Returns the batched reset observation and info."""
+        check_reset(seed, options, batch=self.num_envs)
         if seed is None and self._trial_generators is None:
             base = int(
                 np.random.SeedSequence().entropy % (2**62)
@@ -467,10 +489,6 @@ class MimoRadarSelectVectorEnv(VectorEnv):
             seed = base
         if seed is not None:
             seeds = [seed + i for i in range(self.num_envs)] if np.ndim(seed) == 0 else list(seed)
-            if not all(isinstance(s, int | np.integer) and not isinstance(s, bool) and s >= 0 for s in seeds):
-                raise ValueError(f"seed must be an integer >= 0 or a list of them, got {seed!r}")
-            if len(seeds) != self.num_envs:
-                raise ValueError(f"seed must be an int or a list of {self.num_envs} ints, got {len(seeds)}")
             self._trial_generators = [seeding.np_random(int(s))[0] for s in seeds]
             self._np_random, self._np_random_seed = seeding.np_random(int(seeds[0]))
         assert self._trial_generators is not None

@@ -17,6 +17,8 @@ from .actions import (
     StationScoreAction,
     SuperArmDiscreteAction,
     SuperArmIndex,
+    check_discrete_actions,
+    check_score_actions,
     scores_to_action,
 )
 from .features import RadarFeatureObservation, RadarFeatures
@@ -43,6 +45,8 @@ __all__ = [
     "action_form",
     "make_flat_env",
     "make_ppo_env",
+    "check_discrete_actions",
+    "check_score_actions",
     "scores_to_action",
     "wrap_for_learning",
 ]

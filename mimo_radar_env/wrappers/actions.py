@@ -75,6 +75,41 @@ class SuperArmIndex:
         return index.reshape(action.shape[:-1])
 
 
+def check_discrete_actions(actions: Any, size: int, shape: tuple[int, ...] = ()) -> NDArray[np.int64]:
+    """Validate ``Discrete(size)`` actions of ``shape`` (``()`` for one): integers only (no
+    floats, booleans or strings, not even integral ones), in ``[0, size)``. Raises ``ValueError``
+    showing the value as given; returns them as int64. The single env's wrapper and the Flat
+    vector env both validate with it."""
+    arr = np.asarray(actions)
+    if arr.dtype.kind not in "iu" or isinstance(actions, bool | np.bool_):
+        raise ValueError(
+            f"a Discrete action must be an integer super-arm index in [0, {size}), got {actions!r}"
+        )
+    if arr.shape != shape:
+        raise ValueError(f"Discrete actions must have shape {shape}, got shape {arr.shape} ({actions!r})")
+    if np.any((arr < 0) | (arr >= size)):
+        bad = arr[(arr < 0) | (arr >= size)].ravel()[:5].tolist()
+        raise ValueError(f"a Discrete action's super-arm index must be in [0, {size}), got {bad}")
+    return arr.astype(np.int64)
+
+
+def check_score_actions(scores: Any, size: int, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
+    """Validate station-score actions, ``Box(-1, 1, (size,))`` of leading ``shape``: real
+    numbers, finite, within [-1, 1] (refused outside, not clipped). Raises ``ValueError`` showing
+    the values as given; returns float64."""
+    arr = np.asarray(scores)
+    if arr.dtype.kind not in "iuf" or isinstance(scores, bool | np.bool_):
+        raise ValueError(f"station scores must be real numbers in [-1, 1], got {scores!r}")
+    if arr.shape != (*shape, size):
+        raise ValueError(f"station scores must have shape {(*shape, size)}, got shape {arr.shape}")
+    outside = ~np.isfinite(arr) | (arr < -1) | (arr > 1)
+    if np.any(outside):
+        raise ValueError(
+            f"station scores must be finite and in [-1, 1], got {arr[outside].ravel()[:5].tolist()}"
+        )
+    return arr.astype(np.float64)
+
+
 def _row_keys(bits: NDArray[np.int8]) -> NDArray[np.void]:
     """One comparable key per row of 0/1 bits (their packed bytes)."""
     packed = np.ascontiguousarray(np.packbits(bits.astype(bool), axis=-1))
@@ -91,7 +126,7 @@ class SuperArmDiscreteAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs)
         self.action_space = spaces.Discrete(self.index.size)
 
     def action(self, action: Any) -> NDArray[np.int8]:
-        return self.index.to_action(action)
+        return self.index.to_action(check_discrete_actions(action, self.index.size))
 
     def oracle_action(self) -> int:
         """The optimal super arm of the coming step as this wrapper's ``Discrete`` action (reads
@@ -131,7 +166,8 @@ class StationScoreAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
         self.action_space = spaces.Box(-1.0, 1.0, (sc.num_tx + sc.num_rx,), np.float32)
 
     def action(self, action: Any) -> NDArray[np.int8]:
-        return scores_to_action(action, *self._sizes)
+        size = self.action_space.shape[0]
+        return scores_to_action(check_score_actions(action, size), *self._sizes)
 
     def oracle_action(self) -> NDArray[np.float32]:
         """The optimal super arm of the coming step as station scores (+1 the selected stations,

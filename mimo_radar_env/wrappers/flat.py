@@ -20,7 +20,14 @@ from numpy.typing import NDArray
 
 from ..core.superarm import super_arm_count
 from ..scenarios import Scenario
-from .actions import StationScoreAction, SuperArmDiscreteAction, SuperArmIndex, scores_to_action
+from .actions import (
+    StationScoreAction,
+    SuperArmDiscreteAction,
+    SuperArmIndex,
+    check_discrete_actions,
+    check_score_actions,
+    scores_to_action,
+)
 from .features import RadarFeatureObservation, RadarFeatures
 
 
@@ -151,9 +158,9 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     def to_env_actions(self, actions: Any) -> NDArray[np.int8]:
         """The env's actions (B, M + N) for the batch's Flat actions."""
         if self.index is not None:
-            return self.index.to_action(np.asarray(actions).reshape(self.num_envs))
+            return self.index.to_action(check_discrete_actions(actions, self.index.size, (self.num_envs,)))
         sc = self.scenario
-        scores = np.asarray(actions, dtype=np.float64).reshape(self.num_envs, -1)
+        scores = check_score_actions(actions, sc.num_tx + sc.num_rx, (self.num_envs,))
         return scores_to_action(scores, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
 
     def step(

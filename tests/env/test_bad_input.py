@@ -107,7 +107,7 @@ def test_bad_env_arguments_are_named():
     with pytest.raises(ValueError, match="num_envs must be an integer >= 1, got 2.5"):
         vector_env("MimoRadarSelect-v0", 2.5)
     venv = vector_env("MimoRadarSelect-v0", 2)
-    with pytest.raises(ValueError, match="seed must be an integer >= 0"):
+    with pytest.raises(ValueError, match="seed must be None or an integer >= 0"):
         venv.reset(seed=1.5)
     with pytest.raises(ValueError, match=r"need about .* GiB; this machine has"):
         vector_env("MimoRadarSelect-v0", 10**7)

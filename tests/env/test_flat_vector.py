@@ -226,3 +226,61 @@ def test_every_vector_id_takes_autoreset_mode_and_has_the_horizon_in_its_spec(en
         venv.step(venv.action_space.sample() if "Flat" in env_id else venv.sample_action())
     with pytest.raises(ValueError, match="autoreset_mode must be one of"):
         vector_env(env_id, 2, autoreset_mode="sometimes")
+
+
+@pytest.mark.parametrize(
+    ("action", "message"),
+    [
+        (2.7, r"must be an integer super-arm index in \[0, 120\), got .*2\.7"),
+        ("3", r"got .*'3'"),
+        (True, r"got .*True"),
+        (float("nan"), r"got .*nan"),
+        (120, r"index must be in \[0, 120\), got \[120"),
+        (-1, r"got \[-1"),
+    ],
+)
+def test_a_bad_discrete_action_is_refused_as_given_by_the_single_and_the_vector_flat_env(action, message):
+    env = gym.make("MimoRadarSelectFlat-v1", horizon=5)
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(action)
+    venv = vector_env("MimoRadarSelectFlat-v1", 2, horizon=5)
+    venv.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        venv.step(
+            np.array([action, action], dtype=object)
+            if isinstance(action, str)
+            else np.array([action, action])
+        )
+
+
+@pytest.mark.parametrize(
+    ("scores", "message"),
+    [
+        (np.full(10, 1e9), r"finite and in \[-1, 1\], got \[1000000000.0"),
+        (np.full(10, np.inf), r"got \[inf"),
+        (np.zeros(3), r"must have shape \(10,\), got shape \(3,\)"),
+        ("x", r"real numbers in \[-1, 1\], got 'x'"),
+    ],
+)
+def test_out_of_space_scores_are_refused_not_clipped(scores, message):
+    env = gym.make("MimoRadarSelectFlat-v1", horizon=5, action="scores")
+    env.reset(seed=0)
+    with pytest.raises(ValueError, match=message):
+        env.step(scores)
+
+
+@pytest.mark.parametrize(
+    ("env_id", "seed", "options", "message"),
+    [
+        ("MimoRadarSelect-v1", "7", None, r"seed must be None or an integer >= 0.*, got '7'"),
+        ("MimoRadarSelect-v1", True, None, "got True"),
+        ("MimoRadarSelectFlat-v1", -1, None, "got -1"),
+        ("MimoRadarSelect-v1", 0, {"horizon": 5}, r"reset takes no options here, got \{'horizon': 5\}"),
+    ],
+)
+def test_reset_arguments_are_checked_on_single_and_vector_envs(env_id, seed, options, message):
+    with pytest.raises(ValueError, match=message):
+        gym.make(env_id).reset(seed=seed, options=options)
+    with pytest.raises(ValueError, match=message):
+        vector_env(env_id, 2).reset(seed=seed, options=options)
