@@ -52,9 +52,10 @@ from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
 from .. import uncertainty
 from ..cli import Command
+from ..errors import BenchError
 from ..report import paired_difference
 from .base import machine, write_timing
-from .settings import integer
+from .settings import folder, integer
 
 #: Swerling-I samples per channel of the sampling oracles.
 SAMPLES = (1, 3, 10, 30, 100, 300, 1000)
@@ -246,12 +247,13 @@ class MechanismsStudy(Command):
         parser.add_argument(
             "--summaries", type=Path, default=DEFAULT_SUMMARIES, help="the folder of its runs' summary.json"
         )
-        parser.add_argument("--out", type=Path, default=Path("runs/mechanisms"))
+        parser.add_argument("--out", type=folder, default="runs/mechanisms")
 
     def main(self) -> int:
         args = self.args
+        args.out = Path(args.out)
+        claims = _check_inputs(args)
         start, before = time.perf_counter(), machine()
-        claims = json.loads(args.claims.read_text())
         lead = {}
         for scenario in args.scenarios:
             lead[scenario] = lead_and_sampling_oracles(scenario, args.trials, args.seed, steps=args.steps)
@@ -295,3 +297,24 @@ class MechanismsStudy(Command):
             f"{s['contradicted_follow_bound']} follow the bound, {s['contradicted_follow_sinr']} SINR"
         )
         return 0
+
+
+def _check_inputs(args: Any) -> list[dict[str, Any]]:
+    """The claims file read, after checking every input before anything is computed: the claims
+    file (JSON of a claims study), the summaries' folder, the scenarios (once each) and ``--out``
+    (a folder, or a path where one can be made)."""
+    if len(set(args.scenarios)) != len(args.scenarios):
+        raise BenchError(f"--scenarios lists a scenario twice: {args.scenarios}")
+    try:
+        claims = json.loads(Path(args.claims).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise BenchError(f"--claims {str(args.claims)!r} is not a claims study's JSON file ({exc})") from None
+    if not isinstance(claims, list):
+        raise BenchError(
+            f"--claims {str(args.claims)!r} is not a claims study's JSON file (not a list of claims)"
+        )
+    if not Path(args.summaries).is_dir():
+        raise BenchError(f"--summaries {str(args.summaries)!r} is not a folder of a claims study's runs")
+    if args.out.exists() and not args.out.is_dir():
+        raise BenchError(f"--out {str(args.out)!r} exists and is not a folder")
+    return claims

@@ -36,6 +36,7 @@ import numpy as np
 
 from mimo_radar_env import MimoRadarSelectVectorEnv
 
+from ..errors import BenchError
 from ..report import format_estimate, paired_difference
 from .base import Finished, Run, Study
 from .tracking import add_fusion_run_arguments, fusion_runs
@@ -86,6 +87,10 @@ class PlanningStudy(Study):
         )
 
     def runs(self) -> list[Run]:
+        if self.args.rl is not None and not Path(self.args.rl).is_dir():
+            raise BenchError(
+                f"--rl {self.args.rl!r} is not a folder: give an RL study's output (rl --out DIR)"
+            )
         return fusion_runs(self, planning_policies())
 
     def judge(self, finished: dict[Hashable, Finished]) -> list[dict[str, Any]]:

@@ -181,6 +181,14 @@ def integer(low: int, why: str = "", high: int = MAX_ARGUMENT) -> Callable[[str]
     return parse
 
 
+def folder(text: str) -> str:
+    """An argparse type: a folder to write into, named (an empty ``--out ''`` would write into the
+    current folder)."""
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"must name a folder, got {text!r}")
+    return text
+
+
 def hours(text: str) -> float | None:
     """An argparse type: a positive number of hours, or ``none`` (no limit)."""
     if text.lower() == "none":
@@ -357,7 +365,9 @@ def add_run_arguments(
     parser.add_argument(
         "--seed", type=integer(0), default=0, help="base seed: trial i uses seed + i (default 0)"
     )
-    parser.add_argument("--out", required=True, help="output directory (created; reused to resume)")
+    parser.add_argument(
+        "--out", required=True, type=folder, help="output directory (created; reused to resume)"
+    )
     parser.add_argument(
         "--shard-size",
         type=integer(1),

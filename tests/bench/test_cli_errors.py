@@ -284,3 +284,38 @@ def test_env_option_combinations_are_refused_in_one_line_by_every_command(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0] and "needs --tracking=True" in err[0]
     assert not out.exists()
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (
+            ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--out", ""],
+            "argument --out: must name a folder, got ''",
+        ),
+        (
+            ["mechanisms", "--claims", "/nonexistent", "--out", "X"],
+            "--claims '/nonexistent' is not a claims study's JSON",
+        ),
+        (
+            ["mechanisms", "--claims", "/etc/hostname", "--out", "X"],
+            "--claims '/etc/hostname' is not a claims study's JSON",
+        ),
+        (
+            ["mechanisms", "--scenarios", "paper-1-v1", "paper-1-v1", "--out", "X"],
+            "--scenarios lists a scenario twice",
+        ),
+        (["mechanisms", "--out", "/etc/passwd"], "--out '/etc/passwd' exists and is not a folder"),
+        (["planning", "--rl", "/nonexistent", "--out", "X"], "--rl '/nonexistent' is not a folder"),
+    ],
+)
+def test_referenced_files_and_folders_are_checked_before_anything_runs(
+    argv, message, capsys, tmp_path, monkeypatch
+):
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    assert list(tmp_path.iterdir()) == []  # nothing written
