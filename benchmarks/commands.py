@@ -115,7 +115,8 @@ class TrainPPO(Command):
         algorithm = LEARNERS[args.algo].algorithm.partition(":")[2]  # PPO, MaskablePPO, RecurrentPPO
         if args.seeds == 1:
             print(
-                f"trained {algorithm} for {meta['timesteps']} steps in {meta['train_wall_s']:.0f} s; "
+                f"trained {algorithm} for {meta.get('trained_timesteps', meta['timesteps'])} steps "
+                f"({meta['timesteps']} asked, in whole rollouts) in {meta['train_wall_s']:.0f} s; "
                 f"saved {Path(args.out, 'model.zip')}"
             )
         else:

@@ -45,6 +45,8 @@ from numpy.typing import NDArray
 
 from benchmarks.metrics import TRIAL_FIELDS
 
+from .errors import HarnessError
+
 #: The layout of the fields above; part of every shard's identity, so that shards of an older
 #: layout are recomputed rather than read.
 SHARD_FORMAT = 3
@@ -89,14 +91,27 @@ def write_shard(path: Path, result: dict[str, NDArray], trials: range, identity:
     payload["shard_trials"] = np.array([trials.start, trials.stop])
     payload["config_hash"] = np.array(identity)
     payload["checksum"] = np.array(checksum(result))
-    handle, tmp = tempfile.mkstemp(prefix=path.stem + ".", suffix=".tmp.npz", dir=path.parent)
+    try:
+        handle, tmp = tempfile.mkstemp(prefix=path.stem + ".", suffix=".tmp.npz", dir=path.parent)
+    except OSError as exc:
+        raise _unwritable(path, exc) from None
     try:
         with os.fdopen(handle, "wb") as file:
             np.savez(file, **payload)
         os.replace(tmp, path)
+    except OSError as exc:  # a full disk, a read-only folder: one line; what was written stays
+        Path(tmp).unlink(missing_ok=True)
+        raise _unwritable(path, exc) from None
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def _unwritable(path: Path, exc: OSError) -> HarnessError:
+    return HarnessError(
+        f"cannot write the shard {path} ({exc.strerror or exc}): free space or give `out` a writable "
+        "folder; the shards already written are kept, and the same run started again resumes"
+    )
 
 
 def read_shard(path: Path, trials: range, identity: str) -> dict[str, NDArray]:

@@ -395,6 +395,8 @@ def _train(
         "scenario": sc.to_dict(),
         "env_options": options.to_dict(),
         "timesteps": timesteps,
+        # what the learner ran: whole rollouts of n_steps x n_envs, at least the timesteps asked
+        "trained_timesteps": int(model.num_timesteps),
         "seed": seed,
         "n_envs": n_envs,
         "action": "discrete" if model.action_space.__class__.__name__ == "Discrete" else "scores",

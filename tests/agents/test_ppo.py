@@ -96,6 +96,7 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     from benchmarks.training import train_ppo
 
     meta = train_ppo("paper-1-v1", 2048, tmp_path / "ppo", seed=3, progress=False, tensorboard=True)
+    assert meta["trained_timesteps"] >= meta["timesteps"] == 2048  # whole rollouts, said as run
     assert list((tmp_path / "ppo" / "tensorboard").rglob("events.out.tfevents.*"))
     assert (tmp_path / "ppo" / "model.zip").exists() and (tmp_path / "ppo" / "vecnormalize.npz").exists()
     assert json.loads((tmp_path / "ppo" / "ppo.json").read_text())["timesteps"] == 2048 == meta["timesteps"]

@@ -214,3 +214,32 @@ def test_a_changed_model_file_is_a_different_run(tmp_path):
     changed = make_config("paper-1", [policy], trials=1, steps=3)
     with pytest.raises(HarnessError, match=r"differs in \['policy_files'\]"):
         run(changed, tmp_path / "out", progress=False)
+
+
+def test_a_full_disk_is_one_line_and_a_rerun_resumes(tmp_path, monkeypatch, capsys):
+    import errno
+
+    import benchmarks.shards
+    from benchmarks.cli import main
+
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,random", "--trials", "2", "--steps", "2"]
+    argv += ["--shard-size", "1", "--workers", "1", "--quiet", "--no-figures", "--out", str(tmp_path / "run")]
+    real_savez, calls = np.savez, []
+
+    def full_after_one(file, **payload):
+        calls.append(1)
+        if len(calls) > 1:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_savez(file, **payload)
+
+    monkeypatch.setattr(benchmarks.shards.np, "savez", full_after_one)
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot write the shard" in err[0] and "No space left on device" in err[0]
+    assert len(list((tmp_path / "run").glob("shards/*/*.npz"))) == 1  # the one written is kept
+    assert not list((tmp_path / "run").glob("shards/*/*.tmp.npz"))  # no half-written file
+    monkeypatch.setattr(benchmarks.shards.np, "savez", real_savez)
+    assert main(argv) == 0
+    assert "resumed: 1 of 4 tasks already done" in capsys.readouterr().err
