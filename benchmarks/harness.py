@@ -502,8 +502,17 @@ def prepare_output(out: Path, config: RunConfig) -> None:
     path = out / CONFIG_FILE
     wanted = json.loads(json.dumps(config.to_json(), allow_nan=False))
     try:
+        for name, kind in (("shards", "a folder"), ("summary.json", "a file"), ("table.md", "a file")):
+            other = out / name
+            if other.exists() and (other.is_dir() != (kind == "a folder")):
+                raise HarnessError(
+                    f"{other} should be {kind} of a run: `out` {out} is damaged or not a run's folder; "
+                    "remove it or choose another `out`"
+                )
         if path.exists():
             existing = json.loads(path.read_text())
+            if not isinstance(existing, dict):
+                raise HarnessError(f"{path} is not a run's configuration: remove it or choose another `out`")
             if existing != wanted:
                 changed = sorted(k for k in set(existing) | set(wanted) if existing.get(k) != wanted.get(k))
                 raise HarnessError(
@@ -512,7 +521,7 @@ def prepare_output(out: Path, config: RunConfig) -> None:
                 )
         else:
             path.write_text(json.dumps(wanted, indent=2, allow_nan=False))
-    except (OSError, json.JSONDecodeError) as exc:
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise HarnessError(f"cannot use `out` {out}: {getattr(exc, 'strerror', None) or exc}") from exc
 
 

@@ -243,3 +243,43 @@ def test_a_full_disk_is_one_line_and_a_rerun_resumes(tmp_path, monkeypatch, caps
     monkeypatch.setattr(benchmarks.shards.np, "savez", real_savez)
     assert main(argv) == 0
     assert "resumed: 1 of 4 tasks already done" in capsys.readouterr().err
+
+
+def _damage(folder: Path, how: str) -> None:
+    if how == "config-shape":
+        (folder / "config.json").write_text("[1, 2]")
+    elif how == "config-bytes":
+        (folder / "config.json").write_bytes(bytes(range(128, 228)))
+    elif how == "summary-folder":
+        (folder / "summary.json").unlink()
+        (folder / "summary.json").mkdir()
+    elif how == "table-folder":
+        (folder / "table.md").unlink()
+        (folder / "table.md").mkdir()
+
+
+@pytest.mark.parametrize(
+    ("how", "message"),
+    [
+        ("config-shape", "config.json is not a run's configuration"),
+        ("config-bytes", "cannot use --out"),
+        ("summary-folder", "summary.json should be a file of a run"),
+        ("table-folder", "table.md should be a file of a run"),
+    ],
+)
+def test_a_damaged_run_folder_started_again_is_one_line_and_keeps_its_shards(tmp_path, capsys, how, message):
+    from benchmarks.cli import main
+
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "2", "--steps", "2"]
+    argv += ["--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
+    assert main(argv) == 0
+    shards = sorted(p.read_bytes() for p in out.glob("shards/*/*.npz"))
+    _damage(out, how)
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and message in err[0]
+    assert sorted(p.read_bytes() for p in out.glob("shards/*/*.npz")) == shards  # nothing lost
