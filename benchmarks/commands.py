@@ -240,7 +240,8 @@ class Compile(Command):
         "A fresh install has no numba cache: a run compiles the kernels it calls on their first call. "
         "This compiles all of them up front (the env's fusions and bound, the tracking search, BPSO), "
         "spread over worker processes; later runs load them. Nothing else changes: a run gives the "
-        "same numbers with or without it."
+        "same numbers with or without it. A cached kernel whose index numba cannot read back (a damaged "
+        "cache) counts as not cached: its index is removed and it is compiled anew, here and before a run."
     )
 
     @classmethod

@@ -6,6 +6,7 @@ module, or ``None`` without it), not when the package is imported: ``HAVE_NUMBA`
 whether it is installed, so the command line's help and its argument errors answer without it.
 """
 
+import contextlib
 import importlib
 import importlib.util
 import os
@@ -44,7 +45,9 @@ class LazyKernels:
         if name not in namespace:
             where, _, attribute = self.kernels[name].partition(":")
             package = self.module.rpartition(".")[0]
-            namespace[name] = getattr(importlib.import_module(where, package), attribute)
+            kernel = getattr(importlib.import_module(where, package), attribute)
+            repair_cache(kernel)  # a damaged cache is compiled anew, not a failure of every call
+            namespace[name] = kernel
         return namespace[name]
 
     def module_getattr(self, name: str) -> Any:
@@ -53,19 +56,38 @@ class LazyKernels:
         raise AttributeError(f"module {self.module!r} has no attribute {name!r}")
 
 
+def repair_cache(kernel: Any) -> bool:
+    """Whether ``kernel``'s on-disk cache index was damaged (numba could not read it back: every
+    call would fail in numba's ``_load_index``) and was removed, so that its next call compiles
+    it anew. A kernel whose cache cannot be told (another numba) is left alone."""
+    try:
+        cache_file = kernel._cache._cache_file
+        load, index = cache_file._load_index, cache_file._index_path
+    except AttributeError:
+        return False
+    try:
+        load()
+        return False
+    except Exception:  # noqa: BLE001 - any failure to read the index back is a damaged index
+        with contextlib.suppress(OSError):
+            os.remove(index)
+        return True
+
+
 def uncached(kernels: Iterable[Any]) -> list[str]:
-    """The names of the numba kernels (dispatchers) whose on-disk cache does not exist yet: their
-    first call compiles them. A kernel whose cache cannot be told (another numba) counts as
-    cached, so this never claims a compilation it cannot see."""
+    """The names of the numba kernels (dispatchers) whose on-disk cache does not exist yet, or was
+    damaged and is removed (:func:`repair_cache`): their first call compiles them. A kernel whose
+    cache cannot be told (another numba) counts as cached, so this never claims a compilation it
+    cannot see."""
     names = []
     for kernel in kernels:
         try:
             index = kernel._cache._cache_file._index_path
         except AttributeError:
             continue
-        if not os.path.exists(index):
+        if repair_cache(kernel) or not os.path.exists(index):
             names.append(kernel.__name__)
     return names
 
 
-__all__ = ["HAVE_NUMBA", "LazyKernels", "uncached"]
+__all__ = ["HAVE_NUMBA", "LazyKernels", "repair_cache", "uncached"]

@@ -1,6 +1,7 @@
 """Which numba kernels a run would compile first: the cache check and the kernels of a run."""
 
 import importlib.util
+import os
 import sys
 
 import pytest
@@ -30,6 +31,30 @@ def test_a_kernel_is_uncached_until_its_first_call_writes_the_cache(tmp_path, mo
     assert module.doubled(3) == 6
     assert uncached([module.doubled]) == []
     assert uncached([object()]) == []  # not a numba kernel: nothing claimed
+
+
+def test_a_damaged_cache_index_is_found_removed_and_compiled_anew(tmp_path, monkeypatch):
+    """Random bytes over a kernel's cache index made every call fail inside numba's
+    ``_load_index``; the check finds it, removes it, and the next call compiles and caches."""
+    from mimo_radar_env.core.compiled import repair_cache
+
+    source = tmp_path / "kernel_for_damage_test.py"
+    source.write_text(KERNEL)
+    spec = importlib.util.spec_from_file_location("kernel_for_damage_test", source)
+    module = importlib.util.module_from_spec(spec)
+    monkeypatch.setitem(sys.modules, "kernel_for_damage_test", module)
+    spec.loader.exec_module(module)
+    assert module.doubled(3) == 6 and uncached([module.doubled]) == []
+    index = module.doubled._cache._cache_file._index_path
+    with open(index, "wb") as file:
+        file.write(bytes(range(200, 256)))  # not a pickle
+    assert repair_cache(module.doubled) and not os.path.exists(index)
+    with open(index, "wb") as file:
+        file.write(bytes(range(200, 256)))
+    assert uncached([module.doubled]) == ["doubled"]  # compile would now compile it
+    fresh = importlib.util.module_from_spec(spec)  # a new process's view: loads from the cache
+    spec.loader.exec_module(fresh)
+    assert fresh.doubled(4) == 8 and uncached([fresh.doubled]) == []
 
 
 def test_a_run_lists_its_fusion_bound_and_solver_kernels():
