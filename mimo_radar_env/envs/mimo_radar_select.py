@@ -71,7 +71,23 @@ def _squeeze(batch: dict[str, NDArray]) -> dict[str, Any]:
     return out
 
 
-class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
+class HorizonSpec:
+    """``spec``, the registration spec, with ``max_episode_steps`` the scenario's horizon, where the
+    env truncates (so Gymnasium adds no ``TimeLimit`` of its own): the single and the vector envs
+    of both ids alike (:func:`with_horizon`)."""
+
+    scenario: Scenario
+
+    @property
+    def spec(self) -> EnvSpec | None:
+        return getattr(self, "_spec", None)
+
+    @spec.setter
+    def spec(self, value: EnvSpec | None) -> None:
+        self._spec = with_horizon(value, self.scenario)
+
+
+class MimoRadarSelectEnv(HorizonSpec, gym.Env[dict[str, NDArray], NDArray[np.int8]]):
     """
     ## Description
 
@@ -176,16 +192,6 @@ class MimoRadarSelectEnv(gym.Env[dict[str, NDArray], NDArray[np.int8]]):
 
     metadata = {"render_modes": ["human", "rgb_array"], "render_fps": 10}
     _spec: EnvSpec | None = None
-
-    @property
-    def spec(self) -> EnvSpec | None:  # type: ignore[override]
-        """The registration spec; its ``max_episode_steps`` is the scenario's horizon, where the
-        env truncates (so Gymnasium adds no ``TimeLimit`` of its own)."""
-        return self._spec
-
-    @spec.setter
-    def spec(self, value: EnvSpec | None) -> None:
-        self._spec = with_horizon(value, self.scenario)
 
     def __str__(self) -> str:
         return describe(type(self).__name__, self.spec, self.scenario, self.options)
@@ -413,7 +419,7 @@ MimoRadarSelectEnv.__doc__ = (
 )
 
 
-class MimoRadarSelectVectorEnv(VectorEnv):
+class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
     """B trials of :class:`MimoRadarSelectEnv` as one numpy computation.
 
     Observations, rewards and every ``info`` entry carry a leading trial axis.
@@ -438,14 +444,6 @@ class MimoRadarSelectVectorEnv(VectorEnv):
 
     __repr__ = __str__
 
-    @property
-    def spec(self) -> EnvSpec | None:  # type: ignore[override]
-        """The registration spec, ``max_episode_steps`` the scenario's horizon (as the single env's)."""
-        return getattr(self, "_spec", None)
-
-    @spec.setter
-    def spec(self, value: EnvSpec | None) -> None:
-        self._spec = with_horizon(value, self.scenario)
 
     def __init__(
         self,

@@ -13,21 +13,14 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
-from gymnasium.envs.registration import EnvSpec
 from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from ..core.superarm import super_arm_count
+from ..envs.mimo_radar_select import HorizonSpec
 from ..scenarios import Scenario
-from .actions import (
-    StationScoreAction,
-    SuperArmDiscreteAction,
-    SuperArmIndex,
-    check_discrete_actions,
-    check_score_actions,
-    scores_to_action,
-)
+from . import actions as action_spaces
 from .features import RadarFeatureObservation, RadarFeatures
 
 
@@ -73,13 +66,13 @@ def action_form(action: str, scenario: Scenario) -> str:
 def wrap_for_learning(env: gym.Env, action: str = "auto") -> gym.Env:
     """``env`` with a valid action wrapper and the feature observation."""
     if action_form(action, env.unwrapped.scenario) == "discrete":
-        env = SuperArmDiscreteAction(env)
+        env = action_spaces.SuperArmDiscreteAction(env)
     else:
-        env = StationScoreAction(env)
+        env = action_spaces.StationScoreAction(env)
     return RadarFeatureObservation(env)
 
 
-class MimoRadarSelectFlatVectorEnv(VectorEnv):
+class MimoRadarSelectFlatVectorEnv(HorizonSpec, VectorEnv):
     """B trials of ``MimoRadarSelectFlat`` as one numpy computation: the vector entry point of
     the Flat ids (``gym.make_vec("MimoRadarSelectFlat-v1", num_envs=B,
     vectorization_mode="vector_entry_point")``).
@@ -96,17 +89,6 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     """
 
     metadata = {"autoreset_mode": AutoresetMode.NEXT_STEP, "render_modes": []}
-
-    @property
-    def spec(self) -> EnvSpec | None:  # type: ignore[override]
-        """The registration spec, ``max_episode_steps`` the scenario's horizon (as the single env's)."""
-        return getattr(self, "_spec", None)
-
-    @spec.setter
-    def spec(self, value: EnvSpec | None) -> None:
-        from ..envs.mimo_radar_select import with_horizon
-
-        self._spec = with_horizon(value, self.scenario)
 
     def __init__(
         self,
@@ -129,7 +111,7 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
         self.options = self.env.options
         self.action_form = action_form(action, sc)
         if self.action_form == "discrete":
-            self.index: SuperArmIndex | None = SuperArmIndex(sc)
+            self.index: action_spaces.SuperArmIndex | None = action_spaces.SuperArmIndex(sc)
             self.single_action_space: spaces.Space = spaces.Discrete(self.index.size)
         else:
             self.index = None
@@ -158,10 +140,12 @@ class MimoRadarSelectFlatVectorEnv(VectorEnv):
     def to_env_actions(self, actions: Any) -> NDArray[np.int8]:
         """The env's actions (B, M + N) for the batch's Flat actions."""
         if self.index is not None:
-            return self.index.to_action(check_discrete_actions(actions, self.index.size, (self.num_envs,)))
+            return self.index.to_action(
+                action_spaces.check_discrete_actions(actions, self.index.size, (self.num_envs,))
+            )
         sc = self.scenario
-        scores = check_score_actions(actions, sc.num_tx + sc.num_rx, (self.num_envs,))
-        return scores_to_action(scores, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
+        scores = action_spaces.check_score_actions(actions, sc.num_tx + sc.num_rx, (self.num_envs,))
+        return action_spaces.scores_to_action(scores, sc.num_tx, sc.tx_per_step, sc.rx_per_step)
 
     def step(
         self, actions: Any

@@ -20,13 +20,19 @@ def doubled(x):
 """
 
 
-def test_a_kernel_is_uncached_until_its_first_call_writes_the_cache(tmp_path, monkeypatch):
-    source = tmp_path / "kernel_for_cache_test.py"
+def _kernel_module(tmp_path, monkeypatch, name: str):
+    """KERNEL as module ``name`` in ``tmp_path`` (its numba cache beside it), and its spec."""
+    source = tmp_path / f"{name}.py"
     source.write_text(KERNEL)
-    spec = importlib.util.spec_from_file_location("kernel_for_cache_test", source)
+    spec = importlib.util.spec_from_file_location(name, source)
     module = importlib.util.module_from_spec(spec)
-    monkeypatch.setitem(sys.modules, "kernel_for_cache_test", module)
+    monkeypatch.setitem(sys.modules, name, module)
     spec.loader.exec_module(module)
+    return module, spec
+
+
+def test_a_kernel_is_uncached_until_its_first_call_writes_the_cache(tmp_path, monkeypatch):
+    module, _ = _kernel_module(tmp_path, monkeypatch, "kernel_for_cache_test")
     assert uncached([module.doubled]) == ["doubled"]
     assert module.doubled(3) == 6
     assert uncached([module.doubled]) == []
@@ -38,12 +44,7 @@ def test_a_damaged_cache_index_is_found_removed_and_compiled_anew(tmp_path, monk
     ``_load_index``; the check finds it, removes it, and the next call compiles and caches."""
     from mimo_radar_env.core.compiled import repair_cache
 
-    source = tmp_path / "kernel_for_damage_test.py"
-    source.write_text(KERNEL)
-    spec = importlib.util.spec_from_file_location("kernel_for_damage_test", source)
-    module = importlib.util.module_from_spec(spec)
-    monkeypatch.setitem(sys.modules, "kernel_for_damage_test", module)
-    spec.loader.exec_module(module)
+    module, spec = _kernel_module(tmp_path, monkeypatch, "kernel_for_damage_test")
     assert module.doubled(3) == 6 and uncached([module.doubled]) == []
     index = module.doubled._cache._cache_file._index_path
     with open(index, "wb") as file:
