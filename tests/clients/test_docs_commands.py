@@ -57,3 +57,34 @@ def test_each_command_parses_as_written(where):
     args = build_parser().parse_args(argv[1:])  # SystemExit (exit 2) on anything the parser refuses
     if isinstance(getattr(args, "scenario", None), str) and hasattr(args, "env_version"):
         scenario_for_version(args.scenario, args.env_version)  # a v0 name under v1 is refused
+
+
+def _runnable_examples():
+    """The examples that name a scenario and run from this checkout as written (no model or
+    layout file of the reader's own): run and paper, made small."""
+    for where, line in sorted(COMMANDS.items()):
+        argv = shlex.split(line, comments=True)[1:]
+        if argv[0] not in ("run", "paper") or "ppo:" in line or ".yaml" in line:
+            continue
+        yield where, argv
+
+
+@pytest.mark.parametrize(
+    ("where", "argv"), list(_runnable_examples()), ids=lambda v: v if isinstance(v, str) else ""
+)
+def test_each_example_that_names_a_scenario_runs(where, argv, tmp_path):
+    from benchmarks.cli import main
+
+    small = [
+        "--trials",
+        "2",
+        "--steps",
+        "2",
+        "--workers",
+        "1",
+        "--quiet",
+        "--no-figures",
+        "--out",
+        str(tmp_path / "o"),
+    ]
+    assert main([*argv, *small]) == 0, where  # the last --trials, --steps and --out win
