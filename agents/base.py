@@ -32,7 +32,7 @@ from mimo_radar_env import Scenario, load_scenario
 from mimo_radar_env.core.arrays import NUMPY, NumpyNamespace, TorchNamespace, namespace
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
-from mimo_radar_env.core.superarm import top_mask
+from mimo_radar_env.core.superarm import masks_to_actions, top_mask
 
 from .costs import BOOKKEEPING, SOLVER, Cost, Needs
 from .solvers import SuperArmSolver, make_solver
@@ -177,7 +177,7 @@ class Agent(ABC):
         raise ValueError(f"observation 'sinr' must have shape (K, M, N) or (B, K, M, N), got {sinr.shape}")
 
     def actions_from_masks(self, tx: NDArray[np.bool_], rx: NDArray[np.bool_]) -> NDArray[np.int8]:
-        return self.xp.astype(self.xp.concatenate([tx, rx], axis=1), np.int8)
+        return masks_to_actions(tx, rx)
 
     def random_super_arms(self, count: int) -> NDArray[np.int8]:
         """``count`` uniformly random valid super arms, (count, M + N)."""

@@ -9,7 +9,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
-from mimo_radar_env.core.superarm import top_mask
+from mimo_radar_env.core.superarm import masks_to_actions, top_mask
 
 from ..parameters import check_integer, check_parameter
 from .base import SuperArmSolver
@@ -146,7 +146,7 @@ class BPSOSolver(SuperArmSolver):
         else:
             tx = top_mask(random.uniform(Stream.BPSO_INIT_TX, (self.population, num_tx)), self.tx_count)
             rx = top_mask(random.uniform(Stream.BPSO_INIT_RX, (self.population, num_rx)), self.rx_count)
-            positions = xp.astype(xp.concatenate([tx, rx], axis=-1), np.int8)
+            positions = masks_to_actions(tx, rx)
         return positions, random.keys_for(Stream.BPSO_KEYS)
 
     def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool]:

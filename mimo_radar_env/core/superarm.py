@@ -38,6 +38,12 @@ def subset_masks(size: int, chosen: int) -> NDArray[np.bool_]:
     return masks
 
 
+def masks_to_actions(tx: NDArray[np.bool_], rx: NDArray[np.bool_]) -> NDArray[np.int8]:
+    """The env's actions (..., M + N) int8 of transmitter and receiver masks (..., M), (..., N)."""
+    xp = namespace(tx)
+    return xp.astype(xp.concatenate([tx, rx], axis=-1), np.int8)
+
+
 def super_arm_count(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> int:
     """``C(M, Ms) C(N, Ns)``: the number of super arms."""
     return math.comb(num_tx, tx_count) * math.comb(num_rx, rx_count)

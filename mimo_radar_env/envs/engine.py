@@ -21,7 +21,7 @@ from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
-from ..core.superarm import best_super_arm, super_arm_value
+from ..core.superarm import best_super_arm, masks_to_actions, super_arm_value
 from ..scenarios import Scenario
 from ..tracking import IMMUKFTracker
 from ..tracking.bound import bound_step, position_bound
@@ -181,7 +181,7 @@ class RadarEngine:
             weights, sc.tx_per_step, sc.rx_per_step, self.options.oracle_solver
         )
         info["optimal_reward"] = best_value
-        info["optimal_action"] = xp.astype(xp.concatenate([best_tx, best_rx], axis=1), np.int8)
+        info["optimal_action"] = masks_to_actions(best_tx, best_rx)
         info["action_valid"] = valid
         info["reward_sinr"] = sinr_reward
         reward = sinr_reward
@@ -218,13 +218,12 @@ class RadarEngine:
 
     def oracle_action(self) -> NDArray[np.int8]:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
-        xp = self.xp
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
         tx, rx, _ = best_super_arm(
             weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.options.oracle_solver
         )
-        return xp.astype(xp.concatenate([tx, rx], axis=1), np.int8)
+        return masks_to_actions(tx, rx)
 
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """The super arm of the coming step that minimises the predicted posterior position
@@ -234,7 +233,6 @@ class RadarEngine:
         stations beyond; (B, M + N)."""
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
-        xp = self.xp
         sc = self.scenario
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(upcoming)))
@@ -244,7 +242,7 @@ class RadarEngine:
         tx, rx = select_for_tracking(
             position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
         )
-        return xp.astype(xp.concatenate([tx, rx], axis=1), np.int8)
+        return masks_to_actions(tx, rx)
 
     def tracking_forecast(self, horizon: int) -> Forecast:
         """What a receding-horizon tracking oracle scores plans of the next ``horizon`` steps on

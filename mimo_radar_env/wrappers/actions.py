@@ -16,7 +16,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
-from ..core.superarm import all_super_arms, super_arm_count, top_mask
+from ..core.superarm import all_super_arms, masks_to_actions, super_arm_count, top_mask
 from ..scenarios import Scenario
 
 #: Largest number of super arms :class:`SuperArmDiscreteAction` enumerates.
@@ -45,7 +45,7 @@ class SuperArmIndex:
                 "use StationScoreAction for this layout"
             )
         tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
-        self.actions = np.concatenate([tx, rx], axis=1).astype(np.int8)
+        self.actions = masks_to_actions(tx, rx)
 
     @property
     def size(self) -> int:
@@ -152,7 +152,7 @@ def scores_to_action(
         raise ValueError("station scores must be finite")
     tx = top_mask(scores[..., :num_tx], tx_count)
     rx = top_mask(scores[..., num_tx:], rx_count)
-    return np.concatenate([tx, rx], axis=-1).astype(np.int8)
+    return masks_to_actions(tx, rx)
 
 
 class StationScoreAction(gym.ActionWrapper, gym.utils.RecordConstructorArgs):
