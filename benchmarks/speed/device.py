@@ -21,6 +21,7 @@ docs/performance.md's "The engine on a device" tables are generated from its JSO
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import os
 import platform
@@ -33,6 +34,7 @@ from typing import Any
 import numpy as np
 
 from mimo_radar_env import VERSIONS, load_scenario
+from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs.engine import RadarEngine
@@ -65,7 +67,11 @@ def _engine(version: str, fusion: str, trials: int, device: Any, scenario: str |
 
 
 def _numpy(a: Any) -> np.ndarray:
-    return a.detach().cpu().numpy() if hasattr(a, "detach") else np.asarray(a)
+    return namespace(a).to_numpy(a)
+
+
+def _is_cuda(device: Any) -> bool:
+    return device is not None and str(device).startswith("cuda")
 
 
 def relative_difference(a: Any, b: Any, scale: Any = None) -> float:
@@ -141,27 +147,42 @@ EXECUTION_KEYS = frozenset(
 )
 
 
-def json_differences(a: Any, b: Any, path: str = "") -> list[tuple[str, Any, Any]]:
-    """``(path, a, b)`` of every leaf of two JSON documents that differs: numbers by more than a
-    relative TOLERANCE and ABSOLUTE_FLOOR, other leaves at all; execution keys are skipped."""
+def _leaves(a: Any, b: Any, path: str = "") -> Iterator[tuple[str, Any, Any]]:
+    """``(path, a, b)`` of every pair of leaves of two JSON documents, execution keys skipped; a
+    dict's keys or a list's length that differ are one pair of leaves."""
     if isinstance(a, dict) and isinstance(b, dict):
         if set(a) != set(b):
-            return [(path, sorted(a), sorted(b))]
-        return [d for k in a if k not in EXECUTION_KEYS for d in json_differences(a[k], b[k], f"{path}.{k}")]
-    if isinstance(a, list) and isinstance(b, list):
+            yield path, sorted(a), sorted(b)
+            return
+        for k in a:
+            if k not in EXECUTION_KEYS:
+                yield from _leaves(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, list) and isinstance(b, list):
         if len(a) != len(b):
-            return [(path, len(a), len(b))]
-        return [
-            d
-            for i, (x, y) in enumerate(zip(a, b, strict=True))
-            for d in json_differences(x, y, f"{path}[{i}]")
-        ]
-    numbers = (int, float)
-    if isinstance(a, numbers) and isinstance(b, numbers) and not isinstance(a, bool):
-        if np.isnan(a) and np.isnan(b):
-            return []
-        return [] if np.isclose(b, a, rtol=TOLERANCE, atol=ABSOLUTE_FLOOR) else [(path, a, b)]
-    return [] if a == b else [(path, a, b)]
+            yield path, len(a), len(b)
+            return
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            yield from _leaves(x, y, f"{path}[{i}]")
+    else:
+        yield path, a, b
+
+
+def _numbers(a: Any, b: Any) -> bool:
+    return isinstance(a, int | float) and isinstance(b, int | float) and not isinstance(a, bool)
+
+
+def _agree(a: Any, b: Any) -> bool:
+    """Two leaves agree: numbers within a relative TOLERANCE and ABSOLUTE_FLOOR (NaN with NaN),
+    other leaves equal."""
+    if not _numbers(a, b):
+        return a == b
+    return bool(np.isnan(a) and np.isnan(b) or np.isclose(b, a, rtol=TOLERANCE, atol=ABSOLUTE_FLOOR))
+
+
+def json_differences(a: Any, b: Any) -> list[tuple[str, Any, Any]]:
+    """``(path, a, b)`` of every leaf of two JSON documents that differs (:func:`_agree`);
+    execution keys are skipped."""
+    return [(path, x, y) for path, x, y in _leaves(a, b) if not _agree(x, y)]
 
 
 def study_differences(reference: Path, other: Path) -> dict[str, Any]:
@@ -176,21 +197,11 @@ def study_differences(reference: Path, other: Path) -> dict[str, Any]:
     for name in files:
         a, b = json.loads((reference / name).read_text()), json.loads((Path(other) / name).read_text())
         differing += [(f"{name}{path}", x, y) for path, x, y in json_differences(a, b)]
-        largest = max(largest, _largest_relative(a, b))
-    return {"files": [str(f) for f in files], "differing": differing, "largest_relative": largest}
-
-
-def _largest_relative(a: Any, b: Any) -> float:
-    if isinstance(a, dict) and isinstance(b, dict):
-        return max(
-            [_largest_relative(a[k], b[k]) for k in a if k not in EXECUTION_KEYS and k in b], default=0.0
+        gaps = [(abs(x - y), abs(x)) for _, x, y in _leaves(a, b) if _numbers(x, y)]
+        largest = max(
+            [largest, *(gap / max(size, ABSOLUTE_FLOOR) for gap, size in gaps if gap > ABSOLUTE_FLOOR)]
         )
-    if isinstance(a, list) and isinstance(b, list):
-        return max([_largest_relative(x, y) for x, y in zip(a, b, strict=False)], default=0.0)
-    if isinstance(a, int | float) and isinstance(b, int | float) and not isinstance(a, bool):
-        gap = abs(a - b)
-        return 0.0 if not gap > ABSOLUTE_FLOOR else gap / max(abs(a), ABSOLUTE_FLOOR)
-    return 0.0
+    return {"files": [str(f) for f in files], "differing": differing, "largest_relative": largest}
 
 
 @contextmanager
@@ -208,7 +219,7 @@ def one_core() -> Iterator[None]:
 
 
 def _synchronizer(device: Any) -> Callable[[], None]:
-    if device is not None and str(device).startswith("cuda"):
+    if _is_cuda(device):
         import torch
 
         return torch.cuda.synchronize
@@ -229,7 +240,7 @@ def measure(
         for _ in range(min(steps + 1, 8))
     ]
     sync = _synchronizer(device)
-    cuda = device is not None and str(device).startswith("cuda")
+    cuda = _is_cuda(device)
     if cuda:
         import torch
 
@@ -296,7 +307,7 @@ def _free(device: Any) -> None:
     import gc
 
     gc.collect()
-    if device is not None and str(device).startswith("cuda"):
+    if _is_cuda(device):
         import torch
 
         torch.cuda.empty_cache()
@@ -336,9 +347,7 @@ def main(argv: list[str] | None = None) -> None:
     result: dict[str, Any] = {
         "scenario": SCENARIO,
         "device": device,
-        "device_name": torch.cuda.get_device_name(device)
-        if device.startswith("cuda")
-        else platform.processor(),
+        "device_name": torch.cuda.get_device_name(device) if _is_cuda(device) else platform.processor(),
         "cpu_threads_torch": torch.get_num_threads(),
         "machine": f"{os.cpu_count()} cores ({platform.machine()}, Python {platform.python_version()}, "
         f"torch {torch.__version__}, numpy {np.__version__})",
@@ -375,7 +384,7 @@ def main(argv: list[str] | None = None) -> None:
     if device != "cpu":
         backends.append((f"torch {device} eager", device))
     for backend, where in backends:
-        context = one_core() if where is None else _nothing()
+        context = one_core() if where is None else contextlib.nullcontext()
         with context:
             result["speed"].extend(
                 speed_rows(backend, where, sizes, keys, args.max_step_seconds, args.target_seconds)
@@ -384,11 +393,6 @@ def main(argv: list[str] | None = None) -> None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(result, indent=1) + "\n")
         print(f"wrote {args.json}")
-
-
-@contextmanager
-def _nothing() -> Iterator[None]:
-    yield
 
 
 if __name__ == "__main__":
