@@ -19,7 +19,7 @@ from typing import Any
 
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
-from mimo_radar_env.envs.versions import SCENARIO_SETS, check_scenario_version
+from mimo_radar_env.envs.versions import version_conflict
 
 from ..errors import BenchError
 from ..harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
@@ -136,24 +136,19 @@ class Settings:
 
 def scenario_for_version(scenario: Any, version: str) -> None:
     """Refuses ``--scenario NAME`` of another version's paper scenarios (or scenario sets) under
-    ``--env-version`` (:func:`mimo_radar_env.envs.versions.check_scenario_version`), in the
-    command line's words."""
-    try:
-        check_scenario_version(scenario, version)
-    except ValueError:
-        own = VERSIONS[version]
-        for other in VERSIONS.values():
-            if scenario in other.paper_scenarios:
-                number = other.paper_scenarios.index(scenario) + 1
-                hint = f"use {own.paper_scenario(number)!r} or --env-version {other.name}"
-                break
-        else:
-            other = next(VERSIONS[s.version] for s in SCENARIO_SETS.values() if scenario in s.paper_scenarios)
-            hint = f"use --env-version {other.name}"
-        raise BenchError(
-            f"--scenario {scenario!r} is a scenario of {other.env_id}, not of --env-version {version}: "
-            f"{hint} (a scenario file runs as given under any version)"
-        ) from None
+    ``--env-version`` (:func:`mimo_radar_env.envs.versions.version_conflict`), in the command
+    line's words."""
+    conflict = version_conflict(scenario, version)
+    if conflict is None:
+        return
+    other = conflict.version
+    hint = f"use --env-version {other.name}"
+    if conflict.own is not None:
+        hint = f"use {conflict.own!r} or --env-version {other.name}"
+    raise BenchError(
+        f"--scenario {scenario!r} is a scenario of {other.env_id}, not of --env-version {version}: "
+        f"{hint} (a scenario file runs as given under any version)"
+    )
 
 
 # ------------------------------------------------------------------ argument types

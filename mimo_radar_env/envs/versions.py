@@ -160,29 +160,52 @@ def env_version(name: str) -> EnvVersion:
     return VERSIONS[name]
 
 
+@dataclass(frozen=True)
+class VersionConflict:
+    """A scenario name of another env version than the one asked for: that ``version``, the
+    scenario ``set`` it belongs to (None: one of the version's paper scenarios), and the asking
+    version's ``own`` name of the same paper scenario (None for a scenario set's)."""
+
+    version: EnvVersion
+    set: str | None
+    own: str | None
+
+
+def version_conflict(scenario: Any, version: str | None) -> VersionConflict | None:
+    """The conflict of a scenario *name* with env ``version`` (:class:`VersionConflict`), or None:
+    a name of the version's own, any other name, a file or a :class:`Scenario` object."""
+    if version is None or not isinstance(scenario, str):
+        return None
+    own = env_version(version)
+    for other in VERSIONS.values():
+        if other.name != version and scenario in other.paper_scenarios:
+            return VersionConflict(other, None, own.paper_scenario(other.paper_scenarios.index(scenario) + 1))
+    for scenario_set in SCENARIO_SETS.values():
+        if scenario_set.version != version and scenario in scenario_set.paper_scenarios:
+            return VersionConflict(env_version(scenario_set.version), scenario_set.name, None)
+    return None
+
+
 def check_scenario_version(scenario: Any, version: str | None) -> None:
     """Refuses a scenario *name* that is another version's paper scenario (or in another version's
     scenario set) under env ``version``, naming the version's own: v0's ``paper-3`` under v1 would
     run v0's layout with v1's options, a hybrid of the two. A :class:`Scenario` object or a file
     is taken as given: the explicit way to run one version's layout under another's options."""
-    if version is None or not isinstance(scenario, str):
+    conflict = version_conflict(scenario, version)
+    if conflict is None:
         return
-    own = env_version(version)
-    for other in VERSIONS.values():
-        if other.name != version and scenario in other.paper_scenarios:
-            number = other.paper_scenarios.index(scenario) + 1
-            raise ValueError(
-                f"scenario {scenario!r} is {other.env_id}'s paper Scenario {number}; {own.env_id}'s is "
-                f"{own.paper_scenario(number)!r} (to run that layout under {own.env_id}'s "
-                f"options on purpose, pass the Scenario object: scenario=load_scenario({scenario!r}))"
-            )
-    for scenario_set in SCENARIO_SETS.values():
-        if scenario_set.version != version and scenario in scenario_set.paper_scenarios:
-            raise ValueError(
-                f"scenario {scenario!r} belongs to scenario set {scenario_set.name!r} of "
-                f"{env_version(scenario_set.version).env_id}, not of {own.env_id} (to run it anyway, pass "
-                f"the Scenario object: scenario=load_scenario({scenario!r}))"
-            )
+    own, other = env_version(version).env_id, conflict.version.env_id
+    if conflict.set is None:
+        number = conflict.version.paper_scenarios.index(scenario) + 1
+        raise ValueError(
+            f"scenario {scenario!r} is {other}'s paper Scenario {number}; {own}'s is {conflict.own!r} (to "
+            f"run that layout under {own}'s options on purpose, pass the Scenario object: "
+            f"scenario=load_scenario({scenario!r}))"
+        )
+    raise ValueError(
+        f"scenario {scenario!r} belongs to scenario set {conflict.set!r} of {other}, not of {own} (to run "
+        f"it anyway, pass the Scenario object: scenario=load_scenario({scenario!r}))"
+    )
 
 
 def paper_scenario(number: int, version: str) -> str:
