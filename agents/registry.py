@@ -251,13 +251,17 @@ def agent_argument(name: str) -> str | None:
     return _spec(name).argument
 
 
+class UnknownAgentError(ValueError):
+    """A policy name that is no registered agent, plugin or ``module:Class``."""
+
+
 def _spec(name: str) -> AgentSpec:
     if name not in _REGISTRY:
         load_plugins()
     if name not in _REGISTRY and _is_reference(name):
         _load_reference(name)
     if name not in _REGISTRY:
-        raise ValueError(
+        raise UnknownAgentError(
             f"unknown agent {name!r}; available agents are {available_agents()}, or an agents.Agent "
             "subclass as module:Class"
         )

@@ -199,14 +199,14 @@ def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) 
     for policy in policies:
         try:
             agents.split_policy(policy)
-        except ValueError as exc:
-            if "unknown agent" not in str(exc):
-                raise HarnessError(str(exc)) from None
+        except agents.registry.UnknownAgentError:
             raise HarnessError(
                 f"unknown policy {policy!r}; available policies are {agents.available_agents()} "
                 "(and NAME:ARGUMENT for those that take one, e.g. ppo:PATH/model.zip, or an agents.Agent "
                 "subclass as module:Class)"
             ) from None
+        except ValueError as exc:
+            raise HarnessError(str(exc)) from None
     return params
 
 
@@ -631,22 +631,8 @@ def run_many(
     process on torch on that device (``workers=1``, the local backend).
     """
     folders = [Path(out) for _, out in runs]
-    _check_execution(backend, workers, address, folders, device)
     configs = [config for config, _ in runs]
-    if device is not None:
-        numpy_only = sorted(
-            {
-                p
-                for c in configs
-                for p in c.policies
-                if not agents.agent_class(agents.split_policy(p)[0]).needs.device
-            }
-        )
-        if numpy_only:
-            raise HarnessError(
-                f"`device` {device!r}: {', '.join(numpy_only)} act(s) on numpy arrays only; run them without "
-                f"`device` (those that run on a device: {', '.join(device_agents())})"
-            )
+    _check_execution(backend, workers, address, folders, device, configs)
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
@@ -719,11 +705,16 @@ def device_agents() -> list[str]:
 
 
 def _check_execution(
-    backend: str, workers: int, address: str | None, folders: list[Path], device: Any = None
+    backend: str,
+    workers: int,
+    address: str | None,
+    folders: list[Path],
+    device: Any = None,
+    configs: Sequence[RunConfig] = (),
 ) -> None:
     """Refuses an unknown backend, a worker count that is not a whole number >= 1, an
-    unreachable Ray address, two runs into one folder, and a device that is not there or with
-    other workers than this process."""
+    unreachable Ray address, two runs into one folder, and a device that is not there, with
+    other workers than this process, or with a policy of ``configs`` that acts on numpy only."""
     if backend not in ("local", "ray"):
         raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -740,6 +731,19 @@ def _check_execution(
             device_namespace(device)
         except ValueError as exc:
             raise HarnessError(str(exc).replace("device", "`device`", 1)) from None
+        numpy_only = sorted(
+            {
+                p
+                for c in configs
+                for p in c.policies
+                if not agents.agent_class(agents.split_policy(p)[0]).needs.device
+            }
+        )
+        if numpy_only:
+            raise HarnessError(
+                f"`device` {device!r}: {', '.join(numpy_only)} act(s) on numpy arrays only; run them without "
+                f"`device` (those that run on a device: {', '.join(device_agents())})"
+            )
     if backend == "ray":
         try:
             backends.check_ray_address(address)
