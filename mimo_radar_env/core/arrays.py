@@ -29,7 +29,6 @@ class NumpyNamespace:
 
     is_torch = False
     device = None
-    LinAlgError = np.linalg.LinAlgError
 
     def __getattr__(self, name: str) -> Any:
         return getattr(np, name)
@@ -111,7 +110,6 @@ class TorchNamespace:
         self.torch = torch
         self.device = torch.device(device)
         self.linalg = _TorchLinalg(torch)
-        self.LinAlgError = torch.linalg.LinAlgError
         self.pi, self.nan, self.inf = math.pi, math.nan, math.inf
         self.newaxis = None
         self.float64, self.int64, self.int8, self.bool_ = torch.float64, torch.int64, torch.int8, torch.bool
