@@ -14,7 +14,7 @@ from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
 from .planning import PlanTrackingAgent, PlanTrackingUCB
-from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
+from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent, TorchPPOAgent
 from .recency import RecencyBasedExploration
 from .registry import (
     agent_argument,
@@ -58,6 +58,7 @@ __all__ = [
     "MaskablePPOAgent",
     "PPOAgent",
     "RecurrentPPOAgent",
+    "TorchPPOAgent",
     "RandomAgent",
     "RecencyBasedExploration",
     "Rollout",

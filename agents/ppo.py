@@ -25,6 +25,8 @@ from .costs import BOOKKEEPING, NETWORK, Needs
 
 #: Files written by ``mimo-radar-bench train-ppo`` into its output folder.
 MODEL_FILE = "model.zip"
+#: The weights and network shape of a torch-ppo training (:class:`~agents.networks.ActorCritic`).
+WEIGHTS_FILE = "model.pt"
 #: Observation normalisation statistics, as plain arrays (``np.load`` without pickles).
 NORMALIZATION_FILE = "vecnormalize.npz"
 #: The same statistics as SB3's ``VecNormalize.save`` writes them (a pickle), for SB3's
@@ -387,3 +389,82 @@ class RecurrentPPOAgent(PPOAgent):
         )
         self._starts = np.zeros(self.batch_size, dtype=bool)
         return actions
+
+
+#: The project's own PPO (``train-ppo --algo torch-ppo``, plain torch, on any device), beside the
+#: SB3 learners of :data:`LEARNERS`.
+TORCH_PPO = "torch-ppo"
+#: Every learner ``train-ppo --algo`` trains.
+LEARNER_NAMES = (*LEARNERS, TORCH_PPO)
+
+
+class TorchPPOAgent(Agent):
+    """A policy trained by ``train-ppo --algo torch-ppo`` (``torch-ppo:PATH``), acting
+    deterministically (the most likely super arm) on B trials at once, on the env's device.
+
+    Loads ``model.pt`` (:class:`~agents.networks.ActorCritic`, read with ``weights_only=True``)
+    and the ``vecnormalize.npz`` statistics beside it, computes the training env's features
+    (:class:`~mimo_radar_env.wrappers.RadarFeatures`) for the batch and runs one forward pass per
+    step. On an env made with ``device=`` everything stays on that device.
+
+    Parameters
+    ----------
+    path : str or Path
+        ``model.pt`` or the folder holding it.
+    """
+
+    name = TORCH_PPO
+    needs = Needs(tracking=True, device=True)
+    costs = (BOOKKEEPING, NETWORK)
+
+    def __init__(self, scenario: Scenario | str, path: str | Path, seed: int | None = None) -> None:
+        super().__init__(scenario, seed)
+        require("torch", "rl", "the torch-ppo agent")
+        from .networks import ActorCritic, RunningNormalization
+
+        path = Path(path)
+        file = path if path.suffix else path / WEIGHTS_FILE
+        if not file.is_file():
+            raise ValueError(
+                f"PPO model {file} does not exist (expected torch-ppo:DIR or torch-ppo:DIR/{WEIGHTS_FILE}, "
+                "what train-ppo --algo torch-ppo writes)"
+            )
+        self.features = RadarFeatures(self.scenario)
+        self.index = SuperArmIndex(self.scenario)
+        self.network = ActorCritic.load(file)
+        shape = self.network.shape
+        if (shape["observation_size"], shape["action_count"]) != (self.features.size, self.index.size):
+            raise ValueError(
+                f"the model at {file} takes {shape['observation_size']} features and "
+                f"{shape['action_count']} super arms; this scenario has {self.features.size} and "
+                f"{self.index.size}: train it on this layout"
+            )
+        stats = file.parent / NORMALIZATION_FILE
+        self.normalization = RunningNormalization.load(stats) if stats.is_file() else None
+        self.normalization_file = stats if stats.is_file() else None
+
+    def _reset(self, obs: Observation) -> None:
+        import torch
+
+        device = obs["sinr"].device if self.xp.is_torch else torch.device("cpu")
+        self.network.to(device)
+        if self.normalization is not None:
+            self.normalization = self.normalization.to(device)
+        self._features = self.features.reset(obs)
+
+    def _act(self, obs: Observation) -> NDArray[np.int8]:
+        import torch
+
+        features = self._features
+        on_numpy = not self.xp.is_torch
+        if on_numpy:
+            features = torch.as_tensor(features)
+        if self.normalization is not None:
+            features = self.normalization(features)
+        with torch.no_grad():
+            logits, _ = self.network(features)
+        choice = torch.argmax(logits, dim=-1)
+        return self.index.to_action(choice.numpy() if on_numpy else choice)
+
+    def _update(self, obs: Observation, reward: NDArray[np.float64]) -> None:
+        self._features = self.features.step(obs)

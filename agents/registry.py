@@ -33,7 +33,7 @@ from .greedy import EpsilonGreedy
 from .mg_crb_cl import MGCRBCL
 from .oracle import BestAgent, BestTrackingAgent
 from .planning import PlanTrackingAgent, PlanTrackingUCB
-from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent
+from .ppo import MaskablePPOAgent, PPOAgent, RecurrentPPOAgent, TorchPPOAgent
 from .recency import RecencyBasedExploration
 from .thompson import CombinatorialThompson, DiscountedThompson
 from .tracking import TrackingUCB
@@ -92,7 +92,7 @@ for _cls in (
     FixedAgent,
 ):
     register_agent(_cls.name, _cls, _first_line(_cls))
-for _learned in (PPOAgent, MaskablePPOAgent, RecurrentPPOAgent):
+for _learned in (PPOAgent, MaskablePPOAgent, RecurrentPPOAgent, TorchPPOAgent):
     register_agent(_learned.name, _learned, _first_line(_learned), argument="path")
 # plan-tracking:10 plans 10 steps ahead: several horizons in one run
 register_agent(
@@ -240,10 +240,13 @@ def agent_class(name: str) -> type[Agent]:
 
 
 def learned_agents() -> list[str]:
-    """The agents that evaluate a trained model (``NAME:PATH``): PPO and the sb3-contrib learners."""
-    from .ppo import PPOAgent
+    """The agents that evaluate a trained model (``NAME:PATH``): PPO, the sb3-contrib learners and
+    the project's own torch-ppo."""
+    from .ppo import PPOAgent, TorchPPOAgent
 
-    return [name for name in available_agents() if issubclass(_REGISTRY[name].cls, PPOAgent)]
+    return [
+        name for name in available_agents() if issubclass(_REGISTRY[name].cls, PPOAgent | TorchPPOAgent)
+    ]
 
 
 def agent_argument(name: str) -> str | None:

@@ -6,7 +6,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from agents.ppo import LEARNERS
+from agents.ppo import LEARNER_NAMES, LEARNERS, TORCH_PPO
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
 from .cli import Command
@@ -17,10 +17,11 @@ from .studies.settings import add_env_options, env_options_from, integer
 class TrainPPO(Command):
     name = "train-ppo"
     description = (
-        "Train a learner (--algo) on the native vector env; saves DIR/model.zip, the observation "
-        "normalisation (DIR/vecnormalize.npz, and SB3's DIR/vecnormalize.pkl), the learning curve "
-        "DIR/curve.csv and DIR/ppo.json; with --seeds N, each seed in DIR/seed-S, resumably. "
-        "Evaluate it with 'mimo-radar-bench run --policies ALGO:DIR/model.zip,...'."
+        "Train a learner (--algo) on the native vector env; saves DIR/model.zip (torch-ppo: "
+        "DIR/model.pt), the observation normalisation (DIR/vecnormalize.npz, and SB3's "
+        "DIR/vecnormalize.pkl), the learning curve DIR/curve.csv and DIR/ppo.json; with --seeds N, "
+        "each seed in DIR/seed-S, resumably. Evaluate it with 'mimo-radar-bench run --policies "
+        "ALGO:DIR,...'. --device trains the project's own PPO (torch-ppo) with the env on that device."
     )
 
     @classmethod
@@ -39,9 +40,23 @@ class TrainPPO(Command):
         parser.add_argument("--out", required=True, help="output directory for the model")
         parser.add_argument(
             "--algo",
-            choices=list(LEARNERS),
-            default="ppo",
-            help="the learner: PPO (SB3), MaskablePPO or RecurrentPPO (sb3-contrib) (default ppo)",
+            choices=list(LEARNER_NAMES),
+            default=None,
+            help="the learner: PPO (SB3), MaskablePPO or RecurrentPPO (sb3-contrib), or the project's "
+            f"own PPO in plain torch, {TORCH_PPO} (default ppo; {TORCH_PPO} with --device)",
+        )
+        parser.add_argument(
+            "--device",
+            default=None,
+            help=f"train {TORCH_PPO} with the env, the network and the updates on this torch device "
+            "('cuda', 'cuda:1', 'cpu'); the SB3 learners run on the numpy env (default: none)",
+        )
+        parser.add_argument(
+            "--n-envs",
+            type=integer(1),
+            default=None,
+            help="parallel trials of the training env (default: n_envs of the hyperparameters, 8; "
+            "thousands on a device)",
         )
         parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
         parser.add_argument(
@@ -90,6 +105,7 @@ class TrainPPO(Command):
         from .training import seed_folder, train_ppo
 
         args = self.args
+        algo = args.algo or (TORCH_PPO if args.device is not None else "ppo")
         version = VERSIONS[args.env_version]
         if args.scenario is not None:
             scenario_for_version(args.scenario, args.env_version)
@@ -106,18 +122,22 @@ class TrainPPO(Command):
                 progress=not args.quiet,
                 options=env_options_from(args),
                 overwrite=args.overwrite,
-                algo=args.algo,
+                algo=algo,
                 seeds=args.seeds,
                 workers=local_workers(args.workers),
+                device=args.device,
+                n_envs=args.n_envs,
             )
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc
-        algorithm = LEARNERS[args.algo].algorithm.partition(":")[2]  # PPO, MaskablePPO, RecurrentPPO
+        # PPO, MaskablePPO, RecurrentPPO or torch-ppo
+        algorithm = LEARNERS[algo].algorithm.partition(":")[2] if algo in LEARNERS else algo
         if args.seeds == 1:
+            where = f" on {meta['device']}" if "device" in meta else ""
             print(
                 f"trained {algorithm} for {meta.get('trained_timesteps', meta['timesteps'])} steps "
-                f"({meta['timesteps']} asked, in whole rollouts) in {meta['train_wall_s']:.0f} s; "
-                f"saved {Path(args.out, 'model.zip')}"
+                f"({meta['timesteps']} asked, in whole rollouts){where} in {meta['train_wall_s']:.0f} s "
+                f"({meta['trained_timesteps'] / meta['train_wall_s']:,.0f} steps/s); saved {args.out}"
             )
         else:
             folder = seed_folder(args.out, args.seed).parent

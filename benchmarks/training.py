@@ -10,6 +10,7 @@ from __future__ import annotations
 import ast
 import csv
 import json
+import math
 import time
 from importlib import resources
 from pathlib import Path
@@ -20,11 +21,16 @@ from agents.ppo import (
     MODEL_FILE,
     NORMALIZATION_FILE,
     SB3_NORMALIZATION_FILE,
+    TORCH_PPO,
+    WEIGHTS_FILE,
     Learner,
     learner,
     save_normalization,
 )
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, Scenario, load_scenario
+from mimo_radar_env.core.arrays import device_namespace
+from mimo_radar_env.extras import require
+from mimo_radar_env.wrappers.flat import action_form
 
 from .harness import output_lock
 
@@ -74,9 +80,10 @@ def load_hyperparams(
     return params
 
 
-#: The integer and number hyperparameters train-ppo checks, with their ranges.
+#: The integer and number hyperparameters train-ppo checks, with their ranges (``n_envs`` up to the
+#: thousands torch-ppo runs on a device).
 INTEGER_HYPERPARAMS = {
-    "n_envs": (1, 256),
+    "n_envs": (1, 1 << 20),
     "n_timesteps": (1, 10**9),
     "n_steps": (1, 10**6),
     "batch_size": (1, 10**7),
@@ -220,26 +227,57 @@ def train_ppo(
     workers: int = 1,
     record: dict[str, Any] | None = None,
     seed_folders: bool = False,
+    device: str | None = None,
+    n_envs: int | None = None,
 ) -> dict[str, Any]:
-    """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO) on the native vectorised env and
-    save ``model.zip``, the normalisation statistics, the learning curve and ``ppo.json`` in
-    ``out``; with ``seeds`` > 1, seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``,
+    """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO, or the project's own torch-ppo)
+    on the native vectorised env and save the model (``model.zip``; torch-ppo's ``model.pt``), the
+    normalisation statistics, the learning curve and ``ppo.json`` in ``out``; with ``seeds`` > 1,
+    seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``,
     ``workers`` at a time, resumably (a seed whose folder holds its finished training is kept);
-    ``seed_folders`` uses that layout for a single seed too.
+    ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
+    (default ``"cpu"``; the SB3 learners take none), with PPO's hyperparameter entry;
+    ``n_envs`` overrides the entry's number of parallel trials.
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
     (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that
     already holds a model is refused unless ``overwrite``, which first removes every file of the
     old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
     (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
-    spec = learner(algo)
-    spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
+    own = algo == TORCH_PPO
+    spec = learner("ppo" if own else algo)
+    if own:
+        require("torch", "rl", TORCH_PPO)
+        device = "cpu" if device is None else device
+        device_namespace(device)  # a bad device is refused before anything is written
+    else:
+        spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
+        if device is not None:
+            raise ValueError(
+                f"{algo} (Stable-Baselines3) trains on the numpy env and takes no device; "
+                f"the project's own PPO does: algo={TORCH_PPO!r} (--algo {TORCH_PPO})"
+            )
     options = options or EnvOptions()
     sc = load_scenario(scenario)
-    params = load_hyperparams(hyperparams, hyperparams_key or VERSIONS[DEFAULT_VERSION].flat_env_id, algo)
+    params = load_hyperparams(
+        hyperparams, hyperparams_key or VERSIONS[DEFAULT_VERSION].flat_env_id, spec.name
+    )
     if spec.name == "maskable-ppo" and action == "scores":
         raise ValueError("maskable-ppo masks a Discrete action: use --action discrete or auto")
-    n_envs = int(params.get("n_envs", 8))
+    if n_envs is not None:
+        from agents.parameters import check_integer
+
+        check_integer("n_envs", n_envs, *INTEGER_HYPERPARAMS["n_envs"])
+    config = None
+    if own:
+        from .torch_ppo import PPOConfig
+
+        config = PPOConfig.from_hyperparams(params, n_envs)
+        if action_form(action, sc) != "discrete":
+            raise ValueError(
+                f"{TORCH_PPO} learns the Discrete super-arm action: use --action discrete or auto"
+            )
+    n_envs = int(n_envs or params.get("n_envs", 8))
     if timesteps is not None and timesteps < 1:
         raise ValueError(f"timesteps must be >= 1, got {timesteps}")
     for name, value in (("seeds", seeds), ("workers", workers)):
@@ -248,18 +286,38 @@ def train_ppo(
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
     out = Path(out)
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
+    if n_envs != params.get("n_envs", 8):
+        job["n_envs"] = n_envs  # recorded only when it overrides the entry's
     if seeds == 1 and not seed_folders:
         with output_lock(out):
             _clear_model(out, overwrite)
-            meta = _train(
-                spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
-            )
+            if config is not None:
+                from . import torch_ppo
+
+                meta = torch_ppo.train(
+                    sc,
+                    timesteps,
+                    out,
+                    seed,
+                    config,
+                    options,
+                    device,
+                    LearningCurve(timesteps, progress, name=algo),
+                )
+            else:
+                meta = _train(
+                    spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
+                )
             if record:
                 meta.update(record)
                 (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
             return meta
+    if device is not None and workers > 1:
+        raise ValueError(f"a training on device {device!r} runs its seeds one after another: workers=1")
     with output_lock(out):
-        done = train_jobs([(job, out, s) for s in range(seed, seed + seeds)], workers, overwrite, progress)
+        done = train_jobs(
+            [(job, out, s) for s in range(seed, seed + seeds)], workers, overwrite, progress, device
+        )
     return {
         "seeds": {s: done[out, s] for s in range(seed, seed + seeds)},
         "timesteps": timesteps,
@@ -295,11 +353,13 @@ def train_jobs(
     workers: int,
     overwrite: bool = False,
     progress: bool = True,
+    device: str | None = None,
 ) -> dict[tuple[Path, int], dict[str, Any]]:
     """Every ``(job, out, seed)`` trained into ``seed_folder(out, seed)``, ``workers`` processes at
     once, resumably: a seed whose ``ppo.json`` records the same job is kept, one that records
     another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
-    task's ``ppo.json`` by ``(out, seed)``."""
+    task's ``ppo.json`` by ``(out, seed)``. torch-ppo's jobs run on ``device``, in this
+    process."""
     import concurrent.futures
 
     done, todo = {}, []
@@ -317,7 +377,12 @@ def train_jobs(
             todo.append((job, Path(out), seed))
     if done and progress:
         print(f"train-ppo: {len(done)} of {len(tasks)} trainings already done; training {len(todo)}")
-    if todo:
+    if todo and device is not None:
+        for job, out, seed in todo:
+            done[out, seed] = _train_one_seed(job, str(out), seed, device)
+            if progress:
+                print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{len(tasks)})")
+    elif todo:
         from .backends import worker_pool
 
         with worker_pool(min(workers, len(todo))) as pool:
@@ -332,20 +397,22 @@ def train_jobs(
     return done
 
 
-def _train_one_seed(job: dict[str, Any], out: str, seed: int) -> dict[str, Any]:
+def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None = None) -> dict[str, Any]:
     import torch
 
-    torch.set_num_threads(1)  # one compute thread per worker, as the harness's
+    if device is None:
+        torch.set_num_threads(1)  # one compute thread per worker, as the harness's
     options = EnvOptions(**job["options"])
     return train_ppo(
         Scenario.from_dict(job["scenario"]), job["timesteps"], seed_folder(out, seed), seed=seed,
         hyperparams=job["hyperparams"], hyperparams_key=job["hyperparams_key"], action=job["action"],
         progress=False, options=options, overwrite=True, algo=job["algo"], record={"job": job},
+        device=device, n_envs=job.get("n_envs"),
     )  # fmt: skip
 
 
 #: The files a trained model leaves in its folder.
-MODEL_FILES = (MODEL_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE)
+MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE)
 
 
 def _clear_model(out: Path, overwrite: bool) -> None:
@@ -380,9 +447,11 @@ def _train(
         tensorboard_log=str(out / "tensorboard") if tensorboard else None,
         **ppo_kwargs,
     )
-    curve = LearningCurve()
+    curve = LearningCurve(timesteps, progress)
+    rollout = model.n_steps * n_envs
+    curve.start(-(-timesteps // rollout) * rollout)
     start = time.perf_counter()
-    model.learn(total_timesteps=timesteps, progress_bar=progress, callback=curve.callback())
+    model.learn(total_timesteps=timesteps, callback=curve.callback())
     wall = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     model.save(out / MODEL_FILE)
@@ -409,17 +478,29 @@ def _train(
 
 
 class LearningCurve:
-    """The learning curve of a training: after each rollout, the timesteps so far and the mean
-    return and ARMSE (m) of the training episodes that ended in it (``NativeVecEnv``'s episode
-    info: eq17's or the information reward summed over the episode, and the root of the mean
-    over its steps and targets of the tracker's squared position error)."""
+    """The learning curve of a training, and what it prints as it goes: after each rollout, the
+    timesteps so far and the mean return and ARMSE (m) of the training episodes that ended in it
+    (eq17's or the information reward summed over the episode, and the root of the mean over its
+    steps and targets of the tracker's squared position error). Both trainers feed it: SB3's
+    through :meth:`callback` (``NativeVecEnv``'s episode info), torch-ppo directly.
+
+    With ``progress``, a line per rollout (at most one every ``every`` seconds, and the last):
+    the steps trained of ``total``, the last rollout's return and ARMSE, steps per second and
+    the time left at that rate."""
 
     FIELDS = ("timesteps", "episodes", "return", "armse")
 
-    def __init__(self) -> None:
+    def __init__(self, total: int = 0, progress: bool = False, every: float = 5.0, name: str = "train-ppo"):
         self.rows: list[dict[str, float]] = []
         self._returns: list[float] = []
         self._armse: list[float] = []
+        self.total, self.progress, self.every, self.name = total, progress, every, name
+        self._start = time.perf_counter()
+        self._printed = -math.inf
+
+    def start(self, total: int) -> None:
+        """The training starts now, for ``total`` steps (whole rollouts)."""
+        self.total, self._start = total, time.perf_counter()
 
     def callback(self) -> Any:
         from stable_baselines3.common.callbacks import BaseCallback
@@ -431,14 +512,18 @@ class LearningCurve:
                 for info in self.locals.get("infos", []):
                     episode = info.get("episode")
                     if episode is not None:
-                        curve._returns.append(float(episode["r"]))
-                        curve._armse.append(float(episode.get("armse", float("nan"))))
+                        curve.add_episodes([episode["r"]], [episode.get("armse", math.nan)])
                 return True
 
             def _on_rollout_end(self) -> None:
                 curve.close_rollout(self.num_timesteps)
 
         return _Callback()
+
+    def add_episodes(self, returns: list[float], armse: list[float]) -> None:
+        """Episodes that ended: their returns and ARMSE (NaN without the tracker)."""
+        self._returns += map(float, returns)
+        self._armse += map(float, armse)
 
     def close_rollout(self, timesteps: int) -> None:
         if self._returns:
@@ -451,6 +536,26 @@ class LearningCurve:
                 }
             )
         self._returns, self._armse = [], []
+        now = time.perf_counter()
+        if self.progress and (now - self._printed >= self.every or timesteps >= self.total):
+            self._printed = now
+            print(self.line(timesteps, now - self._start), flush=True)
+
+    def line(self, timesteps: int, seconds: float) -> str:
+        """``train-ppo: 16,384/200,000 steps (8 %) · return 512.3 · ARMSE 12.41 m · 2,310 steps/s
+        · 80 s left``; the return and ARMSE are the last rollout's with an ended episode."""
+        rate = timesteps / seconds if seconds > 0 else math.inf
+        share = 100 * timesteps / max(self.total, 1)
+        parts = [f"{self.name}: {timesteps:,}/{self.total:,} steps ({share:.0f} %)"]
+        if self.rows:
+            last = self.rows[-1]
+            parts.append(f"return {last['return']:.1f}")
+            if math.isfinite(last["armse"]):
+                parts.append(f"ARMSE {last['armse']:.2f} m")
+        parts.append(f"{rate:,.0f} steps/s")
+        if timesteps < self.total and math.isfinite(rate):
+            parts.append(f"{(self.total - timesteps) / rate:,.0f} s left")
+        return " · ".join(parts)
 
     def write(self, path: Path) -> None:
         with path.open("w", newline="") as handle:

@@ -55,6 +55,8 @@ class Stream(IntEnum):
     ALTERNATING_STARTS = 0x1007  #: random starts of alternating maximisation
     GAMMA_NORMAL = 0x1008  #: Thompson sampling's Gamma draws: normals
     GAMMA_UNIFORM = 0x1009  #: Thompson sampling's Gamma draws: uniforms
+    PPO_ACTION = 0x100A  #: torch-ppo's training: the action sampled per trial and step
+    PPO_MINIBATCH = 0x100B  #: torch-ppo's training: the order of a rollout's samples per epoch
 
 
 #: Streams drawn from a trial's observation key; the others use its truth key.

@@ -16,6 +16,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.superarm import all_super_arms, masks_to_actions, super_arm_count, top_mask
 from ..scenarios import Scenario
 
@@ -46,13 +47,22 @@ class SuperArmIndex:
             )
         tx, rx = all_super_arms(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
         self.actions = masks_to_actions(tx, rx)
+        self._on_device: dict[Any, Any] = {}
 
     @property
     def size(self) -> int:
         return len(self.actions)
 
     def to_action(self, index: Any) -> NDArray[np.int8]:
-        """Env action(s) ``(..., M + N)`` for super-arm index(es)."""
+        """Env action(s) ``(..., M + N)`` for super-arm index(es); for a torch tensor of indices,
+        a tensor on its device."""
+        xp = namespace(index)
+        if xp.is_torch:
+            if bool(((index < 0) | (index >= self.size)).any()):
+                raise ValueError(f"super-arm index must be in [0, {self.size}), got {xp.to_numpy(index)}")
+            if index.device not in self._on_device:
+                self._on_device[index.device] = xp.asarray(self.actions)
+            return self._on_device[index.device][index.long()]
         index = np.asarray(index, dtype=np.int64)
         if np.any((index < 0) | (index >= self.size)):
             raise ValueError(f"super-arm index must be in [0, {self.size}), got {index}")
@@ -60,7 +70,11 @@ class SuperArmIndex:
 
     def to_index(self, action: Any) -> NDArray[np.int64]:
         """The super-arm index(es) ``(...)`` of env action(s) ``(..., M + N)``, the inverse of
-        :meth:`to_action`; ``ValueError`` for an action that is not a valid super arm."""
+        :meth:`to_action`; ``ValueError`` for an action that is not a valid super arm. A torch
+        tensor gives a tensor on its device."""
+        xp = namespace(action)
+        if xp.is_torch:
+            return xp.asarray(self.to_index(xp.to_numpy(action)))
         action = np.asarray(action)
         if action.shape[-1:] != (self.num_tx + self.num_rx,):
             bits = self.num_tx + self.num_rx
@@ -78,36 +92,40 @@ class SuperArmIndex:
 def check_discrete_actions(actions: Any, size: int, shape: tuple[int, ...] = ()) -> NDArray[np.int64]:
     """Validate ``Discrete(size)`` actions of ``shape`` (``()`` for one): integers only (no
     floats, booleans or strings, not even integral ones), in ``[0, size)``. Raises ``ValueError``
-    showing the value as given; returns them as int64. The single env's wrapper and the Flat
-    vector env both validate with it."""
-    arr = np.asarray(actions)
-    if arr.dtype.kind not in "iu" or isinstance(actions, bool | np.bool_):
+    showing the value as given; returns them as int64 (a torch tensor stays one, where it is).
+    The single env's wrapper and the Flat vector env both validate with it."""
+    xp = namespace(actions)
+    arr = actions if xp.is_torch else np.asarray(actions)
+    if xp.dtype_kind(arr) not in "iu" or isinstance(actions, bool | np.bool_):
         raise ValueError(
             f"a Discrete action must be an integer super-arm index in [0, {size}), got {actions!r}"
         )
-    if arr.shape != shape:
-        raise ValueError(f"Discrete actions must have shape {shape}, got shape {arr.shape} ({actions!r})")
-    if np.any((arr < 0) | (arr >= size)):
-        bad = arr[(arr < 0) | (arr >= size)].ravel()[:5].tolist()
+    if tuple(arr.shape) != shape:
+        raise ValueError(
+            f"Discrete actions must have shape {shape}, got shape {tuple(arr.shape)} ({actions!r})"
+        )
+    outside = (arr < 0) | (arr >= size)
+    if bool(outside.any()):
+        bad = xp.to_numpy(arr[outside]).ravel()[:5].tolist()
         raise ValueError(f"a Discrete action's super-arm index must be in [0, {size}), got {bad}")
-    return arr.astype(np.int64)
+    return xp.astype(arr, np.int64)
 
 
 def check_score_actions(scores: Any, size: int, shape: tuple[int, ...] = ()) -> NDArray[np.float64]:
     """Validate station-score actions, ``Box(-1, 1, (size,))`` of leading ``shape``: real
     numbers, finite, within [-1, 1] (refused outside, not clipped). Raises ``ValueError`` showing
-    the values as given; returns float64."""
-    arr = np.asarray(scores)
-    if arr.dtype.kind not in "iuf" or isinstance(scores, bool | np.bool_):
+    the values as given; returns float64 (a torch tensor stays one, where it is)."""
+    xp = namespace(scores)
+    arr = scores if xp.is_torch else np.asarray(scores)
+    if xp.dtype_kind(arr) not in "iuf" or isinstance(scores, bool | np.bool_):
         raise ValueError(f"station scores must be real numbers in [-1, 1], got {scores!r}")
-    if arr.shape != (*shape, size):
-        raise ValueError(f"station scores must have shape {(*shape, size)}, got shape {arr.shape}")
-    outside = ~np.isfinite(arr) | (arr < -1) | (arr > 1)
-    if np.any(outside):
-        raise ValueError(
-            f"station scores must be finite and in [-1, 1], got {arr[outside].ravel()[:5].tolist()}"
-        )
-    return arr.astype(np.float64)
+    if tuple(arr.shape) != (*shape, size):
+        raise ValueError(f"station scores must have shape {(*shape, size)}, got shape {tuple(arr.shape)}")
+    outside = ~xp.isfinite(arr) | (arr < -1) | (arr > 1)
+    if bool(outside.any()):
+        bad = xp.to_numpy(arr[outside]).ravel()[:5].tolist()
+        raise ValueError(f"station scores must be finite and in [-1, 1], got {bad}")
+    return xp.astype(arr, np.float64)
 
 
 def _row_keys(bits: NDArray[np.int8]) -> NDArray[np.void]:
@@ -147,8 +165,9 @@ def scores_to_action(
     scores: NDArray[np.float64], num_tx: int, tx_count: int, rx_count: int
 ) -> NDArray[np.int8]:
     """Top-``Ms`` transmitter and top-``Ns`` receiver scores (ties: lowest index), (..., M + N)."""
-    scores = np.asarray(scores, dtype=np.float64)
-    if not np.all(np.isfinite(scores)):
+    xp = namespace(scores)
+    scores = xp.astype(scores if xp.is_torch else np.asarray(scores), np.float64)
+    if not bool(xp.all(xp.isfinite(scores))):
         raise ValueError("station scores must be finite")
     tx = top_mask(scores[..., :num_tx], tx_count)
     rx = top_mask(scores[..., num_tx:], rx_count)

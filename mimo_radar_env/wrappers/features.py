@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from ..core.arrays import namespace
 from ..core.geometry import squared_range_products
 from ..scenarios import Scenario
 from .actions import scenario_of
@@ -31,7 +32,8 @@ class RadarFeatures:
       velocity in units of 100 m/s; ``mode_prob`` (K*3);
     * ``time`` (1): ``t / T``.
 
-    With ``tracking=False`` envs the track-based parts are zeros.
+    With ``tracking=False`` envs the track-based parts are zeros. Observations of an env on a
+    device (torch tensors) give the features there, as float32 tensors: the same computation.
     """
 
     MAX_AGE = 100.0
@@ -47,50 +49,55 @@ class RadarFeatures:
         self.size = 2 * K * M * N + M * N + K * 4 + K * 3 + 1
 
     def reset(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
-        sinr = np.asarray(obs["sinr"], dtype=np.float64)
-        self.latest = np.log10(1.0 + sinr)
-        self.age = np.where(np.asarray(obs["probed"]) > 0, 0.0, self.MAX_AGE)
+        xp = self.xp = namespace(obs["sinr"])
+        sinr = xp.astype(xp.asarray(obs["sinr"]), np.float64)
+        self.latest = xp.log10(1.0 + sinr)
+        probed = xp.asarray(obs["probed"]) > 0
+        self.age = xp.where(probed, 0.0, xp.full(probed.shape, self.MAX_AGE))
         self.t = 0
         return self._features(obs)
 
     def step(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
-        probed = np.asarray(obs["probed"]) > 0
-        self.latest = np.where(probed[:, None], np.log10(1.0 + np.asarray(obs["sinr"])), self.latest)
-        self.age = np.where(probed, 0.0, np.minimum(self.age + 1.0, self.MAX_AGE))
+        xp = self.xp
+        probed = xp.asarray(obs["probed"]) > 0
+        self.latest = xp.where(probed[:, None], xp.log10(1.0 + xp.asarray(obs["sinr"])), self.latest)
+        self.age = xp.where(probed, 0.0, xp.minimum(self.age + 1.0, self.MAX_AGE))
         self.t += 1
         return self._features(obs)
 
     def _features(self, obs: dict[str, NDArray]) -> NDArray[np.float32]:
+        xp = self.xp
         batch = self.latest.shape[0]
         K, M, N = self.shape
+        sc = self.scenario
         if "track_pred" in obs:
-            pred = np.asarray(obs["track_pred"], dtype=np.float64)
+            pred = xp.astype(xp.asarray(obs["track_pred"]), np.float64)
             positions = pred[..., [0, 2]]
-            log_gain = -np.log10(
-                squared_range_products(positions, self.scenario.tx_positions, self.scenario.rx_positions)
+            log_gain = -xp.log10(
+                squared_range_products(positions, xp.asarray(sc.tx_positions), xp.asarray(sc.rx_positions))
             )
-            log_gain = np.maximum(log_gain - log_gain.max(axis=(-1, -2), keepdims=True), -6.0)
-            track = np.concatenate(
+            log_gain = xp.maximum(log_gain - xp.max(log_gain, axis=(-1, -2), keepdims=True), -6.0)
+            track = xp.concatenate(
                 [
-                    (positions - self.centre) / self.extent,
+                    (positions - xp.asarray(self.centre)) / self.extent,
                     pred[..., [1, 3]] / 100.0,
                 ],
                 axis=-1,
             )
-            modes = np.asarray(obs["mode_prob"], dtype=np.float64)
+            modes = xp.astype(xp.asarray(obs["mode_prob"]), np.float64)
         else:
-            log_gain = np.zeros((batch, K, M, N))
-            track = np.zeros((batch, K, 4))
-            modes = np.zeros((batch, K, 3))
+            log_gain = xp.zeros((batch, K, M, N))
+            track = xp.zeros((batch, K, 4))
+            modes = xp.zeros((batch, K, 3))
         parts = [
             self.latest.reshape(batch, -1),
             (self.age / self.MAX_AGE).reshape(batch, -1),
             log_gain.reshape(batch, -1),
             track.reshape(batch, -1),
             modes.reshape(batch, -1),
-            np.full((batch, 1), self.t / self.scenario.horizon),
+            xp.full((batch, 1), self.t / sc.horizon),
         ]
-        return np.concatenate(parts, axis=1).astype(np.float32)
+        return xp.astype(xp.concatenate(parts, axis=1), np.float32)
 
 
 class RadarFeatureObservation(gym.ObservationWrapper, gym.utils.RecordConstructorArgs):

@@ -107,6 +107,9 @@ class MimoRadarSelectFlatVectorEnv(HorizonSpec, VectorEnv):
 
         self.env = MimoRadarSelectVectorEnv(num_envs=num_envs, render_mode=render_mode, **kwargs)
         self.num_envs = self.env.num_envs
+        #: where the trials run (``device=`` as for ``MimoRadarSelectVectorEnv``): ``None`` for
+        #: numpy, else the ``torch.device`` of every tensor returned
+        self.device = self.env.device
         self.scenario = sc = self.env.scenario
         self.options = self.env.options
         self.action_form = action_form(action, sc)
@@ -169,7 +172,7 @@ class MimoRadarSelectFlatVectorEnv(HorizonSpec, VectorEnv):
         valid super arm (``ValueError`` for station scores, which have no mask)."""
         if self.index is None:
             raise ValueError("station-score actions have no mask; make the env with action='discrete'")
-        return np.ones((self.num_envs, self.index.size), dtype=bool)
+        return self.env.engine.xp.ones((self.num_envs, self.index.size), dtype=bool)
 
     def oracle_action(self) -> NDArray:
         """The optimal super arms of the coming step in this env's action space (reads the truth):
@@ -178,7 +181,7 @@ class MimoRadarSelectFlatVectorEnv(HorizonSpec, VectorEnv):
         actions = self.env.oracle_action()
         if self.index is not None:
             return self.index.to_index(actions)
-        return (2.0 * actions - 1.0).astype(np.float32)
+        return self.env.engine.xp.astype(2.0 * actions - 1.0, np.float32)
 
     def oracle_env_action(self) -> NDArray[np.int8]:
         """The optimal super arms of the coming step as the raw env's actions, (B, M + N)."""

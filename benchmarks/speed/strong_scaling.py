@@ -1,0 +1,248 @@
+"""Strong scaling of a study on one machine: its wall time by worker count, where the time goes,
+and a model of the measured parts that predicts other worker counts.
+
+    python -m benchmarks.speed.strong_scaling --workers 1,2 --predict 4,8,16 \\
+        --json docs/results/perf/strong-scaling.json
+
+Each measurement runs ``mimo-radar-bench claims ... --workers W`` as a user does (a fresh
+process, the default shard size for W workers) into a fresh folder, and reads the shards it wrote:
+each task's compute seconds (``wall_s``), its trials, and when its file was written. The
+``W x wall`` worker-seconds of a run split into
+
+* **work in the tasks**: the tasks' compute seconds, of which **fixed per task** is the time to
+  build the agent and the env and take the first step (probed: one trial, one step, per policy);
+* **idle at the tail**: from the last task a worker finished to the run's last (the last ``W``
+  shard files written, one per worker);
+* **outside the tasks**: the rest: starting the command and its workers, loading the compiled
+  kernels in each, writing the shards and the report.
+
+The cost of **smaller batches** is the per-trial-step cost of a task at W's shard size against
+the largest shard measured. The model predicts a worker count from one core's view: each
+policy's task is probed at that count's shard size, the tasks are queued in the harness's order
+(the longest declared cost first, run after run) on W workers (list scheduling), and the time
+outside the tasks is the one measured at the most workers. It assumes a core as fast as this
+machine's when all are busy (no memory-bandwidth contention): a larger machine checks that.
+"""
+
+from __future__ import annotations
+
+import argparse
+import heapq
+import json
+import os
+import platform
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+#: The study measured by default: the v1 claims study's scenario 1, whole episodes.
+STUDY = ("claims", "--scenarios", "1", "--trials", "500")
+
+
+@dataclass(frozen=True)
+class Task:
+    run: str
+    policy: str
+    shard: int
+    trials: int
+    steps: int
+    seconds: float
+    finished: float  # seconds after the command started
+
+
+def run_study(study: tuple[str, ...], workers: int, out: Path) -> float:
+    """Wall seconds of the study's command with ``workers`` workers into ``out``."""
+    command = [sys.executable, "-m", "benchmarks", *study, "--quiet", "--no-figures"]
+    start = time.time()
+    subprocess.run([*command, "--workers", str(workers), "--out", str(out)], check=True,
+                   stdout=subprocess.DEVNULL)  # fmt: skip
+    return time.time() - start
+
+
+def read_tasks(out: Path, started: float) -> list[Task]:
+    """Every shard a study wrote under ``out``: its run, policy, trials, compute seconds and when
+    it was written."""
+    tasks = []
+    for config_file in sorted(out.glob("*/config.json")):
+        steps = json.loads(config_file.read_text())["steps"]
+        for path in sorted(config_file.parent.glob("shards/*/shard_*.npz")):
+            with np.load(path) as shard:
+                trials, seconds = len(shard["trial_expected"]), float(shard["wall_s"])
+            tasks.append(Task(config_file.parent.name, path.parent.name, int(path.stem.split("_")[1]),
+                              trials, steps, seconds, path.stat().st_mtime - started))  # fmt: skip
+    return tasks
+
+
+def breakdown(
+    wall: float, workers: int, tasks: list[Task], fixed_per_task: dict[str, float]
+) -> dict[str, float]:
+    """The ``workers x wall`` worker-seconds of a run by where they went (module docstring)."""
+    work = sum(t.seconds for t in tasks)
+    fixed = sum(fixed_per_task.get(t.policy, 0.0) for t in tasks)
+    finishes = sorted(t.finished for t in tasks)
+    end = finishes[-1]
+    tail = sum(end - f for f in finishes[-workers:])
+    return {
+        "worker_seconds": workers * wall,
+        "task_steps_s": work - fixed,
+        "task_fixed_s": fixed,
+        "tail_idle_s": tail,
+        "outside_tasks_s": workers * wall - work - tail,
+    }
+
+
+def makespan(durations: list[float], workers: int) -> float:
+    """List scheduling: each task in order goes to the first free worker."""
+    free = [0.0] * workers
+    for seconds in durations:
+        heapq.heappush(free, heapq.heappop(free) + seconds)
+    return max(free)
+
+
+def queue_order(out: Path, shard_size: int | None = None) -> list[tuple[str, str, int, int]]:
+    """The harness's order of a study's tasks (run after run, the longest declared cost first),
+    as (run, policy, shard, trials), with the runs' shard size replaced by ``shard_size``."""
+    from ..harness import RunConfig, task_seconds
+
+    order = []
+    for config_file in sorted(out.glob("*/config.json")):
+        payload = json.loads(config_file.read_text())
+        if shard_size is not None:
+            payload["shard_size"] = shard_size
+        config = RunConfig(**payload)
+        cost = task_seconds(config)
+        tasks = sorted(cost, key=lambda task: -cost[task])
+        order += [(config_file.parent.name, p, s, len(config.shard_trials(s))) for p, s in tasks]
+    return order
+
+
+def probe(out: Path, shard_size: int, steps: int | None = None) -> dict[str, dict[str, float]]:
+    """Each policy's task of ``shard_size`` trials (``steps`` steps, default the run's) run alone
+    on one core in this process: its seconds by run and policy."""
+    from ..harness import run_task
+
+    seconds: dict[str, dict[str, float]] = {}
+    for config_file in sorted(out.glob("*/config.json")):
+        payload = json.loads(config_file.read_text())
+        payload["shard_size"] = shard_size
+        if steps is not None:
+            payload["steps"] = steps
+        run = config_file.parent.name
+        seconds[run] = {p: float(run_task(payload, p, 0)["wall_s"]) for p in payload["policies"]}
+    return seconds
+
+
+def predict(
+    out: Path, workers: int, trials: int, overhead: float, probes: dict[int, dict[str, dict[str, float]]]
+) -> dict[str, Any]:
+    """The model's wall time for ``workers`` workers (module docstring)."""
+    from ..harness import auto_shard_size
+
+    config = json.loads(next(out.glob("*/config.json")).read_text())
+    size = auto_shard_size(trials, workers, len(config["policies"]))
+    if size not in probes:
+        probes[size] = probe(out, size)
+    durations = [probes[size][run][policy] * n / size for run, policy, _, n in queue_order(out, size)]
+    span = makespan(durations, workers)
+    return {"workers": workers, "shard_size": size, "tasks": len(durations), "task_seconds": sum(durations),
+            "makespan_s": span, "wall_s": overhead + span}  # fmt: skip
+
+
+def measure(
+    study: tuple[str, ...], counts: list[int], predictions: list[int], model_from: int | None = None
+) -> dict[str, Any]:
+    """The measured runs at ``counts`` workers and the model's predictions at ``predictions``, from
+    the run at ``model_from`` workers (default the most measured): its time outside the tasks."""
+    trials = int(study[study.index("--trials") + 1])
+    measured, folders = [], {}
+    scratch = Path(tempfile.mkdtemp(prefix="strong-scaling-"))
+    for workers in counts:
+        out = scratch / f"w{workers}"
+        started = time.time()
+        wall = run_study(study, workers, out)
+        tasks = read_tasks(out, started)
+        measured.append({"workers": workers, "wall_s": wall, "tasks": tasks})
+        folders[workers] = out
+        print(f"  {workers:>3} workers: {wall:7.1f} s, {len(tasks)} tasks", flush=True)
+    reference = folders[counts[0]]
+    probe(reference, 1, steps=1)  # warm-up: the compiled kernels load in this process
+    fixed = {p: s for run in probe(reference, 1, steps=1).values() for p, s in run.items()}
+    probes: dict[int, dict[str, dict[str, float]]] = {}
+    base = measured[0]
+    rows = []
+    for m in measured:
+        tasks, workers = m["tasks"], m["workers"]
+        per_step = sum(t.seconds - fixed[t.policy] for t in tasks) / sum(t.trials * t.steps for t in tasks)
+        rows.append({
+            "workers": workers, "wall_s": m["wall_s"], "tasks": len(tasks),
+            "shard_trials": max(t.trials for t in tasks),
+            "speedup": base["wall_s"] / m["wall_s"] * base["workers"],
+            "efficiency": base["wall_s"] * base["workers"] / (m["wall_s"] * workers),
+            "us_per_trial_step_in_tasks": 1e6 * per_step,
+            "breakdown": breakdown(m["wall_s"], workers, tasks, fixed),
+        })  # fmt: skip
+    source = next(m for m in measured if m["workers"] == (model_from or max(counts)))
+    order = queue_order(folders[source["workers"]])
+    by_task = {(t.run, t.policy, t.shard): t.seconds for t in source["tasks"]}
+    overhead = source["wall_s"] - makespan([by_task[r, p, s] for r, p, s, _ in order], source["workers"])
+    model = [
+        predict(folders[source["workers"]], w, trials, overhead, probes)
+        for w in sorted({source["workers"], *predictions})
+    ]
+    return {
+        "study": ["mimo-radar-bench", *study],
+        "machine": {
+            "platform": platform.platform(),
+            "cores": os.cpu_count(),
+            "python": platform.python_version(),
+        },
+        "measured": rows,
+        "fixed_per_task_s": fixed,
+        "model_from_workers": source["workers"],
+        "outside_tasks_s": overhead,
+        "model": model,
+    }  # fmt: skip
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", default="1,2", help="worker counts measured, comma-separated")
+    parser.add_argument("--predict", default="4,8,16", help="worker counts the model predicts")
+    parser.add_argument(
+        "--model-from",
+        type=int,
+        default=None,
+        help="the measured count the model starts from (default: the most)",
+    )
+    parser.add_argument(
+        "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
+    )
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args(argv)
+    counts = [int(w) for w in args.workers.split(",")]
+    predictions = [int(w) for w in args.predict.split(",") if w]
+    study = tuple(args.study.split())
+    if "--trials" not in study:
+        parser.error("--study must give --trials")
+    print(f"strong scaling of mimo-radar-bench {' '.join(study)}, {os.cpu_count()} cores")
+    if args.model_from is not None and args.model_from not in counts:
+        parser.error(f"--model-from must be one of the measured counts {counts}")
+    result = measure(study, counts, predictions, args.model_from)
+    for row in result["measured"]:
+        wall, efficiency = row["wall_s"], row["efficiency"]
+        print(f"  measured {row['workers']:>3} workers: {wall:7.1f} s, efficiency {efficiency:.2f}")
+    for row in result["model"]:
+        print(f"  model    {row['workers']:>3} workers: {row['wall_s']:7.1f} s")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

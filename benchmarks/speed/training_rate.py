@@ -1,0 +1,162 @@
+"""PPO training throughput: env steps per second of SB3 PPO on the native vector env (CPU) against
+the project's own torch-ppo on CPU torch and on a device, at several numbers of parallel trials.
+
+Every row trains on ``paper-1-v1`` with the shipped ``hyperparams/ppo.yml`` entry, ``n_envs`` set
+to B, rollouts of ``n_steps`` (default 64) steps per trial and ``batch_size = n_steps B / 8`` (the
+entry's eight minibatches per epoch at any B), 10 epochs. A row times its rollouts after the first
+(the first pays for warm-up: compilation, CUDA context), each rollout with its update: what a
+training spends per env step end to end. CPU rows run on one thread, as ``train-ppo``'s workers
+do. Rows that would take longer than ``--max-seconds`` (judged from the row at the smaller B) are
+skipped and say so.
+
+    python -m benchmarks.speed.training_rate --device cuda --json docs/results/perf/training.json
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import platform
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from mimo_radar_env import EnvOptions, load_scenario
+
+from ..training import _NOT_FOR_PPO, LearningCurve, load_hyperparams
+
+SCENARIO = "paper-1-v1"
+SIZES = (8, 512, 4096)
+MINIBATCHES = 8
+
+
+class _Clock(LearningCurve):
+    """A learning curve that also notes when each rollout (with its update) ended."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.ends: list[tuple[int, float]] = []
+
+    def close_rollout(self, timesteps: int) -> None:
+        super().close_rollout(timesteps)
+        self.ends.append((timesteps, time.perf_counter()))
+
+    def rate(self) -> float:
+        (first_steps, first), (last_steps, last) = self.ends[0], self.ends[-1]
+        return (last_steps - first_steps) / (last - first)
+
+
+def _params(trials: int, n_steps: int) -> dict[str, Any]:
+    params = dict(load_hyperparams())
+    params.update(n_envs=trials, n_steps=n_steps, batch_size=max(n_steps * trials // MINIBATCHES, 1))
+    return params
+
+
+def training_rate(
+    learner: str, trials: int, device: str | None, rollouts: int = 3, n_steps: int = 64
+) -> dict[str, Any]:
+    """One row: ``learner`` ``"sb3"`` (``device`` None) or ``"torch-ppo"`` on ``device``."""
+    import torch
+
+    if rollouts < 2:
+        raise ValueError(f"rollouts must be >= 2 (the first is warm-up), got {rollouts}")
+    params = _params(trials, n_steps)
+    clock = _Clock()
+    total = rollouts * n_steps * trials
+    cuda = device is not None and str(device).startswith("cuda")
+    threads = torch.get_num_threads()
+    if not cuda:
+        torch.set_num_threads(1)
+    if cuda:
+        torch.cuda.reset_peak_memory_stats()
+    try:
+        if learner == "sb3":
+            from stable_baselines3 import PPO
+
+            from mimo_radar_env.sb3 import NativeVecEnv
+
+            kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
+            kwargs.pop("policy", None)
+            venv = NativeVecEnv(SCENARIO, trials, seed=0, action="discrete")
+            model = PPO("MlpPolicy", venv, seed=0, verbose=0, device="cpu", **kwargs)
+            model.learn(total_timesteps=total, callback=clock.callback())
+        else:
+            from .. import torch_ppo
+
+            config = torch_ppo.PPOConfig.from_hyperparams(params)
+            with tempfile.TemporaryDirectory() as out:
+                torch_ppo.train(
+                    load_scenario(SCENARIO), total, Path(out), 0, config, EnvOptions(), device, clock
+                )
+    finally:
+        torch.set_num_threads(threads)
+    return {
+        "learner": learner,
+        "device": "numpy" if device is None else str(device),
+        "trials": trials,
+        "n_steps": n_steps,
+        "batch_size": params["batch_size"],
+        "timed_steps": clock.ends[-1][0] - clock.ends[0][0],
+        "env_steps_per_s": clock.rate(),
+        "peak_device_memory_gib": torch.cuda.max_memory_allocated() / 2**30 if cuda else None,
+    }
+
+
+def rows(
+    device: str | None, sizes: tuple[int, ...], rollouts: int, n_steps: int, max_seconds: float
+) -> list[dict[str, Any]]:
+    """Every backend's rows: SB3 on CPU, torch-ppo on CPU torch and, with ``device``, there."""
+    backends = [("sb3", None), ("torch-ppo", "cpu")] + ([("torch-ppo", device)] if device else [])
+    out = []
+    for learner, where in backends:
+        last = None
+        for trials in sizes:
+            seconds = None if last is None else rollouts * n_steps * trials / last["env_steps_per_s"]
+            if seconds is not None and seconds > max_seconds:
+                out.append({"learner": learner, "device": where or "numpy", "trials": trials,
+                            "skipped": f"about {seconds:,.0f} s, over --max-seconds"})  # fmt: skip
+                print(f"  {learner:9s} {where or 'numpy':6s} B={trials:>6,d}: skipped ({out[-1]['skipped']})")
+                continue
+            try:
+                last = training_rate(learner, trials, where, rollouts, n_steps)
+            except ImportError as exc:  # a machine without stable-baselines3: that backend's rows say so
+                out.append({"learner": learner, "device": where or "numpy", "trials": trials,
+                            "skipped": f"not installed ({exc.name})"})  # fmt: skip
+                break
+            out.append(last)
+            rate = last["env_steps_per_s"]
+            print(
+                f"  {learner:9s} {where or 'numpy':6s} B={trials:>6,d}: {rate:>10,.0f} env steps/s",
+                flush=True,
+            )
+    return out
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--device", default=None, help="a torch device for torch-ppo's last rows ('cuda')")
+    parser.add_argument("--sizes", default=",".join(map(str, SIZES)), help="B values, comma-separated")
+    parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
+    parser.add_argument("--n-steps", type=int, default=64)
+    parser.add_argument("--max-seconds", type=float, default=120.0)
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args(argv)
+    sizes = tuple(int(s) for s in args.sizes.split(","))
+    print(f"PPO training, {SCENARIO}, env steps per second (rollouts of {args.n_steps} steps per trial)")
+    result = {
+        "scenario": SCENARIO,
+        "machine": platform.processor() or platform.machine(),
+        "rows": rows(args.device, sizes, args.rollouts, args.n_steps, args.max_seconds),
+    }
+    if args.device and args.device.startswith("cuda"):
+        import torch
+
+        result["device_name"] = torch.cuda.get_device_name(args.device)
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()

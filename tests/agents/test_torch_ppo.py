@@ -1,0 +1,206 @@
+"""The project's own PPO (``benchmarks/torch_ppo.py``, ``agents/networks.py``, the torch-ppo
+agent): its parts against independent computations (GAE by its definition, SB3's running
+statistics, the clipped loss written out in numpy), a training on CPU torch, the agent on numpy
+and on a device env, and the refusals."""
+
+import dataclasses
+import json
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
+
+import agents  # noqa: E402
+from agents.networks import ActorCritic, RunningNormalization  # noqa: E402
+from benchmarks import torch_ppo  # noqa: E402
+from benchmarks.training import train_ppo  # noqa: E402
+from mimo_radar_env import load_scenario  # noqa: E402
+
+SHORT = dataclasses.replace(load_scenario("paper-1-v1"), horizon=20)
+
+
+def test_gae_matches_its_definition_episode_by_episode():
+    """A_t = sum_l (gamma lambda)^l delta_{t+l} over the rest of the episode, delta_t = r_t +
+    gamma V_{t+1} (0 past an episode's end) - V_t; the rollout's last value closes the tail."""
+    rng = np.random.default_rng(0)
+    S, B, gamma, lam = 13, 4, 0.9, 0.8
+    rewards, values, last = rng.normal(size=(S, B)), rng.normal(size=(S, B)), rng.normal(size=B)
+    dones = (rng.random((S, B)) < 0.2).astype(float)
+    adv, ret = torch_ppo.compute_gae(*map(torch.as_tensor, (rewards, values, dones, last)), gamma, lam)
+    expected = np.zeros((S, B))
+    for b in range(B):
+        for t in range(S):
+            total, factor = 0.0, 1.0
+            for u in range(t, S):
+                following = last[b] if u == S - 1 else values[u + 1, b]
+                delta = rewards[u, b] + gamma * following * (1 - dones[u, b]) - values[u, b]
+                total += factor * delta
+                if dones[u, b]:
+                    break
+                factor *= gamma * lam
+            expected[t, b] = total
+    np.testing.assert_allclose(adv.numpy(), expected, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(ret.numpy(), expected + values, rtol=1e-12, atol=1e-12)
+
+
+def test_running_normalisation_is_vecnormalizes():
+    from stable_baselines3.common.running_mean_std import RunningMeanStd
+
+    rng = np.random.default_rng(1)
+    ours, sb3 = RunningNormalization(5), RunningMeanStd(shape=(5,))
+    for size in (3, 1, 17, 8):
+        batch = rng.normal(2.0, 3.0, (size, 5))
+        ours.update(torch.as_tensor(batch))
+        sb3.update(batch)
+    np.testing.assert_allclose(ours.mean.numpy(), sb3.mean, rtol=1e-12)
+    np.testing.assert_allclose(ours.var.numpy(), sb3.var, rtol=1e-12)
+    x = rng.normal(0, 30, (4, 5))
+    expected = np.clip((x - sb3.mean) / np.sqrt(sb3.var + 1e-8), -10, 10).astype(np.float32)
+    np.testing.assert_allclose(ours(torch.as_tensor(x)).numpy(), expected, rtol=1e-6)
+
+
+def test_the_loss_is_the_clipped_surrogate_value_and_entropy_terms():
+    torch.manual_seed(0)
+    network = ActorCritic(6, 5, (8,))
+    config = torch_ppo.PPOConfig(ent_coef=0.01, vf_coef=0.5, clip_range=0.2)
+    obs = torch.randn(10, 6)
+    actions = torch.randint(0, 5, (10,))
+    old = torch.randn(10) - 1.6
+    adv, ret = torch.randn(10, dtype=torch.float64).float(), torch.randn(10)
+    loss, stats = torch_ppo.ppo_loss(network, config, obs, actions, old, adv, ret)
+    with torch.no_grad():
+        logits, values = network(obs)
+    logits, values = logits.double().numpy(), values.double().numpy()
+    log_p = logits - np.log(np.exp(logits).sum(1, keepdims=True))
+    new = log_p[np.arange(10), actions.numpy()]
+    a = adv.double().numpy()
+    a = (a - a.mean()) / (a.std(ddof=1) + 1e-8)
+    ratio = np.exp(new - old.double().numpy())
+    surrogate = -np.minimum(a * ratio, a * np.clip(ratio, 0.8, 1.2)).mean()
+    value = ((ret.double().numpy() - values) ** 2).mean()
+    entropy = -(np.exp(log_p) * log_p).sum(1).mean()
+    assert float(loss.detach()) == pytest.approx(surrogate - 0.01 * entropy + 0.5 * value, rel=1e-5)
+    assert float(stats["value_loss"].detach()) == pytest.approx(value, rel=1e-5)
+
+
+@pytest.fixture(scope="module")
+def trained(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("torch-ppo")
+    meta = train_ppo(SHORT, 600, folder, seed=2, algo="torch-ppo", n_envs=6, progress=False)
+    return folder, meta
+
+
+def test_a_training_writes_the_model_its_statistics_curve_and_record(trained):
+    folder, meta = trained
+    assert {p.name for p in folder.iterdir()} >= {"model.pt", "vecnormalize.npz", "curve.csv", "ppo.json"}
+    n_steps = 256  # the shipped entry's: whole rollouts of n_steps x n_envs
+    assert meta["trained_timesteps"] == 1 * n_steps * 6 and meta["device"] == "cpu"
+    assert json.loads((folder / "ppo.json").read_text())["algo"] == "torch-ppo"
+    rows = (folder / "curve.csv").read_text().splitlines()
+    assert rows[0] == "timesteps,episodes,return,armse"
+    # 256 steps of 20-step episodes end 12 episodes in each of the 6 trials
+    assert rows[1].startswith("1536,72,")
+
+
+def test_the_same_seed_trains_the_same_weights(trained, tmp_path):
+    folder, _ = trained
+    train_ppo(SHORT, 600, tmp_path, seed=2, algo="torch-ppo", n_envs=6, progress=False)
+    first = torch.load(folder / "model.pt", weights_only=True)["weights"]
+    again = torch.load(tmp_path / "model.pt", weights_only=True)["weights"]
+    assert all(torch.equal(first[k], again[k]) for k in first)
+
+
+def _play(agent, device=None, trials=3, steps=6):
+    episode = agents.Rollout(agent, agents.make_env(agent, trials, device=device), seed=5)
+    played = [np.asarray(step.action.cpu() if device else step.action) for step in episode.run(steps)]
+    return np.stack(played, axis=1)
+
+
+def test_the_agent_plays_valid_super_arms_the_same_on_numpy_and_on_a_device(trained):
+    folder, _ = trained
+    on_numpy = _play(agents.make_agent("torch-ppo", SHORT, path=folder))
+    assert (on_numpy[..., :4].sum(-1) == 2).all() and (on_numpy[..., 4:].sum(-1) == 3).all()
+    on_device = _play(agents.make_agent("torch-ppo", SHORT, path=folder / "model.pt"), device="cpu")
+    np.testing.assert_array_equal(on_numpy, on_device)
+    assert "torch-ppo" in agents.learned_agents()
+
+
+def test_the_agent_refuses_a_model_of_another_layout(trained):
+    folder, _ = trained
+    with pytest.raises(ValueError, match="train it on this layout"):
+        agents.make_agent("torch-ppo", "paper-3-v1", path=folder)  # two targets
+    with pytest.raises(ValueError, match="does not exist"):
+        agents.make_agent("torch-ppo", SHORT, path=folder / "missing")
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "match"),
+    [
+        ({"algo": "ppo", "device": "cpu"}, "takes no device"),
+        ({"algo": "torch-ppo", "device": "tpu"}, "device"),
+        ({"algo": "torch-ppo", "action": "scores"}, "Discrete"),
+        ({"algo": "torch-ppo", "n_envs": 0}, "n_envs"),
+        ({"algo": "torch-ppo", "device": "cpu", "seeds": 2, "workers": 2}, "one after another"),
+    ],
+)
+def test_bad_requests_are_refused_before_anything_is_written(tmp_path, kwargs, match):
+    with pytest.raises(ValueError, match=match):
+        train_ppo(SHORT, 16, tmp_path / "out", progress=False, **kwargs)
+    assert not (tmp_path / "out").exists()
+
+
+def test_an_sb3_key_torch_ppo_does_not_implement_is_refused_by_name():
+    with pytest.raises(ValueError, match=r"does not implement \['use_sde'\]"):
+        torch_ppo.PPOConfig.from_hyperparams({"use_sde": True})
+    config = torch_ppo.PPOConfig.from_hyperparams(
+        {"n_envs": 8, "gamma": 0.9, "normalize": {"norm_obs": True, "norm_reward": False},
+         "policy_kwargs": {"net_arch": [32]}},
+        n_envs=512,
+    )  # fmt: skip
+    assert (config.n_envs, config.gamma, config.net_arch, config.normalize_obs) == (512, 0.9, (32,), True)
+
+
+@pytest.mark.parametrize("learner", ["sb3", "torch-ppo"])
+def test_the_training_rate_times_the_rollouts_after_the_first(learner):
+    """A row's rate is the env steps of its rollouts after the first over their time, each
+    rollout with its update: it counts (rollouts - 1) n_steps B steps, and cannot exceed
+    those steps over the whole call's time."""
+    import time
+
+    from benchmarks.speed import training_rate
+
+    start = time.perf_counter()
+    row = training_rate.training_rate(learner, 4, None if learner == "sb3" else "cpu", rollouts=3, n_steps=8)
+    wall = time.perf_counter() - start
+    assert row["timed_steps"] == 2 * 8 * 4 and row["batch_size"] == 8 * 4 // 8
+    assert row["timed_steps"] / wall < row["env_steps_per_s"] < float("inf")
+
+
+def _returns(agent, trials=200, seed=10_000):
+    episode = agents.Rollout(agent, agents.make_env(agent, trials), seed=seed)
+    return sum(step.reward for step in episode.run(SHORT.horizon))
+
+
+@pytest.mark.slow
+def test_both_learners_beat_random_and_land_within_each_others_across_seed_interval(tmp_path):
+    """SB3 PPO and torch-ppo with the same hyperparameters and budget (six rollouts), four
+    seeds each, scored on the same 200 trials: every trained policy beats random there (paired,
+    the difference's 95 % interval above 0), and the learners do not differ beyond the spread
+    over seeds: Welch's 95 % interval of the difference of their means over seeds holds 0."""
+    from scipy import stats
+
+    random_returns = _returns(agents.make_agent("random", SHORT, seed=0))
+    means = {}
+    for algo in ("ppo", "torch-ppo"):
+        scores = []
+        for seed in range(4):
+            train_ppo(SHORT, 12_000, tmp_path / algo / str(seed), seed=seed, algo=algo, progress=False)
+            returns = _returns(agents.make_agent(algo, SHORT, path=tmp_path / algo / str(seed)))
+            gain = returns - random_returns
+            assert gain.mean() - 1.96 * gain.std(ddof=1) / np.sqrt(len(gain)) > 0, (algo, seed)
+            scores.append(returns.mean())
+        means[algo] = np.array(scores)
+    welch = stats.ttest_ind(means["ppo"], means["torch-ppo"], equal_var=False)
+    low, high = welch.confidence_interval(0.95)
+    assert low <= 0 <= high, means
