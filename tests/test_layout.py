@@ -54,6 +54,7 @@ MODULE_TESTS = {
     "benchmarks/studies/planning.py": ("tests/bench/test_planning_study.py", r"planning"),
     "benchmarks/speed/planning_cost.py": ("tests/bench/test_planning_study.py", r"planning_cost"),
     "benchmarks/speed/device.py": ("tests/env/test_device.py", r"episode_differences"),
+    "benchmarks/speed/strong_scaling.py": ("tests/bench/test_strong_scaling.py", r"strong_scaling"),
     "benchmarks/speed/training_rate.py": ("tests/agents/test_torch_ppo.py", r"training_rate"),
     "benchmarks/torch_ppo.py": ("tests/agents/test_torch_ppo.py", r"torch_ppo\.train|compute_gae"),
     "mimo_radar_env/core/arrays.py": ("tests/env/test_device.py", r"device_namespace"),

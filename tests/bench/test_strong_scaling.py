@@ -1,0 +1,46 @@
+"""The strong-scaling benchmark (``benchmarks/speed/strong_scaling.py``): its schedule against a
+hand-worked one, its breakdown of a run's worker-seconds, and a tiny study measured whole."""
+
+import pytest
+
+from benchmarks.speed import strong_scaling
+from benchmarks.speed.strong_scaling import Task
+
+
+def test_list_scheduling_gives_each_task_to_the_first_free_worker():
+    # 5, 4, 3 on two workers: 5 | 4 -> the 3 joins the 4 (free at 4): ends at 7
+    assert strong_scaling.makespan([5.0, 4.0, 3.0], 2) == 7.0
+    # the longest first is the harness's order; the other order ends later
+    assert strong_scaling.makespan([3.0, 4.0, 5.0], 2) == 8.0
+    assert strong_scaling.makespan([1.0] * 7, 3) == 3.0
+    assert strong_scaling.makespan([2.0, 1.0], 4) == 2.0
+
+
+def test_the_breakdown_splits_a_runs_worker_seconds():
+    # two workers, a 10 s run: tasks of 4 s and 3 s ending at 5 s and 9 s, then 1 s of 3 s ending at 10 s
+    tasks = [
+        Task("r", "a", 0, 10, 5, 4.0, 5.0),
+        Task("r", "b", 0, 10, 5, 3.0, 9.0),
+        Task("r", "a", 1, 10, 5, 1.0, 10.0),
+    ]
+    parts = strong_scaling.breakdown(10.0, 2, tasks, {"a": 0.5, "b": 0.25})
+    assert parts["task_fixed_s"] == 0.5 + 0.25 + 0.5
+    assert parts["task_steps_s"] == 8.0 - 1.25
+    assert parts["tail_idle_s"] == 10.0 - 9.0  # the other worker's last task ended at 9 s
+    assert parts["outside_tasks_s"] == 20.0 - 8.0 - 1.0
+
+
+@pytest.mark.filterwarnings("ignore")
+def test_a_tiny_study_is_measured_and_modelled(tmp_path):
+    study = ("claims", "--scenarios", "1", "--trials", "12", "--steps", "5")
+    result = strong_scaling.measure(study, [1, 2], [4])
+    one, two = result["measured"]
+    assert (one["tasks"], two["tasks"]) == (6, 6)  # six policies, one shard each at 1 and 2 workers
+    for row in (one, two):
+        parts = row["breakdown"]
+        assert parts["task_steps_s"] > 0 and parts["task_fixed_s"] > 0
+        assert parts["task_steps_s"] + parts["task_fixed_s"] <= parts["worker_seconds"]
+    assert two["efficiency"] == pytest.approx(one["wall_s"] / (2 * two["wall_s"]))
+    four = next(m for m in result["model"] if m["workers"] == 4)
+    assert (four["shard_size"], four["tasks"]) == (6, 12)  # 4 // gcd(6, 4) = 2 shards per policy
+    assert four["makespan_s"] >= four["task_seconds"] / 4
