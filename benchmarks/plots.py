@@ -149,3 +149,30 @@ def _selection_figures(
 def _save(fig, path: Path) -> Path:
     fig.savefig(path)
     return path
+
+
+def plot_learning_curves(group: dict[str, list[dict[str, np.ndarray]]], path: Path, title: str) -> Path:
+    """Return and ARMSE against timesteps for each learner: the mean over seeds and their range."""
+    fig = _figure(10, 4)
+    axes = fig.subplots(1, 2)
+    for key, curves in group.items():
+        length = min((len(c["timesteps"]) for c in curves), default=0)
+        if length == 0:
+            continue
+        steps = curves[0]["timesteps"][:length]
+        for ax, metric in zip(axes, ("return", "armse"), strict=True):
+            values = np.array([c[metric][:length] for c in curves])
+            (line,) = ax.plot(
+                steps,
+                np.nanmean(values, axis=0),
+                label=f"{key} ({len(curves)} seed{'s' * (len(curves) > 1)})",
+            )
+            ax.fill_between(
+                steps, np.nanmin(values, axis=0), np.nanmax(values, axis=0), alpha=0.2, color=line.get_color()
+            )
+    axes[0].set(xlabel="timesteps", ylabel="training episode return", title=f"{title}: return")
+    axes[1].set(xlabel="timesteps", ylabel="training episode ARMSE (m)", title=f"{title}: ARMSE")
+    axes[0].legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=100)
+    return path

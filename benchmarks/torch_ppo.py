@@ -62,16 +62,17 @@ class PPOConfig:
     clip_obs: float = 10.0
 
     @classmethod
-    def from_hyperparams(cls, params: dict[str, Any], n_envs: int | None = None) -> PPOConfig:
+    def from_hyperparams(
+        cls, params: dict[str, Any], n_envs: int | None = None, normalize: dict[str, Any] | None = None
+    ) -> PPOConfig:
         """The configuration of a checked ``train-ppo`` entry (SB3's keys), ``n_envs`` overriding
-        the entry's; a key torch-ppo does not implement is refused by name."""
-        from .training import normalize_kwargs
-
+        the entry's, ``normalize`` its ``VecNormalize`` keywords (``training.normalize_kwargs``;
+        None: none); a key torch-ppo does not implement is refused by name."""
         ignored = {"n_envs", "n_timesteps", "normalize", "policy", "policy_kwargs", *CARRIED}
         unknown = sorted(set(params) - ignored)
         if unknown:
             raise ValueError(f"torch-ppo does not implement {unknown}; it reads {sorted(ignored)}")
-        normalize = normalize_kwargs(params) or {}
+        normalize = normalize or {}
         if normalize.get("norm_reward", False):
             raise ValueError("torch-ppo normalises observations only: set normalize: dict(norm_reward=False)")
         values = {key: params[key] for key in CARRIED if key in params}
@@ -144,7 +145,7 @@ def train(
     from agents.networks import ActorCritic, RunningNormalization
     from mimo_radar_env.wrappers import MimoRadarSelectFlatVectorEnv
 
-    from .training import CURVE_FILE, META_FILE, LearningCurve
+    from .training_log import CURVE_FILE, META_FILE, LearningCurve
 
     env = MimoRadarSelectFlatVectorEnv(
         num_envs=config.n_envs, action="discrete", scenario=scenario, device=device,
@@ -239,7 +240,7 @@ def train(
     network.save(out / WEIGHTS_FILE)
     if normalization is not None:
         normalization.save(out / NORMALIZATION_FILE)
-    log.write(out / CURVE_FILE)
+    log.write(out / CURVE_FILE, f"{TORCH_PPO} on {scenario.name}")
     meta = {
         "algo": TORCH_PPO,
         "scenario": scenario.to_dict(),

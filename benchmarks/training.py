@@ -8,9 +8,7 @@ Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-e
 from __future__ import annotations
 
 import ast
-import csv
 import json
-import math
 import time
 from importlib import resources
 from pathlib import Path
@@ -33,13 +31,11 @@ from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
 from .harness import output_lock
+from .training_log import CURVE_FILE, META_FILE, LearningCurve
 
 #: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
 #: ``Learner.hyperparams``.
 DEFAULT_HYPERPARAMS = LEARNERS["ppo"].hyperparams
-META_FILE = "ppo.json"
-#: The learning curve of a training: per rollout, the mean return and ARMSE of its episodes.
-CURVE_FILE = "curve.csv"
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
@@ -272,7 +268,7 @@ def train_ppo(
     if own:
         from .torch_ppo import PPOConfig
 
-        config = PPOConfig.from_hyperparams(params, n_envs)
+        config = PPOConfig.from_hyperparams(params, n_envs, normalize_kwargs(params))
         if action_form(action, sc) != "discrete":
             raise ValueError(
                 f"{TORCH_PPO} learns the Discrete super-arm action: use --action discrete or auto"
@@ -412,7 +408,7 @@ def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None
 
 
 #: The files a trained model leaves in its folder.
-MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE)
+MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE, "curve.png")
 
 
 def _clear_model(out: Path, overwrite: bool) -> None:
@@ -447,7 +443,7 @@ def _train(
         tensorboard_log=str(out / "tensorboard") if tensorboard else None,
         **ppo_kwargs,
     )
-    curve = LearningCurve(timesteps, progress)
+    curve = LearningCurve(timesteps, progress, name=spec.name)
     rollout = model.n_steps * n_envs
     curve.start(-(-timesteps // rollout) * rollout)
     start = time.perf_counter()
@@ -458,7 +454,7 @@ def _train(
     if normalization is not None:
         save_normalization(out / NORMALIZATION_FILE, venv)  # plain arrays: what the harness reads
         venv.save(str(out / SB3_NORMALIZATION_FILE))  # SB3's own format: VecNormalize.load reads it
-    curve.write(out / CURVE_FILE)
+    curve.write(out / CURVE_FILE, f"{spec.name} on {sc.name}")
     meta = {
         "algo": spec.name,
         "scenario": sc.to_dict(),
@@ -475,90 +471,3 @@ def _train(
     }
     (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
     return meta
-
-
-class LearningCurve:
-    """The learning curve of a training, and what it prints as it goes: after each rollout, the
-    timesteps so far and the mean return and ARMSE (m) of the training episodes that ended in it
-    (eq17's or the information reward summed over the episode, and the root of the mean over its
-    steps and targets of the tracker's squared position error). Both trainers feed it: SB3's
-    through :meth:`callback` (``NativeVecEnv``'s episode info), torch-ppo directly.
-
-    With ``progress``, a line per rollout (at most one every ``every`` seconds, and the last):
-    the steps trained of ``total``, the last rollout's return and ARMSE, steps per second and
-    the time left at that rate."""
-
-    FIELDS = ("timesteps", "episodes", "return", "armse")
-
-    def __init__(self, total: int = 0, progress: bool = False, every: float = 5.0, name: str = "train-ppo"):
-        self.rows: list[dict[str, float]] = []
-        self._returns: list[float] = []
-        self._armse: list[float] = []
-        self.total, self.progress, self.every, self.name = total, progress, every, name
-        self._start = time.perf_counter()
-        self._printed = -math.inf
-
-    def start(self, total: int) -> None:
-        """The training starts now, for ``total`` steps (whole rollouts)."""
-        self.total, self._start = total, time.perf_counter()
-
-    def callback(self) -> Any:
-        from stable_baselines3.common.callbacks import BaseCallback
-
-        curve = self
-
-        class _Callback(BaseCallback):
-            def _on_step(self) -> bool:
-                for info in self.locals.get("infos", []):
-                    episode = info.get("episode")
-                    if episode is not None:
-                        curve.add_episodes([episode["r"]], [episode.get("armse", math.nan)])
-                return True
-
-            def _on_rollout_end(self) -> None:
-                curve.close_rollout(self.num_timesteps)
-
-        return _Callback()
-
-    def add_episodes(self, returns: list[float], armse: list[float]) -> None:
-        """Episodes that ended: their returns and ARMSE (NaN without the tracker)."""
-        self._returns += map(float, returns)
-        self._armse += map(float, armse)
-
-    def close_rollout(self, timesteps: int) -> None:
-        if self._returns:
-            self.rows.append(
-                {
-                    "timesteps": timesteps,
-                    "episodes": len(self._returns),
-                    "return": sum(self._returns) / len(self._returns),
-                    "armse": sum(self._armse) / len(self._armse),
-                }
-            )
-        self._returns, self._armse = [], []
-        now = time.perf_counter()
-        if self.progress and (now - self._printed >= self.every or timesteps >= self.total):
-            self._printed = now
-            print(self.line(timesteps, now - self._start), flush=True)
-
-    def line(self, timesteps: int, seconds: float) -> str:
-        """``train-ppo: 16,384/200,000 steps (8 %) · return 512.3 · ARMSE 12.41 m · 2,310 steps/s
-        · 80 s left``; the return and ARMSE are the last rollout's with an ended episode."""
-        rate = timesteps / seconds if seconds > 0 else math.inf
-        share = 100 * timesteps / max(self.total, 1)
-        parts = [f"{self.name}: {timesteps:,}/{self.total:,} steps ({share:.0f} %)"]
-        if self.rows:
-            last = self.rows[-1]
-            parts.append(f"return {last['return']:.1f}")
-            if math.isfinite(last["armse"]):
-                parts.append(f"ARMSE {last['armse']:.2f} m")
-        parts.append(f"{rate:,.0f} steps/s")
-        if timesteps < self.total and math.isfinite(rate):
-            parts.append(f"{(self.total - timesteps) / rate:,.0f} s left")
-        return " · ".join(parts)
-
-    def write(self, path: Path) -> None:
-        with path.open("w", newline="") as handle:
-            writer = csv.DictWriter(handle, fieldnames=self.FIELDS)
-            writer.writeheader()
-            writer.writerows(self.rows)

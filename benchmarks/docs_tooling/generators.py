@@ -987,6 +987,23 @@ DEVICE_CHECKS_FILE = "perf/device-checks.json"
 DEVICE_BACKENDS = {"numpy": "numpy + numba", "torch-cpu": "torch cpu", "device": "torch cuda"}
 
 
+def _trials_grid(
+    rows: list[dict[str, Any]], keys: tuple[str, str], labels: tuple[str, str] | None = None
+) -> tuple[list[int], list[str], dict[tuple[Any, ...], dict[int, dict[str, Any]]]]:
+    """A table with a column per trial count B: the counts, its header lines, and the rows grouped
+    by ``keys`` (the first columns, headed ``labels``, default the keys) and then by B."""
+    sizes = sorted({r["trials"] for r in rows})
+    header = " | ".join(labels or keys)
+    lines = [
+        f"| {header} | " + " | ".join(f"B = {b:,d}" for b in sizes) + " |",
+        "|---|---|" + "---|" * len(sizes),
+    ]
+    groups: dict[tuple[Any, ...], dict[int, dict[str, Any]]] = {}
+    for r in rows:
+        groups.setdefault(tuple(r[k] for k in keys), {})[r["trials"]] = r
+    return sizes, lines, groups
+
+
 def _rate(rate: float) -> str:
     return f"{rate / 1e6:.2f} M" if rate >= 1e6 else f"{rate / 1e3:,.0f} k"
 
@@ -1017,14 +1034,7 @@ def device_speed(docs: Path) -> str:
     step per backend, fusion and trial count, with the time of a step and the device's peak
     memory."""
     record = read_json(docs, DEVICE_FILE)
-    sizes = sorted({r["trials"] for r in record["speed"]})
-    lines = [
-        "| backend | fusion | " + " | ".join(f"B = {b:,d}" for b in sizes) + " |",
-        "|---|---|" + "---|" * len(sizes),
-    ]
-    groups: dict[tuple[str, str], dict[int, dict]] = {}
-    for r in record["speed"]:
-        groups.setdefault((r["backend"], r["fusion"]), {})[r["trials"]] = r
+    sizes, lines, groups = _trials_grid(record["speed"], ("backend", "fusion"))
     for (backend, fusion), rows in groups.items():
         cells = []
         for b in sizes:
@@ -1085,6 +1095,157 @@ def device_value(docs: Path, key: str) -> str:
     raise BenchError(
         f"unknown device figure {key!r}: rate:BACKEND:FUSION:B, ratio:A:B:FUSION:B, largest-difference"
     )
+
+
+# ------------------------------------------------------------------ PPO training throughput
+TRAINING_FILE = "perf/training.json"
+TRAININGS_FILE = "perf/torch-ppo-trainings.json"
+
+
+def _training_rate(record: dict[str, Any], learner: str, device: str, trials: int) -> float:
+    for r in record["rows"]:
+        if (r["learner"], r["device"], r["trials"]) == (learner, device, trials) and "env_steps_per_s" in r:
+            return r["env_steps_per_s"]
+    raise BenchError(f"{TRAINING_FILE} has no measured row {learner}, {device}, B = {trials}")
+
+
+@generator("ppo-training-rate")
+def ppo_training_rate(docs: Path) -> str:
+    """``python -m benchmarks.speed.training_rate``'s rows: env steps per second of PPO training
+    end to end, per learner, where it runs and parallel trials B, with the device's peak memory."""
+    record = read_json(docs, TRAINING_FILE)
+    sizes, lines, groups = _trials_grid(record["rows"], ("learner", "device"), ("learner", "runs on"))
+    names = {"numpy": "CPU, numpy env, 1 thread", "cpu": "CPU torch, 1 thread"}
+    for (learner, device), rows in groups.items():
+        cells = []
+        for b in sizes:
+            r = rows.get(b)
+            if r is None or "env_steps_per_s" not in r:
+                cells.append("not run" if r is None else f"not run ({r['skipped']})")
+                continue
+            memory = r.get("peak_device_memory_gib")
+            cells.append(f"{r['env_steps_per_s']:,.0f}" + ("" if memory is None else f" ({memory:.1f} GiB)"))
+        where = names.get(device, f"{record.get('device_name', device)} ({device})")
+        lines.append(
+            f"| {'SB3 PPO' if learner == 'sb3' else learner} | {where} | " + " | ".join(cells) + " |"
+        )
+    lines += [
+        "",
+        f"Env steps per second of training, each rollout with its update, the first rollout untimed; "
+        f"{record['scenario']}, rollouts of {record['rows'][0]['n_steps']} steps per trial, eight "
+        "minibatches per epoch; the device's peak memory in brackets.",
+    ]
+    return "\n".join(lines)
+
+
+@value_source("training")
+def training_value(docs: Path, key: str) -> str:
+    """A figure of the PPO training benchmark (results/perf/training.json): ``rate.LEARNER.DEVICE.B``
+    and ``ratio.LEARNER.DEVICE.B.LEARNER.DEVICE.B`` (the first's rate over the second's); or of
+    the 48 device trainings (results/perf/torch-ppo-trainings.json): ``trainings.FIELD``."""
+    if key.startswith("trainings."):
+        record = read_json(docs, TRAININGS_FILE)
+        field = key.split(".", 1)[1]
+        if field not in record or isinstance(record[field], dict):
+            raise BenchError(f"{TRAININGS_FILE} has no figure {field!r}")
+        value = record[field]
+        return (
+            f"{value:,}"
+            if isinstance(value, int)
+            else f"{value:,.0f}"
+            if isinstance(value, float)
+            else str(value)
+        )
+    record = read_json(docs, TRAINING_FILE)
+    kind, *parts = key.split(".")
+    if kind == "rate" and len(parts) == 3:
+        return f"{_training_rate(record, parts[0], parts[1], int(parts[2])):,.0f}"
+    if kind == "ratio" and len(parts) == 6:
+        first = _training_rate(record, parts[0], parts[1], int(parts[2]))
+        return f"{first / _training_rate(record, parts[3], parts[4], int(parts[5])):.0f}"
+    raise BenchError(
+        f"unknown training figure {key!r}: rate.LEARNER.DEVICE.B, ratio.(LEARNER.DEVICE.B)x2, trainings.FIELD"
+    )
+
+
+# ------------------------------------------------------------------ strong scaling
+SCALING_FILES = {"2 cores": "perf/strong-scaling.json", "16 cores": "perf/strong-scaling-16-cores.json"}
+
+
+@generator("strong-scaling")
+def strong_scaling(docs: Path) -> str:
+    """``python -m benchmarks.speed.strong_scaling``'s measured rows on each machine, with the
+    worker-seconds by where they went, and the model's predictions."""
+    lines = [
+        "| machine | workers | wall (s) | efficiency | shard | us per trial-step in tasks | "
+        "in the tasks | idle at the tail | outside the tasks |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for machine, relative in SCALING_FILES.items():
+        record = read_json(docs, relative)
+        for r in record["measured"]:
+            parts = r["breakdown"]
+            total = parts["worker_seconds"]
+            share = {k: f"{100 * parts[k] / total:.0f} %" for k in parts}
+            tasks = 100 * (parts["task_steps_s"] + parts["task_fixed_s"]) / total
+            lines.append(
+                f"| {machine} | {r['workers']} | {r['wall_s']:.1f} | {r['efficiency']:.2f} | "
+                f"{r['shard_trials']} | {r['us_per_trial_step_in_tasks']:.1f} | {tasks:.0f} % | "
+                f"{share['tail_idle_s']} | {share['outside_tasks_s']} |"
+            )
+    lines += [
+        "",
+        "| machine | model from | workers | shard | predicted wall (s) | measured (s) |",
+        "|---|---|---|---|---|---|",
+    ]
+    for machine, relative in SCALING_FILES.items():
+        record = read_json(docs, relative)
+        measured = {r["workers"]: r["wall_s"] for r in record["measured"]}
+        for m in record["model"]:
+            seen = measured.get(m["workers"])
+            lines.append(
+                f"| {machine} | {record['model_from_workers']} workers | {m['workers']} | "
+                f"{m['shard_size']} | {m['wall_s']:.1f} | {'—' if seen is None else f'{seen:.1f}'} |"
+            )
+    first = read_json(docs, SCALING_FILES["2 cores"])
+    lines += [
+        "",
+        f"`{' '.join(first['study'])}`, each run a fresh command into a fresh folder; efficiency against "
+        "the fewest workers measured on that machine; the worker-seconds (workers x wall) split as the "
+        "module docstring of `benchmarks/speed/strong_scaling.py` says.",
+    ]
+    return "\n".join(lines)
+
+
+@value_source("scaling")
+def scaling_value(docs: Path, key: str) -> str:
+    """A figure of the strong-scaling runs: ``MACHINE.wall.W``, ``MACHINE.efficiency.W``,
+    ``MACHINE.model.W`` (predicted wall), ``MACHINE.us.W`` (us per trial-step in the tasks),
+    ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker),
+    ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
+    shard size of the count the model starts from), MACHINE ``2`` or ``16`` (cores)."""
+    machine, kind, workers = key.split(".")
+    record = read_json(docs, SCALING_FILES[f"{machine} cores"])
+    rows = {r["workers"]: r for r in record["measured"]}
+    model = {m["workers"]: m for m in record["model"]}
+    w = int(workers)
+    try:
+        if kind == "model":
+            return f"{model[w]['wall_s']:.1f}"
+        if kind == "probe-ratio":  # the probed tasks' seconds at W's shard size over the model's own
+            return f"{model[w]['task_seconds'] / model[record['model_from_workers']]['task_seconds']:.1f}"
+        r = rows[w]
+    except KeyError:
+        raise BenchError(f"{SCALING_FILES[f'{machine} cores']} has no {kind} at {w} workers") from None
+    if kind == "wall":
+        return f"{r['wall_s']:.1f}"
+    if kind == "efficiency":
+        return f"{r['efficiency']:.2f}"
+    if kind == "us":
+        return f"{r['us_per_trial_step_in_tasks']:.1f}"
+    if kind == "outside-per-worker":
+        return f"{r['breakdown']['outside_tasks_s'] / w:.1f}"
+    raise BenchError(f"unknown scaling figure {key!r}")
 
 
 # ------------------------------------------------------------------ the planning study

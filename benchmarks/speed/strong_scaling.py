@@ -186,6 +186,11 @@ def measure(
             "efficiency": base["wall_s"] * base["workers"] / (m["wall_s"] * workers),
             "us_per_trial_step_in_tasks": 1e6 * per_step,
             "breakdown": breakdown(m["wall_s"], workers, tasks, fixed),
+            # wall seconds before the first task started and after the last one ended: the
+            # command's serial parts (imports, the run's checks and estimate, the workers' start;
+            # the report)
+            "before_first_task_s": min(t.finished - t.seconds for t in tasks),
+            "after_last_task_s": m["wall_s"] - max(t.finished for t in tasks),
         })  # fmt: skip
     source = next(m for m in measured if m["workers"] == (model_from or max(counts)))
     order = queue_order(folders[source["workers"]])

@@ -6,8 +6,7 @@ to B, rollouts of ``n_steps`` (default 64) steps per trial and ``batch_size = n_
 entry's eight minibatches per epoch at any B), 10 epochs. A row times its rollouts after the first
 (the first pays for warm-up: compilation, CUDA context), each rollout with its update: what a
 training spends per env step end to end. CPU rows run on one thread, as ``train-ppo``'s workers
-do. Rows that would take longer than ``--max-seconds`` (judged from the row at the smaller B) are
-skipped and say so.
+do, at the B values of ``--cpu-sizes`` (thousands of trials take minutes there).
 
     python -m benchmarks.speed.training_rate --device cuda --json docs/results/perf/training.json
 """
@@ -24,7 +23,8 @@ from typing import Any
 
 from mimo_radar_env import EnvOptions, load_scenario
 
-from ..training import _NOT_FOR_PPO, LearningCurve, load_hyperparams
+from ..training import _NOT_FOR_PPO, load_hyperparams, normalize_kwargs
+from ..training_log import LearningCurve
 
 SCENARIO = "paper-1-v1"
 SIZES = (8, 512, 4096)
@@ -84,7 +84,7 @@ def training_rate(
         else:
             from .. import torch_ppo
 
-            config = torch_ppo.PPOConfig.from_hyperparams(params)
+            config = torch_ppo.PPOConfig.from_hyperparams(params, normalize=normalize_kwargs(params))
             with tempfile.TemporaryDirectory() as out:
                 torch_ppo.train(
                     load_scenario(SCENARIO), total, Path(out), 0, config, EnvOptions(), device, clock
@@ -104,28 +104,23 @@ def training_rate(
 
 
 def rows(
-    device: str | None, sizes: tuple[int, ...], rollouts: int, n_steps: int, max_seconds: float
+    device: str | None, sizes: tuple[int, ...], cpu_sizes: tuple[int, ...], rollouts: int, n_steps: int
 ) -> list[dict[str, Any]]:
-    """Every backend's rows: SB3 on CPU, torch-ppo on CPU torch and, with ``device``, there."""
-    backends = [("sb3", None), ("torch-ppo", "cpu")] + ([("torch-ppo", device)] if device else [])
+    """Every backend's rows: SB3 on CPU and torch-ppo on CPU torch at ``cpu_sizes``, and with
+    ``device``, torch-ppo there at ``sizes``."""
+    backends = [("sb3", None, cpu_sizes), ("torch-ppo", "cpu", cpu_sizes)]
+    backends += [("torch-ppo", device, sizes)] if device else []
     out = []
-    for learner, where in backends:
-        last = None
-        for trials in sizes:
-            seconds = None if last is None else rollouts * n_steps * trials / last["env_steps_per_s"]
-            if seconds is not None and seconds > max_seconds:
-                out.append({"learner": learner, "device": where or "numpy", "trials": trials,
-                            "skipped": f"about {seconds:,.0f} s, over --max-seconds"})  # fmt: skip
-                print(f"  {learner:9s} {where or 'numpy':6s} B={trials:>6,d}: skipped ({out[-1]['skipped']})")
-                continue
+    for learner, where, trial_counts in backends:
+        for trials in trial_counts:
             try:
-                last = training_rate(learner, trials, where, rollouts, n_steps)
+                row = training_rate(learner, trials, where, rollouts, n_steps)
             except ImportError as exc:  # a machine without stable-baselines3: that backend's rows say so
                 out.append({"learner": learner, "device": where or "numpy", "trials": trials,
                             "skipped": f"not installed ({exc.name})"})  # fmt: skip
                 break
-            out.append(last)
-            rate = last["env_steps_per_s"]
+            out.append(row)
+            rate = row["env_steps_per_s"]
             print(
                 f"  {learner:9s} {where or 'numpy':6s} B={trials:>6,d}: {rate:>10,.0f} env steps/s",
                 flush=True,
@@ -136,18 +131,19 @@ def rows(
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default=None, help="a torch device for torch-ppo's last rows ('cuda')")
-    parser.add_argument("--sizes", default=",".join(map(str, SIZES)), help="B values, comma-separated")
+    parser.add_argument("--sizes", default=",".join(map(str, SIZES)), help="B values on the device")
+    parser.add_argument("--cpu-sizes", default="8,512", help="B values on the CPU (SB3, CPU torch)")
     parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
     parser.add_argument("--n-steps", type=int, default=64)
-    parser.add_argument("--max-seconds", type=float, default=120.0)
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     sizes = tuple(int(s) for s in args.sizes.split(","))
+    cpu_sizes = tuple(int(s) for s in args.cpu_sizes.split(","))
     print(f"PPO training, {SCENARIO}, env steps per second (rollouts of {args.n_steps} steps per trial)")
     result = {
         "scenario": SCENARIO,
         "machine": platform.processor() or platform.machine(),
-        "rows": rows(args.device, sizes, args.rollouts, args.n_steps, args.max_seconds),
+        "rows": rows(args.device, sizes, cpu_sizes, args.rollouts, args.n_steps),
     }
     if args.device and args.device.startswith("cuda"):
         import torch

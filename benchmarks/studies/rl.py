@@ -225,8 +225,10 @@ class RLStudy(Study):
         text = rl_markdown(judged)
         (out / "rl.md").write_text(text)
         if self.settings.figures:
+            from ..plots import plot_learning_curves
+
             for number, group in curves.items():
-                plot_curves(group, out / f"curves_paper-{number}.png", f"paper-{number}")
+                plot_learning_curves(group, out / f"curves_paper-{number}.png", f"paper-{number}")
         return text
 
 
@@ -315,32 +317,6 @@ def flattened(curves: list[dict[str, np.ndarray]]) -> dict[str, Any]:
     last, before = np.nanmean(mean[-fifth:]), np.nanmean(mean[-2 * fifth : -fifth])
     change = float((last - before) / before)
     return {"change": change, "flat": abs(change) <= FLAT_CHANGE, "rollouts": length}
-
-
-def plot_curves(group: dict[str, list[dict[str, np.ndarray]]], path: Path, title: str) -> None:
-    """Return and ARMSE against timesteps for each learner: the mean over seeds and their range."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(10, 4))
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(1, 2)
-    for key, curves in group.items():
-        length = min((len(c["timesteps"]) for c in curves), default=0)
-        if length == 0:
-            continue
-        steps = curves[0]["timesteps"][:length]
-        for ax, metric in zip(axes, ("return", "armse"), strict=True):
-            values = np.array([c[metric][:length] for c in curves])
-            (line,) = ax.plot(steps, np.nanmean(values, axis=0), label=f"{key} ({len(curves)} seeds)")
-            ax.fill_between(
-                steps, np.nanmin(values, axis=0), np.nanmax(values, axis=0), alpha=0.2, color=line.get_color()
-            )
-    axes[0].set(xlabel="timesteps", ylabel="training episode return", title=f"{title}: return")
-    axes[1].set(xlabel="timesteps", ylabel="training episode ARMSE (m)", title=f"{title}: ARMSE")
-    axes[0].legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
 
 
 def rl_markdown(judged: dict[str, Any]) -> str:

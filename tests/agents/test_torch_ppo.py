@@ -14,7 +14,7 @@ torch = pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
 import agents  # noqa: E402
 from agents.networks import ActorCritic, RunningNormalization  # noqa: E402
 from benchmarks import torch_ppo  # noqa: E402
-from benchmarks.training import train_ppo  # noqa: E402
+from benchmarks.training import normalize_kwargs, train_ppo  # noqa: E402
 from mimo_radar_env import load_scenario  # noqa: E402
 
 SHORT = dataclasses.replace(load_scenario("paper-1-v1"), horizon=20)
@@ -153,11 +153,9 @@ def test_bad_requests_are_refused_before_anything_is_written(tmp_path, kwargs, m
 def test_an_sb3_key_torch_ppo_does_not_implement_is_refused_by_name():
     with pytest.raises(ValueError, match=r"does not implement \['use_sde'\]"):
         torch_ppo.PPOConfig.from_hyperparams({"use_sde": True})
-    config = torch_ppo.PPOConfig.from_hyperparams(
-        {"n_envs": 8, "gamma": 0.9, "normalize": {"norm_obs": True, "norm_reward": False},
-         "policy_kwargs": {"net_arch": [32]}},
-        n_envs=512,
-    )  # fmt: skip
+    params = {"n_envs": 8, "gamma": 0.9, "normalize": {"norm_obs": True, "norm_reward": False},
+              "policy_kwargs": {"net_arch": [32]}}  # fmt: skip
+    config = torch_ppo.PPOConfig.from_hyperparams(params, n_envs=512, normalize=normalize_kwargs(params))
     assert (config.n_envs, config.gamma, config.net_arch, config.normalize_obs) == (512, 0.9, (32,), True)
 
 
@@ -204,3 +202,20 @@ def test_both_learners_beat_random_and_land_within_each_others_across_seed_inter
     welch = stats.ttest_ind(means["ppo"], means["torch-ppo"], equal_var=False)
     low, high = welch.confidence_interval(0.95)
     assert low <= 0 <= high, means
+
+
+def test_the_progress_line_says_the_steps_the_last_episodes_the_rate_and_the_time_left(capsys):
+    from benchmarks.training_log import LearningCurve
+
+    log = LearningCurve(progress=True, every=0.0, name="torch-ppo")
+    log.start(4000)
+    log.add_episodes([10.0, 20.0], [2.0, 4.0])
+    log._start -= 2.0  # two seconds ago
+    log.close_rollout(1000)
+    line = capsys.readouterr().out.strip()
+    assert line.startswith("torch-ppo: 1,000/4,000 steps (25 %) · return 15.0 · ARMSE 3.00 m · ")
+    rate = int(line.split(" · ")[3].split()[0].replace(",", ""))
+    assert 400 <= rate <= 500  # about 1,000 steps in 2 s
+    assert line.endswith("s left") and log.rows == [
+        {"timesteps": 1000, "episodes": 2, "return": 15.0, "armse": 3.0}
+    ]

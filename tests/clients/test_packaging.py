@@ -18,6 +18,8 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
     assert "oracle" in result.stdout and "steps (300 asked, in whole rollouts)" in result.stdout
     assert "perf: benchmarks.speed.perf imported from the wheel" in result.stdout
     assert "torchrl: GymEnv('MimoRadarSelectFlat-v1') checked and rolled out" in result.stdout
+    assert "torchrl: MimoRadarSelectTorchRLEnv checked and rolled out" in result.stdout
+    assert result.stdout.count("torchrl: the docs' recipe clients.md-") == 3
 
 
 def test_the_hyperparameters_are_package_data():
