@@ -181,12 +181,11 @@ class Plan(Cost):
 
 
 class Network(Cost):
-    """A learned policy's features and a forward pass of its network: about two operations per
-    weight."""
+    """A learned policy's features and a forward pass of its network (``network_weights`` of
+    them): about two operations per weight."""
 
     def operations_per_trial_step(self, agent: Any) -> float:
-        weights = sum(int(p.numel()) for p in agent.model.policy.parameters())
-        return 2.0 * weights + 10.0 * agent.features.size
+        return 2.0 * agent.network_weights + 10.0 * agent.features.size
 
 
 BOOKKEEPING, SOLVER, GAMMA_SAMPLER = Bookkeeping(), Solver(), GammaSampler()

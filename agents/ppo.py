@@ -329,6 +329,11 @@ class PPOAgent(Agent):
                 )
         self._features: NDArray[np.float32] | None = None
 
+    @property
+    def network_weights(self) -> int:
+        """The weights of the policy's network (its cost, ``agents.costs.NETWORK``)."""
+        return sum(int(p.numel()) for p in self.model.policy.parameters())
+
     def _reset(self, obs: Observation) -> None:
         self._features = self.features.reset(obs)
 
@@ -442,6 +447,11 @@ class TorchPPOAgent(Agent):
         stats = file.parent / NORMALIZATION_FILE
         self.normalization = RunningNormalization.load(stats) if stats.is_file() else None
         self.normalization_file = stats if stats.is_file() else None
+
+    @property
+    def network_weights(self) -> int:
+        """The weights of the actor-critic (its cost, ``agents.costs.NETWORK``)."""
+        return sum(int(p.numel()) for p in self.network.parameters())
 
     def _reset(self, obs: Observation) -> None:
         import torch

@@ -244,9 +244,7 @@ def learned_agents() -> list[str]:
     the project's own torch-ppo."""
     from .ppo import PPOAgent, TorchPPOAgent
 
-    return [
-        name for name in available_agents() if issubclass(_REGISTRY[name].cls, PPOAgent | TorchPPOAgent)
-    ]
+    return [name for name in available_agents() if issubclass(_REGISTRY[name].cls, PPOAgent | TorchPPOAgent)]
 
 
 def agent_argument(name: str) -> str | None:

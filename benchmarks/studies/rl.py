@@ -44,7 +44,7 @@ from ..errors import BenchError
 from ..report import format_estimate, paired_difference
 from ..uncertainty import across_seeds
 from .base import Finished, Run, Study
-from .settings import add_scenarios_argument, integer, paper_numbers
+from .settings import Settings, add_scenarios_argument, integer, local_workers, paper_numbers
 
 #: (learner, reward, seeds option) of the study's trainings.
 TRAININGS = (
@@ -53,14 +53,25 @@ TRAININGS = (
     ("maskable-ppo", "information", "contrib_seeds"),
     ("recurrent-ppo", "information", "contrib_seeds"),
 )
+#: With ``--device``: the project's own PPO on that device, under both rewards.
+DEVICE_TRAININGS = (("torch-ppo", "sinr", "ppo_seeds"), ("torch-ppo", "information", "ppo_seeds"))
 PPO_SEEDS = 5
+#: Seeds per learner with ``--device``: at 3-5 seeds a percentile bootstrap over seeds covers
+#: only about 76-84 % (docs/results.md); at 10 it covers closer to its 95 %.
+DEVICE_PPO_SEEDS = 10
 CONTRIB_SEEDS = 3
 #: Timesteps per training: the whole study (48 trainings and their evaluation) fits in about
 #: two hours of a 2-core machine (docs/results.md states the wall time measured).
 DEFAULT_TIMESTEPS = 600_000
+#: With ``--device``, the ``device`` hyperparameter entry (4,096 trials at once) and a budget of
+#: two 1,000-step episodes per trial (600,000 steps would play 146 steps of each).
+DEVICE_HYPERPARAMS_KEY = "device"
+DEVICE_TIMESTEPS = 8_192_000
 #: Training timesteps per second of one worker process, on the developers' machine (paper
-#: scenario 1, the shipped hyperparameters): the scale of the study's time estimate.
+#: scenario 1, the shipped hyperparameters): the scale of the study's time estimate; torch-ppo's
+#: on one H200 with the device entry (docs/performance.md) and on CPU torch.
 TRAINING_STEPS_PER_S = {"ppo": 3000.0, "maskable-ppo": 3000.0, "recurrent-ppo": 1280.0}
+TORCH_PPO_STEPS_PER_S = {"cuda": 200_000.0, "cpu": 1_000.0}
 #: The policies every learned one is compared with, on the same trials.
 COMPARED = ("mg-crb-cl", "best-tracking", "tracking-ucb")
 #: The order of the paired-difference columns of the tables.
@@ -77,10 +88,13 @@ def training_folder(out: str | Path, scenario: str, algo: str, reward: str) -> P
 
 
 def learned_policy(out: str | Path, scenario: str, algo: str, reward: str, seed: int) -> str:
-    """The harness policy of one trained seed: ``ALGO:PATH/model.zip``."""
+    """The harness policy of one trained seed: ``ALGO:PATH/model.zip`` (torch-ppo's ``model.pt``)."""
+    from agents.ppo import MODEL_FILE, TORCH_PPO, WEIGHTS_FILE
+
     from ..training import seed_folder
 
-    return f"{algo}:{seed_folder(training_folder(out, scenario, algo, reward), seed) / 'model.zip'}"
+    file = WEIGHTS_FILE if algo == TORCH_PPO else MODEL_FILE
+    return f"{algo}:{seed_folder(training_folder(out, scenario, algo, reward), seed) / file}"
 
 
 class RLStudy(Study):
@@ -92,7 +106,9 @@ class RLStudy(Study):
         "Train PPO (both rewards), MaskablePPO and RecurrentPPO (information reward) on the v1 paper "
         "scenarios over several seeds (OUT/train, resumable), run every seed beside MG-CRB-CL, "
         "best-tracking and tracking-ucb on the same trials (OUT/<scenario>), and report across-seed "
-        "statistics and learning curves (OUT/rl.md, OUT/rl.json, OUT/curves_<scenario>.png)."
+        "statistics and learning curves (OUT/rl.md, OUT/rl.json, OUT/curves_<scenario>.png). With "
+        "--device, the learner is the project's own torch-ppo (both rewards, 10 seeds by default), "
+        "trained on that device one seed after another; the evaluation runs on numpy with --workers."
     )
 
     @classmethod
@@ -100,15 +116,23 @@ class RLStudy(Study):
         add_scenarios_argument(parser)
         parser.add_argument(
             "--timesteps",
-            type=integer(1, high=10**9),
-            default=DEFAULT_TIMESTEPS,
-            help=f"environment steps per training (default {DEFAULT_TIMESTEPS:,})",
+            type=integer(1, high=10**10),
+            default=None,
+            help=f"environment steps per training (default {DEFAULT_TIMESTEPS:,}; with --device "
+            f"{DEVICE_TIMESTEPS:,}, two episodes of each of the device entry's 4,096 trials)",
         )
         parser.add_argument(
             "--ppo-seeds",
             type=integer(1, high=100),
-            default=PPO_SEEDS,
-            help=f"training seeds of PPO, per reward (default {PPO_SEEDS})",
+            default=None,
+            help=f"training seeds of PPO, per reward (default {PPO_SEEDS}; with --device {DEVICE_PPO_SEEDS})",
+        )
+        parser.add_argument(
+            "--n-envs",
+            type=integer(1, high=1 << 20),
+            default=None,
+            help="parallel trials of each training env (default: the hyperparameter entry's: 8, or "
+            "with --device 4,096)",
         )
         parser.add_argument(
             "--contrib-seeds",
@@ -117,13 +141,33 @@ class RLStudy(Study):
             help=f"training seeds of MaskablePPO and RecurrentPPO (default {CONTRIB_SEEDS})",
         )
 
+    @property
+    def on_device(self) -> bool:
+        return self.settings.device is not None
+
+    def learners(self) -> tuple[tuple[str, str, str], ...]:
+        """``(learner, reward, seeds option)`` of the study's trainings: the SB3 learners, or
+        torch-ppo with ``--device``."""
+        return DEVICE_TRAININGS if self.on_device else TRAININGS
+
+    @property
+    def timesteps(self) -> int:
+        given = self.args.timesteps
+        return given if given is not None else DEVICE_TIMESTEPS if self.on_device else DEFAULT_TIMESTEPS
+
+    def seeds(self, option: str) -> int:
+        given = getattr(self.args, option)
+        if given is not None:
+            return given
+        return DEVICE_PPO_SEEDS if self.on_device else {"ppo_seeds": PPO_SEEDS}.get(option, CONTRIB_SEEDS)
+
     def trainings(self) -> list[tuple[str, str, str, int]]:
         """``(scenario, learner, reward, seeds)`` of every training group."""
         version = env_version(self.settings.env_version)
         return [
-            (version.paper_scenario(number), algo, reward, getattr(self.args, seeds))
+            (version.paper_scenario(number), algo, reward, self.seeds(seeds))
             for number in paper_numbers(self.args.scenarios)
-            for algo, reward, seeds in TRAININGS
+            for algo, reward, seeds in self.learners()
         ]
 
     def runs(self) -> list[Run]:
@@ -144,13 +188,18 @@ class RLStudy(Study):
         from ..training import train_jobs, training_job
 
         tasks = []
+        key = DEVICE_HYPERPARAMS_KEY if self.on_device else None
         for scenario, algo, reward, seeds in self.trainings():
             options = dataclasses.replace(self.settings.options, reward=reward)
-            job = training_job(load_scenario(scenario), self.args.timesteps, algo, options)
+            job = training_job(load_scenario(scenario), self.timesteps, algo, options, hyperparams_key=key)
+            if self.args.n_envs is not None:
+                job["n_envs"] = self.args.n_envs
             folder = training_folder(self.settings.out, scenario, algo, reward)
             tasks += [(job, folder, seed) for seed in range(seeds)]
         try:
-            train_jobs(tasks, self.settings.workers, progress=self.settings.progress)
+            train_jobs(
+                tasks, self.settings.workers, progress=self.settings.progress, device=self.settings.device
+            )
         except ValueError as exc:
             raise BenchError(str(exc)) from exc
 
@@ -165,8 +214,20 @@ class RLStudy(Study):
             for seed in range(seeds):
                 meta = seed_folder(folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
-                    seconds += self.args.timesteps / TRAINING_STEPS_PER_S[algo]
-        return seconds / self.settings.workers
+                    seconds += self.timesteps / self.steps_per_second(algo)
+        return seconds if self.on_device else seconds / self.settings.workers
+
+    def steps_per_second(self, algo: str) -> float:
+        if not self.on_device:
+            return TRAINING_STEPS_PER_S[algo]
+        return TORCH_PPO_STEPS_PER_S["cpu" if str(self.settings.device) == "cpu" else "cuda"]
+
+    def evaluation_settings(self) -> Settings:
+        """The evaluation's settings: with ``--device``, numpy in local worker processes (every
+        evaluated policy acts on numpy too, and a hundred trials launch-bind a device)."""
+        if not self.on_device:
+            return self.settings
+        return dataclasses.replace(self.settings, device=None, workers=local_workers(self.args.workers))
 
     def main(self) -> int:
         import sys
@@ -179,7 +240,9 @@ class RLStudy(Study):
         if self.settings.backend != "local":
             raise BenchError("the RL study trains in local worker processes: use --backend local")
         # everything but the models is checked before hours of training
-        configure([dataclasses.replace(run, policies=COMPARED) for run in self.runs()], self.settings)
+        configure(
+            [dataclasses.replace(run, policies=COMPARED) for run in self.runs()], self.evaluation_settings()
+        )
         seconds = self.estimate_training_seconds()
         if self.settings.max_hours is not None and seconds > 3600 * self.settings.max_hours:
             raise HarnessError(
@@ -192,7 +255,7 @@ class RLStudy(Study):
         )
         self.train()
         trained = time.perf_counter()
-        finished = execute(self.runs(), self.settings)
+        finished = execute(self.runs(), self.evaluation_settings())
         evaluated = time.perf_counter()
         text = self.report(finished, self.judge(finished))
         # the whole study in this invocation, training included (a resumed study counts what it ran)
@@ -204,7 +267,7 @@ class RLStudy(Study):
     def judge(self, finished: dict[Hashable, Finished]) -> dict[str, Any]:
         return judge_learners(
             {number: f.summary for number, f in finished.items()},
-            [(algo, reward) for algo, reward, _ in TRAININGS],
+            [(algo, reward) for algo, reward, _ in self.learners()],
         )
 
     def report(self, finished: dict[Hashable, Finished], judged: dict[str, Any]) -> str:
@@ -214,7 +277,7 @@ class RLStudy(Study):
             scenario = f.run.scenario
             curves[number] = {
                 f"{algo}-{reward}": read_curves(training_folder(out, str(scenario), algo, reward))
-                for algo, reward, _ in TRAININGS
+                for algo, reward, _ in self.learners()
             }
         judged["curves"] = {
             str(number): {key: flattened(curve) for key, curve in group.items()}

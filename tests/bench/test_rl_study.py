@@ -175,3 +175,34 @@ def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
     finished.mkdir(parents=True)
     (finished / "ppo.json").write_text(json.dumps({"job": {}, "train_wall_s": 1.0}))
     assert study.estimate_training_seconds() == pytest.approx(before - 1.0)
+
+
+def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_evaluates_on_numpy(tmp_path):
+    """``rl --device cpu`` (CPU torch here; a GPU in .ci/device-check): torch-ppo under both
+    rewards with the device entry, each seed trained in this process; the evaluation runs the
+    trained models beside the compared policies on numpy."""
+    pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
+    from benchmarks.cli import main
+
+    out = tmp_path / "rl"
+    argv = ["rl", "--scenarios", "1", "--device", "cpu", "--n-envs", "4", "--timesteps", "128"]
+    argv += [
+        "--ppo-seeds",
+        "2",
+        "--trials",
+        "2",
+        "--steps",
+        "5",
+        "--quiet",
+        "--no-figures",
+        "--out",
+        str(out),
+    ]
+    assert main(argv) == 0
+    judged = json.loads((out / "rl.json").read_text())
+    learners = judged["scenarios"][0]["learners"]
+    assert set(learners) == {"torch-ppo-sinr", "torch-ppo-information"}
+    assert all(row["seeds"] == 2 for row in learners.values())
+    meta = json.loads((out / "train/paper-1-v1/torch-ppo-information/seed-1/ppo.json").read_text())
+    assert (meta["device"], meta["n_envs"], meta["config"]["n_steps"]) == ("cpu", 4, 32)  # the device entry
+    assert meta["env_options"]["reward"] == "information" and meta["trained_timesteps"] == 128
