@@ -1221,7 +1221,8 @@ def strong_scaling(docs: Path) -> str:
 def scaling_value(docs: Path, key: str) -> str:
     """A figure of the strong-scaling runs: ``MACHINE.wall.W``, ``MACHINE.efficiency.W``,
     ``MACHINE.model.W`` (predicted wall), ``MACHINE.us.W`` (us per trial-step in the tasks),
-    ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker),
+    ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker), ``MACHINE.before.W``
+    and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
     shard size of the count the model starts from), MACHINE ``2`` or ``16`` (cores)."""
     machine, kind, workers = key.split(".")
@@ -1245,6 +1246,11 @@ def scaling_value(docs: Path, key: str) -> str:
         return f"{r['us_per_trial_step_in_tasks']:.1f}"
     if kind == "outside-per-worker":
         return f"{r['breakdown']['outside_tasks_s'] / w:.1f}"
+    if kind in ("before", "after"):  # wall seconds before the first task, after the last
+        field = f"{kind}_{'first' if kind == 'before' else 'last'}_task_s"
+        if field not in r:
+            raise BenchError(f"{SCALING_FILES[f'{machine} cores']} predates {field!r}: measure it again")
+        return f"{r[field]:.1f}"
     raise BenchError(f"unknown scaling figure {key!r}")
 
 

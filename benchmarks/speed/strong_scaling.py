@@ -159,9 +159,15 @@ def measure(
 ) -> dict[str, Any]:
     """The measured runs at ``counts`` workers and the model's predictions at ``predictions``, from
     the run at ``model_from`` workers (default the most measured): its time outside the tasks."""
+    with tempfile.TemporaryDirectory(prefix="strong-scaling-") as scratch:
+        return _measure(study, counts, predictions, model_from, Path(scratch))
+
+
+def _measure(
+    study: tuple[str, ...], counts: list[int], predictions: list[int], model_from: int | None, scratch: Path
+) -> dict[str, Any]:
     trials = int(study[study.index("--trials") + 1])
     measured, folders = [], {}
-    scratch = Path(tempfile.mkdtemp(prefix="strong-scaling-"))
     for workers in counts:
         out = scratch / f"w{workers}"
         started = time.time()
