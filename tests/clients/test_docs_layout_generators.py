@@ -79,3 +79,26 @@ def test_seed_sensitivity_names_the_verdicts_that_move(docs):
         assert f"- {layout}: " in text
         line = next(row for row in text.splitlines() if row.startswith(f"- {layout}: "))
         assert line.endswith(f"verdicts that change with the seed: {', '.join(moving) or 'none'}.")
+
+
+def test_the_always_contradicted_claims_are_computed_over_every_scorecard(docs):
+    """The summary's "contradicted in each of the scorecards" covers the readings, the other master
+    seeds and every searched layout: a claim that holds in any one of them leaves the list, and
+    one contradicted everywhere is listed (computed here from the artefacts)."""
+    files = [*generators.READINGS.values(), *generators.SEED_SCORECARDS.values()]
+    files += list(generators.SET_SEED_SCORECARDS.values())
+    cards = [verdicts_of(load(docs, f"results/{f}")) for f in dict.fromkeys(files)]
+    search = load(docs, "results/layout-search/search.json")["finalists"]
+    cards += [f["verdicts"] for f in search if f["name"] != "v1"]
+    cards += [f["verdicts"] for f in load(docs, RESCORED)["finalists"]]
+    expected = [c for c in cards[0] if all(card[c] == "contradicted" for card in cards)]
+    text = generators.claims_counts(docs)
+    assert f"Contradicted in each of the {len(cards)} scorecards" in text
+    assert text.rstrip(".").endswith(", ".join(expected))
+    assert "S2.5" not in expected  # it holds under the searched layouts
+    # make S1.7 hold under one searched layout: the sentence drops it
+    rescored = load(docs, RESCORED)
+    rescored["finalists"][-1]["verdicts"]["S1.7"] = "holds"
+    (docs / RESCORED).write_text(json.dumps(rescored))
+    again = generators.claims_counts(docs)
+    assert "S1.7" in expected and "S1.7" not in again.splitlines()[-1]
