@@ -127,6 +127,114 @@ def ppo_loss(
     return loss, {"policy_loss": policy_loss, "value_loss": value_loss, "approx_kl": approx_kl}
 
 
+class Collector:
+    """The rollout side of a training: the Flat vector env on the device, the observation
+    statistics, the rollout buffers and the episodes in progress. :meth:`collect` fills the
+    buffers with ``n_steps`` steps of every trial, acting with the network."""
+
+    def __init__(self, scenario: Scenario, seed: int, config: PPOConfig, options: EnvOptions, device: str):
+        import torch
+
+        from agents.networks import RunningNormalization
+        from mimo_radar_env.wrappers import MimoRadarSelectFlatVectorEnv
+
+        self.env = MimoRadarSelectFlatVectorEnv(
+            num_envs=config.n_envs, action="discrete", scenario=scenario, device=device,
+            autoreset_mode="disabled", **options.to_dict(),
+        )  # fmt: skip
+        self.xp, self.config, self.seed, self.horizon = self.env.env.engine.xp, config, seed, scenario.horizon
+        B, S, where = config.n_envs, config.n_steps, self.xp.device
+        self.size, self.arms = self.env.single_observation_space.shape[0], int(self.env.single_action_space.n)
+        self.normalization = (
+            RunningNormalization(self.size, where, config.clip_obs) if config.normalize_obs else None
+        )
+        self.sampling = TrialRandom.for_batch(seed, B, self.xp)
+        self.obs = torch.zeros((S, B, self.size), dtype=torch.float32, device=where)
+        self.actions = torch.zeros((S, B), dtype=torch.int64, device=where)
+        self.log_probs, self.rewards, self.dones, self.values = (
+            torch.zeros((S, B), device=where) for _ in range(4)
+        )
+        self.returns, self.squared_errors = (
+            torch.zeros(B, dtype=torch.float64, device=where) for _ in range(2)
+        )
+        self.episode, self.length = 0, 0
+        self.current = self._new_episode()
+
+    def observe(self, features: Any, update: bool = True) -> Any:
+        """The features as the network sees them: normalised, the statistics updated first (as
+        ``VecNormalize`` does in training) unless ``update`` is false."""
+        if self.normalization is None:
+            return features
+        if update:
+            self.normalization.update(features)
+        return self.normalization(features)
+
+    def _new_episode(self) -> Any:
+        B = self.config.n_envs
+        features, _ = self.env.reset(seed=self.seed + self.episode * B)  # NativeVecEnv's seeds
+        self.episode += 1
+        return self.observe(features)
+
+    def collect(self, network: Any, log: Any) -> Any:
+        """One rollout; returns the value of the state after it (GAE's last value)."""
+        import torch
+
+        for t in range(self.config.n_steps):  # act, step, record, all on the device
+            with torch.no_grad():
+                logits, value = network(self.current)
+            cumulative = torch.softmax(logits.double(), dim=-1).cumsum(-1)
+            u = self.sampling.uniform(Stream.PPO_ACTION)
+            action = torch.clamp((cumulative < u[:, None]).sum(-1), max=self.arms - 1)
+            features, reward, _, _, info = self.env.step(action)
+            self.obs[t], self.actions[t], self.values[t], self.rewards[t] = (
+                self.current,
+                action,
+                value,
+                reward,
+            )
+            self.log_probs[t] = torch.log_softmax(logits, dim=-1).gather(1, action[:, None]).squeeze(1)
+            self.returns += reward
+            tracked = "position_error" in info
+            if tracked:
+                self.squared_errors += (info["position_error"] ** 2).mean(-1)
+            self.length += 1
+            self.dones[t] = float(self.length == self.horizon)
+            if self.length < self.horizon:
+                self.current = self.observe(features)
+                continue
+            # every trial's time limit: bootstrap with the value of the last state, then a new episode
+            with torch.no_grad():
+                self.rewards[t] += self.config.gamma * network(self.observe(features, update=False))[1]
+            armse = torch.sqrt(self.squared_errors / self.length) if tracked else self.returns * math.nan
+            log.add_episodes(self.returns.tolist(), armse.tolist())
+            self.returns.zero_(), self.squared_errors.zero_()
+            self.current, self.length = self._new_episode(), 0
+        with torch.no_grad():
+            return network(self.current)[1]
+
+
+def update(
+    network: Any, optimizer: Any, config: PPOConfig, batch: tuple[Any, ...], shuffling: TrialRandom
+) -> None:
+    """``n_epochs`` passes over a rollout's samples ``batch`` (observations, actions, log
+    probabilities, advantages, returns) in minibatches of ``batch_size``, in a fresh order each
+    epoch; SB3's early stop when the approximate KL passes ``1.5 target_kl``."""
+    import torch
+
+    samples = len(batch[0])
+    for _ in range(config.n_epochs):
+        order = torch.argsort(shuffling.uniform(Stream.PPO_MINIBATCH, (samples,))[0])
+        for begin in range(0, samples, config.batch_size):
+            chosen = order[begin : begin + config.batch_size]
+            loss, stats = ppo_loss(network, config, *(part[chosen] for part in batch))
+            if config.target_kl is not None and stats["approx_kl"] > 1.5 * config.target_kl:
+                return  # before this minibatch's step, as SB3
+            optimizer.zero_grad()
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(network.parameters(), config.max_grad_norm)
+            optimizer.step()
+
+
 def train(
     scenario: Scenario,
     timesteps: int,
@@ -139,108 +247,48 @@ def train(
 ) -> dict[str, Any]:
     """Train torch-ppo for at least ``timesteps`` env steps (whole rollouts of ``n_steps x
     n_envs``) and save ``model.pt``, ``vecnormalize.npz``, ``curve.csv`` and ``ppo.json`` in
-    ``out``. ``log`` (a :class:`~benchmarks.training.LearningCurve`) hears of every rollout."""
+    ``out``. ``log`` (a :class:`~benchmarks.training_log.LearningCurve`) hears of every rollout."""
     import torch
 
-    from agents.networks import ActorCritic, RunningNormalization
-    from mimo_radar_env.wrappers import MimoRadarSelectFlatVectorEnv
+    from agents.networks import ActorCritic
 
-    from .training_log import CURVE_FILE, META_FILE, LearningCurve
+    from .training_log import CURVE_FILE, LearningCurve
 
-    env = MimoRadarSelectFlatVectorEnv(
-        num_envs=config.n_envs, action="discrete", scenario=scenario, device=device,
-        autoreset_mode="disabled", **options.to_dict(),
-    )  # fmt: skip
-    xp, B, S, horizon = env.env.engine.xp, config.n_envs, config.n_steps, scenario.horizon
-    size, arms = env.single_observation_space.shape[0], env.single_action_space.n
+    collector = Collector(scenario, seed, config, options, device)
+    where, rollout = collector.xp.device, config.n_steps * config.n_envs
     torch.manual_seed(seed)
-    network = ActorCritic(size, arms, config.net_arch).to(xp.device)
+    network = ActorCritic(collector.size, collector.arms, config.net_arch).to(where)
     optimizer = torch.optim.Adam(network.parameters(), lr=config.learning_rate, eps=1e-5)
-    normalization = RunningNormalization(size, xp.device, config.clip_obs) if config.normalize_obs else None
-    sampling, shuffling = TrialRandom.for_batch(seed, B, xp), TrialRandom.for_batch(seed, 1, xp)
+    shuffling = TrialRandom.for_batch(seed, 1, collector.xp)
     log = log or LearningCurve(timesteps)
-
-    def observe(features: Any, update: bool = True) -> Any:
-        if normalization is None:
-            return features
-        if update:
-            normalization.update(features)
-        return normalization(features)
-
-    episode = 0
-
-    def new_episode() -> Any:
-        nonlocal episode
-        features, _ = env.reset(seed=seed + episode * B)  # NativeVecEnv's seeds, episode by episode
-        episode += 1
-        return observe(features)
-
-    def zeros(dtype: Any = torch.float32, *shape: int) -> Any:
-        return torch.zeros((S, B, *shape), dtype=dtype, device=xp.device)
-
-    obs_buf, action_buf, log_prob_buf = zeros(torch.float32, size), zeros(torch.int64), zeros()
-    reward_buf, done_buf, value_buf = zeros(), zeros(), zeros()
-    obs, length = new_episode(), 0
-    returns, squared_errors = (torch.zeros(B, dtype=torch.float64, device=xp.device) for _ in range(2))
-    updates, trained, start = math.ceil(timesteps / (S * B)), 0, time.perf_counter()
-    log.start(updates * S * B)
-    for _ in range(updates):
-        for t in range(S):  # the rollout: act, step, record, all on the device
-            with torch.no_grad():
-                logits, value = network(obs)
-            cumulative = torch.softmax(logits.double(), dim=-1).cumsum(-1)
-            u = sampling.uniform(Stream.PPO_ACTION)
-            action = torch.clamp((cumulative < u[:, None]).sum(-1), max=arms - 1)
-            features, reward, _, _, info = env.step(action)
-            reward_buf[t] = reward
-            returns += reward
-            squared_errors += (info["position_error"] ** 2).mean(-1) if "position_error" in info else 0.0
-            obs_buf[t], action_buf[t], value_buf[t] = obs, action, value
-            log_prob_buf[t] = torch.log_softmax(logits, dim=-1).gather(1, action[:, None]).squeeze(1)
-            length += 1
-            if length == horizon:  # every trial's time limit: bootstrap, then a new episode
-                with torch.no_grad():
-                    reward_buf[t] += config.gamma * network(observe(features, update=False))[1]
-                done_buf[t] = 1.0
-                armse = (
-                    torch.sqrt(squared_errors / length) if "position_error" in info else returns * math.nan
-                )
-                log.add_episodes(returns.tolist(), armse.tolist())
-                returns.zero_(), squared_errors.zero_()
-                obs, length = new_episode(), 0
-            else:
-                done_buf[t] = 0.0
-                obs = observe(features)
-        with torch.no_grad():
-            last_value = network(obs)[1]
+    updates, start = math.ceil(timesteps / rollout), time.perf_counter()
+    log.start(updates * rollout)
+    for done in range(1, updates + 1):
+        last_value = collector.collect(network, log)
+        c = collector
         advantages, value_targets = compute_gae(
-            reward_buf, value_buf, done_buf, last_value, config.gamma, config.gae_lambda
+            c.rewards, c.values, c.dones, last_value, config.gamma, config.gae_lambda
         )
-        flat = (obs_buf.reshape(S * B, size), action_buf.reshape(-1), log_prob_buf.reshape(-1),
-                advantages.reshape(-1), value_targets.reshape(-1))  # fmt: skip
-        stop = False
-        for _ in range(config.n_epochs):
-            order = torch.argsort(shuffling.uniform(Stream.PPO_MINIBATCH, (S * B,))[0])
-            for begin in range(0, S * B, config.batch_size):
-                batch = order[begin : begin + config.batch_size]
-                loss, stats = ppo_loss(network, config, *(part[batch] for part in flat))
-                if config.target_kl is not None and stats["approx_kl"] > 1.5 * config.target_kl:
-                    stop = True  # SB3's early stop, before this minibatch's step
-                    break
-                optimizer.zero_grad()
-                loss.backward()
-                torch.nn.utils.clip_grad_norm_(network.parameters(), config.max_grad_norm)
-                optimizer.step()
-            if stop:
-                break
-        trained += S * B
-        log.close_rollout(trained)
+        batch = (c.obs.reshape(rollout, -1), c.actions.reshape(-1), c.log_probs.reshape(-1),
+                 advantages.reshape(-1), value_targets.reshape(-1))  # fmt: skip
+        update(network, optimizer, config, batch, shuffling)
+        log.close_rollout(done * rollout)
     wall = time.perf_counter() - start
     out.mkdir(parents=True, exist_ok=True)
     network.save(out / WEIGHTS_FILE)
-    if normalization is not None:
-        normalization.save(out / NORMALIZATION_FILE)
+    if collector.normalization is not None:
+        collector.normalization.save(out / NORMALIZATION_FILE)
     log.write(out / CURVE_FILE, f"{TORCH_PPO} on {scenario.name}")
+    return _record(out, scenario, options, timesteps, updates * rollout, seed, config, str(where), wall)
+
+
+def _record(
+    out: Path, scenario: Scenario, options: EnvOptions, timesteps: int, trained: int, seed: int,
+    config: PPOConfig, device: str, wall: float,
+) -> dict[str, Any]:  # fmt: skip
+    """``ppo.json``: what was trained, where, and how fast."""
+    from .training_log import META_FILE
+
     meta = {
         "algo": TORCH_PPO,
         "scenario": scenario.to_dict(),
@@ -248,9 +296,9 @@ def train(
         "timesteps": timesteps,
         "trained_timesteps": trained,
         "seed": seed,
-        "n_envs": B,
+        "n_envs": config.n_envs,
         "action": "discrete",
-        "device": str(xp.device),
+        "device": device,
         "config": {f.name: getattr(config, f.name) for f in fields(config)},
         "train_wall_s": wall,
         "steps_per_second": trained / wall,

@@ -240,19 +240,7 @@ def train_ppo(
     already holds a model is refused unless ``overwrite``, which first removes every file of the
     old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
     (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
-    own = algo == TORCH_PPO
-    spec = learner("ppo" if own else algo)
-    if own:
-        require("torch", "rl", TORCH_PPO)
-        device = "cpu" if device is None else device
-        device_namespace(device)  # a bad device is refused before anything is written
-    else:
-        spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
-        if device is not None:
-            raise ValueError(
-                f"{algo} (Stable-Baselines3) trains on the numpy env and takes no device; "
-                f"the project's own PPO does: algo={TORCH_PPO!r} (--algo {TORCH_PPO})"
-            )
+    spec, device = _learner_and_device(algo, device)
     options = options or EnvOptions()
     sc = load_scenario(scenario)
     params = load_hyperparams(
@@ -260,25 +248,9 @@ def train_ppo(
     )
     if spec.name == "maskable-ppo" and action == "scores":
         raise ValueError("maskable-ppo masks a Discrete action: use --action discrete or auto")
-    if n_envs is not None:
-        from agents.parameters import check_integer
-
-        check_integer("n_envs", n_envs, *INTEGER_HYPERPARAMS["n_envs"])
-    config = None
-    if own:
-        from .torch_ppo import PPOConfig
-
-        config = PPOConfig.from_hyperparams(params, n_envs, normalize_kwargs(params))
-        if action_form(action, sc) != "discrete":
-            raise ValueError(
-                f"{TORCH_PPO} learns the Discrete super-arm action: use --action discrete or auto"
-            )
+    _check_counts(n_envs, timesteps, seeds, workers)
+    config = _torch_config(params, n_envs, action, sc) if algo == TORCH_PPO else None
     n_envs = int(n_envs or params.get("n_envs", 8))
-    if timesteps is not None and timesteps < 1:
-        raise ValueError(f"timesteps must be >= 1, got {timesteps}")
-    for name, value in (("seeds", seeds), ("workers", workers)):
-        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-            raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
     out = Path(out)
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
@@ -290,16 +262,8 @@ def train_ppo(
             if config is not None:
                 from . import torch_ppo
 
-                meta = torch_ppo.train(
-                    sc,
-                    timesteps,
-                    out,
-                    seed,
-                    config,
-                    options,
-                    device,
-                    LearningCurve(timesteps, progress, name=algo),
-                )
+                log = LearningCurve(timesteps, progress, name=algo)
+                meta = torch_ppo.train(sc, timesteps, out, seed, config, options, device, log)
             else:
                 meta = _train(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
@@ -319,6 +283,46 @@ def train_ppo(
         "timesteps": timesteps,
         "algo": algo,
     }
+
+
+def _check_counts(n_envs: int | None, timesteps: int | None, seeds: int, workers: int) -> None:
+    if n_envs is not None:
+        from agents.parameters import check_integer
+
+        check_integer("n_envs", n_envs, *INTEGER_HYPERPARAMS["n_envs"])
+    if timesteps is not None and timesteps < 1:
+        raise ValueError(f"timesteps must be >= 1, got {timesteps}")
+    for name, value in (("seeds", seeds), ("workers", workers)):
+        if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+            raise ValueError(f"{name} must be an integer >= 1, got {value!r}")
+
+
+def _torch_config(params: dict[str, Any], n_envs: int | None, action: str, scenario: Scenario) -> Any:
+    """torch-ppo's configuration of a checked entry; it learns the Discrete action only."""
+    from .torch_ppo import PPOConfig
+
+    if action_form(action, scenario) != "discrete":
+        raise ValueError(f"{TORCH_PPO} learns the Discrete super-arm action: use --action discrete or auto")
+    return PPOConfig.from_hyperparams(params, n_envs, normalize_kwargs(params))
+
+
+def _learner_and_device(algo: str, device: str | None) -> tuple[Learner, str | None]:
+    """The learner whose hyperparameters ``algo`` reads (torch-ppo reads PPO's) and the device it
+    trains on (torch-ppo: ``device`` or ``"cpu"``; the SB3 learners: none), its dependencies
+    checked first; ``ValueError`` for a device given to an SB3 learner or not there."""
+    if algo == TORCH_PPO:
+        require("torch", "rl", TORCH_PPO)
+        device = "cpu" if device is None else device
+        device_namespace(device)  # a bad device is refused before anything is written
+        return learner("ppo"), device
+    spec = learner(algo)
+    spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
+    if device is not None:
+        raise ValueError(
+            f"{algo} (Stable-Baselines3) trains on the numpy env and takes no device; "
+            f"the project's own PPO does: algo={TORCH_PPO!r} (--algo {TORCH_PPO})"
+        )
+    return spec, None
 
 
 def seed_folder(out: str | Path, seed: int) -> Path:
