@@ -85,6 +85,10 @@ class TrialMetrics:
         )
         self.num_targets = self.squared.shape[2] if self.squared is not None else 0
         self._regret_steps = np.cumsum(self.optimal - self.expected, axis=1)  # (N, T)
+        # the time-averaged RMS of the last few weight arrays, by (array, span, target): a
+        # bootstrap evaluates ARMSE, the bound, their ratio and every paired difference on the
+        # same resampled weights (the same object: uncertainty's weights are shared)
+        self._averages: dict[tuple[int, int | None, int | None, int], list[tuple[NDArray, NDArray]]] = {}
 
     # ------------------------------------------------------------ weights
     def equal(self) -> NDArray[np.float64]:
@@ -132,7 +136,7 @@ class TrialMetrics:
     def armse(self, w: NDArray, window: Window = None, target: int | None = None) -> NDArray:
         """The mean over the window's steps of ``RMSE_k(t)``, averaged over targets with equal
         weights (or of one ``target``)."""
-        return _time_averaged(self._tracked(self.squared), w, self._span(window), target)
+        return self._time_averaged(self._tracked(self.squared), w, self._span(window), target)
 
     def armse_target(self, target: int):
         """``w -> armse(w, target=target)``."""
@@ -144,13 +148,28 @@ class TrialMetrics:
 
     def bound(self, w: NDArray, window: Window = None, target: int | None = None) -> NDArray:
         """The bound averaged as ARMSE averages the RMSE: the floor the selections set."""
-        return _time_averaged(self._bounded(), w, self._span(window), target)
+        return self._time_averaged(self._bounded(), w, self._span(window), target)
 
     def bound_target(self, target: int):
         return lambda w: self.bound(w, target=target)
 
     def armse_over_bound(self, w: NDArray) -> NDArray:
         return self.armse(w) / self.bound(w)
+
+    def _time_averaged(self, squared: NDArray, w: NDArray, span: slice, target: int | None) -> NDArray:
+        """The mean over targets (or one) of the mean over the span's steps of the root mean
+        square; each target's term is kept for the last :data:`REMEMBERED_WEIGHTS` weight arrays."""
+        targets = range(squared.shape[2]) if target is None else [target]
+        terms = []
+        for k in targets:
+            remembered = self._averages.setdefault((id(squared), span.start, span.stop, k), [])
+            term = next((value for weights, value in remembered if weights is w), None)
+            if term is None:
+                term = _root_mean_square(squared, w, k, span).mean(axis=-1)
+                remembered.insert(0, (w, term))
+                del remembered[REMEMBERED_WEIGHTS:]
+            terms.append(term)
+        return np.mean(terms, axis=0)
 
     def _tracked(self, squared: NDArray | None) -> NDArray:
         if not self.tracked or squared is None:
@@ -196,7 +215,6 @@ def _root_mean_square(squared: NDArray, w: NDArray, target: int, span: slice = s
     return np.sqrt(w @ squared[:, span, target])
 
 
-def _time_averaged(squared: NDArray, w: NDArray, span: slice, target: int | None) -> NDArray:
-    """The mean over targets (or one) of the mean over the span's steps of the root mean square."""
-    targets = range(squared.shape[2]) if target is None else [target]
-    return np.mean([_root_mean_square(squared, w, k, span).mean(axis=-1) for k in targets], axis=0)
+#: How many weight arrays a policy's time-averaged RMS terms are kept for: a bootstrap's
+#: resamples, its jackknife and the equal weights.
+REMEMBERED_WEIGHTS = 4

@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import stats
 
-from benchmarks.metrics import TrialMetrics, trial_weights
+from benchmarks.metrics import REMEMBERED_WEIGHTS, TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
 RESAMPLES = 2000
@@ -64,11 +64,34 @@ class IntervalError(ArithmeticError):
     """A bootstrap interval excludes its own value by more than rounding."""
 
 
+#: The largest index array (elements) whose weights are kept: 2,000 resamples of 1,000 trials.
+SHARED_INDEX_ELEMENTS = 2_000_000
+#: The weights of the last few index arrays a bootstrap resampled (:func:`_shared_weights`).
+_WEIGHTS: list[tuple[NDArray, int, NDArray]] = []
+
+
+def _shared_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
+    """``trial_weights(index, num_trials)``, the same array object for an index equal to one of the
+    last :data:`metrics.REMEMBERED_WEIGHTS` seen: every estimate of a run draws the same resamples
+    (one seed), so the metrics evaluated on them can share their work (``TrialMetrics`` keeps
+    terms by weight array)."""
+    index = np.asarray(index)
+    if index.size > SHARED_INDEX_ELEMENTS:  # large batches (many trials) are not kept
+        return trial_weights(index, num_trials)
+    for seen, n, weights in _WEIGHTS:
+        if n == num_trials and seen.shape == index.shape and np.array_equal(seen, index):
+            return weights
+    weights = trial_weights(index, num_trials)
+    _WEIGHTS.insert(0, (index.copy(), num_trials, weights))
+    del _WEIGHTS[REMEMBERED_WEIGHTS:]
+    return weights
+
+
 def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, seed: int) -> Any:
     """``scipy.stats.bootstrap`` over resampled trials of ``metric(weights) -> (...,) or (..., T)``."""
 
     def statistic(index: NDArray, axis: int = -1) -> NDArray:
-        value = metric(trial_weights(index, num_trials))
+        value = metric(_shared_weights(index, num_trials))
         return np.moveaxis(value, -1, 0) if value.ndim > np.ndim(index) - 1 else value
 
     batch = None if num_trials <= BCA_MAX_TRIALS else max(1, BATCH_WEIGHTS // num_trials)
@@ -89,7 +112,7 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
 def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     """``{"estimate", "ci", "method"}``: the metric at equal weights and its 95 % interval
     (``ci`` None with a single trial, which has no interval)."""
-    value = float(metric(trial_weights(np.arange(num_trials), num_trials)))
+    value = float(metric(_shared_weights(np.arange(num_trials), num_trials)))
     if num_trials < 2:
         return {"estimate": value, "ci": None, "method": "none (one trial)"}
     method = "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"

@@ -189,3 +189,40 @@ def test_the_stratified_bootstrap_resamples_within_each_task():
         across_seeds([np.ones(3)], "median")
     with pytest.raises(ValueError, match="every group needs at least one score"):
         across_seeds([np.ones(3), np.array([])])
+
+
+def test_metrics_on_the_same_resamples_share_their_rms_terms_and_give_the_same_numbers(monkeypatch):
+    """Every estimate of a run draws the same resamples: ARMSE, the bound, their ratio and the
+    paired differences reuse each policy's time-averaged RMS terms. The numbers are those of
+    computing every metric afresh (sharing switched off), with far fewer products."""
+    from benchmarks import metrics
+
+    rng = np.random.default_rng(4)
+    expected, squared = rng.exponential(1.0, (40, 30)), rng.exponential(1.0, (40, 30, 2))
+    calls = []
+    counted = metrics._root_mean_square
+    monkeypatch.setattr(metrics, "_root_mean_square", lambda *a, **k: calls.append(1) or counted(*a, **k))
+
+    def everything():
+        policies = {
+            name: uncertainty.TrialMetrics(
+                {
+                    "trial_expected": expected * scale,
+                    "trial_optimal": expected + 1,
+                    "trial_matches": expected > 1,
+                    "trial_squared_error": squared * scale,
+                    "trial_bound_squared": squared * scale / 2,
+                },
+                channels=6,
+            )  # fmt: skip
+            for name, scale in (("a", 1.0), ("b", 1.5), ("c", 0.7))
+        }
+        calls.clear()
+        out = {name: uncertainty.policy_estimates(m) for name, m in policies.items()}
+        return out | {"pairs": uncertainty.paired_differences(policies)}, len(calls)
+
+    shared, shared_calls = everything()
+    monkeypatch.setattr(uncertainty, "SHARED_INDEX_ELEMENTS", 0)
+    afresh, afresh_calls = everything()
+    assert json.dumps(shared, sort_keys=True) == json.dumps(afresh, sort_keys=True)
+    assert shared_calls * 3 <= afresh_calls, (shared_calls, afresh_calls)
