@@ -1188,7 +1188,13 @@ def training_value(docs: Path, key: str) -> str:
 
 
 # ------------------------------------------------------------------ strong scaling
-SCALING_FILES = {"2 cores": "perf/strong-scaling.json", "16 cores": "perf/strong-scaling-16-cores.json"}
+SCALING_FILES = {
+    "2 cores": "perf/strong-scaling.json",
+    "2 cores, at ef5e440": "perf/strong-scaling-ef5e440.json",  # before the report shared its terms
+    "16 cores": "perf/strong-scaling-16-cores.json",
+}
+#: The value spans' names of the strong-scaling runs (``scaling MACHINE.KIND.W``).
+SCALING_MACHINES = {"2": "2 cores", "2-ef5e440": "2 cores, at ef5e440", "16": "16 cores"}
 
 
 @generator("strong-scaling")
@@ -1243,9 +1249,12 @@ def scaling_value(docs: Path, key: str) -> str:
     ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker), ``MACHINE.before.W``
     and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
-    shard size of the count the model starts from), MACHINE ``2`` or ``16`` (cores)."""
+    shard size of the count the model starts from), MACHINE a key of :data:`SCALING_MACHINES`."""
     machine, kind, workers = key.split(".")
-    record = read_json(docs, SCALING_FILES[f"{machine} cores"])
+    if machine not in SCALING_MACHINES:
+        raise BenchError(f"unknown strong-scaling run {machine!r}: {', '.join(SCALING_MACHINES)}")
+    relative = SCALING_FILES[SCALING_MACHINES[machine]]
+    record = read_json(docs, relative)
     rows = {r["workers"]: r for r in record["measured"]}
     model = {m["workers"]: m for m in record["model"]}
     w = int(workers)
@@ -1256,7 +1265,7 @@ def scaling_value(docs: Path, key: str) -> str:
             return f"{model[w]['task_seconds'] / model[record['model_from_workers']]['task_seconds']:.1f}"
         r = rows[w]
     except KeyError:
-        raise BenchError(f"{SCALING_FILES[f'{machine} cores']} has no {kind} at {w} workers") from None
+        raise BenchError(f"{relative} has no {kind} at {w} workers") from None
     if kind == "wall":
         return f"{r['wall_s']:.1f}"
     if kind == "efficiency":
@@ -1268,7 +1277,7 @@ def scaling_value(docs: Path, key: str) -> str:
     if kind in ("before", "after"):  # wall seconds before the first task, after the last
         field = f"{kind}_{'first' if kind == 'before' else 'last'}_task_s"
         if field not in r:
-            raise BenchError(f"{SCALING_FILES[f'{machine} cores']} predates {field!r}: measure it again")
+            raise BenchError(f"{relative} predates {field!r}: measure it again")
         return f"{r[field]:.1f}"
     raise BenchError(f"unknown scaling figure {key!r}")
 
