@@ -40,10 +40,8 @@ def test_the_study_floor_sentence(tmp_path, bpso, floor, verdict):
     if bpso - floor >= 0.02 * bpso:
         assert f"so BPSO is about {bpso - floor:.0f} s ({(bpso - floor) / bpso:.0%}) of the study" in text
     elif bpso >= floor:  # no "about 0 s (0%)"
-        assert (
-            f"so in this one pair of timings BPSO added {bpso - floor:.1f} s, less than 2 % of the study"
-            in text
-        )
+        added = f"BPSO added {bpso - floor:.1f} s, less than 2 % of the study"
+        assert f"so in this one pair of timings {added}" in text
         assert "(one pair of runs: no interval)" in text
     else:  # two timings of one study differ by more than BPSO's share: no negative share is printed
         assert "below the difference between two timings" in text and "about -" not in text
