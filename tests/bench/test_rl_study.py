@@ -185,19 +185,8 @@ def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_evaluates
     from benchmarks.cli import main
 
     out = tmp_path / "rl"
-    argv = ["rl", "--scenarios", "1", "--device", "cpu", "--n-envs", "4", "--timesteps", "128"]
-    argv += [
-        "--ppo-seeds",
-        "2",
-        "--trials",
-        "2",
-        "--steps",
-        "5",
-        "--quiet",
-        "--no-figures",
-        "--out",
-        str(out),
-    ]
+    argv = "rl --scenarios 1 --device cpu --n-envs 4 --timesteps 128 --ppo-seeds 2 --trials 2 --steps 5"
+    argv = [*argv.split(), "--quiet", "--no-figures", "--out", str(out)]
     assert main(argv) == 0
     judged = json.loads((out / "rl.json").read_text())
     learners = judged["scenarios"][0]["learners"]
