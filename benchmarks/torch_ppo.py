@@ -242,6 +242,7 @@ def train(
     seed: int,
     config: PPOConfig,
     options: EnvOptions,
+    *,
     device: str = "cpu",
     log: Any = None,
 ) -> dict[str, Any]:

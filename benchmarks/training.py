@@ -263,7 +263,7 @@ def train_ppo(
                 from . import torch_ppo
 
                 log = LearningCurve(timesteps, progress, name=algo)
-                meta = torch_ppo.train(sc, timesteps, out, seed, config, options, device, log)
+                meta = torch_ppo.train(sc, timesteps, out, seed, config, options, device=device, log=log)
             else:
                 meta = _train(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs

@@ -86,9 +86,8 @@ def training_rate(
 
             config = torch_ppo.PPOConfig.from_hyperparams(params, normalize=normalize_kwargs(params))
             with tempfile.TemporaryDirectory() as out:
-                torch_ppo.train(
-                    load_scenario(SCENARIO), total, Path(out), 0, config, EnvOptions(), device, clock
-                )
+                scenario = load_scenario(SCENARIO)
+                torch_ppo.train(scenario, total, Path(out), 0, config, EnvOptions(), device=device, log=clock)
     finally:
         torch.set_num_threads(threads)
     return {
