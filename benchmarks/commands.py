@@ -101,6 +101,7 @@ class TrainPPO(Command):
         add_env_options(parser)
 
     def main(self) -> int:
+        from .harness import RunInterrupted
         from .studies.settings import local_workers, scenario_for_version
         from .training import seed_folder, train_ppo
 
@@ -128,6 +129,8 @@ class TrainPPO(Command):
                 device=args.device,
                 n_envs=args.n_envs,
             )
+        except RunInterrupted:
+            raise
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc
         # PPO, MaskablePPO, RecurrentPPO or torch-ppo

@@ -30,7 +30,7 @@ from mimo_radar_env.core.arrays import device_namespace
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
-from .harness import output_lock
+from .harness import RunInterrupted, output_lock
 from .training_log import CURVE_FILE, META_FILE, LearningCurve
 
 #: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
@@ -360,8 +360,6 @@ def train_jobs(
     another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
     task's ``ppo.json`` by ``(out, seed)``. torch-ppo's jobs run on ``device``, in this
     process."""
-    import concurrent.futures
-
     done, todo = {}, []
     for job, out, seed in tasks:
         meta_file = seed_folder(out, seed) / META_FILE
@@ -377,12 +375,37 @@ def train_jobs(
             todo.append((job, Path(out), seed))
     if done and progress:
         print(f"train-ppo: {len(done)} of {len(tasks)} trainings already done; training {len(todo)}")
+    try:
+        _train_todo(todo, workers, progress, device, done, len(tasks))
+    except KeyboardInterrupt:
+        import os
+
+        folder = os.path.commonpath([str(out) for _, out, _ in tasks])
+        raise RunInterrupted(
+            f"interrupted: {len(done)} of {len(tasks)} trainings finished and saved in {folder} "
+            "(an unfinished one is trained again); run the same command again to resume"
+        ) from None
+    return done
+
+
+def _train_todo(
+    todo: list[tuple[dict[str, Any], Path, int]],
+    workers: int,
+    progress: bool,
+    device: str | None,
+    done: dict[tuple[Path, int], dict[str, Any]],
+    total: int,
+) -> None:
+    """Train ``todo`` into ``done``: on ``device`` one after another in this process, else in
+    ``workers`` processes."""
     if todo and device is not None:
         for job, out, seed in todo:
             done[out, seed] = _train_one_seed(job, str(out), seed, device)
             if progress:
-                print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{len(tasks)})")
+                print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
     elif todo:
+        import concurrent.futures
+
         from .backends import worker_pool
 
         with worker_pool(min(workers, len(todo))) as pool:
@@ -393,8 +416,7 @@ def train_jobs(
                 done[futures[future]] = future.result()
                 if progress:
                     out, seed = futures[future]
-                    print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{len(tasks)})")
-    return done
+                    print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
 
 
 def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None = None) -> dict[str, Any]:

@@ -185,6 +185,7 @@ class RLStudy(Study):
 
     def train(self) -> None:
         """Every training of the study, resumably, ``--workers`` at once."""
+        from ..harness import RunInterrupted
         from ..training import train_jobs, training_job
 
         tasks = []
@@ -200,6 +201,8 @@ class RLStudy(Study):
             train_jobs(
                 tasks, self.settings.workers, progress=self.settings.progress, device=self.settings.device
             )
+        except RunInterrupted:
+            raise
         except ValueError as exc:
             raise BenchError(str(exc)) from exc
 

@@ -71,3 +71,28 @@ def test_the_folder_is_locked_and_an_old_model_is_replaced_only_when_asked(tmp_p
     assert "another run is writing into" in capsys.readouterr().err
     assert main(_train(tmp_path, "  normalize: false", "--overwrite")) == 0
     assert (folder / "model.zip").exists() and not (folder / "vecnormalize.npz").exists()  # no stale file
+
+
+def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, monkeypatch, capsys):
+    """Ctrl-C during a several-seed training: the finished seeds stay, and the command says how
+    many and how to resume (exit 130), as an interrupted benchmark run does."""
+    from benchmarks import training
+
+    trained = []
+
+    def one_seed(job, out, seed, device=None):
+        if trained:
+            raise KeyboardInterrupt
+        trained.append(seed)
+        return {"job": job}
+
+    monkeypatch.setattr(training, "_train_one_seed", one_seed)
+    argv = ["train-ppo", "--algo", "torch-ppo", "--device", "cpu", "--seeds", "3", "--timesteps", "64"]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(tmp_path / "t"), "--quiet"])
+    assert exit_info.value.code == 130
+    err = capsys.readouterr().err.strip()
+    assert err == (
+        f"mimo-radar-bench: interrupted: 1 of 3 trainings finished and saved in {tmp_path / 't'} "
+        "(an unfinished one is trained again); run the same command again to resume"
+    )
