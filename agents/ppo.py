@@ -445,8 +445,8 @@ class TorchPPOAgent(Agent):
                 f"{self.index.size}: train it on this layout"
             )
         stats = file.parent / NORMALIZATION_FILE
-        self.normalization = RunningNormalization.load(stats) if stats.is_file() else None
         self.normalization_file = stats if stats.is_file() else None
+        self.normalization = RunningNormalization.load(stats) if self.normalization_file else None
 
     @property
     def network_weights(self) -> int:

@@ -760,12 +760,20 @@ def _queue(
     (:func:`task_seconds`), run after run; the first ``max_tasks`` of them."""
     todo: list[tuple[int, str, int]] = []
     for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
-        tasks = _tasks_to_run(out, config, tqdm.write)
-        if len(tasks) > 1:
-            cost = task_seconds(config)
-            tasks.sort(key=lambda task: -cost[task])  # stable: ties keep the shard order
-        todo += [(number, policy, shard) for policy, shard in tasks]
+        todo += [
+            (number, policy, shard)
+            for policy, shard in longest_first(config, _tasks_to_run(out, config, tqdm.write))
+        ]
     return todo if max_tasks is None else todo[:max_tasks]
+
+
+def longest_first(config: RunConfig, tasks: list[tuple[str, int]]) -> list[tuple[str, int]]:
+    """The (policy, shard) ``tasks`` of a run in the order they start: the longest declared cost
+    first (:func:`task_seconds`), ties in the shard order."""
+    if len(tasks) < 2:
+        return list(tasks)
+    cost = task_seconds(config)
+    return sorted(tasks, key=lambda task: -cost[task])
 
 
 def _progress_bar(

@@ -31,7 +31,7 @@ from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
 from .harness import RunInterrupted, output_lock
-from .training_log import CURVE_FILE, META_FILE, LearningCurve
+from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
 #: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
 #: ``Learner.hyperparams``.
@@ -180,6 +180,13 @@ def _ppo_keywords(spec: Learner = LEARNERS["ppo"]) -> set[str]:
         }
     own = {"self", "policy", "env", "seed", "verbose", "tensorboard_log", "device", "_init_setup_model"}
     return set(inspect.signature(algorithm.__init__).parameters) - own
+
+
+def algorithm_kwargs(params: dict[str, Any], spec: Learner = LEARNERS["ppo"]) -> tuple[str, dict[str, Any]]:
+    """The policy name and the algorithm's keywords of an entry (the keys train-ppo reads itself,
+    ``n_envs``, ``n_timesteps`` and ``normalize``, left out)."""
+    kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
+    return kwargs.pop("policy", spec.policies[0]), kwargs
 
 
 def normalize_kwargs(params: dict[str, Any]) -> dict[str, Any] | None:
@@ -434,7 +441,7 @@ def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None
 
 
 #: The files a trained model leaves in its folder.
-MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE, "curve.png")
+MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE, CURVE_FIGURE)
 
 
 def _clear_model(out: Path, overwrite: bool) -> None:
@@ -456,8 +463,7 @@ def _train(
     from mimo_radar_env.sb3 import NativeVecEnv
 
     normalization = normalize_kwargs(params)
-    ppo_kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
-    policy = ppo_kwargs.pop("policy", spec.policies[0])
+    policy, ppo_kwargs = algorithm_kwargs(params, spec)
     venv = NativeVecEnv(sc, n_envs, seed, action=action, **options.to_dict())
     if normalization is not None:
         venv = VecNormalize(venv, **normalization)

@@ -115,18 +115,17 @@ def ppo_training_rate(scenario: str, timesteps: int, native: bool, n_envs: int =
 
     from mimo_radar_env.sb3 import NativeVecEnv
 
-    from ..training import _NOT_FOR_PPO, load_hyperparams
+    from ..training import algorithm_kwargs, load_hyperparams
 
     torch.set_num_threads(1)
-    params = {k: v for k, v in load_hyperparams().items() if k not in _NOT_FOR_PPO}
-    params.pop("policy", None)
+    policy, params = algorithm_kwargs(load_hyperparams())
     if native:
         venv = NativeVecEnv(scenario, n_envs, seed=0, action="discrete")
     else:
         venv = make_vec_env(
             "MimoRadarSelectFlat-v1", n_envs=n_envs, seed=0, env_kwargs={"scenario": scenario}
         )
-    model = PPO("MlpPolicy", venv, seed=0, verbose=0, **params)
+    model = PPO(policy, venv, seed=0, verbose=0, **params)
     start = time.perf_counter()
     model.learn(total_timesteps=timesteps)
     return model.num_timesteps / (time.perf_counter() - start)

@@ -108,7 +108,7 @@ def makespan(durations: list[float], workers: int) -> float:
 def queue_order(out: Path, shard_size: int | None = None) -> list[tuple[str, str, int, int]]:
     """The harness's order of a study's tasks (run after run, the longest declared cost first),
     as (run, policy, shard, trials), with the runs' shard size replaced by ``shard_size``."""
-    from ..harness import RunConfig, task_seconds
+    from ..harness import RunConfig, longest_first
 
     order = []
     for config_file in sorted(out.glob("*/config.json")):
@@ -116,9 +116,11 @@ def queue_order(out: Path, shard_size: int | None = None) -> list[tuple[str, str
         if shard_size is not None:
             payload["shard_size"] = shard_size
         config = RunConfig(**payload)
-        cost = task_seconds(config)
-        tasks = sorted(cost, key=lambda task: -cost[task])
-        order += [(config_file.parent.name, p, s, len(config.shard_trials(s))) for p, s in tasks]
+        tasks = [(p, s) for s in range(config.num_shards) for p in config.policies]
+        order += [
+            (config_file.parent.name, p, s, len(config.shard_trials(s)))
+            for p, s in longest_first(config, tasks)
+        ]
     return order
 
 

@@ -23,7 +23,7 @@ from typing import Any
 
 from mimo_radar_env import EnvOptions, load_scenario
 
-from ..training import _NOT_FOR_PPO, load_hyperparams, normalize_kwargs
+from ..training import algorithm_kwargs, load_hyperparams, normalize_kwargs
 from ..training_log import LearningCurve
 
 SCENARIO = "paper-1-v1"
@@ -76,10 +76,9 @@ def training_rate(
 
             from mimo_radar_env.sb3 import NativeVecEnv
 
-            kwargs = {k: v for k, v in params.items() if k not in _NOT_FOR_PPO}
-            kwargs.pop("policy", None)
+            policy, kwargs = algorithm_kwargs(params)
             venv = NativeVecEnv(SCENARIO, trials, seed=0, action="discrete")
-            model = PPO("MlpPolicy", venv, seed=0, verbose=0, device="cpu", **kwargs)
+            model = PPO(policy, venv, seed=0, verbose=0, device="cpu", **kwargs)
             model.learn(total_timesteps=total, callback=clock.callback())
         else:
             from .. import torch_ppo

@@ -156,10 +156,11 @@ class RLStudy(Study):
         return given if given is not None else DEVICE_TIMESTEPS if self.on_device else DEFAULT_TIMESTEPS
 
     def seeds(self, option: str) -> int:
+        """The seeds of a seeds option; ``--ppo-seeds`` defaults by where the study trains."""
         given = getattr(self.args, option)
         if given is not None:
             return given
-        return DEVICE_PPO_SEEDS if self.on_device else {"ppo_seeds": PPO_SEEDS}.get(option, CONTRIB_SEEDS)
+        return DEVICE_PPO_SEEDS if self.on_device else PPO_SEEDS
 
     def trainings(self) -> list[tuple[str, str, str, int]]:
         """``(scenario, learner, reward, seeds)`` of every training group."""
