@@ -236,16 +236,9 @@ def update(
 
 
 def train(
-    scenario: Scenario,
-    timesteps: int,
-    out: Path,
-    seed: int,
-    config: PPOConfig,
-    options: EnvOptions,
-    *,
-    device: str = "cpu",
-    log: Any = None,
-) -> dict[str, Any]:
+    scenario: Scenario, timesteps: int, out: Path, seed: int, config: PPOConfig, options: EnvOptions,
+    *, device: str = "cpu", log: Any = None,
+) -> dict[str, Any]:  # fmt: skip
     """Train torch-ppo for at least ``timesteps`` env steps (whole rollouts of ``n_steps x
     n_envs``) and save ``model.pt``, ``vecnormalize.npz``, ``curve.csv`` and ``ppo.json`` in
     ``out``. ``log`` (a :class:`~benchmarks.training_log.LearningCurve`) hears of every rollout."""
