@@ -65,6 +65,36 @@ def value_source(name: str) -> Callable[[Callable[[Path, str], str]], Callable[[
     return register
 
 
+#: Value tables: name -> function(docs) giving every value of one finding, ``{key: text}``.
+ValueTable = Callable[[Path], dict[str, str]]
+_TABLES: dict[tuple[str, Path], dict[str, str]] = {}
+
+
+def values(name: str) -> Callable[[ValueTable], ValueTable]:
+    """Register a value table: the spans ``<!-- value: NAME KEY -->`` quote its ``KEY``. The
+    sentences around them are the page's; a table gives only values (numbers, intervals, verdicts,
+    policy names, computed lists of claims), read once per rendering."""
+
+    def register(function: ValueTable) -> ValueTable:
+        def lookup(docs: Path, key: str) -> str:
+            table = _TABLES.get((name, docs))
+            if table is None:
+                table = _TABLES[(name, docs)] = function(docs)
+            if key not in table:
+                raise BenchError(f"the values {name!r} have no {key!r}; they have: {', '.join(table)}")
+            return table[key]
+
+        VALUE_SOURCES[name] = lookup
+        return function
+
+    return register
+
+
+def forget_values() -> None:
+    """Drop the value tables read so far (a new rendering reads the artefacts again)."""
+    _TABLES.clear()
+
+
 def read_json(docs: Path, relative: str) -> Any:
     path = docs / "results" / relative
     try:
@@ -83,18 +113,25 @@ def claims_verdicts(docs: Path) -> str:
     return claims.comparison_markdown(_scorecards(docs, SCORECARDS))
 
 
-@generator("claims-counts")
-def claims_counts(docs: Path) -> str:
-    """One sentence per scorecard: how many claims hold, are consistent, are contradicted."""
-    lines = []
+#: The key of each scorecard of :data:`SCORECARDS` in the values ``claims``.
+SCORECARD_KEYS = {"v1": "v1", "v1, centralised": "v1-centralized", "v0": "v0"}
+
+
+@values("claims")
+def claims_values(docs: Path) -> dict[str, str]:
+    """Per scorecard of :data:`SCORECARDS` (``v1``, ``v1-centralized``, ``v0``), ``KEY.VERDICT``
+    the number of claims with that verdict; ``total`` the claims; ``scorecards`` how many
+    scorecards give a verdict per claim (:func:`every_scorecard`) and ``always-contradicted`` the
+    claims contradicted in each of them."""
+    table = {}
     for label, results in _scorecards(docs, SCORECARDS).items():
         counts = verdicts.count(r["verdict"] for r in results)
-        lines.append(
-            f"- {label}: {counts['holds']} of {len(results)} claims hold; consistent: "
-            f"{counts['consistent']}, contradicted: {counts['contradicted']}."
-        )
-    lines.append(f"- {_always_contradicted_sentence(docs)}.")
-    return "\n".join(lines)
+        table |= {f"{SCORECARD_KEYS[label]}.{v}": str(counts[v]) for v in verdicts.VERDICTS}
+        table["total"] = str(len(results))
+    cards = every_scorecard(docs)
+    table["scorecards"] = str(len(cards))
+    table["always-contradicted"] = ", ".join(_always_contradicted(cards)) or "none"
+    return table
 
 
 def _always_contradicted(scorecards: dict[str, dict[str, str]]) -> list[str]:
@@ -117,58 +154,46 @@ def every_scorecard(docs: Path) -> dict[str, dict[str, str]]:
     return cards | {f["name"]: f["verdicts"] for f in _long_scorecards(docs)}
 
 
-def _always_contradicted_sentence(docs: Path) -> str:
-    cards = every_scorecard(docs)
-    always = _always_contradicted(cards)
-    return (
-        f"Contradicted in each of the {len(cards)} scorecards with a verdict per claim (every reading and "
-        "fusion, master seeds 1000 and 2000, every searched layout scored in full): "
-        + (", ".join(always) or "none")
-    )
-
-
 @generator("readings")
 def readings(docs: Path) -> str:
     """The verdicts under each single reading change (the columns build on one another)."""
     return claims.comparison_markdown(_scorecards(docs, READINGS), claim_text=False)
 
 
-#: Each change of the readings table: (what changes, its column, the column it modifies).
-READING_CHANGES = [
-    ("eq32 on dB alone", "v0 + dB", "v0"),
-    ("One shared ground truth alone", "v0 + shared truth", "v0"),
-    ("The standard BPSO rule alone", "v0 + set rule", "v0"),
-    ("All three readings together, on section 1's layout", "v1, section 1 layout", "v0"),
-    ("The calibrated layout", "v1", "v1, section 1 layout"),
-    ("Centralised fusion (on v1)", "v1, centralised", "v1"),
-]
+#: Each change of the readings table: its key in the values ``readings`` -> (its column, the
+#: column it modifies).
+READING_CHANGES = {
+    "db": ("v0 + dB", "v0"),
+    "shared-truth": ("v0 + shared truth", "v0"),
+    "set-rule": ("v0 + set rule", "v0"),
+    "all-three": ("v1, section 1 layout", "v0"),
+    "layout": ("v1", "v1, section 1 layout"),
+    "centralized": ("v1, centralised", "v1"),
+}
 
 
-@generator("readings-moves")
-def reading_moves(docs: Path) -> str:
-    """Per change of the readings table, the claims whose verdict it moves against the column it
-    modifies, and the claims contradicted in every column."""
+@values("readings")
+def reading_values(docs: Path) -> dict[str, str]:
+    """Per change of :data:`READING_CHANGES`, ``CHANGE.moves`` the claims whose verdict it moves
+    against the column it modifies (``claim (old to new)``), ``CHANGE.holds`` and
+    ``CHANGE.base-holds`` the claims holding in its column and in that one; ``always`` the claims
+    contradicted in every column and ``always.count`` how many."""
     cards = _scorecards(docs, READINGS)
-    lines = []
-    for change, column, base in READING_CHANGES:
-        before = {r["id"]: r["verdict"] for r in cards[base]}
+    table = {}
+    for change, (column, base) in READING_CHANGES.items():
+        before = _by_claim(cards[base])
         moved = [
             (r["id"], before[r["id"]], r["verdict"]) for r in cards[column] if r["verdict"] != before[r["id"]]
         ]
-        what = ", ".join(f"{claim} ({old} to {new})" for claim, old, new in moved) or "no claim"
-        counts = verdicts.count(r["verdict"] for r in cards[column])
-        holds = counts["holds"]
-        lines.append(
-            f"- **{change}** (`{column}` against `{base}`) moves {what}; {holds} "
-            f"{'claim holds' if holds == 1 else 'claims hold'} there, against "
-            f"{verdicts.count(before.values())['holds']}."
+        table[f"{change}.moves"] = (
+            ", ".join(f"{claim} ({old} to {new})" for claim, old, new in moved) or "no claim"
         )
+        table[f"{change}.holds"] = str(verdicts.count(r["verdict"] for r in cards[column])["holds"])
+        table[f"{change}.base-holds"] = str(verdicts.count(before.values())["holds"])
     always = _always_contradicted({label: _by_claim(results) for label, results in cards.items()})
-    lines.append(
-        f"- Contradicted in every column ({len(always)} {'claim' if len(always) == 1 else 'claims'}): "
-        f"{', '.join(always) or 'none'}."
-    )
-    return "\n".join(lines)
+    table["always"] = ", ".join(always) or "none"
+    table["always.count"] = str(len(always))
+    return table
 
 
 @generator("calibration-summary")
@@ -188,6 +213,17 @@ def calibration_summary(docs: Path) -> str:
             name += " (adopted)"
         cells = [" / ".join(str(c["scorecards"][t][v]) for v in verdicts.VERDICTS) for t in (screen, final)]
         lines.append(f"| {name} | {cells[0]} | {cells[1]} |")
+    return "\n".join(lines)
+
+
+@values("calibration")
+def calibration_values(docs: Path) -> dict[str, str]:
+    """The calibration's figures: ``count`` jittered layouts, ``seed``, ``met`` of ``candidates``
+    meeting the text's constraints, ``screened`` and ``final`` judged at ``screen-trials`` and
+    ``final-trials``, ``best`` the adopted layout and ``moves`` how far it moves the reference's
+    stations (km, smallest to largest)."""
+    report = read_json(docs, "calibration/calibration.json")
+    screen, final = str(report["stages"]["screen_trials"]), str(report["stages"]["final_trials"])
     best = next(c for c in report["candidates"] if c["index"] == report["best"])
     reference = report["candidates"][0]
     moves = [
@@ -195,16 +231,18 @@ def calibration_summary(docs: Path) -> str:
         for key in ("tx_km", "rx_km")
         for p, q in zip(best[key], reference[key], strict=True)
     ]
-    judged = sum(1 for c in report["candidates"] if screen in c["scorecards"])
-    met = sum(1 for c in report["candidates"] if c["rejected"] is None)
-    lines += [
-        "",
-        f"{report['count']} jittered layouts and the reference (seed {report['seed']}); {met} of "
-        f"{report['count'] + 1} meet the text's constraints; {judged} were judged at {screen} trials "
-        f"and {sum(1 for c in report['candidates'] if final in c['scorecards'])} at {final}. Layout "
-        f"{best['index']} moves every station of the reference, by {min(moves):.1f} to {max(moves):.1f} km.",
-    ]
-    return "\n".join(lines)
+    return {
+        "count": str(report["count"]),
+        "seed": str(report["seed"]),
+        "candidates": str(report["count"] + 1),
+        "met": str(sum(1 for c in report["candidates"] if c["rejected"] is None)),
+        "screened": str(sum(1 for c in report["candidates"] if screen in c["scorecards"])),
+        "final": str(sum(1 for c in report["candidates"] if final in c["scorecards"])),
+        "screen-trials": screen,
+        "final-trials": final,
+        "best": str(best["index"]),
+        "moves": f"{min(moves):.1f} to {max(moves):.1f}",
+    }
 
 
 @generator("tracking-targets")
@@ -264,7 +302,7 @@ def v1_table(
         ]
         cells += [format_cell(row, "final_regret", "{:.1f}"), format_cell(row, "mean_sinr_db", "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
-    lines += ["", _about(average, "ASR, regret and SINR from the eq22-average run"), ""]
+    lines.append("")
     head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in labels)]
     head += ["Δ ASR (pp)", "Δ final regret", "Δ mean SINR (dB)"]
     lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
@@ -278,13 +316,6 @@ def v1_table(
         cells += [format_judged(a["mean_sinr_db"], "{:.2f}")]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines)
-
-
-def _about(summary: dict, what: str) -> str:
-    return (
-        f"{summary['trials']} trials, {summary['steps']} steps, seed {summary['seed']}; {what}. "
-        "Each cell: the value [95 % interval]; " + METHOD_LEGEND
-    )
 
 
 def v1_targets_table(docs: Path) -> str:
@@ -320,59 +351,74 @@ def _diff_text(summary: dict, a: str, b: str, metric: str, fmt: str, scale: floa
     return format_judged(paired_difference(summary, a, b, metric), fmt, scale)
 
 
-@generator("v1-findings")
-def v1_findings(docs: Path) -> str:
-    """What the v1 tables show, every number read from the studies' summaries."""
-    summaries = {(n, f): study_summary(docs, n, f) for n in (1, 2, 3) for f in FUSION_LABELS}
-    lines = []
-    parts = []
+def study_values(docs: Path, version: str) -> dict[str, str]:
+    """What ``version``'s paper-study tables show, from their summaries (eq22 average fusion
+    unless a key names the fusion): ``trials``, ``steps`` and ``seed`` (one for every table),
+    ``legend`` (the interval marks); per scenario N, ``regret.N.B`` MG-CRB-CL's final regret
+    minus B's, ``asr.N`` MG-CRB-CL's ASR (%), ``paper-asr.N`` the paper's and
+    ``asr.N.epsilon-greedy``; ``lowest.N.FUSION`` the policy of lowest ARMSE, ``runner-up.N.FUSION``
+    the next and ``margin.N.FUSION`` its paired excess (m); ``highest-regret.N`` and
+    ``second-regret.N``, ``best-rank.N`` Best's rank by ARMSE of ``policies``; ``armse-ratio``
+    our ARMSE over the paper's (every policy and scenario); with both fusions, ``central-drop``
+    (%) how much centralised fusion lowers every policy's ARMSE and ``widest`` (m) the farthest
+    an ARMSE interval reaches from its value."""
+    fusions = ("average", "centralized") if version == "v1" else ("average",)
+    summaries = {(n, f): study_summary(docs, n, f, version) for n in (1, 2, 3) for f in fusions}
+    shape = {(s["trials"], s["steps"], s["seed"]) for s in summaries.values()}
+    if len(shape) != 1:
+        raise BenchError(f"the {version} studies ran different trials, steps or seeds: {sorted(shape)}")
+    ((trials, steps, seed),) = shape
+    table = {"trials": str(trials), "steps": str(steps), "seed": str(seed), "legend": METHOD_LEGEND}
     for (n, fusion), s in summaries.items():
         rows = s["policies"]
-        order = sorted(rows, key=lambda p: rows[p]["armse"])
-        first, second = order[0], order[1]
-        parts.append(
-            f"Scenario {n}, {FUSION_LABELS[fusion]}: {first}, "
-            f"{_diff_text(s, second, first, 'armse', '{:.3f}')} m below {second}"
-        )
-    lines.append(
-        "- **The lowest ARMSE of the six** (the runner-up's paired excess): " + "; ".join(parts) + "."
+        by_armse = sorted(rows, key=lambda p: rows[p]["armse"])
+        table |= {
+            f"lowest.{n}.{fusion}": by_armse[0],
+            f"runner-up.{n}.{fusion}": by_armse[1],
+            f"margin.{n}.{fusion}": _diff_text(s, by_armse[1], by_armse[0], "armse", "{:.3f}"),
+        }
+        if fusion != "average":
+            continue
+        by_regret = sorted(rows, key=lambda p: rows[p]["final_regret"])
+        table |= {
+            f"regret.{n}.{b}": _diff_text(s, "mg-crb-cl", b, "final_regret", "{:.0f}")
+            for b in ("epsilon-greedy", "ucb1")
+        }
+        table |= {
+            f"asr.{n}": format_cell(rows["mg-crb-cl"], "asr", "{:.1f}", 100),
+            f"paper-asr.{n}": f"{PAPER_ASR[f'paper-{n}']['mg-crb-cl']:.2f}",
+            f"asr.{n}.epsilon-greedy": format_cell(rows["epsilon-greedy"], "asr", "{:.1f}", 100),
+            f"highest-regret.{n}": by_regret[-1],
+            f"second-regret.{n}": by_regret[-2],
+            f"best-rank.{n}": str(by_armse.index("best") + 1),
+            "policies": str(len(rows)),
+        }
+    table["armse-ratio"] = _span(
+        [
+            row["armse"] / paper_armse(f"paper-{n}", p)
+            for (n, f), s in summaries.items()
+            if f == "average"
+            for p, row in s["policies"].items()
+        ],
+        "{:.1f}",
     )
-    parts = []
-    for n in (1, 2, 3):
-        s = summaries[(n, "average")]
-        parts.append(
-            f"Scenario {n}: {_diff_text(s, 'mg-crb-cl', 'epsilon-greedy', 'final_regret', '{:.0f}')} against "
-            f"epsilon-greedy, {_diff_text(s, 'mg-crb-cl', 'ucb1', 'final_regret', '{:.0f}')} against UCB1"
-        )
-    lines.append(
-        "- **MG-CRB-CL's final regret minus the other learners'** (eq22 average run; negative: "
-        "MG-CRB-CL's is lower): " + "; ".join(parts) + "."
-    )
-    parts = []
-    for n in (1, 2, 3):
-        s = summaries[(n, "average")]
-        mg, eps = s["policies"]["mg-crb-cl"], s["policies"]["epsilon-greedy"]
-        paper = PAPER_ASR[f"paper-{n}"]["mg-crb-cl"]
-        parts.append(
-            f"Scenario {n}: {format_cell(mg, 'asr', '{:.1f}', 100)} % against the paper's {paper:.2f} %, "
-            f"epsilon-greedy {format_cell(eps, 'asr', '{:.1f}', 100)} %"
-        )
-    lines.append("- **MG-CRB-CL's ASR**: " + "; ".join(parts) + ".")
-    drops, widths = [], []
-    for n in (1, 2, 3):
-        for policy, row in summaries[(n, "average")]["policies"].items():
-            central = summaries[(n, "centralized")]["policies"][policy]
-            drops.append(1 - central["armse"] / row["armse"])
-            widths += [
-                max(r["ci"]["armse"][1] - r["armse"], r["armse"] - r["ci"]["armse"][0])
-                for r in (row, central)
-            ]
-    lines.append(
-        f"- **Centralised fusion lowers every policy's ARMSE**, by {100 * min(drops):.0f} to "
-        f"{100 * max(drops):.0f} % in the three scenarios; no ARMSE interval of these tables reaches "
-        f"further than {max(widths):.3f} m from its value."
-    )
-    return "\n".join(lines)
+    if "centralized" in fusions:
+        drops, widths = [], []
+        for n in (1, 2, 3):
+            for policy, row in summaries[(n, "average")]["policies"].items():
+                central = summaries[(n, "centralized")]["policies"][policy]
+                drops.append(1 - central["armse"] / row["armse"])
+                widths += [
+                    max(r["ci"]["armse"][1] - r["armse"], r["armse"] - r["ci"]["armse"][0])
+                    for r in (row, central)
+                ]
+        table["central-drop"] = f"{100 * min(drops):.0f} to {100 * max(drops):.0f}"
+        table["widest"] = f"{max(widths):.3f}"
+    return table
+
+
+for _version in STUDIES:
+    values(_version)(lambda docs, v=_version: study_values(docs, v))
 
 
 # ------------------------------------------------------------------ the summary and the timings
@@ -394,46 +440,40 @@ def _span(values: list[float], fmt: str = "{:.2f}") -> str:
     )
 
 
-@generator("summary")
-def summary(docs: Path) -> str:
-    """The page's opening lines: what holds, the calibration caveat, what selecting for tracking
-    gains, and our numbers against the paper's."""
-    cards = _scorecards(docs, SCORECARDS)
-    counts = {label: verdicts.count(r["verdict"] for r in results) for label, results in cards.items()}
-    total = len(cards["v1"])
+@values("summary")
+def summary_values(docs: Path) -> dict[str, str]:
+    """The page's opening figures: ``layout`` (v1's calibrated layout) and ``judged`` (the layouts
+    judged by scorecards); the tracking targets' margins, smallest to largest
+    (``best-tracking.margins``: below Best, ``tracking-ucb.margins``: below MG-CRB-CL),
+    ``targets`` and ``targets.held``; ``armse-ratio.FUSION`` our ARMSE over the paper's, over
+    every policy and scenario; ``asr.N`` MG-CRB-CL's ASR in Scenario N and ``paper-asr.N`` the
+    paper's."""
     report = read_json(docs, "calibration/calibration.json")
-    judged = sum(1 for c in report["candidates"] if c["scorecards"])
     targets = read_json(docs, "tracking/targets.json")
-    gains = [c for r in targets for c in r["best_tracking_lower"] if c["b"] == "best"]
-    ucb = [c for r in targets for c in r["tracking_ucb_lower"] if c["b"] == "mg-crb-cl"]
-    held = all(c["holds"] for r in targets for c in r["best_tracking_lower"] + r["tracking_ucb_lower"])
-    ratios = {f: [] for f in FUSION_LABELS}
-    asr = []
+    comparisons = [c for r in targets for c in r["best_tracking_lower"] + r["tracking_ucb_lower"]]
+    table = {
+        "layout": str(report["best"]),
+        "judged": str(sum(1 for c in report["candidates"] if c["scorecards"])),
+        "best-tracking.margins": _margins(
+            [c for r in targets for c in r["best_tracking_lower"] if c["b"] == "best"]
+        ),
+        "tracking-ucb.margins": _margins(
+            [c for r in targets for c in r["tracking_ucb_lower"] if c["b"] == "mg-crb-cl"]
+        ),
+        "targets": str(len(comparisons)),
+        "targets.held": str(sum(c["holds"] for c in comparisons)),
+    }
+    for fusion in FUSION_LABELS:
+        ratios = [
+            row["armse"] / paper_armse(f"paper-{n}", p)
+            for n in (1, 2, 3)
+            for p, row in study_summary(docs, n, fusion)["policies"].items()
+        ]
+        table[f"armse-ratio.{fusion}"] = _span(ratios, "{:.1f}")
     for n in (1, 2, 3):
-        for fusion in FUSION_LABELS:
-            rows = study_summary(docs, n, fusion)["policies"]
-            ratios[fusion] += [rows[p]["armse"] / paper_armse(f"paper-{n}", p) for p in rows]
-        mg = study_summary(docs, n, "average")["policies"]["mg-crb-cl"]["asr"]
-        asr.append(f"{100 * mg:.1f} % against {PAPER_ASR[f'paper-{n}']['mg-crb-cl']:.1f} %")
-    v1, central, v0 = counts["v1"], counts["v1, centralised"], counts["v0"]
-    lines = [
-        f"- **The paper's claims** (500 trials, paired 95 % intervals): under v1 {v1['holds']} of {total} "
-        f"hold, {v1['consistent']} consistent, {v1['contradicted']} contradicted (centralised fusion: "
-        f"{central['holds']} hold); under v0 {v0['holds']} hold. {_always_contradicted_sentence(docs)}.",
-        "- **The layout is a calibration against the paper's text**, not the paper's layout (its figure "
-        f"is missing): v1 uses layout {report['best']}, the best of {judged} layouts judged by scorecards; "
-        "a claim that holds may hold for reasons of that layout.",
-        "- **Selecting for tracking** (200 trials, three scenarios x two fusions): best-tracking's ARMSE "
-        f"is below Best's by {_margins(gains)} m and tracking-ucb's below MG-CRB-CL's by "
-        f"{_margins(ucb)} m; "
-        + ("every target holds." if held else "not every target holds (see its section)."),
-        f"- **Against the paper**: our ARMSE is {_span(ratios['average'], '{:.1f}')} times the paper's "
-        f"with its eq22 average fusion and {_span(ratios['centralized'], '{:.1f}')} times with centralised "
-        "fusion (our ARMSE over the paper's, over both targets in Scenario 3 as its table prints it); "
-        "MG-CRB-CL's ASR is "
-        f"{', '.join(asr)} in Scenarios 1, 2, 3.",
-    ]
-    return "\n".join(lines)
+        table[f"asr.{n}"] = f"{100 * study_summary(docs, n, 'average')['policies']['mg-crb-cl']['asr']:.1f}"
+        table[f"paper-asr.{n}"] = f"{PAPER_ASR[f'paper-{n}']['mg-crb-cl']:.1f}"
+    return table
 
 
 #: The timing artefacts of the studies the page reports: label -> file.
@@ -496,105 +536,60 @@ def _where(key: tuple[int, str]) -> str:
     return f"Scenario {key[0]}, {FUSION_LABELS[key[1]]}"
 
 
-@generator("tracking-findings")
-def tracking_findings(docs: Path) -> str:
-    """What the tracking study shows, every number from its targets and summaries."""
+@values("tracking")
+def tracking_values(docs: Path) -> dict[str, str]:
+    """What the tracking study shows, from its targets and summaries (WHERE: ``Scenario N,
+    fusion``). ``best-tracking.held`` of ``best-tracking.compared`` comparisons below Best and
+    every SINR-driven policy, the smallest margin (m) ``best-tracking.smallest`` against
+    ``.against`` in ``.where``; for B in best, mg-crb-cl, tracking-ucb's ``ucb.B.held`` of
+    ``ucb.B.studies``, its margins ``ucb.B.low``/``ucb.B.high`` with ``.where``; ``cost`` the
+    compute-time ratios to MG-CRB-CL; per N.FUSION, ``sinr-cost.N.FUSION.regret``/``.sinr``
+    (tracking-ucb minus MG-CRB-CL) and ``trade.N.FUSION.armse``/``.regret`` (tracking-ucb:0.75
+    minus MG-CRB-CL); per FUSION, the range of ARMSE / bound: ``bound.FUSION.low``/``.high``,
+    each with ``.policy`` and ``.scenario``."""
     targets = read_json(docs, "tracking/targets.json")
     summaries = tracking_summaries(docs)
     by_key = {(r["scenario"], r["fusion"]): r for r in targets}
     comparisons = [(k, c) for k, r in by_key.items() for c in r["best_tracking_lower"]]
-    holds = sum(c["verdict"] == verdicts.HOLDS for _, c in comparisons)
     key, smallest = max(comparisons, key=lambda kc: kc[1]["difference"])
-    lines = [
-        f"- `best-tracking`'s ARMSE is below Best's and every SINR-driven policy's in {holds} of "
-        f"{len(comparisons)} paired comparisons; the smallest margin is "
-        f"{_margin(smallest)} m "
-        f"(against {smallest['b']}, {_where(key)})."
-    ]
+    table = {
+        "best-tracking.held": str(sum(c["verdict"] == verdicts.HOLDS for _, c in comparisons)),
+        "best-tracking.compared": str(len(comparisons)),
+        "best-tracking.smallest": _margin(smallest),
+        "best-tracking.smallest.against": smallest["b"],
+        "best-tracking.smallest.where": _where(key),
+    }
     for b in ("best", "mg-crb-cl"):
         cs = [(k, c) for k, r in by_key.items() for c in r["tracking_ucb_lower"] if c["b"] == b]
-        low, high = min(cs, key=lambda kc: -kc[1]["difference"]), max(cs, key=lambda kc: -kc[1]["difference"])
-        held = sum(c["verdict"] == verdicts.HOLDS for _, c in cs)
-        lines.append(
-            f"- `tracking-ucb`'s ARMSE is below {b}'s in {held} of {len(cs)} studies, by "
-            + " to ".join(f"{_margin(c)} m ({_where(k)})" for k, c in (low, high))
-            + "."
+        table[f"ucb.{b}.held"] = str(sum(c["verdict"] == verdicts.HOLDS for _, c in cs))
+        table[f"ucb.{b}.studies"] = str(len(cs))
+        for end, (k, c) in (("low", max(cs, key=lambda kc: kc[1]["difference"])),
+                            ("high", min(cs, key=lambda kc: kc[1]["difference"]))):  # fmt: skip
+            table[f"ucb.{b}.{end}"], table[f"ucb.{b}.{end}.where"] = _margin(c), _where(k)
+    ratios = [c["ratio"] for r in by_key.values() for c in r["cost"].values()]
+    table["cost"] = f"{min(ratios):.2f} to {max(ratios):.2f}"
+    for (n, fusion), s in summaries.items():
+        where = f"{n}.{fusion}"
+        table[f"sinr-cost.{where}.regret"] = _diff_text(
+            s, "tracking-ucb", "mg-crb-cl", "final_regret", "{:.0f}"
         )
-    ratios = [(k, p, c["ratio"]) for k, r in by_key.items() for p, c in r["cost"].items()]
-    lines.append(
-        f"- Compute time: `best-tracking` and `tracking-ucb` take {min(x[2] for x in ratios):.2f} to "
-        f"{max(x[2] for x in ratios):.2f} times MG-CRB-CL's (which runs the paper's BPSO), from the studies' "
-        "`wall (s)` columns."
-    )
-    parts = []
-    for k, s in summaries.items():
-        regret = _diff_text(s, "tracking-ucb", "mg-crb-cl", "final_regret", "{:.0f}")
-        sinr = _diff_text(s, "tracking-ucb", "mg-crb-cl", "mean_sinr_db", "{:.2f}")
-        parts.append(f"{_where(k)}: regret {regret}, mean SINR {sinr} dB")
-    lines.append(
-        "- **What selecting for tracking costs in SINR** (`tracking-ucb` minus MG-CRB-CL): "
-        + "; ".join(parts)
-        + "."
-    )
-    parts = []
-    for k, s in summaries.items():
-        if "tracking-ucb:0.75" not in s["policies"]:
-            continue
-        armse = _diff_text(s, "tracking-ucb:0.75", "mg-crb-cl", "armse", "{:.3f}")
-        regret = _diff_text(s, "tracking-ucb:0.75", "mg-crb-cl", "final_regret", "{:.0f}")
-        parts.append(f"{_where(k)}: ARMSE {armse} m, regret {regret}")
-    if parts:
-        lines.append("- **The trade-off** (`tracking-ucb:0.75` minus MG-CRB-CL): " + "; ".join(parts) + ".")
-    for fusion, label in FUSION_LABELS.items():
+        table[f"sinr-cost.{where}.sinr"] = _diff_text(
+            s, "tracking-ucb", "mg-crb-cl", "mean_sinr_db", "{:.2f}"
+        )
+        table[f"trade.{where}.armse"] = _diff_text(s, "tracking-ucb:0.75", "mg-crb-cl", "armse", "{:.3f}")
+        table[f"trade.{where}.regret"] = _diff_text(
+            s, "tracking-ucb:0.75", "mg-crb-cl", "final_regret", "{:.0f}"
+        )
+    for fusion in FUSION_LABELS:
         rows = [(k, p, r) for k, s in summaries.items() if k[1] == fusion for p, r in s["policies"].items()]
-        low = min(rows, key=lambda x: x[2]["armse_over_bound"])
-        high = max(rows, key=lambda x: x[2]["armse_over_bound"])
-        lines.append(
-            f"- ARMSE / bound with {label} fusion ranges from "
-            + " to ".join(
-                f"{format_cell(r, 'armse_over_bound', '{:.3f}')} (`{p}`, Scenario {k[0]})"
-                for k, p, r in (low, high)
+        for end, pick in (("low", min), ("high", max)):
+            (n, _), policy, row = pick(rows, key=lambda x: x[2]["armse_over_bound"])
+            table[f"bound.{fusion}.{end}"] = format_cell(row, "armse_over_bound", "{:.3f}")
+            table[f"bound.{fusion}.{end}.policy"], table[f"bound.{fusion}.{end}.scenario"] = (
+                f"`{policy}`",
+                str(n),
             )
-            + "."
-        )
-    return "\n".join(lines)
-
-
-@generator("v0-findings")
-def v0_findings(docs: Path) -> str:
-    """What the v0 tables show (eq22 average fusion), every number from the summaries."""
-    summaries = {n: study_summary(docs, n, "average", "v0") for n in (1, 2, 3)}
-    lines = []
-    for a, b in (("mg-crb-cl", "ucb1"), ("mg-crb-cl", "epsilon-greedy")):
-        parts = [
-            f"Scenario {n}: {_diff_text(s, a, b, 'final_regret', '{:.0f}')}" for n, s in summaries.items()
-        ]
-        lines.append(f"- Final regret, {a} minus {b}: " + "; ".join(parts) + ".")
-    parts = []
-    for n, s in summaries.items():
-        rows = s["policies"]
-        by_regret = sorted(rows, key=lambda p: rows[p]["final_regret"])
-        by_armse = sorted(rows, key=lambda p: rows[p]["armse"])
-        parts.append(
-            f"Scenario {n}: highest regret {by_regret[-1]} then {by_regret[-2]}; lowest ARMSE {by_armse[0]}; "
-            f"Best's ARMSE ranks {by_armse.index('best') + 1} of {len(rows)} (1: lowest)"
-        )
-    lines.append("- Orderings of the six: " + "; ".join(parts) + ".")
-    ratios = [
-        s["policies"][p]["armse"] / paper_armse(f"paper-{n}", p)
-        for n, s in summaries.items()
-        for p in s["policies"]
-    ]
-    lines.append(
-        f"- Our ARMSE is {_span(ratios, '{:.1f}')} times the paper's (eq22 average fusion, the six policies, "
-        "three scenarios)."
-    )
-    asr = []
-    for n, s in summaries.items():
-        paper = PAPER_ASR[f"paper-{n}"]["mg-crb-cl"]
-        asr.append(f"{100 * s['policies']['mg-crb-cl']['asr']:.1f} % against {paper:.1f} %")
-    lines.append(f"- MG-CRB-CL's ASR: {', '.join(asr)} in Scenarios 1, 2, 3.")
-    return "\n".join(lines)
+    return table
 
 
 # ------------------------------------------------------------------ performance
@@ -622,42 +617,27 @@ def perf_figures(docs: Path) -> str:
     return "\n".join(lines)
 
 
-@generator("study-floor")
-def study_floor(docs: Path) -> str:
-    """The claims study with MG-CRB-CL's exact solver against the same study with the paper's
-    BPSO, from perf.json: what BPSO's share is, and whether the study meets its time target or
-    a faster BPSO kernel could make it."""
+@values("floor")
+def floor_values(docs: Path) -> dict[str, str]:
+    """The v1 claims study with MG-CRB-CL's exact solver against the same study with the paper's
+    BPSO, from perf.json: ``workers``, ``bpso`` and ``exact`` (s), ``speedup`` (the exact solver
+    over BPSO per selection), ``added`` (s) and ``share`` (%) what BPSO added, ``target`` (s) and
+    ``against-target`` (within or above)."""
     from ..speed.perf import TARGETS
 
     results = read_json(docs, "perf/perf.json")
     bpso, floor = results["claims_v1_average_wall_s"], results["claims_v1_average_exact_solver_wall_s"]
     _, target = TARGETS["claims_v1_average_wall_s"]
-    if bpso - floor >= 0.02 * bpso:
-        share = f"so BPSO is about {bpso - floor:.0f} s ({(bpso - floor) / bpso:.0%}) of the study"
-    elif bpso >= floor:
-        share = (
-            f"so in this one pair of timings BPSO added {bpso - floor:.1f} s, less than 2 % of the study "
-            "(one pair of runs: no interval)"
-        )
-    else:
-        share = "so BPSO's share is below the difference between two timings of the same study"
-    if bpso <= target:
-        verdict = f"The study with BPSO is within the {target:g} s target."
-    elif floor > target:
-        verdict = (
-            f"The {floor:.0f} s left is above the {target:g} s target: no BPSO kernel, however fast, "
-            "meets it on this machine."
-        )
-    else:
-        verdict = (
-            f"The {floor:.0f} s left is within the {target:g} s target: a faster BPSO kernel could meet it."
-        )
-    return (
-        f"The v1 claims study (500 trials, average fusion, {results['workers']} workers) took "
-        f"{bpso:.0f} s with the paper's BPSO and {floor:.0f} s with MG-CRB-CL's exact solver in its place "
-        f"(`claims_v1_average_exact_solver_wall_s`; the exact solver is "
-        f"{results['exact_vs_bpso_speedup']:.0f}x cheaper per selection), {share}. {verdict}"
-    )
+    return {
+        "workers": str(results["workers"]),
+        "bpso": f"{bpso:.0f}",
+        "exact": f"{floor:.0f}",
+        "speedup": f"{results['exact_vs_bpso_speedup']:.0f}",
+        "added": f"{bpso - floor:.1f}",
+        "share": f"{100 * (bpso - floor) / bpso:.1f}",
+        "target": f"{target:g}",
+        "against-target": "within" if bpso <= target else "above",
+    }
 
 
 @generator("scaling")
@@ -787,60 +767,51 @@ def rl_tables(docs: Path) -> str:
     return body.replace("\n## ", "\n### ").rstrip("\n")
 
 
-def _against(stat: dict) -> str:
-    """``better``/``worse``/``no difference shown`` for a learner-minus-X ARMSE interval."""
-    verdict = verdicts.verdict(stat["ci"], -1)
-    return {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse"}.get(verdict, "no difference shown")
+#: The verdicts of a learner-minus-X ARMSE interval, by their keys in the values ``rl``.
+AGAINST = {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse", verdicts.CONSISTENT: "same"}
 
 
-@generator("rl-findings")
-def rl_findings(docs: Path) -> str:
-    """What the RL study shows, every number from rl.json and timing.json."""
+@values("rl")
+def rl_values(docs: Path) -> dict[str, str]:
+    """What the RL study shows, from rl.json and timing.json: ``wall``, ``cores``, ``training``,
+    ``evaluation``, ``worker`` (the trainings' worker time); against X of the study's
+    comparisons, ``X.pairs`` learner and scenario pairs and, per verdict (``better``, ``worse``,
+    ``same``: no difference shown), ``X.VERDICT`` how many and ``X.VERDICT.which``; the learning
+    curves: ``flat-change`` (%), ``curves``, ``flat`` and ``flat.which``, ``moving.which``."""
     from ..harness import duration
     from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
     judged = read_json(docs, "rl/rl.json")
     timing = read_json(docs, "rl/timing.json")
-    parts = timing.get("parts_s", {})
-    machine = timing["machine"]
-    split = (
-        f"training {duration(parts['training'])}, evaluation {duration(parts['evaluation'])}; "
-        if {"training", "evaluation"} <= set(parts)
-        else ""
-    )
-    lines = [
-        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores ({split}`timing.json`); "
-        f"its trainings took {duration(judged['training_worker_s'])} of worker time (the sum of every "
-        "seed's training wall time)."
-    ]
+    parts = timing["parts_s"]
+    table = {
+        "wall": duration(timing["wall_s"]),
+        "cores": str(timing["machine"]["cores"]),
+        "training": duration(parts["training"]),
+        "evaluation": duration(parts["evaluation"]),
+        "worker": duration(judged["training_worker_s"]),
+    }
     for other in MINUS_ORDER:
-        counts: dict[str, list[str]] = {}
+        which: dict[str, list[str]] = {key: [] for key in AGAINST.values()}
         for entry in judged["scenarios"]:
             for key, row in entry["learners"].items():
-                counts.setdefault(_against(row["minus"][other]), []).append(
-                    f"`{key}` in Scenario {entry['scenario']}"
-                )
-        total = sum(len(v) for v in counts.values())
-        said = "; ".join(
-            f"{label} in {len(where)} ({', '.join(where)})" for label, where in sorted(counts.items())
-        )
-        lines.append(
-            f"- Against `{other}` (ARMSE paired on the same trials, interval over seeds), of {total} learner "
-            f"and scenario pairs: {said}."
-        )
-    curves = [(n, k, c) for n, group in judged.get("curves", {}).items() for k, c in group.items()]
+                verdict = verdicts.verdict(row["minus"][other]["ci"], -1)
+                which[AGAINST[verdict]].append(f"`{key}` in Scenario {entry['scenario']}")
+        table[f"{other}.pairs"] = str(sum(map(len, which.values())))
+        for verdict, where in which.items():
+            table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(where)), _claims(where)
+    curves = [(n, k, c) for n, group in judged["curves"].items() for k, c in group.items()]
     flat = [f"`{k}` (Scenario {n})" for n, k, c in curves if c["flat"]]
-    moving = [f"`{k}` (Scenario {n}, {100 * c['change']:+.1f} %)" for n, k, c in curves if c["flat"] is False]
-    lines.append(
-        f"- Learning curves at this budget (flat: the mean training ARMSE moves by at most "
-        f"{100 * FLAT_CHANGE:.0f} % between the last two fifths of training): flat for "
-        f"{len(flat)} of {len(curves)}"
-        + (f" ({', '.join(flat)})" if flat else "")
-        + "; still moving for "
-        + (", ".join(moving) if moving else "none")
-        + "."
-    )
-    return "\n".join(lines)
+    table |= {
+        "flat-change": f"{100 * FLAT_CHANGE:.0f}",
+        "curves": str(len(curves)),
+        "flat": str(len(flat)),
+        "flat.which": _claims(flat),
+        "moving.which": _claims(
+            [f"`{k}` (Scenario {n}, {100 * c['change']:+.1f} %)" for n, k, c in curves if c["flat"] is False]
+        ),
+    }
+    return table
 
 
 def _rate_with_interval(rate: float, trials: int) -> str:
@@ -933,27 +904,32 @@ def bpso_parts_table(docs: Path) -> str:
     return "\n".join(lines)
 
 
-@generator("first-run")
-def first_run_sentence(docs: Path) -> str:
+@values("first-run")
+def first_run_values(docs: Path) -> dict[str, str]:
     """``python -m benchmarks.speed.first_run``: the quickstart's first run against its second,
-    after the README's compile step and without it, each from an empty numba cache."""
-    from ..speed.first_run import TARGET as FIRST_RUN_TARGET
+    after the README's compile step and without it, each from an empty numba cache. ``command``,
+    ``compile-command`` (as code), ``repeats``, ``load``; per repeat, ``compile``, ``after-compile`` and
+    ``without`` (first against second, s); ``median-after``, ``largest-after``, ``target`` and
+    ``met``; ``median-without`` and ``largest-without`` (first / second)."""
+    from ..speed.first_run import TARGET
 
     r = read_json(docs, "perf/first_run.json")
     repeats = r["repeats"]
-    after = "; ".join(f"{p['first_after_compile_s']:.1f} s" for p in repeats)
-    compiled = "; ".join(f"{p['compile_s']:.1f} s" for p in repeats)
-    pairs = "; ".join(f"{p['first_s']:.1f} s against {p['second_s']:.1f} s" for p in repeats)
-    met = "met" if r["max_ratio_after_compile"] <= FIRST_RUN_TARGET else "**missed**"
-    return (
-        f"`{' '.join(r['command'])}`, {len(repeats)} repeats, each path from an empty cache "
-        f"(load average {r['machine']['load_average_1min']:.2f}):\n\n"
-        f"- after `{' '.join(r['compile_command'])}` ({compiled}), the first run took {after}: "
-        f"first / second {r['median_ratio_after_compile']:.2f} at the median, "
-        f"{r['max_ratio_after_compile']:.2f} at the largest (target <= {FIRST_RUN_TARGET:g}: {met});\n"
-        f"- without it, first run against second {pairs}: first / second {r['median_ratio']:.2f} at the "
-        f"median, {r['max_ratio']:.2f} at the largest."
-    )
+    return {
+        "command": f"`{' '.join(r['command'])}`",
+        "compile-command": f"`{' '.join(r['compile_command'])}`",
+        "repeats": str(len(repeats)),
+        "load": f"{r['machine']['load_average_1min']:.2f}",
+        "compile": "; ".join(f"{p['compile_s']:.1f} s" for p in repeats),
+        "after-compile": "; ".join(f"{p['first_after_compile_s']:.1f} s" for p in repeats),
+        "without": "; ".join(f"{p['first_s']:.1f} s against {p['second_s']:.1f} s" for p in repeats),
+        "median-after": f"{r['median_ratio_after_compile']:.2f}",
+        "largest-after": f"{r['max_ratio_after_compile']:.2f}",
+        "target": f"{TARGET:g}",
+        "met": "met" if r["max_ratio_after_compile"] <= TARGET else "**missed**",
+        "median-without": f"{r['median_ratio']:.2f}",
+        "largest-without": f"{r['max_ratio']:.2f}",
+    }
 
 
 @generator("step-stages")
@@ -1340,89 +1316,81 @@ def _signed(stat: dict) -> str:
     return format_estimate(stat["estimate"], stat["ci"], "{:.3f}")
 
 
-@generator("planning-findings")
-def planning_findings(docs: Path) -> str:
+@values("planning")
+def planning_values(docs: Path) -> dict[str, str]:
     """The planning targets, judged from planning.json (and rl.json for the learners that beat
-    best-tracking), with the study's wall time from its timing.json."""
+    best-tracking), and the study's ``wall``, ``cores``, ``load-before`` and ``load-after``. Per
+    study N.FUSION: ``oracle.N.FUSION`` (better, worse, no difference shown) and its
+    ``.difference`` (m), :data:`PLANNING_ORACLE` minus best-tracking, with ``.beaten-by`` the
+    policies that beat best-tracking there; per learner L of :data:`PLANNING_LEARNERS` (its ``:``
+    a ``-``), ``L.better`` of ``L.studies`` against tracking-ucb and ``L.N.FUSION`` each
+    difference (m); per centralised study N, ``bound.N.best`` the best policy, ``bound.N.ratio``
+    its ARMSE over the best achievable bound and ``bound.N.within`` (within or not shown within
+    ``bound-margin`` %)."""
     from ..harness import duration
 
     runs = read_json(docs, "planning/planning.json")
     timing = read_json(docs, "planning/timing.json")
     rl = read_json(docs, "rl/rl.json") if (docs / "results" / "rl" / "rl.json").is_file() else None
     machine = timing["machine"]
-    lines = [
-        f"- The study took {duration(timing['wall_s'])} on {machine['cores']} cores (the timings table "
-        f"above; load average {machine['load_average_1min']:.2f} before and "
-        f"{machine['load_average_1min_after']:.2f} after)."
-    ]
-    # target 1: the oracle against best-tracking, where anything beat it and elsewhere
-    beaten, judged_runs = [], []
+    table = {
+        "wall": duration(timing["wall_s"]),
+        "cores": str(machine["cores"]),
+        "load-before": f"{machine['load_average_1min']:.2f}",
+        "load-after": f"{machine['load_average_1min_after']:.2f}",
+        "bound-margin": f"{100 * BEST_BOUND_MARGIN:.0f}",
+    }
+    word = {
+        verdicts.HOLDS: "better",
+        verdicts.CONTRADICTED: "worse",
+        verdicts.CONSISTENT: "no difference shown",
+    }
     for run in runs:
+        where = f"{run['scenario']}.{run['fusion']}"
         winners = [
-            p
+            f"`{p}`"
             for p, d in run["minus_best_tracking"].items()
             if not p.startswith("plan-tracking:") and verdicts.verdict(d["ci"], -1) == verdicts.HOLDS
         ]
         if rl is not None and run["fusion"] == "average":
-            for entry in rl["scenarios"]:
-                if entry["scenario"] == run["scenario"]:
-                    winners += [
-                        f"{key} (RL study)"
-                        for key, row in entry["learners"].items()
-                        if verdicts.verdict(row["minus"]["best-tracking"]["ci"], -1) == verdicts.HOLDS
-                    ]
+            winners += [
+                f"`{key} (RL study)`"
+                for entry in rl["scenarios"]
+                if entry["scenario"] == run["scenario"]
+                for key, row in entry["learners"].items()
+                if verdicts.verdict(row["minus"]["best-tracking"]["ci"], -1) == verdicts.HOLDS
+            ]
         oracle = run["minus"][PLANNING_ORACLE]["best-tracking"]
-        verdict = {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse"}.get(
-            verdicts.verdict(oracle["ci"], -1), "no difference shown"
-        )
-        judged_runs.append((run, verdict, oracle, winners))
-        beaten += [run] if winners else []
-    where_beaten = [
-        f"{_run_where(r)}: {verdict}, {_signed(o)} m (beaten there by {', '.join(f'`{w}`' for w in winners)})"
-        for r, verdict, o, winners in judged_runs
-        if winners
-    ]
-    elsewhere = [
-        f"{_run_where(r)}: {verdict}, {_signed(o)} m" for r, verdict, o, winners in judged_runs if not winners
-    ]
-    lines.append(
-        f"- **The oracle against best-tracking** (`{PLANNING_ORACLE}` minus `best-tracking`, ARMSE): "
-        f"where another policy beat best-tracking, {'; '.join(where_beaten) or 'none did'}; "
-        f"elsewhere, {'; '.join(elsewhere) or 'none'}."
-    )
-    # target 2: the learning planner against tracking-ucb
+        table[f"oracle.{where}"] = word[verdicts.verdict(oracle["ci"], -1)]
+        table[f"oracle.{where}.difference"] = _signed(oracle)
+        table[f"oracle.{where}.beaten-by"] = _claims(winners)
     for learner in PLANNING_LEARNERS:
-        outcomes = []
-        for run in runs:
-            d = run["minus"][learner]["tracking-ucb"]
-            outcomes.append((verdicts.verdict(d["ci"], -1), f"{_run_where(run)} {_signed(d)} m"))
-        better = sum(v == verdicts.HOLDS for v, _ in outcomes)
-        lines.append(
-            f"- **`{learner}` against tracking-ucb**: better in {better} of {len(outcomes)} studies "
-            "(target: 4 of 6); " + "; ".join(text for _, text in outcomes) + "."
+        key = learner.replace(":", "-")
+        differences = [run["minus"][learner]["tracking-ucb"] for run in runs]
+        table[f"{key}.better"] = str(
+            sum(verdicts.verdict(d["ci"], -1) == verdicts.HOLDS for d in differences)
         )
-    # target 3: the best policy against the best achievable bound, centralised
+        table[f"{key}.studies"] = str(len(runs))
+        table |= {
+            f"{key}.{run['scenario']}.{run['fusion']}": _signed(d)
+            for run, d in zip(runs, differences, strict=True)
+        }
     for run in runs:
         if run["fusion"] != "centralized":
             continue
         best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
         ratio = run["policies"][best]["armse_over_best_bound"]
+        table[f"bound.{run['scenario']}.best"] = f"`{best}`"
+        table[f"bound.{run['scenario']}.ratio"] = _signed(ratio)
         within = ratio["ci"][1] <= 1 + BEST_BOUND_MARGIN
-        lines.append(
-            f"- **{_run_where(run)}: the best policy against the best achievable bound**: `{best}`'s "
-            "ARMSE is "
-            f"{format_estimate(ratio['estimate'], ratio['ci'], '{:.3f}')} times it, "
-            + (
-                f"within {100 * BEST_BOUND_MARGIN:.0f} %."
-                if within
-                else f"not shown within {100 * BEST_BOUND_MARGIN:.0f} % (the target is missed here)."
-            )
-        )
-    return "\n".join(lines)
+        table[f"bound.{run['scenario']}.within"] = "within" if within else "not shown within"
+    return table
 
 
 # ------------------------------------------------------------------ mechanisms of the failing claims
 MECHANISMS = "mechanisms/mechanisms.json"
+#: The lead below which mechanisms.json counts a step's best super arm as nearly tied.
+LEAD_THRESHOLD = 0.02
 
 
 def _best_window(entry: dict, key: str) -> tuple[str, dict]:
@@ -1496,34 +1464,41 @@ def mechanisms_armse(docs: Path) -> str:
     return "\n".join(lines)
 
 
-@generator("mechanisms-findings")
-def mechanisms_findings(docs: Path) -> str:
-    """What the mechanisms tables show, every number and every comparison from mechanisms.json and
-    the v1 study's summaries."""
+@values("mechanisms")
+def mechanisms_values(docs: Path) -> dict[str, str]:
+    """What the mechanisms tables show, from mechanisms.json and the v1 study's summaries: the
+    ARMSE comparisons' counts (``comparisons``, ``follow-bound``, ``follow-sinr``,
+    ``contradicted``, ``contradicted-follow-bound``, ``contradicted-follow-sinr``); per ASR claim
+    of Scenario N, ``N.lead-below`` the steps (%) whose best super arm leads by less than
+    ``lead-threshold`` %,
+    ``N.cap`` and ``N.width`` the probing window oracle's best ASR (%) and its window,
+    ``N.paper`` the paper's MG-CRB-CL ASR (%), ``N.where`` where it lies against the cap, and
+    ``N.ours`` ours (%)."""
     m = read_json(docs, MECHANISMS)
     s = m["armse_summary"]
-    lines = [
-        f"- **ARMSE follows the bound.** Of the {s['comparisons']} ARMSE comparisons in the claims, "
-        f"{s['follow_bound']} go the way the two policies' position bounds go, "
-        f"and {s['follow_sinr']} the way their mean SINR goes; of the {s['contradicted']} contradicted "
-        f"comparisons, {s['contradicted_follow_bound']} follow the bound and "
-        f"{s['contradicted_follow_sinr']} follow SINR."
-    ]
+    table = {
+        "comparisons": str(s["comparisons"]),
+        "follow-bound": str(s["follow_bound"]),
+        "follow-sinr": str(s["follow_sinr"]),
+        "contradicted": str(s["contradicted"]),
+        "contradicted-follow-bound": str(s["contradicted_follow_bound"]),
+        "contradicted-follow-sinr": str(s["contradicted_follow_sinr"]),
+    }
+    table["lead-threshold"] = f"{100 * LEAD_THRESHOLD:g}"
     for scenario, entry in m["lead"].items():
-        claim = entry["claim"]
+        n = scenario.split("-")[1]
         width, cap = _best_window(entry, "probing_window_oracle_asr")
-        ours = _v1_mg_crb_cl(docs, scenario)
-        paper = m["paper_asr"][claim]["mg-crb-cl"] / 100
+        paper = m["paper_asr"][entry["claim"]]["mg-crb-cl"] / 100
         low, high = cap["ci"]
-        where = "below" if paper < low else "above" if paper > high else "within the interval of"
-        below = 100 * entry["fraction_lead_below_0.02"]["estimate"]
-        lines.append(
-            f"- **{claim} ({scenario}).** The best super arm leads the second by less than 2 % in "
-            f"{below:.0f} % of the steps. The probing window oracle reaches an ASR of "
-            f"{format_judged(cap, '{:.1f}', 100)} % (W = {width}); the paper's MG-CRB-CL ASR, "
-            f"{100 * paper:.2f} %, is {where} it; ours is {format_cell(ours, 'asr', '{:.1f}', 100)} %."
-        )
-    return "\n".join(lines)
+        table |= {
+            f"{n}.lead-below": f"{100 * entry[f'fraction_lead_below_{LEAD_THRESHOLD}']['estimate']:.0f}",
+            f"{n}.cap": format_judged(cap, "{:.1f}", 100),
+            f"{n}.width": str(width),
+            f"{n}.paper": f"{100 * paper:.2f}",
+            f"{n}.where": "below" if paper < low else "above" if paper > high else "within the interval of",
+            f"{n}.ours": format_cell(_v1_mg_crb_cl(docs, scenario), "asr", "{:.1f}", 100),
+        }
+    return table
 
 
 # ------------------------------------------------------------------ the ablations
@@ -1834,17 +1809,11 @@ def _long_scorecards(docs: Path) -> list[dict]:
 
 @generator("layout-search")
 def layout_search_table(docs: Path) -> str:
-    """The search's size and speed, and each claim's verdict under v1's layout and every searched
-    layout with a 500-trial scorecard, from search.json, rescored.json and the v1 claims study."""
-    found = read_json(docs, LAYOUT_SEARCH)
+    """Each claim's verdict under v1's layout and every searched layout with a 500-trial
+    scorecard, from search.json, rescored.json and the v1 claims study."""
     v1 = _verdicts(docs, SCORECARDS["v1"])
     finalists = _long_scorecards(docs)
     lines = [
-        f"{found['evaluations']} layouts scored in {found['wall_s']:.0f} s ({found['layouts_per_s']:.1f} "
-        f"layouts/s, {found['population']} a generation, {found['generations']} generations, seed "
-        f"{found['seed']}); the objective of v1's layout {found['v1_objective']:.3f}, of the best searched "
-        f"{found['ranked'][0]['objective']:.3f} (lower is better).",
-        "",
         "| claim | v1's layout (layout 116) | " + " | ".join(f["name"] for f in finalists) + " |",
         "|---|---|" + "---|" * len(finalists),
     ]
@@ -1855,24 +1824,71 @@ def layout_search_table(docs: Path) -> str:
         lines.append(
             f"| **{kind}** | {counts[kind]} | " + " | ".join(str(f["counts"][kind]) for f in finalists) + " |"
         )
-    agree = sum(f["agreement"]["agree"] for f in finalists)
-    compared = sum(f["agreement"]["compared"] for f in finalists)
-    gained = [c for c in v1 if v1[c] != "holds" and any(f["verdicts"][c] == "holds" for f in finalists)]
-    lost = [c for c in v1 if v1[c] == "holds" and any(f["verdicts"][c] != "holds" for f in finalists)]
-    never = [c for c in v1 if v1[c] != "holds" and all(f["verdicts"][c] != "holds" for f in finalists)]
-    best = max(f["counts"]["holds"] for f in finalists)
-    under = [f["name"] for f in finalists if f["counts"]["holds"] == best]
-    lines += [
-        "",
-        f"The most claims holding under a searched layout at {_long_trials(docs)} trials: {best}, under "
-        f"{', '.join(under)} (v1's layout: {counts['holds']}). Holding under a searched layout and not under "
-        f"v1's: {', '.join(gained) or 'none'}; holding under v1's and not under every searched one: "
-        f"{', '.join(lost) or 'none'}; holding under none of these layouts: {', '.join(never) or 'none'}.",
-        "",
-        f"The noise-free predictors with a scorecard comparison of their own agree with it in {agree} of "
-        f"{compared} cases on the searched layouts' scorecards.",
-    ]
     return "\n".join(lines)
+
+
+@values("layouts")
+def layout_values(docs: Path) -> dict[str, str]:
+    """The layout search's figures. The search: ``evaluations``, ``wall``, ``rate``,
+    ``population``, ``generations``, ``seed``, ``v1-objective``, ``best-objective``. Its long
+    scorecards (``long-trials`` trials): ``most-holding`` and ``most-holding.under``, ``gained``
+    (holding under a searched layout, not under v1's), ``lost`` (holding under v1's, not under
+    every searched one), ``never``, the predictors' ``agree`` of ``compared``; per scored layout
+    NAME, ``NAME.VERDICT`` its counts, ``NAME.won`` and ``NAME.lost`` against v1's; ``better``
+    the layouts with more claims holding than v1's, ``better.count`` of ``scored``. The ten best
+    at ``screen-trials`` trials: ``once`` and ``none-of-ten``, ``could`` (the ranks whose holding
+    or consistent claims outnumber v1's holding ones) and ``could.unscored``."""
+    found = read_json(docs, LAYOUT_SEARCH)
+    v1 = _verdicts(docs, SCORECARDS["v1"])
+    v1_holds = verdicts.count(v1.values())["holds"]
+    finalists = _long_scorecards(docs)
+    most = max(f["counts"]["holds"] for f in finalists)
+    table = {
+        "evaluations": str(found["evaluations"]),
+        "wall": f"{found['wall_s']:.0f}",
+        "rate": f"{found['layouts_per_s']:.1f}",
+        "population": str(found["population"]),
+        "generations": str(found["generations"]),
+        "seed": str(found["seed"]),
+        "v1-objective": f"{found['v1_objective']:.3f}",
+        "best-objective": f"{found['ranked'][0]['objective']:.3f}",
+        "long-trials": str(_long_trials(docs)),
+        "most-holding": str(most),
+        "most-holding.under": ", ".join(f["name"] for f in finalists if f["counts"]["holds"] == most),
+        "agree": str(sum(f["agreement"]["agree"] for f in finalists)),
+        "compared": str(sum(f["agreement"]["compared"] for f in finalists)),
+        "scored": str(len(finalists)),
+    }
+    held = {c: [f["verdicts"][c] == "holds" for f in finalists] for c in v1}
+    table["gained"] = _claims([c for c in v1 if v1[c] != "holds" and any(held[c])])
+    table["lost"] = _claims([c for c in v1 if v1[c] == "holds" and not all(held[c])])
+    table["never"] = _claims([c for c in v1 if v1[c] != "holds" and not any(held[c])])
+    for f in finalists:
+        table |= {f"{f['name']}.{v}": str(f["counts"][v]) for v in verdicts.VERDICTS}
+        table[f"{f['name']}.won"] = _claims(
+            [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
+        )
+        table[f"{f['name']}.lost"] = _claims(
+            [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
+        )
+    better = [f["name"] for f in finalists if f["counts"]["holds"] > v1_holds]
+    table["better"], table["better.count"] = _claims(better), str(len(better))
+    top = read_json(docs, LAYOUT_TOP)
+    ten = [f for f in top["finalists"] if f["name"] != "v1"]
+    table["screen-trials"] = str(top["trials"])
+    count = {c: sum(f["verdicts"][c] == "holds" for f in ten) for c in ten[0]["verdicts"]}
+    table["once"] = _claims([c for c, n in count.items() if n == 1])
+    table["none-of-ten"] = _claims([c for c, n in count.items() if n == 0])
+    long = {int(f["name"].rsplit("-", 1)[1]) for f in finalists}
+    could = [i + 1 for i, f in enumerate(ten) if f["counts"]["holds"] + f["counts"]["consistent"] > v1_holds]
+    table["could"] = _claims([str(rank) for rank in could])
+    table["could.unscored"] = _claims([str(rank) for rank in could if rank not in long])
+    return table | _shipped_values(docs, finalists) | _seed_values(docs, finalists)
+
+
+def _claims(items: list[str]) -> str:
+    """A computed list of a sentence: its items, or "none"."""
+    return ", ".join(items) or "none"
 
 
 LAYOUT_TOP = "layout-search/top10.json"
@@ -1889,7 +1905,6 @@ def layout_sensitivity(docs: Path) -> str:
     """Each claim's verdict under the ten best searched layouts (short scorecards)."""
     found = read_json(docs, LAYOUT_TOP)
     finalists = [f for f in found["finalists"] if f["name"] != "v1"]
-    trials = found.get("trials")
     claims_ids = list(finalists[0]["verdicts"])
     short = {"holds": "H", "consistent": "c", "contradicted": "X"}
     lines = [
@@ -1911,28 +1926,7 @@ def layout_sensitivity(docs: Path) -> str:
         )
         + " | |"
     )
-    note = f" at {trials} trials" if trials else ""
-    v1_holds = verdicts.count(_verdicts(docs, SCORECARDS["v1"]).values())["holds"]
-    could = [
-        i + 1 for i, f in enumerate(finalists) if f["counts"]["holds"] + f["counts"]["consistent"] > v1_holds
-    ]
-    missing = [rank for rank in could if rank not in long]
-    held = {c: sum(f["verdicts"][c] == "holds" for f in finalists) for c in claims_ids}
-    once = [c for c, n in held.items() if n == 1]
-    never = [c for c, n in held.items() if n == 0]
-    return "\n".join(lines) + (
-        f"\n\nH holds, c consistent, X contradicted{note}. Holding under one of the ten layouts only: "
-        f"{', '.join(once) or 'none'}; under none: {', '.join(never) or 'none'}. The last row counts the "
-        f"claims holding at {long_trials} trials for the layouts scored there (—: not scored). "
-        f"Only a layout whose claims holding or consistent{note} outnumber the {v1_holds} holding under "
-        f"v1's layout at {long_trials} trials can beat it (unless a contradicted verdict turns): "
-        f"{', '.join(map(str, could)) or 'none'}; "
-        + (
-            f"each of them was scored at {long_trials} trials."
-            if not missing
-            else f"not scored at {long_trials} trials: {', '.join(map(str, missing))}."
-        )
-    )
+    return "\n".join(lines)
 
 
 #: The shipped scenario set's scorecards under the other master seeds (seed 0: rescored.json).
@@ -1944,58 +1938,34 @@ SET_SEED_SCORECARDS = {
 SHIPPED_RANK, SHIPPED_SET = 5, "search-5"
 
 
-@generator("layout-adoption")
-def layout_adoption(docs: Path) -> str:
-    """Which searched layouts beat v1's at 500 trials, what they win and lose, and the shipped
-    set's stations checked against its layout."""
+def _shipped_values(docs: Path, finalists: list[dict]) -> dict[str, str]:
+    """``shipped``, the layout shipped as :data:`SHIPPED_SET`, checked to have the most claims
+    holding and the fewest contradicted among those tied with it, and the stations of each of
+    its scenarios (``shipped.scenarios``)."""
     from mimo_radar_env import SCENARIO_SETS, load_scenario
 
-    v1 = _verdicts(docs, SCORECARDS["v1"])
-    v1_counts = verdicts.count(v1.values())
-    scorecards, trials = _long_scorecards(docs), _long_trials(docs)
-    better = [f for f in scorecards if f["counts"]["holds"] > v1_counts["holds"]]
-    if not better:
-        return f"No searched layout has more claims holding than v1's at {trials} trials."
-    lines = [f"{len(better)} of the {len(scorecards)} searched layouts scored at {trials} trials:", ""]
-    for f in better:
-        won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
-        lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
-        c = f["counts"]
-        lines.append(
-            f"- {f['name']}: {c['holds']} hold, {c['consistent']} consistent, {c['contradicted']} "
-            f"contradicted (v1's layout: {v1_counts['holds']}, {v1_counts['consistent']}, "
-            f"{v1_counts['contradicted']}); "
-            f"it makes {', '.join(won) or 'none'} hold and loses {', '.join(lost) or 'none'}."
+    shipped = next(f for f in finalists if f["name"] == f"search-{SHIPPED_RANK}")
+    tied = [f for f in finalists if f["counts"]["holds"] == shipped["counts"]["holds"]]
+    if shipped["counts"]["holds"] < max(f["counts"]["holds"] for f in finalists) or shipped["counts"][
+        "contradicted"
+    ] > min(f["counts"]["contradicted"] for f in tied):
+        raise BenchError(
+            f"{shipped['name']} no longer has the most claims holding with the fewest contradicted"
         )
-    shipped = next(f for f in better if f["name"] == f"search-{SHIPPED_RANK}")
     km = np.array(shipped["vector"]).reshape(-1, 2) * 1e3
-    for name in SCENARIO_SETS[SHIPPED_SET].paper_scenarios:
+    names = SCENARIO_SETS[SHIPPED_SET].paper_scenarios
+    for name in names:
         sc = load_scenario(name)
-        stations = np.vstack([sc.tx_positions, sc.rx_positions])
-        if not np.allclose(stations, km, rtol=0, atol=1e-6):
+        if not np.allclose(np.vstack([sc.tx_positions, sc.rx_positions]), km, rtol=0, atol=1e-6):
             raise BenchError(f"scenario {name} does not have the stations of {shipped['name']}")
-    tied = [f["name"] for f in better if f["counts"]["holds"] == shipped["counts"]["holds"]]
-    fewest = min(f["counts"]["contradicted"] for f in better if f["name"] in tied)
-    lines.append(
-        f"- Shipped as the scenario set `{SHIPPED_SET}`: {shipped['name']}, "
-        + (
-            "the most claims holding with the fewest contradicted"
-            if shipped["counts"]["contradicted"] == fewest and len(tied) > 1
-            else "the most claims holding"
-        )
-        + f" ({', '.join(SCENARIO_SETS[SHIPPED_SET].paper_scenarios)}: its stations, checked here)."
-    )
-    return "\n".join(lines)
+    return {"shipped": shipped["name"], "shipped.scenarios": ", ".join(names)}
 
 
 @generator("seed-sensitivity")
 def seed_sensitivity(docs: Path) -> str:
     """The v1 scorecard (500 trials, average fusion) under three master seeds, and the shipped
     scenario set's under the same seeds."""
-    cards = {label: _verdicts(docs, path) for label, path in SEED_SCORECARDS.items()}
-    shipped = next(f for f in _long_scorecards(docs) if f["name"] == f"search-{SHIPPED_RANK}")
-    cards[f"{SHIPPED_SET}, seed {read_json(docs, LAYOUT_RESCORED)['seed']}"] = shipped["verdicts"]
-    cards.update({label: _verdicts(docs, path) for label, path in SET_SEED_SCORECARDS.items()})
+    cards = _seed_cards(docs, _long_scorecards(docs))
     labels = list(cards)
     lines = ["| claim | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for claim in cards[labels[0]]:
@@ -2006,17 +1976,31 @@ def seed_sensitivity(docs: Path) -> str:
             + " | ".join(str(verdicts.count(cards[label].values())[kind]) for label in labels)
             + " |"
         )
-    lines.append("")
-    for layout in dict.fromkeys(label.split(",")[0] for label in labels):
-        mine = [label for label in labels if label.split(",")[0] == layout]
-        moving = [c for c in cards[mine[0]] if len({cards[label][c] for label in mine}) > 1]
-        holds = [verdicts.count(cards[label].values())["holds"] for label in mine]
-        span = (
-            f"{min(holds)} claims hold under each of the {len(mine)} seeds"
-            if min(holds) == max(holds)
-            else f"{min(holds)} to {max(holds)} claims hold, depending on the seed"
-        )
-        lines.append(
-            f"- {layout}: {span}; verdicts that change with the seed: {', '.join(moving) or 'none'}."
-        )
     return "\n".join(lines)
+
+
+def _seed_cards(docs: Path, finalists: list[dict]) -> dict[str, dict[str, str]]:
+    """The verdicts of v1's layout and of the shipped set under each master seed, by label."""
+    cards = {label: _verdicts(docs, path) for label, path in SEED_SCORECARDS.items()}
+    shipped = next(f for f in finalists if f["name"] == f"search-{SHIPPED_RANK}")
+    cards[f"{SHIPPED_SET}, seed {read_json(docs, LAYOUT_RESCORED)['seed']}"] = shipped["verdicts"]
+    return cards | {label: _verdicts(docs, path) for label, path in SET_SEED_SCORECARDS.items()}
+
+
+def _seed_values(docs: Path, finalists: list[dict]) -> dict[str, str]:
+    """Per layout of the seed table (``layout-116``, ``search-5``): ``seeds.LAYOUT`` its seeds,
+    ``seeds.LAYOUT.holds`` the claims holding under each and ``seeds.LAYOUT.moving`` the claims
+    whose verdict changes with the seed."""
+    cards = _seed_cards(docs, finalists)
+    table = {}
+    for layout in dict.fromkeys(label.split(",")[0] for label in cards):
+        mine = [label for label in cards if label.split(",")[0] == layout]
+        key = f"seeds.{layout.replace(' ', '-')}"
+        table[key] = str(len(mine))
+        table[f"{key}.holds"] = ", ".join(
+            str(verdicts.count(cards[label].values())["holds"]) for label in mine
+        )
+        table[f"{key}.moving"] = _claims(
+            [c for c in cards[mine[0]] if len({cards[label][c] for label in mine}) > 1]
+        )
+    return table

@@ -33,10 +33,12 @@ from pathlib import Path
 
 from ..cli import Command
 from ..errors import BenchError
-from .generators import GENERATORS, VALUE_SOURCES
+from .generators import GENERATORS, VALUE_SOURCES, forget_values
 
 BLOCK = re.compile(r"(<!-- generated: ([\w.-]+) -->\n)(.*?)(<!-- end generated -->)", re.DOTALL)
 VALUE = re.compile(r"(<!-- value: ([\w.-]+) ([\w.+-]+) -->)(.*?)(<!-- end value -->)")
+#: A value span opened inside a code span (Markdown shows a code span's comments as text).
+CODED_VALUE = re.compile(r"`<!-- value: [\w.-]+ [\w.+-]+ -->[^`\n]*`")
 #: Numbers shaped like measurements; a match outside a generated block or value span is unsourced.
 MEASUREMENT = re.compile(
     r"(?<![\w.])(?:"
@@ -72,6 +74,7 @@ def unsourced_numbers(text: str) -> list[tuple[int, str]]:
 
 def render(text: str, docs: Path) -> str:
     """``text`` with every generated block rewritten; an unknown generator is an error."""
+    forget_values()
 
     def fill(match: re.Match[str]) -> str:
         name = match.group(2)
@@ -79,6 +82,13 @@ def render(text: str, docs: Path) -> str:
             raise BenchError(f"no generator called {name!r}; known: {sorted(GENERATORS)}")
         body = GENERATORS[name](docs).rstrip("\n") + "\n"
         return match.group(1) + body + match.group(4)
+
+    coded = CODED_VALUE.search(text)
+    if coded:
+        raise BenchError(
+            f"a value span inside a code span shows its comments on the page: {coded.group(0)!r} "
+            "(let the value carry its backticks)"
+        )
 
     def quote(match: re.Match[str]) -> str:
         source, key = match.group(2), match.group(3)

@@ -35,22 +35,23 @@ def test_a_short_planning_study_reports_the_horizons_against_the_one_step_polici
 
 
 def _the_docs_say_what_the_planning_json_shows(tmp_path, out, run):
-    """The generated findings count and judge from planning.json alone."""
+    """The values quoted in the docs count and judge from planning.json alone."""
     import shutil
 
     from benchmarks import verdicts
-    from benchmarks.docs_tooling.generators import PLANNING_LEARNERS, planning_findings, planning_tables
+    from benchmarks.docs_tooling.generators import PLANNING_LEARNERS, planning_tables, planning_values
 
     docs = tmp_path / "docs"
     (docs / "results" / "planning").mkdir(parents=True)
     for name in ("planning.json", "timing.json"):
         shutil.copy(out / name, docs / "results" / "planning" / name)
-    findings = planning_findings(docs)
+    table = planning_values(docs)
     for learner in PLANNING_LEARNERS:
         better = verdicts.verdict(run["minus"][learner]["tracking-ucb"]["ci"], -1) == verdicts.HOLDS
-        assert f"`{learner}` against tracking-ucb**: better in {int(better)} of 1 studies" in findings
+        key = learner.replace(":", "-")
+        assert (table[f"{key}.better"], table[f"{key}.studies"]) == (str(int(better)), "1")
     best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
-    assert f"`{best}`'s ARMSE is" in findings  # the centralised run's best policy, against the best bound
+    assert table["bound.1.best"] == f"`{best}`"  # the centralised run's best policy, against the best bound
     tables = planning_tables(docs)
     assert "### paper-1, centralized (3 trials)" in tables and "ARMSE / best bound" in tables
 

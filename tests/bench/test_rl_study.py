@@ -111,7 +111,7 @@ def test_the_rl_study_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, 
 
 
 def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
-    from benchmarks.docs_tooling.generators import rl_findings, rl_tables
+    from benchmarks.docs_tooling.generators import rl_tables, rl_values
 
     learned = {
         f"ppo:t/paper-1-v1/ppo-information/seed-{s}/model.zip": a for s, a in enumerate((1.0, 1.2, 1.1))
@@ -141,17 +141,28 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     (folder / "rl.json").write_text(json.dumps(judged, default=float))
     timing = {"wall_s": 7200.0, "parts_s": {"training": 6600.0, "evaluation": 500.0}, "machine": {"cores": 2}}
     (folder / "timing.json").write_text(json.dumps(timing))
-    text = rl_findings(tmp_path)
-    assert "The study took 2.0 h on 2 cores (training 1.8 h, evaluation 8 min" in text
-    assert "its trainings took 3.6 h of worker time" in text
-    assert "Against `best-tracking`" in text and "better in 1 (`ppo-information` in Scenario 1)" in text
-    assert "worse in 1 (`recurrent-ppo-information` in Scenario 1)" in text
-    # against tracking-ucb (1.1): ppo's seeds 1.0, 1.2, 1.1 straddle it
-    assert "Against `tracking-ucb`" in text and "no difference shown in 1 (`ppo-information`" in text
-    assert (
-        "flat for 1 of 2 (`ppo-information` (Scenario 1))" in text
-        and "`recurrent-ppo-information` (Scenario 1, -" in text
+    table = rl_values(tmp_path)
+    assert (table["wall"], table["cores"], table["training"], table["evaluation"]) == (
+        "2.0 h",
+        "2",
+        "1.8 h",
+        "8 min",
     )
+    assert table["worker"] == "3.6 h"
+    assert (table["best-tracking.better"], table["best-tracking.better.which"]) == (
+        "1",
+        "`ppo-information` in Scenario 1",
+    )
+    assert table["best-tracking.worse.which"] == "`recurrent-ppo-information` in Scenario 1"
+    assert (table["best-tracking.same"], table["best-tracking.pairs"]) == ("0", "2")
+    # against tracking-ucb (1.1): ppo's seeds 1.0, 1.2, 1.1 straddle it
+    assert table["tracking-ucb.same.which"] == "`ppo-information` in Scenario 1"
+    assert (table["flat"], table["curves"], table["flat.which"]) == (
+        "1",
+        "2",
+        "`ppo-information` (Scenario 1)",
+    )
+    assert table["moving.which"].startswith("`recurrent-ppo-information` (Scenario 1, -")
     tables = rl_tables(tmp_path)
     assert tables.startswith("Learned policies across their training seeds") and "### paper-1" in tables
 

@@ -1,6 +1,6 @@
-"""The layout search's generated statements (docs/results.md): which searched layouts beat v1's,
-what each wins and loses, that the shipped scenario set has the scored stations, and which
-verdicts move with the seed, each against a computation of its own from the artefacts."""
+"""The layout search's values quoted in docs/results.md: which searched layouts beat v1's, what
+each wins and loses, that the shipped scenario set has the scored stations, and which verdicts
+move with the seed, each against a computation of its own from the artefacts."""
 
 import json
 import shutil
@@ -34,21 +34,32 @@ def test_layouts_that_beat_v1_are_listed_with_what_they_win_and_lose(docs):
     v1 = verdicts_of(load(docs, "results/claims/v1.json"))
     v1_holds = sum(v == "holds" for v in v1.values())
     rescored = load(docs, RESCORED)
-    text = generators.layout_adoption(docs)
+    table = generators.layout_values(docs)
     for f in rescored["finalists"]:
         holds = f["counts"]["holds"]
-        listed = f"- {f['name']}: {holds} hold" in text
-        assert listed == (holds > v1_holds)
-        if listed:
-            won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
-            lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
-            assert f"it makes {', '.join(won)} hold and loses {', '.join(lost)}." in text
+        assert (f["name"] in table["better"].split(", ")) == (holds > v1_holds)
+        assert table[f"{f['name']}.holds"] == str(holds)
+        won = [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
+        lost = [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
+        assert table[f"{f['name']}.won"] == (", ".join(won) or "none")
+        assert table[f"{f['name']}.lost"] == (", ".join(lost) or "none")
     # one layout fewer above v1's count: it drops out of the list and the count says so
     ten = next(f for f in rescored["finalists"] if f["name"] == "search-10")
     ten["counts"]["holds"] = v1_holds
     (docs / RESCORED).write_text(json.dumps(rescored))
-    text = generators.layout_adoption(docs)
-    assert "- search-10:" not in text and text.startswith("1 of the 5 searched layouts scored at 500 trials")
+    table = generators.layout_values(docs)
+    assert (table["better"], table["better.count"], table["scored"]) == ("search-5", "1", "5")
+
+
+def test_the_shipped_layout_must_still_lead(docs):
+    """The page says the shipped layout has the most claims holding with the fewest contradicted:
+    when the artefacts stop saying so, the values refuse to be read."""
+    rescored = load(docs, RESCORED)
+    ten = next(f for f in rescored["finalists"] if f["name"] == "search-10")
+    ten["counts"]["holds"] += 1
+    (docs / RESCORED).write_text(json.dumps(rescored))
+    with pytest.raises(BenchError, match="search-5 no longer has the most claims holding"):
+        generators.layout_values(docs)
 
 
 def test_the_shipped_set_must_have_the_scored_stations(docs):
@@ -57,13 +68,13 @@ def test_the_shipped_set_must_have_the_scored_stations(docs):
     five["vector"][0] += 1.0  # 1 km off: no longer the shipped scenarios' first transmitter
     (docs / RESCORED).write_text(json.dumps(rescored))
     with pytest.raises(BenchError, match="search-5 of the 500-trial scorecards is not layout 5"):
-        generators.layout_adoption(docs)
+        generators.layout_values(docs)
     top = load(docs, "results/layout-search/top10.json")
     ranked = [f for f in top["finalists"] if f["name"] != "v1"]
     ranked[4]["vector"][0] += 1.0  # the search's own rank 5 moved too: now the stations disagree
     (docs / "results/layout-search/top10.json").write_text(json.dumps(top))
     with pytest.raises(BenchError, match="does not have the stations of search-5"):
-        generators.layout_adoption(docs)
+        generators.layout_values(docs)
 
 
 def test_seed_sensitivity_names_the_verdicts_that_move(docs):
@@ -73,12 +84,13 @@ def test_seed_sensitivity_names_the_verdicts_that_move(docs):
     cards["search-5"] = [five["verdicts"]] + [
         verdicts_of(load(docs, f"results/{p}")) for p in generators.SET_SEED_SCORECARDS.values()
     ]
-    text = generators.seed_sensitivity(docs)
+    table = generators.layout_values(docs)
     for layout, seeds in cards.items():
+        key = f"seeds.{layout.replace(' ', '-')}"
         moving = [c for c in seeds[0] if len({s[c] for s in seeds}) > 1]
-        assert f"- {layout}: " in text
-        line = next(row for row in text.splitlines() if row.startswith(f"- {layout}: "))
-        assert line.endswith(f"verdicts that change with the seed: {', '.join(moving) or 'none'}.")
+        assert table[key] == str(len(seeds)) == "3"
+        assert table[f"{key}.moving"] == (", ".join(moving) or "none")
+        assert table[f"{key}.holds"] == ", ".join(str(sum(v == "holds" for v in s.values())) for s in seeds)
 
 
 def test_the_always_contradicted_claims_are_computed_over_every_scorecard(docs):
@@ -92,13 +104,13 @@ def test_the_always_contradicted_claims_are_computed_over_every_scorecard(docs):
     cards += [f["verdicts"] for f in search if f["name"] != "v1"]
     cards += [f["verdicts"] for f in load(docs, RESCORED)["finalists"]]
     expected = [c for c in cards[0] if all(card[c] == "contradicted" for card in cards)]
-    text = generators.claims_counts(docs)
-    assert f"Contradicted in each of the {len(cards)} scorecards" in text
-    assert text.rstrip(".").endswith(", ".join(expected))
+    table = generators.claims_values(docs)
+    assert table["scorecards"] == str(len(cards))
+    assert table["always-contradicted"] == ", ".join(expected)
     assert "S2.5" not in expected  # it holds under the searched layouts
     # make S1.7 hold under one searched layout: the sentence drops it
     rescored = load(docs, RESCORED)
     rescored["finalists"][-1]["verdicts"]["S1.7"] = "holds"
     (docs / RESCORED).write_text(json.dumps(rescored))
-    again = generators.claims_counts(docs)
-    assert "S1.7" in expected and "S1.7" not in again.splitlines()[-1]
+    again = generators.claims_values(docs)["always-contradicted"]
+    assert "S1.7" in expected and "S1.7" not in again.split(", ")

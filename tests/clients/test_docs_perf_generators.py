@@ -1,5 +1,4 @@
-"""The performance page's generated sentence on the study targets, against perf.json figures
-altered by hand."""
+"""The performance page's values on the study targets, against perf.json figures altered by hand."""
 
 import json
 
@@ -23,31 +22,21 @@ def write_perf(tmp_path, bpso, floor):
 
 
 @pytest.mark.parametrize(
-    ("bpso", "floor", "verdict"),
+    ("bpso", "floor", "added", "share", "against"),
     [
-        (212.0, 135.0, "no BPSO kernel, however fast, meets it"),
-        (212.0, 100.0, "The 100 s left is within the 120 s target: a faster BPSO kernel could meet it"),
-        (115.0, 100.0, "The study with BPSO is within the 120 s target."),
-        (119.0, 125.0, "The study with BPSO is within the 120 s target."),
-        (95.6, 95.5, "The study with BPSO is within the 120 s target."),
+        (212.0, 135.0, "77.0", "36.3", "above"),
+        (115.0, 100.0, "15.0", "13.0", "within"),
+        (119.0, 125.0, "-6.0", "-5.0", "within"),
+        (95.6, 95.5, "0.1", "0.1", "within"),
     ],
 )
-def test_the_study_floor_sentence(tmp_path, bpso, floor, verdict):
-    """The sentence says whether the study meets its target, else whether a faster BPSO could."""
+def test_the_study_floor_values(tmp_path, bpso, floor, added, share, against):
+    """What BPSO adds to the study, its share and the study against its target."""
     assert TARGETS["claims_v1_average_wall_s"][1] == 120
-    text = generators.study_floor(write_perf(tmp_path, bpso, floor))
-    assert f"took {bpso:.0f} s with the paper's BPSO and {floor:.0f} s with MG-CRB-CL's exact solver" in text
-    if bpso - floor >= 0.02 * bpso:
-        assert f"so BPSO is about {bpso - floor:.0f} s ({(bpso - floor) / bpso:.0%}) of the study" in text
-    elif bpso >= floor:  # no "about 0 s (0%)"
-        added = f"BPSO added {bpso - floor:.1f} s, less than 2 % of the study"
-        assert f"so in this one pair of timings {added}" in text
-        assert "(one pair of runs: no interval)" in text
-    else:  # two timings of one study differ by more than BPSO's share: no negative share is printed
-        assert "below the difference between two timings" in text and "about -" not in text
-    assert "111x cheaper" in text
-    assert verdict in text
-    assert sum(v in text for v in ("within the 120 s target", "no BPSO kernel")) == 1
+    table = generators.floor_values(write_perf(tmp_path, bpso, floor))
+    assert (table["bpso"], table["exact"]) == (f"{bpso:.0f}", f"{floor:.0f}")
+    assert (table["added"], table["share"], table["against-target"]) == (added, share, against)
+    assert (table["speedup"], table["target"], table["workers"]) == ("111", "120", "2")
 
 
 def _breakdown(rule, kernel_ms, whole_ms, polynomial_without_ms, mean_iterations):

@@ -86,6 +86,36 @@ def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):
     assert exit_info.value.code == 2 and "no figure 'no-such-figure'" in capsys.readouterr().err
 
 
+def test_a_value_table_is_read_once_per_rendering_and_names_its_keys(tmp_path):
+    """A page's sentence quotes a value table's keys; a key the table lacks is named with the
+    keys it has, and a value span inside a code span (whose comments Markdown would show) is
+    refused."""
+    from benchmarks.docs_tooling import generators
+    from benchmarks.docs_tooling.pages import render
+    from benchmarks.errors import BenchError
+
+    calls = []
+
+    @generators.values("test-table")
+    def table(docs):
+        calls.append(docs)
+        return {"a": "1", "b": "two"}
+
+    try:
+        span = "<!-- value: test-table {} -->?<!-- end value -->"
+        page = f"A {span.format('a')} and {span.format('b')}."
+        assert render(page, tmp_path) == page.replace("?", "1", 1).replace("?", "two", 1)
+        assert calls == [tmp_path]
+        render(page, tmp_path)
+        assert len(calls) == 2  # a new rendering reads the artefacts again
+        with pytest.raises(BenchError, match="the values 'test-table' have no 'c'; they have: a, b"):
+            render("<!-- value: test-table c -->?<!-- end value -->", tmp_path)
+        with pytest.raises(BenchError, match="inside a code span"):
+            render("`<!-- value: test-table a -->1<!-- end value -->`", tmp_path)
+    finally:
+        del generators.VALUE_SOURCES["test-table"]
+
+
 def test_the_reading_moves_are_each_column_against_the_one_it_modifies(tmp_path):
     """Hand-made scorecards: each change lists exactly the claims whose verdict differs from the
     column it modifies (not from the column beside it), and the claims contradicted everywhere."""
@@ -106,15 +136,17 @@ def test_the_reading_moves_are_each_column_against_the_one_it_modifies(tmp_path)
     for label, path in generators.READINGS.items():
         card = [{"id": claim, "verdict": verdict} for claim, verdict in columns[label].items()]
         (docs / "results" / path).write_text(json.dumps(card))
-    lines = generators.reading_moves(docs).splitlines()
-    assert (
-        lines[0] == "- **eq32 on dB alone** (`v0 + dB` against `v0`) moves A1 (consistent to holds); "
-        "2 claims hold there, against 1."
+    table = generators.reading_values(docs)
+    assert (table["db.moves"], table["db.holds"], table["db.base-holds"]) == (
+        "A1 (consistent to holds)",
+        "2",
+        "1",
     )
-    assert lines[1].endswith("moves no claim; 1 claim holds there, against 1.")
-    assert "moves S1 (holds to consistent), A1 (consistent to contradicted); 0 claims hold" in lines[2]
+    assert table["shared-truth.moves"] == "no claim"
+    assert table["set-rule.moves"] == "S1 (holds to consistent), A1 (consistent to contradicted)"
+    assert table["set-rule.holds"] == "0"
     # the section 1 layout is against v0, the calibrated layout against the section 1 layout
-    assert "(`v1, section 1 layout` against `v0`) moves A1 (consistent to holds)" in lines[3]
-    assert "(`v1` against `v1, section 1 layout`) moves S1 (holds to contradicted); 1 claim holds" in lines[4]
-    assert lines[5].endswith("moves no claim; 1 claim holds there, against 1.")
-    assert lines[6] == "- Contradicted in every column (1 claim): S2."
+    assert table["all-three.moves"] == "A1 (consistent to holds)"
+    assert (table["layout.moves"], table["layout.holds"]) == ("S1 (holds to contradicted)", "1")
+    assert table["centralized.moves"] == "no claim"
+    assert (table["always"], table["always.count"]) == ("S2", "1")
