@@ -823,11 +823,8 @@ def _rate_with_interval(rate: float, trials: int) -> str:
 
 @generator("bpso-parts")
 def bpso_parts_table(docs: Path) -> str:
-    """``bpso_parts.json`` (measured at commit bb595a0): under each position rule, what each part of the
-    whole swarm costs, how many iterations the kernel's trials run before their stop, and whether
-    the kernel, or one with the same numbers whose eq21 decision cost nothing, is within the speed
-    target's budget over the kernel it replaced."""
-    from ..speed.perf import TARGETS
+    """``bpso_parts.json`` (measured at commit bb595a0): under each position rule, what each part of
+    the whole swarm costs."""
 
     r = read_json(docs, "perf/bpso_parts.json")
     breakdowns = r["breakdowns"]
@@ -847,60 +844,77 @@ def bpso_parts_table(docs: Path) -> str:
                 )
             line += f" {part['without_ms']:.1f} | {part['cost_ms']:.1f} | {100 * part['share']:.0f} % |"
         lines.append(line)
-    lines.append("")
-    lines.append(
-        f"{r['trials']} trials, one thread, the kernels alone (no starting swarm). The kernel stops a "
-        "trial once its global best holds the optimum, so its time is about the whole swarm's scaled "
-        "by the share of the iterations its trials run:"
-    )
-    lines.append("")
-    for b in breakdowns:
-        whole, kernel, q_max = b["whole_swarm_ms"], b["kernel_ms"], b["q_max"]
+    return "\n".join(lines)
+
+
+@values("bpso-parts")
+def bpso_parts_values(docs: Path) -> dict[str, str]:
+    """``bpso_parts.json``: ``trials``; per rule R, ``R.whole`` the whole swarm (ms), its trials'
+    ``R.iterations`` of ``R.q-max`` on average and ``R.all-iterations`` (%) running them all,
+    ``R.estimate`` the kernel so estimated against ``R.kernel`` measured (ms), ``R.less`` the
+    whole swarm over the kernel, ``R.reference`` the kernel it replaced (ms), ``R.speedup`` the
+    target, ``R.budget`` (ms) what it leaves and ``R.kernel-against`` (within or above it);
+    ``R.without-polynomial`` (ms) the whole swarm without eq21's polynomial, ``R.free`` (ms) a
+    kernel whose eq21 decision cost nothing and ``R.free-against``; ``float32-trials``."""
+    from ..speed.perf import TARGETS
+
+    r = read_json(docs, "perf/bpso_parts.json")
+    table = {"trials": str(r["trials"])}
+    for b in r["breakdowns"]:
+        rule, whole, kernel, q_max = b["rule"], b["whole_swarm_ms"], b["kernel_ms"], b["q_max"]
         share = b["mean_iterations"] / q_max
-        speedup = TARGETS[f"bpso_speedup_vs_reference_{b['rule']}"][1]
+        speedup = TARGETS[f"bpso_speedup_vs_reference_{rule}"][1]
         budget = b["reference_ms"] / speedup
-        polynomial = next(row for row in b["parts"] if "polynomial" in row["part"])
-        free = polynomial["without_ms"] * share
-        lines.append(
-            f"- rule {b['rule']}: the whole swarm {whole:.1f} ms; its trials run "
-            f"{b['mean_iterations']:.1f} of {q_max} iterations on average "
-            f"({100 * b['share_all_iterations']:.1f} % of them all {q_max}), "
-            f"which estimates the kernel at {whole * share:.1f} ms against {kernel:.1f} ms measured "
-            f"({whole / kernel:.1f}x less than the whole swarm). The kernel it replaced took "
-            f"{b['reference_ms']:.1f} ms: a {speedup:g}x speed-up over it leaves {budget:.1f} ms, and the "
-            f"kernel is {'within' if kernel <= budget else 'above'} it. Without the exp polynomial of eq21 "
-            f"(its numbers then wrong) the whole swarm took {polynomial['without_ms']:.1f} ms, so a kernel "
-            f"with these numbers whose eq21 decision cost nothing would take about {free:.1f} ms: "
-            f"{'within' if free <= budget else 'above'} the budget."
+        without = next(row for row in b["parts"] if "polynomial" in row["part"])["without_ms"]
+        table |= {
+            f"{rule}.whole": f"{whole:.1f}",
+            f"{rule}.iterations": f"{b['mean_iterations']:.1f}",
+            f"{rule}.q-max": str(q_max),
+            f"{rule}.all-iterations": f"{100 * b['share_all_iterations']:.1f}",
+            f"{rule}.estimate": f"{whole * share:.1f}",
+            f"{rule}.kernel": f"{kernel:.1f}",
+            f"{rule}.less": f"{whole / kernel:.1f}",
+            f"{rule}.reference": f"{b['reference_ms']:.1f}",
+            f"{rule}.speedup": f"{speedup:g}",
+            f"{rule}.budget": f"{budget:.1f}",
+            f"{rule}.kernel-against": "within" if kernel <= budget else "above",
+            f"{rule}.without-polynomial": f"{without:.1f}",
+            f"{rule}.free": f"{without * share:.1f}",
+            f"{rule}.free-against": "within" if without * share <= budget else "above",
+        }
+    table["float32-trials"] = str(r["float32"]["trials"])
+    return table
+
+
+@generator("bpso-float32")
+def bpso_float32_table(docs: Path) -> str:
+    """``bpso_parts.json``'s float32 transcription of the kernel beside the kernel and the kernel
+    it replaced, under each rule."""
+    from ..speed.perf import TARGETS
+
+    r = read_json(docs, "perf/bpso_parts.json")
+    lines = [
+        "| rule | the kernel (ms) | in float32 (ms) | the kernel it replaced (ms) | speed-up over it: "
+        "the kernel, in float32 | target | optimal selections (95 % Wilson interval): the kernel, "
+        "in float32, the kernel it replaced |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for rule, row in r["float32"]["rules"].items():
+        target = TARGETS[f"bpso_speedup_vs_reference_{rule}"][1]
+        kernel, float32 = (row["reference_ms"] / row[f"{k}_ms"] for k in ("kernel", "float32"))
+        rates = ", ".join(
+            _rate_with_interval(row[f"{k}_optimality_rate"], r["float32"]["trials"])
+            for k in ("kernel", "float32", "reference")
         )
-    if "float32" in r:
-        lines += [
-            "",
-            "The kernel transcribed to float32 (16 particles per vector; its stop kept), beside the "
-            f"kernel and the kernel it replaced, the kernels alone (no starting swarm), "
-            f"{r['float32']['trials']} trials, one thread:",
-            "",
-            "| rule | the kernel (ms) | in float32 (ms) | the kernel it replaced (ms) | speed-up over it: "
-            "the kernel, in float32 | target | optimal selections (95 % Wilson interval): the kernel, "
-            "in float32, the kernel it replaced |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for rule, row in r["float32"]["rules"].items():
-            target = TARGETS[f"bpso_speedup_vs_reference_{rule}"][1]
-            kernel, float32 = (row["reference_ms"] / row[f"{k}_ms"] for k in ("kernel", "float32"))
-            rates = ", ".join(
-                _rate_with_interval(row[f"{k}_optimality_rate"], r["float32"]["trials"])
-                for k in ("kernel", "float32", "reference")
-            )
-            reach = (
-                "both reach it"
-                if min(kernel, float32) >= target
-                else ("float32 alone reaches it" if float32 >= target else "neither reaches it")
-            )
-            lines.append(
-                f"| {rule} | {row['kernel_ms']:.1f} | {row['float32_ms']:.1f} | {row['reference_ms']:.1f} | "
-                f"{kernel:.1f}x, {float32:.1f}x | >= {target:g}x: {reach} | {rates} |"
-            )
+        reach = (
+            "both reach it"
+            if min(kernel, float32) >= target
+            else ("float32 alone reaches it" if float32 >= target else "neither reaches it")
+        )
+        lines.append(
+            f"| {rule} | {row['kernel_ms']:.1f} | {row['float32_ms']:.1f} | {row['reference_ms']:.1f} | "
+            f"{kernel:.1f}x, {float32:.1f}x | >= {target:g}x: {reach} | {rates} |"
+        )
     return "\n".join(lines)
 
 

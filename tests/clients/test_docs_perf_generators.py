@@ -64,7 +64,7 @@ def _breakdown(rule, kernel_ms, whole_ms, polynomial_without_ms, mean_iterations
     ("kernel_ms", "polynomial_without_ms", "within", "free_within"),
     [(4.0, 15.0, True, True), (20.0, 20.0, False, False), (20.0, 15.0, False, True)],
 )
-def test_the_bpso_breakdown_sentences(tmp_path, kernel_ms, polynomial_without_ms, within, free_within):
+def test_the_bpso_breakdown_values(tmp_path, kernel_ms, polynomial_without_ms, within, free_within):
     """Each rule's parts side by side; per rule, the stop's share of the iterations, the estimate it
     gives beside the kernel's time, and whether the kernel, and a kernel whose eq21 decision cost
     nothing (the whole swarm without the polynomial, scaled the same), are within the budget of the
@@ -75,7 +75,7 @@ def test_the_bpso_breakdown_sentences(tmp_path, kernel_ms, polynomial_without_ms
         _breakdown("xor", kernel_ms, 30.0, polynomial_without_ms, 60.0),
         _breakdown("set", 2.5, 29.5, 20.0, 7.0),
     ]
-    figures = {"trials": 500, "breakdowns": breakdowns}
+    figures = {"trials": 500, "breakdowns": breakdowns, "float32": {"trials": 500, "rules": {}}}
     (docs / "results" / "perf" / "bpso_parts.json").write_text(json.dumps(figures))
     text = generators.bpso_parts_table(docs)
     assert "| rule xor: without it (ms) | the part's cost (ms) | share | rule set: without it (ms) |" in text
@@ -85,14 +85,23 @@ def test_the_bpso_breakdown_sentences(tmp_path, kernel_ms, polynomial_without_ms
         f"{100 * polynomial_cost / 30:.0f} % | 20.0 | 9.5 | 32 % |" in text
     )
     budget = 52.5 / TARGETS["bpso_speedup_vs_reference_xor"][1]
-    xor = next(line for line in text.splitlines() if line.startswith("- rule xor"))
-    assert "its trials run 60.0 of 100 iterations on average (50.0 % of them all 100)" in xor
-    assert f"estimates the kernel at {30.0 * 0.6:.1f} ms against {kernel_ms:.1f} ms measured" in xor
-    assert f"leaves {budget:.1f} ms, and the kernel is {'within' if within else 'above'} it" in xor
+    table = generators.bpso_parts_values(docs)
+    assert (table["xor.iterations"], table["xor.q-max"], table["xor.all-iterations"]) == (
+        "60.0",
+        "100",
+        "50.0",
+    )
+    assert (table["xor.estimate"], table["xor.kernel"]) == (f"{30.0 * 0.6:.1f}", f"{kernel_ms:.1f}")
+    assert (table["xor.budget"], table["xor.kernel-against"]) == (
+        f"{budget:.1f}",
+        "within" if within else "above",
+    )
     free = polynomial_without_ms * 0.6
-    assert f"would take about {free:.1f} ms: {'within' if free_within else 'above'} the budget" in xor
-    set_rule = next(line for line in text.splitlines() if line.startswith("- rule set"))
-    assert "estimates the kernel at 2.1 ms against 2.5 ms measured" in set_rule
+    assert (table["xor.free"], table["xor.free-against"]) == (
+        f"{free:.1f}",
+        "within" if free_within else "above",
+    )
+    assert (table["set.estimate"], table["set.kernel"]) == ("2.1", "2.5")
     breakdowns[1]["parts"][1]["part"] = "another part"
     (docs / "results" / "perf" / "bpso_parts.json").write_text(json.dumps(figures))
     with pytest.raises(ValueError, match="the rules' parts differ"):
