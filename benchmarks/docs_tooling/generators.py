@@ -95,6 +95,11 @@ def forget_values() -> None:
     _TABLES.clear()
 
 
+def _machine(m: dict[str, Any]) -> str:
+    """A measuring machine as the captions name it: ``2 cores (x86_64, Python 3.11.7)``."""
+    return f"{m['cores']} cores ({m['machine']}, Python {m['python']})"
+
+
 def read_json(docs: Path, relative: str) -> Any:
     path = docs / "results" / relative
     try:
@@ -608,13 +613,20 @@ def perf_figures(docs: Path) -> str:
             op, bound = TARGETS[key]
             target = f"{op} {bound:g}: {'met' if target_met(key, value) else '**missed**'}"
         lines.append(f"| `{key}` | {what} | {text} {unit} | {target} |")
-    lines += [
-        "",
-        f"{results['workers']} workers, {results['cores']} cores ({results['machine']}); load average "
-        f"{results.get('load_average_1min_before', float('nan')):.2f} before and "
-        f"{results.get('load_average_1min_after', float('nan')):.2f} after the run.",
-    ]
     return "\n".join(lines)
+
+
+@values("perf-figures")
+def perf_figure_values(docs: Path) -> dict[str, str]:
+    """perf.json's run: ``workers``, ``cores``, ``machine``, ``load-before`` and ``load-after``."""
+    results = read_json(docs, "perf/perf.json")
+    return {
+        "workers": str(results["workers"]),
+        "cores": str(results["cores"]),
+        "machine": results["machine"],
+        "load-before": f"{results['load_average_1min_before']:.2f}",
+        "load-after": f"{results['load_average_1min_after']:.2f}",
+    }
 
 
 @values("floor")
@@ -642,9 +654,7 @@ def floor_values(docs: Path) -> dict[str, str]:
 
 @generator("scaling")
 def scaling_table(docs: Path) -> str:
-    """``python -m benchmarks.speed.scaling --json``'s rows and the fitted growth."""
-    from ..speed.scaling import fitted_growth
-
+    """``python -m benchmarks.speed.scaling --json``'s rows."""
     rows = read_json(docs, "perf/scaling.json")
     lines = [
         "| M x N | Ms, Ns | K | B | solver | ms/step | us/trial-step | peak MiB |",
@@ -656,13 +666,18 @@ def scaling_table(docs: Path) -> str:
                 f"| {r['M']} x {r['N']} | {r['Ms']}, {r['Ns']} | {r['K']} | {r['B']} | {r['solver']} | "
                 f"{r['ms_per_step']:.1f} | {r['us_per_trial_step']:.1f} | {r['peak_mib']:.1f} |"
             )
-    slopes = fitted_growth(rows)
-    lines += [
-        "",
-        f"Fitted growth of the time per step (log-log slope): trials B {slopes['trials B']:.2f}, targets K "
-        f"{slopes['targets K']:.2f} (16 x 16), stations M*N {slopes['stations M*N']:.2f} (K = 5).",
-    ]
     return "\n".join(lines)
+
+
+@values("growth")
+def growth_values(docs: Path) -> dict[str, str]:
+    """The fitted growth (log-log slope) of the time per step in ``trials``, ``targets`` and
+    ``stations`` (``python -m benchmarks.speed.scaling``)."""
+    from ..speed.scaling import fitted_growth
+
+    slopes = fitted_growth(read_json(docs, "perf/scaling.json"))
+    keys = {"trials": "trials B", "targets": "targets K", "stations": "stations M*N"}
+    return {key: f"{slopes[name]:.2f}" for key, name in keys.items()}
 
 
 @generator("solver-figures")
@@ -716,17 +731,25 @@ def policy_cost(docs: Path) -> str:
                 f"{r['measured_mib_per_trial']:.2f} / {r['declared_mib_per_trial']:.2f} MiB"
             )
         lines.append(f"| `{policy}` | " + " | ".join(values) + " |")
-    worst = max(r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows)
-    times = sorted(r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows)
-    machine = record["machine"]
-    lines += [
-        "",
-        f"{record['trials']} trials, {record['steps']} steps after a warm-up step, on {machine['cores']} "
-        f"cores ({machine['machine']}, Python {machine['python']}); the largest measured / declared memory "
-        f"is {worst:.2f} (every declaration is an upper estimate); measured / estimated time ranges from "
-        f"{times[0]:.2f} to {times[-1]:.2f}, with a median of {times[len(times) // 2]:.2f}.",
-    ]
     return "\n".join(lines)
+
+
+@values("policy-cost")
+def policy_cost_values(docs: Path) -> dict[str, str]:
+    """policy_cost.json's run (``trials``, ``steps``, ``machine``), the largest measured /
+    declared memory (``worst-memory``) and measured / estimated time's ``time-range`` and
+    ``time-median``."""
+    record = read_json(docs, "perf/policy_cost.json")
+    rows = record["rows"]
+    times = sorted(r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows)
+    return {
+        "trials": str(record["trials"]),
+        "steps": str(record["steps"]),
+        "machine": _machine(record["machine"]),
+        "worst-memory": f"{max(r['measured_mib_per_trial'] / r['declared_mib_per_trial'] for r in rows):.2f}",
+        "time-range": f"{times[0]:.2f} to {times[-1]:.2f}",
+        "time-median": f"{times[len(times) // 2]:.2f}",
+    }
 
 
 def _recipe_costs(docs: Path, page: str) -> str:
@@ -744,13 +767,14 @@ def _recipe_costs(docs: Path, page: str) -> str:
     for r in rows:
         cost = f"{r['seconds']:.1f} s" if "seconds" in r else f"not run here ({r['not_run']})"
         lines.append(f"| {r['index'] + 1} | {r['section']} | {cost} |")
-    machine = record["machine"]
-    lines += [
-        "",
-        f"Measured by `{record['command']}` on {machine['cores']} cores ({machine['machine']}, "
-        f"Python {machine['python']}), one recipe at a time.",
-    ]
     return "\n".join(lines)
+
+
+@values("recipes")
+def recipe_values(docs: Path) -> dict[str, str]:
+    """recipes.json's ``command`` (as code) and ``machine``."""
+    record = read_json(docs, "perf/recipes.json")
+    return {"command": f"`{record['command']}`", "machine": _machine(record["machine"])}
 
 
 for _page in ("clients.md", "ppo.md"):
@@ -970,23 +994,33 @@ def step_stages(docs: Path) -> str:
             f"| {r['fusion']} | {r['stage']} | {r['ms_per_step']:.2f} | {share} | "
             f"{'—' if ops is None else f'{ops:,.0f}'} | {'—' if rate is None else f'{rate:.2e}'} | {floor} |"
         )
-    machine = record["machine"]
-    largest = {
-        f: max((r for r in rows if r["fusion"] == f), key=lambda r: r["ms_per_step"])
-        for f in ("average", "centralized")
-    }
-    lines += [
-        "",
-        f"{record['scenario']}, {record['trials']} trials, {record['steps']} steps after a warm-up, on "
-        f"{machine['cores']} cores ({machine['machine']}, Python {machine['python']}); "
-        "the env step's largest stage is, "
-        + "; ".join(
-            f"with {f} fusion, the {r['stage']} ({100 * r['ms_per_step'] / totals[f]:.0f} % of the step)"
-            for f, r in largest.items()
-        )
-        + f"; the assumed accelerator rate is {ASSUMED_ACCELERATOR_OPS:.0e} float64 operations per second.",
-    ]
     return "\n".join(lines)
+
+
+@values("stages")
+def stage_values(docs: Path) -> dict[str, str]:
+    """stages.json's run (``scenario``, ``trials``, ``steps``, ``machine``), per fusion the env
+    step's largest stage ``largest.FUSION`` and its ``largest.FUSION.share`` (%), and the
+    ``accelerator-rate`` assumed (float64 operations per second)."""
+    from ..speed.stages import ASSUMED_ACCELERATOR_OPS
+
+    record = read_json(docs, "perf/stages.json")
+    rows = record["rows"]
+    table = {
+        "scenario": record["scenario"],
+        "trials": str(record["trials"]),
+        "steps": str(record["steps"]),
+        "machine": _machine(record["machine"]),
+        "accelerator-rate": f"{ASSUMED_ACCELERATOR_OPS:.0e}",
+    }
+    for fusion in ("average", "centralized"):
+        mine = [r for r in rows if r["fusion"] == fusion]
+        largest = max(mine, key=lambda r: r["ms_per_step"])
+        table[f"largest.{fusion}"] = largest["stage"]
+        table[f"largest.{fusion}.share"] = (
+            f"{100 * largest['ms_per_step'] / sum(r['ms_per_step'] for r in mine):.0f}"
+        )
+    return table
 
 
 # ------------------------------------------------------------------ the engine on a device
@@ -1033,7 +1067,6 @@ def device_equality(docs: Path) -> str:
             f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e['trials']} | {e['steps']} | "
             f"{e['largest']:.1e} | `{e['largest_entry']}` | {agree} |"
         )
-    lines += ["", f"On {record['device_name']} ({record['device']}); tolerance {record['tolerance']:.0e}."]
     return "\n".join(lines)
 
 
@@ -1057,11 +1090,6 @@ def device_speed(docs: Path) -> str:
                 extra = "" if memory is None else f", {memory:.1f} GiB"
                 cells.append(f"{_rate(r['trial_steps_per_s'])} ({1e3 * r['seconds_per_step']:.1f} ms{extra})")
         lines.append(f"| {backend} | {fusion} | " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        f"Trial-steps per second (the time of one step; the device's peak memory); "
-        f"{record['scenario']}, random valid actions; {record['machine']}; {record['device_name']}.",
-    ]
     return "\n".join(lines)
 
 
@@ -1069,8 +1097,18 @@ def device_speed(docs: Path) -> str:
 def device_value(docs: Path, key: str) -> str:
     """A figure of ``python -m benchmarks.speed.device`` (results/perf/device.json):
     ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS), ``ratio.BACKEND.BACKEND.
-    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference``, ``device``, and
+    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference``, ``device`` (its
+    name), ``device-id``, ``tolerance``, ``scenario``, ``machine``, and
     ``checks.FIELD`` a field of results/perf/device-checks.json."""
+    if key in ("device-id", "tolerance", "scenario", "machine"):  # the run's own fields
+        record = read_json(docs, DEVICE_FILE)
+        field = {
+            "device-id": "device",
+            "tolerance": "tolerance",
+            "scenario": "scenario",
+            "machine": "machine",
+        }[key]
+        return f"{record[field]:.0e}" if key == "tolerance" else str(record[field])
     if key.startswith("checks."):  # results/perf/device-checks.json: the claims study on both
         checks = read_json(docs, DEVICE_CHECKS_FILE)
         field = key.split(".", 1)[1]
@@ -1138,12 +1176,6 @@ def ppo_training_rate(docs: Path) -> str:
         lines.append(
             f"| {'SB3 PPO' if learner == 'sb3' else learner} | {where} | " + " | ".join(cells) + " |"
         )
-    lines += [
-        "",
-        f"Env steps per second of training, each rollout with its update, the first rollout untimed; "
-        f"{record['scenario']}, rollouts of {record['rows'][0]['n_steps']} steps per trial, eight "
-        "minibatches per epoch; the device's peak memory in brackets.",
-    ]
     return "\n".join(lines)
 
 
@@ -1151,7 +1183,11 @@ def ppo_training_rate(docs: Path) -> str:
 def training_value(docs: Path, key: str) -> str:
     """A figure of the PPO training benchmark (results/perf/training.json): ``rate.LEARNER.DEVICE.B``
     and ``ratio.LEARNER.DEVICE.B.LEARNER.DEVICE.B`` (the first's rate over the second's); or of
-    the 48 device trainings (results/perf/torch-ppo-trainings.json): ``trainings.FIELD``."""
+    the 48 device trainings (results/perf/torch-ppo-trainings.json): ``trainings.FIELD``; the
+    benchmark's ``scenario`` and ``n-steps`` (a rollout's steps per trial)."""
+    if key in ("scenario", "n-steps"):
+        record = read_json(docs, TRAINING_FILE)
+        return record["scenario"] if key == "scenario" else str(record["rows"][0]["n_steps"])
     if key.startswith("trainings."):
         record = read_json(docs, TRAININGS_FILE)
         field = key.split(".", 1)[1]
@@ -1222,13 +1258,6 @@ def strong_scaling(docs: Path) -> str:
                 f"| {machine} | {record['model_from_workers']} workers | {m['workers']} | "
                 f"{m['shard_size']} | {m['wall_s']:.1f} | {'—' if seen is None else f'{seen:.1f}'} |"
             )
-    first = read_json(docs, SCALING_FILES["2 cores"])
-    lines += [
-        "",
-        f"`{' '.join(first['study'])}`, each run a fresh command into a fresh folder; efficiency against "
-        "the fewest workers measured on that machine; the worker-seconds (workers x wall) split as the "
-        "module docstring of `benchmarks/speed/strong_scaling.py` says.",
-    ]
     return "\n".join(lines)
 
 
@@ -1239,7 +1268,10 @@ def scaling_value(docs: Path, key: str) -> str:
     ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker), ``MACHINE.before.W``
     and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
-    shard size of the count the model starts from), MACHINE a key of :data:`SCALING_MACHINES`."""
+    shard size of the count the model starts from), MACHINE a key of :data:`SCALING_MACHINES`;
+    ``study`` the study's command (as code)."""
+    if key == "study":
+        return f"`{' '.join(read_json(docs, SCALING_FILES['2 cores'])['study'])}`"
     machine, kind, workers = key.split(".")
     if machine not in SCALING_MACHINES:
         raise BenchError(f"unknown strong-scaling run {machine!r}: {', '.join(SCALING_MACHINES)}")
@@ -1299,16 +1331,24 @@ def planning_cost(docs: Path) -> str:
         target = f"<= {record['target_ratio']:g}: {verdict}" if policy.endswith("-beam") else "-"
         ms = figures.get(f"{policy}_ms_per_step")  # recorded since the planners' times are kept too
         lines.append(f"| `{policy}` | {'-' if ms is None else f'{ms:.1f}'} | {value:.2f} | {target} |")
-    machine = record["machine"]
-    lines += [
-        "",
-        f"best-tracking takes {figures['best-tracking_ms_per_step']:.1f} ms per step on {record['trials']} "
-        f"trials of `{record['scenario']}` (median of {record['steps']} steps after a warm-up); "
-        f"`{record['command']}` on "
-        f"{machine['cores']} cores ({machine['machine']}, Python {machine['python']}), load average "
-        f"{machine['load_average_1min']} before and {record['load_average_1min_after']} after.",
-    ]
     return "\n".join(lines)
+
+
+@values("planning-cost")
+def planning_cost_values(docs: Path) -> dict[str, str]:
+    """planning_cost.json's run: best-tracking's ``ms`` per step, ``trials``, ``scenario`` (as
+    code), ``steps``, ``command`` (as code), ``machine``, ``load-before`` and ``load-after``."""
+    record = read_json(docs, "perf/planning_cost.json")
+    return {
+        "ms": f"{record['figures']['best-tracking_ms_per_step']:.1f}",
+        "trials": str(record["trials"]),
+        "scenario": f"`{record['scenario']}`",
+        "steps": str(record["steps"]),
+        "command": f"`{record['command']}`",
+        "machine": _machine(record["machine"]),
+        "load-before": str(record["machine"]["load_average_1min"]),
+        "load-after": str(record["load_average_1min_after"]),
+    }
 
 
 @generator("planning-tables")
@@ -1558,11 +1598,6 @@ def ablations_asr(docs: Path) -> str:
             + " | ".join(cells)
             + f" | {paper:.2f} |"
         )
-    trials = {e["trials"] for e in scenarios.values()}
-    lines += [
-        "",
-        f"{', '.join(map(str, sorted(trials)))} trials per scenario, paired on the claims study's trials.",
-    ]
     return "\n".join(lines)
 
 
@@ -1574,7 +1609,21 @@ ABLATION_VARIANTS = {"paper": "paper", "exact": "mg-crb-cl, exact solver"}
 def ablations_value(docs: Path, key: str) -> str:
     """``SCENARIO.VARIANT.METRIC`` of ablations.json's ``asr`` entries: MG-CRB-CL's ``asr`` or
     ``final_regret`` with its interval, VARIANT ``paper`` (the paper's BPSO) or ``exact`` (the
-    exact solver)."""
+    exact solver); ``trials`` (every scenario's), ``crossing`` (the step from which UCB1's mean
+    regret stays above epsilon-greedy's, Scenario 1), ``rising`` of ``super-arms`` (with a higher
+    mean reward over 400-500 s than over 300-400 s, Scenario 2) and ``best-changes`` (how often
+    the best super arm changes over 300-500 s)."""
+    a = read_json(docs, ABLATIONS)
+    if key == "trials":
+        return _claims([str(t) for t in sorted({e["trials"] for e in _ablation_scenarios(a).values()})])
+    if key == "crossing":
+        crossing = a["paper-1-v1"]["exploration"]["crossing"]
+        if not crossing:
+            raise BenchError(f"{ABLATIONS}: UCB1's mean regret now ends below epsilon-greedy's")
+        return str(crossing)
+    maneuver = {"rising": "super_arms_rising", "super-arms": "super_arms", "best-changes": "best_arm_changes"}
+    if key in maneuver:
+        return str(a["paper-2-v1"]["maneuver"][maneuver[key]])
     scenario, variant, metric = key.split(".")
     try:
         judged = read_json(docs, ABLATIONS)[scenario]["asr"][ABLATION_VARIANTS[variant]][metric]
@@ -1602,14 +1651,6 @@ def ablations_s17(docs: Path) -> str:
             + " | ".join(format_judged(row[k], "{:.0f}") for k in (*keys, "ucb1_minus_epsilon_greedy"))
             + " |"
         )
-    crossing = entry["crossing"]
-    lines += [
-        "",
-        "UCB1's mean regret stays above epsilon-greedy's from step "
-        f"{crossing} on (the paper: they cross near 455 s)."
-        if crossing
-        else "UCB1's mean regret ends below epsilon-greedy's.",
-    ]
     return "\n".join(lines)
 
 
@@ -1655,13 +1696,6 @@ def ablations_s22(docs: Path) -> str:
             f"| {format_judged(row['below_best_before_db'], '{:.2f}')} "
             f"| {format_judged(row['below_best_after_db'], '{:.2f}')} |"
         )
-    lines += [
-        "",
-        f"Along the true track, {m['super_arms_rising']} of the {m['super_arms']} super arms have a higher "
-        "mean reward over 400-500 s than over 300-400 s; the best super arm changes "
-        + ("once" if m["best_arm_changes"] == 1 else f"{m['best_arm_changes']} times")
-        + " over 300-500 s.",
-    ]
     return "\n".join(lines)
 
 
@@ -1669,124 +1703,97 @@ def _m(judged: dict, fmt: str = "{:.2f}", scale: float = 1.0) -> str:
     return format_judged(judged, fmt, scale)
 
 
-@generator("mechanisms-per-claim")
-def mechanisms_per_claim(docs: Path) -> str:
+def _require(shown: bool, statement: str) -> None:
+    """Refuse to fill a page whose sentence ``statement`` the artefacts no longer show."""
+    if not shown:
+        raise BenchError(f"the artefacts no longer show that {statement}: rewrite the sentence that says so")
+
+
+@values("per-claim")
+def per_claim_values(docs: Path) -> dict[str, str]:
     """One measured mechanism per claim contradicted under v1, from mechanisms.json and
-    ablations.json (the sections below give the tables); each lead phrase is said only where the
-    intervals show it."""
+    ablations.json; each lead phrase of the page is checked against its intervals (``CLAIM``: its
+    v1 verdict). S1.7 (Scenario 1's exploration at ``S1.7.at`` s): ``S1.7.ucb1`` and
+    ``S1.7.epsilon-greedy`` above the greedy core, ``S1.7.crossing``. S1.8, per window W (1, 2,
+    ...): ``S1.8.W.span``, ``.extreme`` (lowest or highest), ``.top`` the policy of the extreme
+    bound and ``.top-bound``, ``.claimed`` the claim's policy and ``.claimed-bound``, ``.worst``
+    the policy of the extreme ARMSE, ``.ratio-worst`` and ``.ratio-top`` (ARMSE / bound);
+    ``S1.8.follow`` of ``S1.8.windows``. Per ARMSE claim: ``CLAIM.follow`` of ``CLAIM.compared``,
+    ``CLAIM.broken-follow`` of ``CLAIM.broken``. Per ASR claim: ``CLAIM.greedy`` and
+    ``CLAIM.greedy-gain``, ``CLAIM.paper``, ``CLAIM.exact-gain``, ``CLAIM.memory-gain``,
+    ``CLAIM.cap`` with ``CLAIM.width``. S2.2: ``S2.2.rising`` of ``S2.2.super-arms``,
+    ``S2.2.POLICY`` the SINR change of fix1, fix2, best, mg-crb-cl, ``S2.2.behind-before`` and
+    ``S2.2.behind-after``."""
     a = read_json(docs, ABLATIONS)
     m = read_json(docs, MECHANISMS)
-    v1 = _verdicts(docs, SCORECARDS["v1"])
-    rows = ["| claim | v1 | mechanism, measured (v1, eq22 average fusion) |", "|---|---|---|"]
-    rows += [_exploration_row(a, v1), _windows_row(a, v1), *_armse_rows(m, v1), *_asr_rows(a, m, v1)]
-    rows.append(_maneuver_row(a, v1))
-    return "\n".join(rows)
-
-
-def _exploration_row(a: dict, v1: dict) -> str:
-    """S1.7: what exploring costs UCB1 and epsilon-greedy."""
+    table = dict(_verdicts(docs, SCORECARDS["v1"]))
     explore = a["paper-1-v1"]["exploration"]
     at = min(explore["at"], key=int)
     early = explore["at"][at]
-    lead = (
-        "Exploring costs UCB1 more than epsilon-greedy from the start"
-        if early["ucb1_minus_epsilon_greedy"]["ci"][0] > 0
-        else "Exploring costs"
-    )
-    crossing = explore["crossing"]
-    return (
-        f"| S1.7 | {v1['S1.7']} | {lead}: by {at} s UCB1's regret is above its greedy core's (UCB1 with "
-        f"beta = 0) by {_m(early['ucb1_minus_greedy'], '{:.0f}')}, epsilon-greedy's by "
-        f"{_m(early['epsilon_greedy_minus_greedy'], '{:.0f}')}"
-        + (f"; UCB1's mean regret stays above epsilon-greedy's from step {crossing} on" if crossing else "")
-        + " |"
-    )
-
-
-def _windows_row(a: dict, v1: dict) -> str:
-    """S1.8: in each window, whether the extreme ARMSE is the extreme bound's."""
+    _require(early["ucb1_minus_epsilon_greedy"]["ci"][0] > 0, "exploring costs UCB1 more from the start")
+    _require(bool(explore["crossing"]), "UCB1's mean regret stays above epsilon-greedy's")
+    table |= {
+        "S1.7.at": at,
+        "S1.7.ucb1": _m(early["ucb1_minus_greedy"], "{:.0f}"),
+        "S1.7.epsilon-greedy": _m(early["epsilon_greedy_minus_greedy"], "{:.0f}"),
+        "S1.7.crossing": str(explore["crossing"]),
+    }
     windows = a["paper-1-v1"]["rmse_windows"]
-    parts = []
-    for row in windows:
-        lo, hi = row["window"]
-        claimed, extreme, top, worst = (
-            row["policy"],
-            row["extreme"],
-            row["bound_extreme"],
-            row["armse_extreme"],
-        )
-
-        def ratio(p: str, row: dict = row) -> str:
-            return _m(row["armse_over_bound"][p])
-
-        text = f"over {lo}-{hi} s the {extreme} bound is {top}'s ({_m(row['bound'][top])} m"
-        text += f"; {claimed}'s {_m(row['bound'][claimed])} m)" if top != claimed else ")"
-        if worst == top:
-            text += " and so is the ARMSE"
-        else:
-            text += (
-                f", the {extreme} ARMSE {worst}'s (ARMSE / bound {ratio(worst)} against {top}'s {ratio(top)})"
-            )
-        parts.append(text)
-    follow = sum(r["armse_extreme"] == r["bound_extreme"] for r in windows)
-    return (
-        f"| S1.8 | {v1['S1.8']} | The windows' extreme ARMSE is the extreme bound's in {follow} of "
-        f"{len(windows)} windows: " + "; ".join(parts) + " |"
-    )
-
-
-def _armse_rows(m: dict, v1: dict) -> list[str]:
-    """The ARMSE claims: how many comparisons go the way the position bounds go."""
-    s = m["armse_summary"]
-    rows = []
+    for w, row in enumerate(windows, 1):
+        top, claimed, worst = row["bound_extreme"], row["policy"], row["armse_extreme"]
+        table |= {
+            f"S1.8.{w}.span": "-".join(map(str, row["window"])),
+            f"S1.8.{w}.extreme": row["extreme"],
+            f"S1.8.{w}.top": top,
+            f"S1.8.{w}.top-bound": _m(row["bound"][top]),
+            f"S1.8.{w}.claimed": claimed,
+            f"S1.8.{w}.claimed-bound": _m(row["bound"][claimed]),
+            f"S1.8.{w}.worst": worst,
+            f"S1.8.{w}.ratio-worst": _m(row["armse_over_bound"][worst]),
+            f"S1.8.{w}.ratio-top": _m(row["armse_over_bound"][top]),
+        }
+    table["S1.8.windows"] = str(len(windows))
+    table["S1.8.follow"] = str(sum(r["armse_extreme"] == r["bound_extreme"] for r in windows))
     for claim in ("S1.9", "S2.4", "S3.2", "S3.3"):
         mine = [r for r in m["armse_comparisons"] if r["claim"] == claim]
         broken = [r for r in mine if r["verdict"] == "contradicted"]
-        rows.append(
-            f"| {claim} | {v1[claim]} | {sum(r['follows_bound'] for r in mine)} of its {len(mine)} ARMSE "
-            f"comparisons go the way the two policies' position bounds go "
-            f"({sum(r['follows_bound'] for r in broken)} of the {len(broken)} contradicted; over all the "
-            f"claims {s['follow_bound']} of {s['comparisons']}) |"
-        )
-    return rows
-
-
-def _asr_rows(a: dict, m: dict, v1: dict) -> list[str]:
-    """The ASR claims: MG-CRB-CL's ASR without eq18's optimism, and the probing oracle's cap."""
-    rows = []
+        table |= {
+            f"{claim}.follow": str(sum(r["follows_bound"] for r in mine)),
+            f"{claim}.compared": str(len(mine)),
+            f"{claim}.broken-follow": str(sum(r["follows_bound"] for r in broken)),
+            f"{claim}.broken": str(len(broken)),
+        }
     for scenario, claim in ASR_CLAIM_OF.items():
         asr = a[scenario]["asr"]
         greedy = asr["mg-crb-cl, exact, beta = 0"]
-        cap_width, cap = _best_window(m["lead"][scenario], "probing_window_oracle_asr")
-        lead = "eq18's optimism keeps MG-CRB-CL's ASR low: " if greedy["asr_minus_paper"]["ci"][0] > 0 else ""
-        rows.append(
-            f"| {claim} | {v1[claim]} | {lead}without it (beta = 0, exact solver) the ASR is "
-            f"{_m(greedy['asr'], '{:.1f}', 100)} % ({_pp(greedy['asr_minus_paper'])} pp over the paper's "
-            f"MG-CRB-CL, {_m(asr['paper']['asr'], '{:.1f}', 100)} %); the exact solver alone moves it by "
-            f"{_pp(asr['mg-crb-cl, exact solver']['asr_minus_paper'])} pp, a longer memory "
-            f"(alpha_bar = 0.05) by {_pp(asr['mg-crb-cl, exact, alpha_bar = 0.05']['asr_minus_paper'])} pp; "
-            f"the probing window oracle's cap is {_m(cap, '{:.1f}', 100)} % (W = {cap_width}) |"
+        _require(
+            greedy["asr_minus_paper"]["ci"][0] > 0, f"eq18's optimism keeps MG-CRB-CL's ASR low in {claim}"
         )
-    return rows
-
-
-def _maneuver_row(a: dict, v1: dict) -> str:
-    """S2.2: the SINR before and after the maneuver."""
+        width, cap = _best_window(m["lead"][scenario], "probing_window_oracle_asr")
+        table |= {
+            f"{claim}.greedy": _m(greedy["asr"], "{:.1f}", 100),
+            f"{claim}.greedy-gain": _pp(greedy["asr_minus_paper"]),
+            f"{claim}.paper": _m(asr["paper"]["asr"], "{:.1f}", 100),
+            f"{claim}.exact-gain": _pp(asr["mg-crb-cl, exact solver"]["asr_minus_paper"]),
+            f"{claim}.memory-gain": _pp(asr["mg-crb-cl, exact, alpha_bar = 0.05"]["asr_minus_paper"]),
+            f"{claim}.cap": _m(cap, "{:.1f}", 100),
+            f"{claim}.width": str(width),
+        }
     man = a["paper-2-v1"]["maneuver"]
     pol = man["policies"]
     mg = pol["mg-crb-cl"]
-    behind = mg["below_best_after_db"]["ci"][0] > mg["below_best_before_db"]["ci"][1]
-    rising = [p for p in ("fix1", "fix2") if pol[p]["change_db"]["ci"][0] > 0]
-    among = {2: "fix1's and fix2's among them", 1: f"{''.join(rising)}'s among them", 0: "neither fixed one"}
-    return (
-        f"| S2.2 | {v1['S2.2']} | Along the true track {man['super_arms_rising']} of the {man['super_arms']} "
-        f"super arms gain mean reward after the maneuver, {among[len(rising)]} (their SINR changes by "
-        f"{_m(pol['fix1']['change_db'], '{:+.2f}')} and {_m(pol['fix2']['change_db'], '{:+.2f}')} dB); "
-        f"Best's SINR changes by {_m(pol['best']['change_db'], '{:+.2f}')} dB, MG-CRB-CL's by "
-        f"{_m(mg['change_db'], '{:+.2f}')} dB; MG-CRB-CL's SINR below Best's goes from "
-        f"{_m(mg['below_best_before_db'])} to {_m(mg['below_best_after_db'])} dB"
-        + (": it falls further behind Best after the maneuver |" if behind else " |")
+    _require(all(pol[p]["change_db"]["ci"][0] > 0 for p in ("fix1", "fix2")), "fix1 and fix2 gain SINR")
+    _require(
+        mg["below_best_after_db"]["ci"][0] > mg["below_best_before_db"]["ci"][1], "MG-CRB-CL falls behind"
     )
+    table |= {
+        "S2.2.rising": str(man["super_arms_rising"]),
+        "S2.2.super-arms": str(man["super_arms"]),
+        "S2.2.behind-before": _m(mg["below_best_before_db"]),
+        "S2.2.behind-after": _m(mg["below_best_after_db"]),
+    }
+    table |= {f"S2.2.{p}": _m(pol[p]["change_db"], "{:+.2f}") for p in ("fix1", "fix2", "best", "mg-crb-cl")}
+    return table
 
 
 # ------------------------------------------------------------------ the global layout search
