@@ -1,5 +1,7 @@
-"""The generators of the docs' blocks (:mod:`benchmarks.docs_tooling.pages`), one per table or set of
-numbers, each reading the committed artefacts it names under ``docs/results``."""
+"""What the docs' pages quote (:mod:`benchmarks.docs_tooling.pages`): a generator per table, and
+a value source or value table per set of values (numbers, intervals, verdicts, computed lists),
+each reading the committed artefacts it names under ``docs/results``. The sentences around them
+are written in the pages."""
 
 from __future__ import annotations
 

@@ -1,27 +1,27 @@
-"""The docs' generated blocks: every table and number that reports a measurement is written by
-code from a committed artefact, never by hand.
+"""The docs' filler: the pages hold the sentences; every table and value that reports a
+measurement is filled from a committed artefact, never typed by hand.
 
-A page marks a generated block with two HTML comments (invisible on the site)::
+A page marks a table with two HTML comments (invisible on the site)::
 
     <!-- generated: claims-verdicts -->
     ...written by the generator "claims-verdicts"...
     <!-- end generated -->
 
-``mimo-radar-bench docs`` rewrites every block of every page of ``--docs`` from the artefacts
-under ``DOCS/results``; ``--check`` changes nothing and fails, naming the blocks, where a page
-differs from what the artefacts give (CI runs it). A generator is a function of the docs folder
-registered with :func:`benchmarks.docs_tooling.generators.generator`; each names the artefacts it reads.
-
-A number quoted in a sentence is a *value span* on one line::
+and a value in one of its sentences (a number, an interval, a verdict, a computed list) as a
+*value span* on one line::
 
     optimal in <!-- value: model greedy-optimal-average -->99.0 % [96.4, 99.7]<!-- end value -->
 
-which the same command fills from the artefact of the source (``model``: the figures of
-``mimo-radar-bench model-figures``, :mod:`benchmarks.model_figures`), formatted with its 95 %
-interval where it has one. Outside generated blocks and value spans, a number shaped like a
-measurement (a decimal percentage, duration or interval, a ratio such as ``1.7x`` or
-``1.19 times``) is an error: :func:`unsourced_numbers` finds them, and ``--check`` fails on
-any. Constants of the model are written as code (```[0.2, 1.2]```), which the check skips.
+``mimo-radar-bench docs`` rewrites every block and value of every page of ``--docs`` from the
+artefacts under ``DOCS/results``; ``--check`` changes nothing and fails, naming the pages, where
+one differs from what the artefacts give (CI runs it). Generators, value sources and value
+tables (:func:`benchmarks.docs_tooling.generators.values`: every value of one finding by key)
+are registered in :mod:`benchmarks.docs_tooling.generators`; each names the artefacts it reads.
+
+Outside generated blocks and value spans, a number shaped like a measurement (a decimal
+percentage, duration or interval, a ratio such as ``1.7x`` or ``1.19 times``) is an error:
+:func:`unsourced_numbers` finds them, and ``--check`` fails on any. Constants of the model are
+written as code (```[0.2, 1.2]```), which the check skips.
 """
 
 from __future__ import annotations
