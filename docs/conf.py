@@ -69,5 +69,13 @@ def _env_docstring(app, what, name, obj, options, lines) -> None:
 _write_env_page()
 
 
+def _data_pages_are_orphans(app, docname, source) -> None:
+    """The studies' own report pages under results/ are reached from their study's page, not
+    listed in the sidebar: mark them orphans (in no toctree, by design)."""
+    if docname.startswith("results/") and not source[0].startswith("---"):
+        source[0] = "---\norphan: true\n---\n" + source[0]
+
+
 def setup(app):
     app.connect("autodoc-process-docstring", _env_docstring)
+    app.connect("source-read", _data_pages_are_orphans)

@@ -6,6 +6,7 @@ are written in the pages."""
 from __future__ import annotations
 
 import json
+import re
 import shlex
 from collections.abc import Callable
 from pathlib import Path
@@ -161,10 +162,30 @@ def every_scorecard(docs: Path) -> dict[str, dict[str, str]]:
     return cards | {f["name"]: f["verdicts"] for f in _long_scorecards(docs)}
 
 
+#: The readings table's first columns: the default, then its centralised fusion (then from the
+#: last change back to v0).
+READING_COLUMNS = ("v1", "v1, centralised")
+#: A verdict in a table too wide for the words (the page gives the legend).
+SHORT_VERDICTS = {verdicts.HOLDS: "H", verdicts.CONSISTENT: "c", verdicts.CONTRADICTED: "X"}
+
+
 @generator("readings")
 def readings(docs: Path) -> str:
-    """The verdicts under each single reading change (the columns build on one another)."""
-    return claims.comparison_markdown(_scorecards(docs, READINGS), claim_text=False)
+    """The verdicts under each single reading change, the default (v1) first, then its
+    centralised fusion, then back to v0 one change at a time, each verdict by its letter
+    (:data:`SHORT_VERDICTS`)."""
+    read = _scorecards(docs, READINGS)
+    labels = [*READING_COLUMNS, *(label for label in reversed(read) if label not in READING_COLUMNS)]
+    cards = {label: _by_claim(read[label]) for label in labels}
+    lines = ["| claim | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    for claim in cards["v1"]:
+        lines.append(
+            f"| {claim} | " + " | ".join(SHORT_VERDICTS[cards[label][claim]] for label in labels) + " |"
+        )
+    for verdict in verdicts.VERDICTS:
+        counts = [str(verdicts.count(cards[label].values())[verdict]) for label in labels]
+        lines.append(f"| **{verdict}** | " + " | ".join(counts) + " |")
+    return "\n".join(lines)
 
 
 #: Each change of the readings table: its key in the values ``readings`` -> (its column, the
@@ -480,7 +501,70 @@ def summary_values(docs: Path) -> dict[str, str]:
     for n in (1, 2, 3):
         table[f"asr.{n}"] = f"{100 * study_summary(docs, n, 'average')['policies']['mg-crb-cl']['asr']:.1f}"
         table[f"paper-asr.{n}"] = f"{PAPER_ASR[f'paper-{n}']['mg-crb-cl']:.1f}"
-    return table
+    return table | _rests_on(docs) | _missed_targets(docs)
+
+
+def _one(values: set[Any], what: str) -> str:
+    """The one value ``values`` hold (every study of a kind ran the same count), as text."""
+    if len(values) != 1:
+        raise BenchError(f"the studies' {what} differ: {sorted(values)}")
+    return str(next(iter(values)))
+
+
+def _rests_on(docs: Path) -> dict[str, str]:
+    """What each study's results rest on: ``claims.trials``, ``tracking.trials``,
+    ``rl.trials`` and ``rl.seeds`` (seeds per learner), ``planning.trials``, ``screen.trials``
+    (the layout screen) and ``scorecards`` (master seeds of v1's scorecard)."""
+    rl = read_json(docs, "rl/rl.json")
+    seeds: dict[int, list[str]] = {}
+    for key, row in rl["scenarios"][0]["learners"].items():
+        seeds.setdefault(row["seeds"], []).append(f"`{key}`")
+    return {
+        "claims.trials": _one(
+            {study_summary(docs, n, f)["trials"] for n in (1, 2, 3) for f in FUSION_LABELS}, "trials"
+        ),
+        "tracking.trials": _one({s["trials"] for s in tracking_summaries(docs).values()}, "trials"),
+        "rl.trials": _one({e["trials"] for e in rl["scenarios"]}, "trials"),
+        "rl.seeds": "; ".join(
+            f"{n} for {', '.join(keys)}" for n, keys in sorted(seeds.items(), reverse=True)
+        ),
+        "planning.trials": _one({r["trials"] for r in read_json(docs, "planning/planning.json")}, "trials"),
+        "screen.trials": str(read_json(docs, LAYOUT_TOP)["trials"]),
+        "scorecards": str(len(SEED_SCORECARDS)),
+    }
+
+
+def _missed_targets(docs: Path) -> dict[str, str]:
+    """The speed targets missed: ``missed`` the figures of perf.json below their target (each
+    with its value and target), and the beam planner's act time as a multiple of
+    best-tracking's (``beam``) against its target (``beam.target``)."""
+    from ..speed.perf import TARGETS, format_value, target_met
+
+    results = read_json(docs, "perf/perf.json")
+    missed = [
+        f"`{key}` {format_value(results[key])} (target {op} {bound:g})"
+        for key, (op, bound) in TARGETS.items()
+        if key in results and not target_met(key, results[key])
+    ]
+    cost = read_json(docs, "perf/planning_cost.json")
+    return {
+        "missed": _claims(missed),
+        "beam": f"{cost['figures']['plan-tracking:10-beam_over_best_tracking']:.0f}",
+        "beam.target": f"{cost['target_ratio']:g}",
+    }
+
+
+@generator("results-summary")
+def results_summary(docs: Path) -> str:
+    """The README's copy of the summary of docs/results.md (between ``<!-- summary -->`` and
+    ``<!-- end summary -->``), its links made relative to the repository's root; the page is
+    the summary's one home."""
+    text = (docs / "results.md").read_text()
+    start, end = "<!-- summary -->\n", "<!-- end summary -->"
+    if start not in text or end not in text:
+        raise BenchError(f"{docs / 'results.md'} has no {start.strip()} ... {end} section")
+    summary = text.split(start, 1)[1].split(end, 1)[0]
+    return re.sub(r"\]\((?!https?:|#)([^)]+)\)", lambda m: f"]({docs.name}/{m.group(1)})", summary)
 
 
 #: The timing artefacts of the studies the page reports: label -> file.
@@ -790,7 +874,7 @@ def rl_tables(docs: Path) -> str:
 
     text = rl_markdown(read_json(docs, "rl/rl.json"))
     body = text.split("\n", 2)[2].lstrip("\n")  # the page has its own heading
-    return body.replace("\n## ", "\n### ").rstrip("\n")
+    return body.rstrip("\n")
 
 
 #: The verdicts of a learner-minus-X ARMSE interval, by their keys in the values ``rl``.
@@ -1361,7 +1445,7 @@ def planning_tables(docs: Path) -> str:
 
     text = planning_markdown(read_json(docs, "planning/planning.json"))
     body = text.split("\n", 2)[2].lstrip("\n")
-    return body.replace("\n## ", "\n### ").rstrip("\n")
+    return body.rstrip("\n")
 
 
 def _run_where(run: dict) -> str:
@@ -1929,7 +2013,6 @@ def layout_sensitivity(docs: Path) -> str:
     found = read_json(docs, LAYOUT_TOP)
     finalists = [f for f in found["finalists"] if f["name"] != "v1"]
     claims_ids = list(finalists[0]["verdicts"])
-    short = {"holds": "H", "consistent": "c", "contradicted": "X"}
     lines = [
         "| claim | " + " | ".join(str(i + 1) for i in range(len(finalists))) + " | holds in |",
         "|---|" + "---|" * len(finalists) + "---|",
@@ -1937,7 +2020,9 @@ def layout_sensitivity(docs: Path) -> str:
     for claim in claims_ids:
         row = [f["verdicts"][claim] for f in finalists]
         lines.append(
-            f"| {claim} | " + " | ".join(short[v] for v in row) + f" | {row.count('holds')} of {len(row)} |"
+            f"| {claim} | "
+            + " | ".join(SHORT_VERDICTS[v] for v in row)
+            + f" | {row.count('holds')} of {len(row)} |"
         )
     lines.append("| **holds** | " + " | ".join(str(f["counts"]["holds"]) for f in finalists) + " | |")
     long = {int(f["name"].rsplit("-", 1)[1]): f for f in _long_scorecards(docs)}

@@ -18,7 +18,7 @@ learners with one parameter changed (:data:`VARIANTS`). Every comparison is pair
   every policy's SINR change (400-500 s against 300-400 s), its SINR below Best's before and
   after, and how many super arms gain mean reward along the true track (v1's truth is shared).
 
-Results go to ``OUT/ablations.json``; ``python -m benchmarks docs`` writes results.md's tables
+Results go to ``OUT/ablations.json``; ``python -m benchmarks docs`` writes results-claims.md's tables
 from the committed copy.
 """
 

@@ -411,7 +411,7 @@ class ClaimsStudy(Study):
     name = "claims"
     min_trials = 2
     description = (
-        "Evaluate the paper's claims (docs/results.md) on finished 'paper' runs, or run the paper "
+        "Evaluate the paper's claims (docs/results-claims.md) on finished 'paper' runs, or run the paper "
         "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."
     )
     paper_study = True

@@ -11,7 +11,7 @@ Layouts are scored on v1's paper scenarios (``paper-k-v1`` with the layout's sta
 objective is cheap and noise-free (about ten layouts a second here): the number of the claims'
 noise-free predictors that hold (:func:`predictors`), with the smallest median lead of the best
 super arm in Scenarios 2 and 3 as a tie-break (a dominant best super arm is what the paper's
-ASR needs, docs/results.md). The best ``--final`` layouts of the last population and v1's own
+ASR needs, docs/results-claims.md). The best ``--final`` layouts of the last population and v1's own
 layout (layout 116 of the calibration) then get full scorecards (``claims.scorecard``, v1's
 paper study, ``--trials``), and every predictor with a scorecard comparison of its own is
 checked against it (:data:`PREDICTED`, :func:`agreement`).

@@ -31,7 +31,7 @@
 Part 1 runs the env under v1's options (its truth and mean SINR only: no tracker, no policy); part 2 reads the
 claims study's results (``--claims``, ``--summaries``: the committed v1 average-fusion ones by
 default). Results go to ``OUT/mechanisms.json``; ``python -m benchmarks docs`` writes the tables
-of docs/results.md from the committed copy.
+of docs/results-claims.md from the committed copy.
 """
 
 from __future__ import annotations

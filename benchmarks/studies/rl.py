@@ -57,11 +57,11 @@ TRAININGS = (
 DEVICE_TRAININGS = (("torch-ppo", "sinr", "ppo_seeds"), ("torch-ppo", "information", "ppo_seeds"))
 PPO_SEEDS = 5
 #: Seeds per learner with ``--device``: at 3-5 seeds a percentile bootstrap over seeds covers
-#: only about 76-84 % (docs/results.md); at 10 it covers closer to its 95 %.
+#: only about 76-84 % (docs/results-rl.md); at 10 it covers closer to its 95 %.
 DEVICE_PPO_SEEDS = 10
 CONTRIB_SEEDS = 3
 #: Timesteps per training: the whole study (48 trainings and their evaluation) fits in about
-#: two hours of a 2-core machine (docs/results.md states the wall time measured).
+#: two hours of a 2-core machine (docs/results-rl.md states the wall time measured).
 DEFAULT_TIMESTEPS = 600_000
 #: With ``--device``, the ``device`` hyperparameter entry (4,096 trials at once) and a budget of
 #: two 1,000-step episodes per trial (600,000 steps would play 146 steps of each).

@@ -8,7 +8,7 @@ targets below on paired differences with their 95 % intervals, writes ``DIR/targ
 ``DIR/targets.json``, draws ``DIR/tradeoff_<scenario>.png`` (final SINR regret against ARMSE,
 both fusions) and prints the targets. Runs resume like every run of the harness.
 
-Targets (docs/results.md, "Selecting for tracking"):
+Targets (docs/results-tracking.md):
 
 * ``best-tracking`` has a lower ARMSE than Best and every SINR-driven policy (the paper's
   six, :data:`~benchmarks.harness.PAPER_POLICIES`);

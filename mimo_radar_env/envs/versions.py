@@ -132,7 +132,7 @@ class ScenarioSet:
         return self.paper_scenarios[number - 1]
 
 
-#: Named calibrations shipped as scenario sets (docs/results.md, "A global layout search").
+#: Named calibrations shipped as scenario sets (docs/results-layouts.md, "A global layout search").
 SCENARIO_SETS: dict[str, ScenarioSet] = {
     s.name: s
     for s in (

@@ -31,9 +31,9 @@ def test_a_changed_artefact_number_fails_the_check(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "-| 116 (adopted) | 10 / 2 / 10 | 11 / 1 / 10 |" in out
     assert "+| 116 (adopted) | 10 / 2 / 10 | 12 / 1 / 10 |" in out
-    before = (docs / "results.md").read_text()
+    before = (docs / "results-layouts.md").read_text()
     assert main(["docs", "--docs", str(docs)]) == 0  # regenerating writes the new number
-    after = (docs / "results.md").read_text()
+    after = (docs / "results-layouts.md").read_text()
     assert after != before and "| 116 (adopted) | 10 / 2 / 10 | 12 / 1 / 10 |" in after
     assert main(["docs", "--docs", str(docs), "--check"]) == 0
 

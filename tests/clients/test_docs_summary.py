@@ -1,0 +1,73 @@
+"""The results summary's computed statements (docs/results.md, and the README's copy): each
+changes when an artefact it must cover changes."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from benchmarks.docs_tooling import generators
+from benchmarks.errors import BenchError
+
+DOCS = Path(__file__).resolve().parents[2] / "docs"
+
+
+@pytest.fixture
+def docs(tmp_path):
+    copy = tmp_path / "docs"
+    shutil.copytree(DOCS, copy, ignore=shutil.ignore_patterns("*.png", "_build"))
+    return copy
+
+
+def edit(docs, relative, change):
+    path = docs / "results" / relative
+    record = json.loads(path.read_text())
+    change(record)
+    path.write_text(json.dumps(record))
+
+
+def test_the_missed_targets_are_every_figure_below_its_target(docs):
+    from benchmarks.speed.perf import TARGETS, target_met
+
+    perf = json.loads((docs / "results/perf/perf.json").read_text())
+    missed = [key for key in TARGETS if key in perf and not target_met(key, perf[key])]
+    table = generators.summary_values(docs)
+    assert [key for key in TARGETS if f"`{key}`" in table["missed"]] == missed
+    edit(
+        docs,
+        "perf/perf.json",
+        lambda r: r.update(bpso_speedup_vs_reference_xor=6.0, tracking_study_wall_s=1e4),
+    )
+    again = generators.summary_values(docs)["missed"]
+    assert "bpso_speedup_vs_reference_xor" not in again and again.startswith("`tracking_study_wall_s`")
+
+
+def test_the_sample_sizes_are_read_from_every_study(docs):
+    table = generators.summary_values(docs)
+    assert (table["claims.trials"], table["tracking.trials"], table["planning.trials"]) == (
+        "500",
+        "200",
+        "50",
+    )
+
+    def fewer_seeds(record):
+        for entry in record["scenarios"]:
+            entry["learners"]["ppo-sinr"]["seeds"] = 2
+
+    edit(docs, "rl/rl.json", fewer_seeds)
+    assert generators.summary_values(docs)["rl.seeds"].endswith("2 for `ppo-sinr`")
+    edit(docs, "planning/planning.json", lambda runs: runs[0].update(trials=49))
+    with pytest.raises(BenchError, match="trials differ"):
+        generators.summary_values(docs)
+
+
+def test_the_readme_quotes_the_summary_of_the_results_page(docs):
+    text = generators.results_summary(docs)
+    page = (docs / "results.md").read_text()
+    assert text.replace("](docs/", "](") in page
+    (docs / "results.md").write_text(page.replace("**What to keep in mind:**", "**Caveats:**"))
+    assert "**Caveats:**" in generators.results_summary(docs)
+    (docs / "results.md").write_text("# Results\n")
+    with pytest.raises(BenchError, match="no <!-- summary -->"):
+        generators.results_summary(docs)
