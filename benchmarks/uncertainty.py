@@ -242,3 +242,39 @@ def across_seeds(groups: list[NDArray[np.float64]], statistic: str = "iqm", seed
         "method": SEED_METHOD,
         "runs": int(sum(g.size for g in groups)),
     }
+
+
+def seed_coverage(
+    counts: tuple[int, ...] = (3, 5, 10), groups: int = 1, repeats: int = 400, seed: int = 0
+) -> dict[str, Any]:
+    """How often :func:`across_seeds`' interval contains the population's mean and IQM, at each
+    count of runs per group: ``repeats`` simulated studies per count, ``groups`` tasks of
+    normal scores (unit spread, locations 0, 1, 2, ...), each study's interval against the
+    statistic of a population of a million scores per task. The RL study's per-scenario rows
+    are one group of 3 or 5 seeds; its over-scenario rows three groups."""
+    rng = np.random.default_rng(seed)
+    locations = np.arange(groups, dtype=np.float64)
+    population = np.concatenate([rng.normal(loc, 1.0, 1_000_000) for loc in locations])
+    truth = {name: float(function(population)) for name, function in SEED_STATISTICS.items()}
+    rows = []
+    for count in counts:
+        covered = dict.fromkeys(SEED_STATISTICS, 0)
+        for r in range(repeats):
+            sample = [rng.normal(loc, 1.0, count) for loc in locations]
+            for name in covered:
+                low, high = across_seeds(sample, name, seed=r)["ci"]
+                covered[name] += low <= truth[name] <= high
+        rows.append({"runs_per_group": count, **{name: hits / repeats for name, hits in covered.items()}})
+    return {"groups": groups, "repeats": repeats, "seed": seed, "method": SEED_METHOD, "coverage": rows}
+
+
+if __name__ == "__main__":  # python -m benchmarks.uncertainty OUT.json: the across-seed coverage
+    import json
+    import sys
+
+    record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
+    text = json.dumps(record, indent=2) + "\n"
+    if len(sys.argv) > 1:
+        with open(sys.argv[1], "w") as handle:
+            handle.write(text)
+    print(text, end="")

@@ -924,6 +924,23 @@ def rl_values(docs: Path) -> dict[str, str]:
     return table
 
 
+@values("coverage")
+def coverage_values(docs: Path) -> dict[str, str]:
+    """How often the across-seed interval covers (``python -m benchmarks.uncertainty``,
+    results/rl/seed-coverage.json), with its Wilson interval over the simulated studies:
+    ``GROUPS.N.STATISTIC`` (GROUPS ``one`` or ``three`` scenarios, N runs per scenario,
+    STATISTIC ``mean`` or ``iqm``) and ``repeats``."""
+    record = read_json(docs, "rl/seed-coverage.json")
+    table = {"repeats": str(record["one_group"]["repeats"])}
+    for groups, key in (("one_group", "one"), ("three_groups", "three")):
+        entry = record[groups]
+        for row in entry["coverage"]:
+            for statistic in ("mean", "iqm"):
+                text = _rate_with_interval(row[statistic], entry["repeats"])
+                table[f"{key}.{row['runs_per_group']}.{statistic}"] = text.replace(" %", "", 1)
+    return table
+
+
 def _rate_with_interval(rate: float, trials: int) -> str:
     """A fraction of ``trials`` as a percentage with its 95 % Wilson interval (``model_figures.rate``)."""
     figure = model_figures.rate(np.arange(trials) < round(rate * trials), "")

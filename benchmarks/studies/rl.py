@@ -56,8 +56,9 @@ TRAININGS = (
 #: With ``--device``: the project's own PPO on that device, under both rewards.
 DEVICE_TRAININGS = (("torch-ppo", "sinr", "ppo_seeds"), ("torch-ppo", "information", "ppo_seeds"))
 PPO_SEEDS = 5
-#: Seeds per learner with ``--device``: at 3-5 seeds a percentile bootstrap over seeds covers
-#: only about 76-84 % (docs/results-rl.md); at 10 it covers closer to its 95 %.
+#: Seeds per learner with ``--device``: at 3-5 seeds the percentile bootstrap over seeds covers
+#: only about 71-84 % (:func:`benchmarks.uncertainty.seed_coverage`, docs/results-rl.md); at 10
+#: it covers closer to its 95 %.
 DEVICE_PPO_SEEDS = 10
 CONTRIB_SEEDS = 3
 #: Timesteps per training: the whole study (48 trainings and their evaluation) fits in about
