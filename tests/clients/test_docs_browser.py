@@ -14,7 +14,7 @@ from urllib.parse import unquote, urlparse
 import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
-PAGES = ("index", "results", "results-claims", "_generated/environment", "api")
+PAGES = ("index", "results", "results-claims", "_generated/environment", "api", "api-env")
 #: Every page of the guide and the results (the API's source pages and the studies' data pages
 #: aside).
 ALL_PAGES = tuple(sorted({*PAGES, *(p.stem for p in (ROOT / "docs").glob("*.md"))}))

@@ -20,7 +20,7 @@ def test_sphinx_builds_the_site_without_warnings(tmp_path):
         timeout=600,
     )
     assert done.returncode == 0, done.stderr[-3000:]
-    api = (tmp_path / "api.html").read_text()
-    assert "EnvOptions" in api and "make_agent" in api  # generated from the docstrings
+    env_api, agents_api = ((tmp_path / f"api-{p}.html").read_text() for p in ("env", "agents"))
+    assert "EnvOptions" in env_api and "make_agent" in agents_api  # generated from the docstrings
     env_page = (tmp_path / "_generated" / "environment.html").read_text()
     assert "Action Space" in env_page and "Observation Space" in env_page
