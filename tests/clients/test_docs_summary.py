@@ -71,3 +71,26 @@ def test_the_readme_quotes_the_summary_of_the_results_page(docs):
     (docs / "results.md").write_text("# Results\n")
     with pytest.raises(BenchError, match="no <!-- summary -->"):
         generators.results_summary(docs)
+
+
+def test_the_tracking_targets_held_count_every_target(docs):
+    targets = json.loads((docs / "results/tracking/targets.json").read_text())
+    total = sum(len(r["best_tracking_lower"]) + len(r["tracking_ucb_lower"]) for r in targets)
+    table = generators.summary_values(docs)
+    assert table["targets"] == str(total) and table["targets.held"] == str(total)
+
+    def one_fails(records):
+        records[-1]["tracking_ucb_lower"][-1]["holds"] = False
+
+    edit(docs, "tracking/targets.json", one_fails)
+    assert generators.summary_values(docs)["targets.held"] == str(total - 1)
+
+
+def test_the_armse_ratio_spans_every_policy_and_scenario(docs):
+    from benchmarks.report import paper_armse
+
+    ratios = []
+    for n in (1, 2, 3):
+        rows = json.loads((docs / f"results/v1/paper-{n}-v1-average.summary.json").read_text())["policies"]
+        ratios += [row["armse"] / paper_armse(f"paper-{n}", p) for p, row in rows.items()]
+    assert generators.summary_values(docs)["armse-ratio.average"] == f"{min(ratios):.1f} to {max(ratios):.1f}"
