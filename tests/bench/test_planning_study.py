@@ -53,7 +53,7 @@ def _the_docs_say_what_the_planning_json_shows(tmp_path, out, run):
     best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
     assert table["bound.1.best"] == f"`{best}`"  # the centralised run's best policy, against the best bound
     tables = planning_tables(docs)
-    assert "### paper-1, centralized (3 trials)" in tables and "ARMSE / best bound" in tables
+    assert "## paper-1, centralized (3 trials)" in tables and "ARMSE / best bound" in tables
 
 
 def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, capsys):

@@ -164,7 +164,7 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     )
     assert table["moving.which"].startswith("`recurrent-ppo-information` (Scenario 1, -")
     tables = rl_tables(tmp_path)
-    assert tables.startswith("Learned policies across their training seeds") and "### paper-1" in tables
+    assert tables.startswith("Learned policies across their training seeds") and "## paper-1" in tables
 
 
 def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
