@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 
 from agents.ppo import LEARNER_NAMES, LEARNERS, TORCH_PPO
@@ -11,7 +12,7 @@ from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
 from .cli import Command
 from .errors import BenchError
-from .studies.settings import add_env_options, env_options_from, integer
+from .studies.settings import add_env_options, add_max_hours, env_options_from, integer
 
 
 class TrainPPO(Command):
@@ -98,10 +99,11 @@ class TrainPPO(Command):
             help="replace a model already in --out (its files are removed first)",
         )
         parser.add_argument("--quiet", action="store_true", help="no progress bar")
+        add_max_hours(parser)
         add_env_options(parser)
 
     def main(self) -> int:
-        from .harness import RunInterrupted
+        from .harness import HarnessError, RunInterrupted
         from .studies.settings import local_workers, scenario_for_version
         from .training import seed_folder, train_ppo
 
@@ -128,8 +130,10 @@ class TrainPPO(Command):
                 workers=local_workers(args.workers),
                 device=args.device,
                 n_envs=args.n_envs,
+                max_hours=args.max_hours,
+                say=lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
             )
-        except RunInterrupted:
+        except (RunInterrupted, HarnessError):
             raise
         except (ValueError, OSError) as exc:
             raise BenchError(str(exc)) from exc

@@ -26,6 +26,8 @@ FLAGS = {
     "max_hours": "--max-hours",
     "device": "--device",
     "out": "--out",
+    "timesteps": "--timesteps",
+    "seeds": "--seeds",
 }
 
 

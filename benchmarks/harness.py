@@ -233,18 +233,36 @@ def _check_run_time(
     say: Callable[[str], None],
 ) -> None:
     """Says the run's estimated time, or refuses it beyond ``max_hours`` (:func:`check_time`)."""
-    operations = {policy: agents.costs.operations_per_trial_step(agent) for policy, agent in built.items()}
-    fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
-    alone = {
-        p: estimate_seconds(sc, options, {p: operations[p]}, trials, steps, shard_size, 1, fixed)
-        for p in built
-    }
+    alone = {p: _built_seconds(sc, options, {p: built[p]}, trials, steps, shard_size, 1) for p in built}
     where = (
         f"{trials} trials x {steps} steps of {len(built)} polic{'y' if len(built) == 1 else 'ies'} "
         f"on {sc.name!r}, {parallel} task(s) at once"
     )
-    seconds = estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
+    seconds = _built_seconds(sc, options, built, trials, steps, shard_size, parallel)
     check_time(seconds, where, max(alone, key=alone.__getitem__), max_hours, say)
+
+
+def _built_seconds(
+    sc: Scenario,
+    options: EnvOptions,
+    built: dict[str, agents.Agent],
+    trials: int,
+    steps: int,
+    shard_size: int,
+    parallel: int,
+) -> float:
+    """:func:`estimate_seconds` of the built agents' declared costs."""
+    operations = {policy: agents.costs.operations_per_trial_step(agent) for policy, agent in built.items()}
+    fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
+    return estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
+
+
+def run_seconds(config: RunConfig, parallel: int = 1) -> float:
+    """A configured run's estimated wall time (:func:`estimate_seconds`), ``parallel`` tasks at
+    once; its agents are built as :func:`make_config` probes them."""
+    sc, options = config.scenario_object, config.options
+    built = {p: _probe(p, sc, config.agent_params.get(p, {}), config.seed, options) for p in config.policies}
+    return _built_seconds(sc, options, built, config.trials, config.steps, config.shard_size, parallel)
 
 
 #: The share of the machine's memory the tasks running at once may take together.

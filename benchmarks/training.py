@@ -30,7 +30,7 @@ from mimo_radar_env.core.arrays import device_namespace
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
-from .harness import RunInterrupted, output_lock
+from .harness import HarnessError, RunInterrupted, duration, output_lock
 from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
 #: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
@@ -213,6 +213,38 @@ def _parse_dict_call(text: str, name: str) -> dict[str, Any]:
         ) from None
 
 
+#: Training timesteps per second of one worker process, on the developers' machine (paper
+#: scenario 1, the shipped hyperparameters): the scale of a training's time estimate; torch-ppo's
+#: on one H200 with the device entry (docs/performance.md) and on CPU torch.
+TRAINING_STEPS_PER_S = {"ppo": 3000.0, "maskable-ppo": 3000.0, "recurrent-ppo": 1280.0}
+TORCH_PPO_STEPS_PER_S = {"cuda": 200_000.0, "cpu": 1_000.0}
+
+
+def estimate_training_seconds(algo: str, timesteps: int, device: str | None = None) -> float:
+    """One training's wall time, roughly: ``timesteps`` at :data:`TRAINING_STEPS_PER_S` (torch-ppo:
+    :data:`TORCH_PPO_STEPS_PER_S` on ``device``, CPU torch unless a CUDA device)."""
+    if algo == TORCH_PPO:
+        return timesteps / TORCH_PPO_STEPS_PER_S["cuda" if str(device).startswith("cuda") else "cpu"]
+    return timesteps / TRAINING_STEPS_PER_S[algo]
+
+
+def _check_training_time(
+    algo: str, timesteps: int, seeds: int, workers: int, device: str | None, max_hours: float | None, say
+) -> None:
+    """Says the trainings' estimated time when it is a minute or more; refuses them beyond
+    ``max_hours`` (seeds ``workers`` at a time; on a device one after another)."""
+    at_once = 1 if device is not None else min(workers, seeds)
+    seconds = estimate_training_seconds(algo, timesteps, device) * -(-seeds // at_once)
+    what = f"{seeds} training(s) of {timesteps:,} `timesteps` of {algo}"
+    if max_hours is not None and seconds > 3600 * max_hours:
+        raise HarnessError(
+            f"{what} would take about {duration(seconds)}, more than `max_hours` {max_hours:g}: use fewer "
+            "`timesteps` or `seeds`, or a larger `max_hours`"
+        )
+    if seconds >= 60:
+        say(f"{what}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
+
+
 def train_ppo(
     scenario: str | Path | Scenario,
     timesteps: int | None,
@@ -232,6 +264,8 @@ def train_ppo(
     seed_folders: bool = False,
     device: str | None = None,
     n_envs: int | None = None,
+    max_hours: float | None = None,
+    say=print,
 ) -> dict[str, Any]:
     """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO, or the project's own torch-ppo)
     on the native vectorised env and save the model (``model.zip``; torch-ppo's ``model.pt``), the
@@ -240,7 +274,9 @@ def train_ppo(
     ``workers`` at a time, resumably (a seed whose folder holds its finished training is kept);
     ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
     (default ``"cpu"``; the SB3 learners take none), with PPO's hyperparameter entry;
-    ``n_envs`` overrides the entry's number of parallel trials.
+    ``n_envs`` overrides the entry's number of parallel trials. The trainings' estimated time
+    (:func:`estimate_training_seconds`) is said through ``say`` when it is a minute or more, and
+    refused beyond ``max_hours``.
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
     (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that
@@ -259,6 +295,7 @@ def train_ppo(
     config = _torch_config(params, n_envs, action, sc) if algo == TORCH_PPO else None
     n_envs = int(n_envs or params.get("n_envs", 8))
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
+    _check_training_time(algo, timesteps, seeds, workers, device, max_hours, say)
     out = Path(out)
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
     if n_envs != params.get("n_envs", 8):

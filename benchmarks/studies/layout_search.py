@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from typing import Any
 
@@ -33,9 +34,10 @@ from scipy.optimize import differential_evolution
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
 
+from .. import harness
 from ..errors import BenchError
 from . import calibration, claims, mechanisms
-from .base import Study, machine, write_timing
+from .base import Study, configure, machine, write_timing
 from .settings import integer
 
 #: v1's paper scenarios: the layouts searched replace their stations.
@@ -241,6 +243,25 @@ class LayoutSearch(Study):
             help="do not run v1's own layout (its scorecard under the same options is the claims study's)",
         )
 
+    def estimate_seconds(self, cards: int) -> float:
+        """The search's and the scorecards' wall time, roughly: the search's layouts at the time
+        one takes here (timed on v1's layout), ``--workers`` at once, and ``cards`` scorecards
+        each as long as v1's paper study under the same settings (configured, so checked too:
+        nothing is written)."""
+        settings = self.settings
+        layout = vector_from_layout(v1_layout())
+        objective(layout, settings.options.lambda_scale)  # the first call builds what the rest reuse
+        timer = time.perf_counter()
+        objective(layout, settings.options.lambda_scale)
+        per_layout = time.perf_counter() - timer
+        layouts = (self.args.generations + 1) * self.args.population * DIMENSIONS
+        seconds = layouts * per_layout / settings.workers
+        if cards:
+            runs = claims.paper_runs(v1_layout().scenarios(), settings.out / "v1")
+            per_card = sum(harness.run_seconds(c, settings.workers) for c in configure(runs, settings))
+            seconds += cards * per_card
+        return seconds
+
     def main(self) -> int:
         settings = self.settings
         ranks = self.args.score or range(1, self.args.final + 1)
@@ -249,6 +270,15 @@ class LayoutSearch(Study):
             raise BenchError(
                 f"--score {' '.join(map(str, beyond))}: ranks run from 1 to --final ({self.args.final})"
             )
+        cards = len(set(ranks)) + (0 if self.args.no_v1_scorecard else 1)
+        seconds = self.estimate_seconds(cards)
+        harness.check_time(
+            seconds,
+            f"the search and its {cards} scorecard(s)",
+            "mg-crb-cl" if cards else "the search",
+            settings.max_hours,
+            lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
+        )
         start, before = time.perf_counter(), machine()
         out = settings.out
         out.mkdir(parents=True, exist_ok=True)
@@ -270,7 +300,7 @@ class LayoutSearch(Study):
             else [{"name": "v1", "vector": vector_from_layout(v1_layout()).tolist()}]
         )
         best = distinct_feasible(found["ranked"], self.args.final)
-        if len(best) < max(ranks):
+        if ranks and len(best) < max(ranks):
             print(
                 f"mimo-radar-bench: the last population holds {len(best)} distinct feasible layouts; "
                 f"ranks above {len(best)} are not scored",

@@ -68,11 +68,6 @@ DEFAULT_TIMESTEPS = 600_000
 #: two 1,000-step episodes per trial (600,000 steps would play 146 steps of each).
 DEVICE_HYPERPARAMS_KEY = "device"
 DEVICE_TIMESTEPS = 8_192_000
-#: Training timesteps per second of one worker process, on the developers' machine (paper
-#: scenario 1, the shipped hyperparameters): the scale of the study's time estimate; torch-ppo's
-#: on one H200 with the device entry (docs/performance.md) and on CPU torch.
-TRAINING_STEPS_PER_S = {"ppo": 3000.0, "maskable-ppo": 3000.0, "recurrent-ppo": 1280.0}
-TORCH_PPO_STEPS_PER_S = {"cuda": 200_000.0, "cpu": 1_000.0}
 #: The policies every learned one is compared with, on the same trials.
 COMPARED = ("mg-crb-cl", "best-tracking", "tracking-ucb")
 #: The order of the paired-difference columns of the tables.
@@ -210,8 +205,9 @@ class RLStudy(Study):
 
     def estimate_training_seconds(self) -> float:
         """The wall time of the trainings still to do (a resumed study keeps its finished
-        seeds), roughly: their timesteps at :data:`TRAINING_STEPS_PER_S`, ``--workers`` at once."""
-        from ..training import META_FILE, seed_folder
+        seeds), roughly: :func:`benchmarks.training.estimate_training_seconds` each, ``--workers``
+        at once."""
+        from ..training import META_FILE, estimate_training_seconds, seed_folder
 
         seconds = 0.0
         for scenario, algo, reward, seeds in self.trainings():
@@ -219,13 +215,8 @@ class RLStudy(Study):
             for seed in range(seeds):
                 meta = seed_folder(folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
-                    seconds += self.timesteps / self.steps_per_second(algo)
+                    seconds += estimate_training_seconds(algo, self.timesteps, self.settings.device)
         return seconds if self.on_device else seconds / self.settings.workers
-
-    def steps_per_second(self, algo: str) -> float:
-        if not self.on_device:
-            return TRAINING_STEPS_PER_S[algo]
-        return TORCH_PPO_STEPS_PER_S["cpu" if str(self.settings.device) == "cpu" else "cuda"]
 
     def evaluation_settings(self) -> Settings:
         """The evaluation's settings: with ``--device``, numpy in local worker processes (every

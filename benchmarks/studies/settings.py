@@ -338,6 +338,18 @@ def add_agent_param(parser: argparse.ArgumentParser, paper_study: bool = False) 
 
 
 # ------------------------------------------------------------------ a study's shared arguments
+def add_max_hours(parser: argparse.ArgumentParser) -> None:
+    """``--max-hours``: the longest a command may be estimated to take before it starts."""
+    parser.add_argument(
+        "--max-hours",
+        type=hours,
+        default=DEFAULT_MAX_HOURS,
+        metavar="H",
+        help="refuse to start what is estimated (from declared costs, on a machine like the "
+        "developers') to take longer; 'none': no limit (default %(default)s)",
+    )
+
+
 def add_run_arguments(
     parser: argparse.ArgumentParser, trials: int = DEFAULT_TRIALS, min_trials: int = 1
 ) -> None:
@@ -392,14 +404,7 @@ def add_run_arguments(
         "same numbers as numpy to rounding; a policy's trials are one batch unless --shard-size, and "
         "--max-hours (a CPU estimate) is not applied (default: numpy, no torch needed)",
     )
-    parser.add_argument(
-        "--max-hours",
-        type=hours,
-        default=DEFAULT_MAX_HOURS,
-        metavar="H",
-        help="refuse a run estimated (from the policies' declared costs) to take longer; "
-        "'none': no limit (default %(default)s)",
-    )
+    add_max_hours(parser)
     parser.add_argument(
         "--pairs",
         choices=("reference", "all"),

@@ -96,3 +96,28 @@ def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, mo
         f"mimo-radar-bench: interrupted: 1 of 3 trainings finished and saved in {tmp_path / 't'} "
         "(an unfinished one is trained again); run the same command again to resume"
     )
+
+
+def test_a_training_estimated_beyond_max_hours_is_refused_before_anything_is_written(tmp_path, capsys):
+    """train-ppo estimates its trainings (timesteps at each learner's rate, seeds --workers at a
+    time) and refuses beyond --max-hours in one line, as the studies do; below, it says the
+    estimate when it is a minute or more."""
+    from benchmarks.training import TRAINING_STEPS_PER_S, estimate_training_seconds
+
+    assert estimate_training_seconds("recurrent-ppo", 1280) == pytest.approx(1.0)
+    assert estimate_training_seconds("ppo", 3000) == pytest.approx(3000 / TRAINING_STEPS_PER_S["ppo"])
+    assert estimate_training_seconds("torch-ppo", 200_000, "cuda:1") == pytest.approx(1.0)
+    out = tmp_path / "model"
+    argv = ["train-ppo", "--timesteps", "2147483647", "--out", str(out), "--quiet"]
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "1 training(s) of 2,147,483,647 --timesteps of ppo would take about" in err[0]
+    assert "more than --max-hours 24" in err[0] and not out.exists()
+    # four seeds, two at a time, at 3000 steps/s: two rounds of 36,000 / 3000 = 12 s
+    with pytest.raises(SystemExit):
+        main(["train-ppo", "--timesteps", "36000", "--seeds", "4", "--workers", "2", "--out", str(out),
+              "--max-hours", str(23 / 3600), "--quiet"])  # fmt: skip
+    assert "4 training(s) of 36,000 --timesteps of ppo would take about 24 s" in capsys.readouterr().err
+    assert not out.exists()

@@ -123,3 +123,43 @@ def test_command_scores_only_the_ranks_asked_for(tmp_path, capsys):
     second = layout_search.distinct_feasible(found["ranked"], 2)[1]
     assert (finalist["name"], finalist["rank"], finalist["vector"]) == ("search-2", 2, second["vector"])
     assert not (out / "search-1").exists()
+
+
+def test_the_search_and_its_scorecards_are_estimated_before_anything_runs(tmp_path, capsys, monkeypatch):
+    """--max-hours is checked against the search (its layouts at the time one takes here) and
+    its scorecards (each v1's paper study) before the search: a refusal is one line, exit 2,
+    nothing written; the estimate counts the scorecards asked for."""
+    from benchmarks.cli import main as cli_main
+    from benchmarks.studies.layout_search import LayoutSearch
+
+    estimates = []
+    real = LayoutSearch.estimate_seconds
+    monkeypatch.setattr(
+        LayoutSearch, "estimate_seconds", lambda self, cards: estimates.append(cards) or real(self, cards)
+    )
+    out = tmp_path / "search"
+    args = ["search-layouts", "--generations", "1", "--population", "1", "--quiet", "--out", str(out)]
+    for extra, said in (
+        (["--final", "0", "--no-v1-scorecard"], "the search and its 0 scorecard(s) would take about"),
+        (["--final", "2", "--trials", "2", "--steps", "5"], "would take about"),  # a scorecard's run, or all
+    ):
+        with pytest.raises(SystemExit) as exit_info:
+            cli_main([*args, *extra, "--max-hours", "1e-9"])
+        assert exit_info.value.code == 2
+        err = capsys.readouterr().err.strip().splitlines()
+        assert len(err) == 1 and said in err[0] and "--max-hours 1e-09" in err[0]
+        assert not out.exists()
+    assert estimates == [0, 3]  # no scorecard; then two ranks and v1's own layout
+
+
+def test_a_search_with_no_scorecard_finishes(tmp_path):
+    """--final 0 with --no-v1-scorecard searches and scores nothing (it used to fail after the
+    search on the empty list of ranks)."""
+    import json
+
+    from benchmarks.cli import main as cli_main
+
+    args = ["search-layouts", "--generations", "1", "--population", "1", "--final", "0", "--no-v1-scorecard"]
+    assert cli_main([*args, "--quiet", "--out", str(tmp_path)]) == 0
+    found = json.loads((tmp_path / "search.json").read_text())
+    assert found["finalists"] == [] and found["evaluations"] == 40
