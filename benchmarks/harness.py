@@ -43,7 +43,7 @@ from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
 from . import backends
-from .errors import HarnessError
+from .errors import BenchError, HarnessError
 from .shards import (
     TRIAL_FIELDS,
     TRUTH_FIELD,
@@ -545,20 +545,32 @@ def prepare_output(out: Path, config: RunConfig) -> None:
 
 @contextlib.contextmanager
 def output_lock(out: Path) -> Iterator[None]:
-    """Hold DIR/.lock for the run: a second run into the same DIR is refused, not interleaved."""
+    """Hold DIR/.lock for the run: a second run into the same DIR is refused, not interleaved.
+    A run refused while holding it (a damaged folder, say) leaves the folder as it found it:
+    the lock file, and the folder, are removed again where this call made them."""
+    made_folder = not out.exists()
+    made_lock = not (out / LOCK_FILE).exists()
     try:
         out.mkdir(parents=True, exist_ok=True)
         handle = open(out / LOCK_FILE, "a+")  # held (and locked) for the whole run
     except OSError as exc:
         raise HarnessError(f"cannot write into `out` {out}: {exc.strerror or exc}") from exc
+    locked = False
     try:
         try:
             fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            locked = True
         except BlockingIOError:
             raise HarnessError(
                 f"another run is writing into {out}; wait for it to finish or choose another `out`"
             ) from None
         yield
+    except BenchError:
+        if locked and made_lock:
+            (out / LOCK_FILE).unlink(missing_ok=True)
+            if made_folder and not any(out.iterdir()):
+                out.rmdir()
+        raise
     finally:
         handle.close()  # releases the lock
 

@@ -89,6 +89,12 @@ class SuperArmIndex:
         return index.reshape(action.shape[:-1])
 
 
+def shown(value: Any, limit: int = 120) -> str:
+    """``value`` as an error message shows it: its repr on one line, cut at ``limit`` characters."""
+    text = " ".join(repr(value).split())
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
 def check_discrete_actions(actions: Any, size: int, shape: tuple[int, ...] = ()) -> NDArray[np.int64]:
     """Validate ``Discrete(size)`` actions of ``shape`` (``()`` for one): integers only (no
     floats, booleans or strings, not even integral ones), in ``[0, size)``. Raises ``ValueError``
@@ -98,11 +104,11 @@ def check_discrete_actions(actions: Any, size: int, shape: tuple[int, ...] = ())
     arr = actions if xp.is_torch else np.asarray(actions)
     if xp.dtype_kind(arr) not in "iu" or isinstance(actions, bool | np.bool_):
         raise ValueError(
-            f"a Discrete action must be an integer super-arm index in [0, {size}), got {actions!r}"
+            f"a Discrete action must be an integer super-arm index in [0, {size}), got {shown(actions)}"
         )
     if tuple(arr.shape) != shape:
         raise ValueError(
-            f"Discrete actions must have shape {shape}, got shape {tuple(arr.shape)} ({actions!r})"
+            f"Discrete actions must have shape {shape}, got shape {tuple(arr.shape)} ({shown(actions)})"
         )
     outside = (arr < 0) | (arr >= size)
     if bool(outside.any()):
@@ -118,7 +124,7 @@ def check_score_actions(scores: Any, size: int, shape: tuple[int, ...] = ()) -> 
     xp = namespace(scores)
     arr = scores if xp.is_torch else np.asarray(scores)
     if xp.dtype_kind(arr) not in "iuf" or isinstance(scores, bool | np.bool_):
-        raise ValueError(f"station scores must be real numbers in [-1, 1], got {scores!r}")
+        raise ValueError(f"station scores must be real numbers in [-1, 1], got {shown(scores)}")
     if tuple(arr.shape) != (*shape, size):
         raise ValueError(f"station scores must have shape {(*shape, size)}, got shape {tuple(arr.shape)}")
     outside = ~xp.isfinite(arr) | (arr < -1) | (arr > 1)

@@ -194,3 +194,71 @@ def test_hostile_hyperparameter_files_give_success_or_one_line(keys, data):
 @given(invocations())
 def test_hostile_arguments_give_success_or_one_line_many(argv):
     _run_example(argv)
+
+
+def _damage(out: Path, how: str) -> None:
+    """One damaged state of a run's output folder (issue: hostile file-system states)."""
+    if how == "out-a-file":
+        out.write_text("not a folder")
+        return
+    out.mkdir(exist_ok=True)
+    target = {
+        "config-wrong-shape": "config.json",
+        "config-not-text": "config.json",
+        "config-a-folder": "config.json",
+        "summary-a-folder": "summary.json",
+        "table-a-folder": "table.md",
+        "shards-a-file": "shards",
+    }[how]
+    path = out / target
+    if path.is_dir():
+        shutil.rmtree(path)
+    elif path.exists():
+        path.unlink()
+    if how == "config-wrong-shape":
+        path.write_text('[1, {"trials": "x"}]')
+    elif how == "config-not-text":
+        path.write_bytes(b"\xff\xfe\x00\x81 not text")
+    elif how in ("config-a-folder", "summary-a-folder", "table-a-folder"):
+        path.mkdir()
+        (path / "inside").write_text("kept")
+    else:
+        path.write_text("a file where a folder belongs")
+
+
+def _snapshot(root: Path) -> dict[str, bytes | None]:
+    if root.is_file():
+        return {".": root.read_bytes()}
+    return {str(p.relative_to(root)): (p.read_bytes() if p.is_file() else None) for p in root.rglob("*")}
+
+
+DAMAGES = (
+    "config-wrong-shape", "config-not-text", "config-a-folder", "summary-a-folder", "table-a-folder",
+    "shards-a-file", "out-a-file",
+)  # fmt: skip
+
+
+@settings(max_examples=14, deadline=None, suppress_health_check=[HealthCheck.too_slow], derandomize=True)
+@given(st.sampled_from(DAMAGES), st.booleans())
+def test_damaged_output_folders_give_success_or_one_line_and_lose_nothing(how, finished_first):
+    """A run started into a damaged folder (of a finished run, or of none) succeeds, or is
+    refused in one line with exit 2 and every file already there unchanged."""
+    folder = Path(tempfile.mkdtemp())
+    try:
+        out = folder / "out"
+        argv = ["run", "--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2"]
+        argv += ["--workers", "1", "--out", str(out), "--quiet", "--no-figures"]
+        if finished_first:
+            assert _invoke(argv, out)[0] == 0
+            if how == "out-a-file":
+                shutil.rmtree(out)
+        _damage(out, how)
+        before = _snapshot(out)
+        code, err = _invoke(argv, out)
+        lines = [line for line in err.strip().splitlines() if line.strip()]
+        assert code in (0, 2) and "Traceback" not in err, (how, finished_first, code, err[-2000:])
+        if code == 2:
+            assert len([line for line in lines if "error" in line]) == 1, (how, err)
+            assert _snapshot(out) == before, (how, "changed a folder it refused")
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
