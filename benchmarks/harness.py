@@ -233,12 +233,13 @@ def _check_run_time(
     say: Callable[[str], None],
 ) -> None:
     """Says the run's estimated time, or refuses it beyond ``max_hours`` (:func:`check_time`)."""
-    alone = {p: _built_seconds(sc, options, {p: built[p]}, trials, steps, shard_size, 1) for p in built}
+    size = (trials, steps, shard_size)
+    alone = {p: _built_seconds(sc, options, {p: built[p]}, size, 1) for p in built}
     where = (
         f"{trials} trials x {steps} steps of {len(built)} polic{'y' if len(built) == 1 else 'ies'} "
         f"on {sc.name!r}, {parallel} task(s) at once"
     )
-    seconds = _built_seconds(sc, options, built, trials, steps, shard_size, parallel)
+    seconds = _built_seconds(sc, options, built, size, parallel)
     check_time(seconds, where, max(alone, key=alone.__getitem__), max_hours, say)
 
 
@@ -246,15 +247,14 @@ def _built_seconds(
     sc: Scenario,
     options: EnvOptions,
     built: dict[str, agents.Agent],
-    trials: int,
-    steps: int,
-    shard_size: int,
+    size: tuple[int, int, int],
     parallel: int,
 ) -> float:
-    """:func:`estimate_seconds` of the built agents' declared costs."""
+    """:func:`estimate_seconds` of the built agents' declared costs; ``size`` is the run's
+    (trials, steps, shard size)."""
     operations = {policy: agents.costs.operations_per_trial_step(agent) for policy, agent in built.items()}
     fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
-    return estimate_seconds(sc, options, operations, trials, steps, shard_size, parallel, fixed)
+    return estimate_seconds(sc, options, operations, *size, parallel, fixed)
 
 
 def run_seconds(config: RunConfig, parallel: int = 1) -> float:
@@ -262,7 +262,7 @@ def run_seconds(config: RunConfig, parallel: int = 1) -> float:
     once; its agents are built as :func:`make_config` probes them."""
     sc, options = config.scenario_object, config.options
     built = {p: _probe(p, sc, config.agent_params.get(p, {}), config.seed, options) for p in config.policies}
-    return _built_seconds(sc, options, built, config.trials, config.steps, config.shard_size, parallel)
+    return _built_seconds(sc, options, built, (config.trials, config.steps, config.shard_size), parallel)
 
 
 #: The share of the machine's memory the tasks running at once may take together.
