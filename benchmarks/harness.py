@@ -668,7 +668,8 @@ def run_many(
             locks.enter_context(output_lock(out))
             prepare_output(out, config)
         payloads = [config.to_json() for config in configs]
-        todo = _queue(configs, folders, max_tasks)
+        todo, estimated = _queue(configs, folders, max_tasks)
+        started = time.perf_counter()
         left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
         for number, (config, folder) in enumerate(zip(configs, folders, strict=True)):
             total = config.num_shards * len(config.policies)
@@ -719,6 +720,7 @@ def run_many(
                 backends.run_inline(run_task, tasks, finished)
             else:
                 backends.run_processes(run_task, tasks, finished, workers)
+            _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
                 f"interrupted: {len(saved)} of {len(todo)} tasks finished and saved in "
@@ -727,6 +729,21 @@ def run_many(
         finally:
             bar.close()
         return complete
+
+
+#: A run slower than its estimate by this factor says so at its end (from this many seconds).
+SLOW_FACTOR, SLOW_RUN_MIN_SECONDS = 2.0, 30.0
+
+
+def _say_if_slow(wall: float, estimate: float) -> None:
+    """Says, at a run's end, that it took more than :data:`SLOW_FACTOR` times its estimate."""
+    if wall >= SLOW_RUN_MIN_SECONDS and wall > SLOW_FACTOR * estimate:
+        tqdm.write(
+            f"mimo-radar-bench: the tasks took {duration(wall)}, more than {SLOW_FACTOR:g} times their "
+            f"estimate of {duration(estimate)} (a rate measured on the developers' machine): allow for "
+            "that in --max-hours on this machine",
+            file=sys.stderr,
+        )
 
 
 def device_agents() -> list[str]:
@@ -785,16 +802,18 @@ def _check_execution(
 
 def _queue(
     configs: list[RunConfig], folders: list[Path], max_tasks: int | None
-) -> list[tuple[int, str, int]]:
+) -> tuple[list[tuple[int, str, int]], float]:
     """The (run, policy, shard) tasks not yet saved, each run's longest first
-    (:func:`task_seconds`), run after run; the first ``max_tasks`` of them."""
+    (:func:`task_seconds`), run after run; the first ``max_tasks`` of them; and the sum of their
+    estimated seconds."""
     todo: list[tuple[int, str, int]] = []
+    costs: dict[int, dict[tuple[str, int], float]] = {}
     for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
-        todo += [
-            (number, policy, shard)
-            for policy, shard in longest_first(config, _tasks_to_run(out, config, tqdm.write))
-        ]
-    return todo if max_tasks is None else todo[:max_tasks]
+        tasks = _tasks_to_run(out, config, tqdm.write)
+        cost = costs[number] = task_seconds(config) if tasks else {}
+        todo += [(number, policy, shard) for policy, shard in sorted(tasks, key=lambda task: -cost[task])]
+    todo = todo if max_tasks is None else todo[:max_tasks]
+    return todo, sum(costs[number][policy, shard] for number, policy, shard in todo)
 
 
 def longest_first(config: RunConfig, tasks: list[tuple[str, int]]) -> list[tuple[str, int]]:

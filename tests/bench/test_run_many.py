@@ -110,3 +110,20 @@ def test_max_tasks_leaves_later_runs_incomplete_and_two_runs_may_not_share_a_fol
     assert run_many(list(zip(configs, folders, strict=True)), progress=False) == [True, True]
     with pytest.raises(HarnessError, match="two runs write into one folder"):
         run_many([(configs[0], tmp_path / "x"), (configs[1], tmp_path / "x" / ".." / "x")], progress=False)
+
+
+@pytest.mark.parametrize(("scale", "said"), [(1e-9, True), (1e9, False)])
+def test_a_run_far_slower_than_its_estimate_says_so_at_its_end(tmp_path, monkeypatch, capsys, scale, said):
+    """The tasks' wall time against the sum of their estimates (task_seconds) over the workers:
+    beyond SLOW_FACTOR times it, one line at the end says so; within it, nothing."""
+    monkeypatch.setattr(harness, "SLOW_RUN_MIN_SECONDS", 0.0)
+    real = harness.task_seconds
+    monkeypatch.setattr(
+        harness, "task_seconds", lambda config: {k: v * scale for k, v in real(config).items()}
+    )
+    config = make_config("paper-1", ["fix1", "random"], trials=2, steps=3, shard_size=1, say=lambda m: None)
+    assert run_many([(config, tmp_path / "out")], progress=False) == [True]
+    err = capsys.readouterr().err
+    assert ("more than 2 times their estimate" in err) == said
+    if said:
+        assert "allow for that in --max-hours" in err and len(err.strip().splitlines()) == 1
