@@ -1,4 +1,6 @@
-"""The perf command's quick mode: every figure is produced, as a positive number."""
+"""The perf command's quick mode and the speed suite's parts: every figure is produced, and each
+means what it says (a ratio is the quotient of the two figures measured beside it, a rate the
+work done over the time it took, a share within 0 and 1)."""
 
 import json
 import sys
@@ -31,8 +33,6 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
     assert main(["perf", "--quick", "--workers", "1", "--out", str(tmp_path)]) == 0
     result = json.loads((tmp_path / "perf.json").read_text())
     assert FIGURES <= set(result) and result["quick"] is True
-    for key in FIGURES:
-        assert result[key] > 0, key
     # each ratio is the quotient of the two figures measured beside it in the same run
     quotients = {
         "tracker_speedup_vs_filterpy": ("batched_channel_cycles_per_s", "filterpy_channel_cycles_per_s"),
