@@ -73,7 +73,8 @@ def unsourced_numbers(text: str) -> list[tuple[int, str]]:
 
 
 def render(text: str, docs: Path) -> str:
-    """``text`` with every generated block rewritten; an unknown generator is an error."""
+    """``text`` with every generated block and value span filled from the artefacts; an unknown
+    generator, value source or key is an error."""
     forget_values()
 
     def fill(match: re.Match[str]) -> str:
