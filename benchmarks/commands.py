@@ -287,13 +287,35 @@ class Compile(Command):
 
         if HAVE_NUMBA and not uncached(all_kernels()):
             print(f"all {len(all_kernels())} numba kernels are cached already: nothing to compile")
-            return 0
-        start = time.perf_counter()
-        workers = self.args.workers or os.cpu_count() or 1
-        print(
-            f"compiling numba kernels in {workers} worker processes (once: later runs load them)", flush=True
-        )
-        for name, seconds in precompile(workers):
-            print(f"  {name}: {seconds:.1f} s", flush=True)
-        print(f"all {len(all_kernels())} kernels compiled and cached in {time.perf_counter() - start:.1f} s")
+        else:
+            start = time.perf_counter()
+            workers = self.args.workers or os.cpu_count() or 1
+            print(
+                f"compiling numba kernels in {workers} worker processes (once: later runs load them)",
+                flush=True,
+            )
+            for name, seconds in precompile(workers):
+                print(f"  {name}: {seconds:.1f} s", flush=True)
+            print(
+                f"all {len(all_kernels())} kernels compiled and cached in {time.perf_counter() - start:.1f} s"
+            )
+        self.time_this_machine()
         return 0
+
+    @staticmethod
+    def time_this_machine() -> None:
+        """Time the reference step here, for the time estimates (:mod:`benchmarks.machine_rate`)."""
+        from .machine_rate import PLAUSIBLE, calibrate, rate_file
+
+        record = calibrate()
+        where = rate_file()
+        kept = where is not None and PLAUSIBLE[0] <= record["factor"] <= PLAUSIBLE[1]
+        print(
+            f"this machine runs the reference step in {record['seconds']:.3f} s, "
+            f"{record['factor']:.2f} times the developers' machine: "
+            + (
+                f"time estimates use that (kept in {where})"
+                if kept
+                else "not kept, estimates stay the developers'"
+            )
+        )

@@ -42,7 +42,7 @@ from mimo_radar_env.envs.cost import machine_memory, memory_parts, operations_pe
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
-from . import backends
+from . import backends, machine_rate
 from .errors import BenchError, HarnessError
 from .shards import (
     TRIAL_FIELDS,
@@ -349,7 +349,8 @@ def estimate_seconds(
     (:meth:`agents.Agent.seconds_per_step`, ``agent_seconds``) plus its trials' operations (the
     env's, :func:`~mimo_radar_env.envs.cost.operations_per_trial_step`, and the policy's,
     :meth:`agents.Agent.operations_per_trial_step`) at :data:`SECONDS_PER_OPERATION`;
-    ``parallel`` tasks run at once."""
+    ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
+    machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`)."""
     env = operations_per_trial_step(scenario, options.tracking, options.fusion)
     shards = -(-trials // shard_size)
     fixed = agent_seconds or {}
@@ -361,7 +362,7 @@ def estimate_seconds(
         )
         for policy, agent in agent_operations.items()
     )
-    return total / max(1, min(parallel, shards * len(agent_operations)))
+    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, shards * len(agent_operations)))
 
 
 def duration(seconds: float) -> str:
@@ -388,7 +389,16 @@ def check_time(
             "or a larger `max_hours`"
         )
     if seconds >= 60:
-        say(f"{where}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
+        say(f"{where}: about {duration(seconds)} {estimated_where()}")
+
+
+def estimated_where() -> str:
+    """Whose speed an estimate is: this machine's where ``compile`` measured it."""
+    if machine_rate.factor() is None:
+        return (
+            "on a machine like the developers' (a rough estimate; 'mimo-radar-bench compile' times this one)"
+        )
+    return "on this machine (a rough estimate, from the speed 'mimo-radar-bench compile' measured here)"
 
 
 def _policy_files(policy: str, agent: Any) -> dict[str, str]:
@@ -740,8 +750,7 @@ def _say_if_slow(wall: float, estimate: float) -> None:
     if wall >= SLOW_RUN_MIN_SECONDS and wall > SLOW_FACTOR * estimate:
         tqdm.write(
             f"mimo-radar-bench: the tasks took {duration(wall)}, more than {SLOW_FACTOR:g} times their "
-            f"estimate of {duration(estimate)} (a rate measured on the developers' machine): allow for "
-            "that in --max-hours on this machine",
+            f"estimate of {duration(estimate)} {estimated_where()}: allow for that in --max-hours",
             file=sys.stderr,
         )
 

@@ -92,6 +92,7 @@ MODULE_TESTS = {
     "mimo_radar_env/envs/options.py": ("tests/env/test_options.py", r"option_names"),
     "mimo_radar_env/envs/versions.py": ("tests/env/test_versions.py", r"VERSIONS"),
     "mimo_radar_env/extras.py": ("tests/agents/test_ppo.py", r"DependencyNotInstalled|extras"),
+    "benchmarks/machine_rate.py": ("tests/bench/test_machine_rate.py", r"machine_rate\.factor"),
     "benchmarks/metrics.py": ("tests/bench/test_metrics.py", r"TrialMetrics"),
     "mimo_radar_env/rendering.py": ("tests/env/test_env.py", r"rgb_array"),
     "mimo_radar_env/torchrl_env.py": ("tests/clients/test_packaging.py", r"MimoRadarSelectTorchRLEnv"),
