@@ -1532,6 +1532,7 @@ def planning_values(docs: Path) -> dict[str, str]:
             f"{key}.{run['scenario']}.{run['fusion']}": _signed(d)
             for run, d in zip(runs, differences, strict=True)
         }
+    table |= _planner_gains(runs)
     for run in runs:
         if run["fusion"] != "centralized":
             continue
@@ -1541,6 +1542,54 @@ def planning_values(docs: Path) -> dict[str, str]:
         table[f"bound.{run['scenario']}.ratio"] = _signed(ratio)
         within = ratio["ci"][1] <= 1 + BEST_BOUND_MARGIN
         table[f"bound.{run['scenario']}.within"] = "within" if within else "not shown within"
+    return table
+
+
+def _one_step(planner: str) -> str:
+    """The one-step policy a planner extends: tracking-ucb for the learning planner, else
+    best-tracking."""
+    return "tracking-ucb" if planner.startswith("plan-tracking-ucb:") else "best-tracking"
+
+
+def _planner_gains(runs: list[dict[str, Any]]) -> dict[str, str]:
+    """The planners against their one-step policies (checked: under eq22 average fusion every
+    planner looking more than one step ahead tracks better than its one-step policy, and the
+    rollout by the largest margin); per fusion, ``gain.FUSION`` the largest ARMSE margin (m) of
+    a planner over best-tracking; ``best-tracking.bound`` the range of best-tracking's centralised
+    ARMSE / best achievable bound."""
+    ahead = {
+        (run["scenario"], p): d[_one_step(p)]
+        for run in runs
+        if run["fusion"] == "average"
+        for p, d in run["minus"].items()
+        if not p.endswith(":1")
+    }
+    _require(
+        all(verdicts.verdict(d["ci"], -1) == verdicts.HOLDS for d in ahead.values()),
+        "every planner looking ahead beats its one-step policy under eq22 average fusion",
+    )
+    for n in {n for n, _ in ahead}:
+        mine = {p: d["estimate"] for (m, p), d in ahead.items() if m == n}
+        _require(
+            min(mine, key=mine.__getitem__).startswith("plan-tracking-rollout"), "the rollout gains most"
+        )
+    table = {}
+    for fusion in sorted({run["fusion"] for run in runs}):
+        gains = [
+            -d["best-tracking"]["estimate"]
+            for run in runs
+            if run["fusion"] == fusion
+            for p, d in run["minus"].items()
+            if not p.startswith("plan-tracking-ucb:")
+        ]
+        table[f"gain.{fusion}"] = f"{max(gains):.3f}"
+    ratios = [
+        r["policies"]["best-tracking"]["armse_over_best_bound"]["estimate"]
+        for r in runs
+        if r["fusion"] == "centralized"
+    ]
+    if ratios:
+        table["best-tracking.bound"] = f"{min(ratios):.3f} to {max(ratios):.3f}"
     return table
 
 

@@ -94,3 +94,18 @@ def test_the_armse_ratio_spans_every_policy_and_scenario(docs):
         rows = json.loads((docs / f"results/v1/paper-{n}-v1-average.summary.json").read_text())["policies"]
         ratios += [row["armse"] / paper_armse(f"paper-{n}", p) for p, row in rows.items()]
     assert generators.summary_values(docs)["armse-ratio.average"] == f"{min(ratios):.1f} to {max(ratios):.1f}"
+
+
+def test_the_planning_page_says_every_planner_gains_only_while_the_artefacts_show_it(docs):
+    """ "Every planner looking ahead beats its one-step policy (the rollout most)" is checked on
+    planning.json: a planner that stops beating it makes the values refuse to fill the page."""
+    table = generators.planning_values(docs)
+    assert float(table["gain.average"]) > float(table["gain.centralized"]) > 0
+
+    def no_gain(runs):
+        run = next(r for r in runs if r["fusion"] == "average")
+        run["minus"]["plan-tracking-ucb:5"]["tracking-ucb"].update(estimate=0.01, ci=[-0.01, 0.03])
+
+    edit(docs, "planning/planning.json", no_gain)
+    with pytest.raises(BenchError, match="every planner looking ahead beats its one-step policy"):
+        generators.planning_values(docs)
