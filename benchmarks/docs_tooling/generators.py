@@ -474,8 +474,8 @@ def summary_values(docs: Path) -> dict[str, str]:
     judged by scorecards); the tracking targets' margins, smallest to largest
     (``best-tracking.margins``: below Best, ``tracking-ucb.margins``: below MG-CRB-CL),
     ``targets`` and ``targets.held``; ``armse-ratio.FUSION`` our ARMSE over the paper's, over
-    every policy and scenario; ``asr.N`` MG-CRB-CL's ASR in Scenario N and ``paper-asr.N`` the
-    paper's."""
+    every policy and scenario; ``asr.N`` MG-CRB-CL's ASR in Scenario N (with its interval) and
+    ``paper-asr.N`` the paper's."""
     report = read_json(docs, "calibration/calibration.json")
     targets = read_json(docs, "tracking/targets.json")
     comparisons = [c for r in targets for c in r["best_tracking_lower"] + r["tracking_ucb_lower"]]
@@ -499,7 +499,9 @@ def summary_values(docs: Path) -> dict[str, str]:
         ]
         table[f"armse-ratio.{fusion}"] = _span(ratios, "{:.1f}")
     for n in (1, 2, 3):
-        table[f"asr.{n}"] = f"{100 * study_summary(docs, n, 'average')['policies']['mg-crb-cl']['asr']:.1f}"
+        table[f"asr.{n}"] = format_cell(
+            study_summary(docs, n, "average")["policies"]["mg-crb-cl"], "asr", "{:.1f}", 100
+        )
         table[f"paper-asr.{n}"] = f"{PAPER_ASR[f'paper-{n}']['mg-crb-cl']:.1f}"
     return table | _rests_on(docs) | _missed_targets(docs)
 
