@@ -550,7 +550,7 @@ def _missed_targets(docs: Path) -> dict[str, str]:
     ]
     cost = read_json(docs, "perf/planning_cost.json")
     return {
-        "missed": _claims(missed),
+        "missed": _listed(missed),
         "beam": f"{cost['figures']['plan-tracking:10-beam_over_best_tracking']:.0f}",
         "beam.target": f"{cost['target_ratio']:g}",
     }
@@ -911,15 +911,15 @@ def rl_values(docs: Path) -> dict[str, str]:
                 which[AGAINST[verdict]].append(f"`{key}` in Scenario {entry['scenario']}")
         table[f"{other}.pairs"] = str(sum(map(len, which.values())))
         for verdict, where in which.items():
-            table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(where)), _claims(where)
+            table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(where)), _listed(where)
     curves = [(n, k, c) for n, group in judged["curves"].items() for k, c in group.items()]
     flat = [f"`{k}` (Scenario {n})" for n, k, c in curves if c["flat"]]
     table |= {
         "flat-change": f"{100 * FLAT_CHANGE:.0f}",
         "curves": str(len(curves)),
         "flat": str(len(flat)),
-        "flat.which": _claims(flat),
-        "moving.which": _claims(
+        "flat.which": _listed(flat),
+        "moving.which": _listed(
             [f"`{k}` (Scenario {n}, {100 * c['change']:+.1f} %)" for n, k, c in curves if c["flat"] is False]
         ),
     }
@@ -1522,7 +1522,7 @@ def planning_values(docs: Path) -> dict[str, str]:
         oracle = run["minus"][PLANNING_ORACLE]["best-tracking"]
         table[f"oracle.{where}"] = word[verdicts.verdict(oracle["ci"], -1)]
         table[f"oracle.{where}.difference"] = _signed(oracle)
-        table[f"oracle.{where}.beaten-by"] = _claims(winners)
+        table[f"oracle.{where}.beaten-by"] = _listed(winners)
     for learner in PLANNING_LEARNERS:
         key = learner.replace(":", "-")
         differences = [run["minus"][learner]["tracking-ucb"] for run in runs]
@@ -1769,7 +1769,7 @@ def ablations_value(docs: Path, key: str) -> str:
     the best super arm changes over 300-500 s)."""
     a = read_json(docs, ABLATIONS)
     if key == "trials":
-        return _claims([str(t) for t in sorted({e["trials"] for e in _ablation_scenarios(a).values()})])
+        return _listed([str(t) for t in sorted({e["trials"] for e in _ablation_scenarios(a).values()})])
     if key == "crossing":
         crossing = a["paper-1-v1"]["exploration"]["crossing"]
         if not crossing:
@@ -2035,33 +2035,33 @@ def layout_values(docs: Path) -> dict[str, str]:
         "scored": str(len(finalists)),
     }
     held = {c: [f["verdicts"][c] == "holds" for f in finalists] for c in v1}
-    table["gained"] = _claims([c for c in v1 if v1[c] != "holds" and any(held[c])])
-    table["lost"] = _claims([c for c in v1 if v1[c] == "holds" and not all(held[c])])
-    table["never"] = _claims([c for c in v1 if v1[c] != "holds" and not any(held[c])])
+    table["gained"] = _listed([c for c in v1 if v1[c] != "holds" and any(held[c])])
+    table["lost"] = _listed([c for c in v1 if v1[c] == "holds" and not all(held[c])])
+    table["never"] = _listed([c for c in v1 if v1[c] != "holds" and not any(held[c])])
     for f in finalists:
         table |= {f"{f['name']}.{v}": str(f["counts"][v]) for v in verdicts.VERDICTS}
-        table[f"{f['name']}.won"] = _claims(
+        table[f"{f['name']}.won"] = _listed(
             [c for c in v1 if v1[c] != "holds" and f["verdicts"][c] == "holds"]
         )
-        table[f"{f['name']}.lost"] = _claims(
+        table[f"{f['name']}.lost"] = _listed(
             [c for c in v1 if v1[c] == "holds" and f["verdicts"][c] != "holds"]
         )
     better = [f["name"] for f in finalists if f["counts"]["holds"] > v1_holds]
-    table["better"], table["better.count"] = _claims(better), str(len(better))
+    table["better"], table["better.count"] = _listed(better), str(len(better))
     top = read_json(docs, LAYOUT_TOP)
     ten = [f for f in top["finalists"] if f["name"] != "v1"]
     table["screen-trials"] = str(top["trials"])
     count = {c: sum(f["verdicts"][c] == "holds" for f in ten) for c in ten[0]["verdicts"]}
-    table["once"] = _claims([c for c, n in count.items() if n == 1])
-    table["none-of-ten"] = _claims([c for c, n in count.items() if n == 0])
+    table["once"] = _listed([c for c, n in count.items() if n == 1])
+    table["none-of-ten"] = _listed([c for c, n in count.items() if n == 0])
     long = {int(f["name"].rsplit("-", 1)[1]) for f in finalists}
     could = [i + 1 for i, f in enumerate(ten) if f["counts"]["holds"] + f["counts"]["consistent"] > v1_holds]
-    table["could"] = _claims([str(rank) for rank in could])
-    table["could.unscored"] = _claims([str(rank) for rank in could if rank not in long])
+    table["could"] = _listed([str(rank) for rank in could])
+    table["could.unscored"] = _listed([str(rank) for rank in could if rank not in long])
     return table | _shipped_values(docs, finalists) | _seed_values(docs, finalists)
 
 
-def _claims(items: list[str]) -> str:
+def _listed(items: list[str]) -> str:
     """A computed list of a sentence: its items, or "none"."""
     return ", ".join(items) or "none"
 
@@ -2176,7 +2176,7 @@ def _seed_values(docs: Path, finalists: list[dict]) -> dict[str, str]:
         table[f"{key}.holds"] = ", ".join(
             str(verdicts.count(cards[label].values())["holds"]) for label in mine
         )
-        table[f"{key}.moving"] = _claims(
+        table[f"{key}.moving"] = _listed(
             [c for c in cards[mine[0]] if len({cards[label][c] for label in mine}) > 1]
         )
     return table
