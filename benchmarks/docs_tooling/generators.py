@@ -519,8 +519,9 @@ def _rests_on(docs: Path) -> dict[str, str]:
     (the layout screen) and ``scorecards`` (master seeds of v1's scorecard)."""
     rl = read_json(docs, "rl/rl.json")
     seeds: dict[int, list[str]] = {}
-    for key, row in rl["scenarios"][0]["learners"].items():
-        seeds.setdefault(row["seeds"], []).append(f"`{key}`")
+    for key in rl["scenarios"][0]["learners"]:
+        count = int(_one({e["learners"][key]["seeds"] for e in rl["scenarios"]}, f"{key} seeds"))
+        seeds.setdefault(count, []).append(f"`{key}`")
     return {
         "claims.trials": _one(
             {study_summary(docs, n, f)["trials"] for n in (1, 2, 3) for f in FUSION_LABELS}, "trials"
