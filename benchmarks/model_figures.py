@@ -258,7 +258,7 @@ def oracle_exact_cost() -> dict[str, Figure]:
 def nees_per_step(batch: int, steps: int, turn_rates: tuple, probabilities: tuple) -> NDArray[np.float64]:
     """The NEES of every step after 20 steps of transient and every trial (steps - 20, batch), on
     paper-1 (v0's per-trial NCV truth), centralised fusion, the fixed selection {TX1,TX2;
-    RX1,RX2,RX3} (tests/tracking/test_closed_loop.py asserts its consistency from it too)."""
+    RX1,RX2,RX3} (tests/mimo_radar_env/tracking/test_closed_loop.py asserts its consistency from it too)."""
     from mimo_radar_env.tracking import IMMUKFTracker
 
     model = RadarModel.from_scenario(load_scenario("paper-1"))
@@ -301,7 +301,7 @@ def consistency() -> dict[str, Figure]:
 def vector_run(scenario: str, batch: int, steps: int, fusion: str, fixed=None, **options) -> tuple:
     """Target 0's position errors (steps, batch) and model probabilities (steps, batch, R) of a
     v0 vector env, with ``fixed`` selections (an action (M + N,)) or the oracle's
-    (tests/tracking/test_closed_loop.py asserts on them too)."""
+    (tests/mimo_radar_env/tracking/test_closed_loop.py asserts on them too)."""
     if fixed is None:
         agent = agents.make_agent("best", scenario)
     else:
@@ -354,7 +354,8 @@ def maneuver_modes() -> dict[str, Figure]:
 # ---------------------------------------------------------------- the bound
 def error_and_bound(trials: int, steps: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Squared position errors and squared bounds (steps, trials) of paper-1-v1, centralised
-    fusion, uniformly random selections, seed 0 (tests/tracking/test_bound.py reads them too)."""
+    fusion, uniformly random selections, seed 0 (tests/mimo_radar_env/tracking/test_bound.py reads
+    them too)."""
     venv = gym.make_vec(
         "MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point", fusion="centralized"
     )

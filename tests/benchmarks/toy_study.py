@@ -1,5 +1,5 @@
 """A study defined in one module, as a user would write one: it adds ``toy`` to the command
-line's registry (``mimo-radar-bench --import tests.bench.toy_study toy``). It runs Best and a
+line's registry (``mimo-radar-bench --import tests.benchmarks.toy_study toy``). It runs Best and a
 random policy on two paper scenarios and judges "Best's regret is below the random policy's"
 on each."""
 

@@ -10,9 +10,9 @@ from benchmarks.studies import Run, Settings, configure
 
 
 def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsys):
-    argv = ["--import", "tests.bench.toy_study", "toy", "--out", str(tmp_path / "toy"), "--steps", "20"]
+    argv = ["--import", "tests.benchmarks.toy_study", "toy", "--out", str(tmp_path / "toy"), "--steps", "20"]
     assert main([*argv, "--workers", "1", "--quiet", "--no-figures"]) == 0
-    from tests.bench import toy_study
+    from tests.benchmarks import toy_study
 
     assert COMMANDS["toy"].load() is toy_study.ToyStudy and COMMANDS["toy"].group == "studies"
     out = tmp_path / "toy"
@@ -189,7 +189,7 @@ def test_every_import_before_the_command_is_imported_and_a_missing_one_is_named(
     )
     (tmp_path / "first_module.py").write_text("LOADED = True\n")
     monkeypatch.syspath_prepend(str(tmp_path))
-    argv = ["--import", "first_module", "--import", "tests.bench.toy_study", "toy", "--help"]
+    argv = ["--import", "first_module", "--import", "tests.benchmarks.toy_study", "toy", "--help"]
     with pytest.raises(SystemExit) as exit_:
         main(argv)
     assert exit_.value.code == 0 and "first_module" in sys.modules and COMMANDS["toy"].group == "studies"
