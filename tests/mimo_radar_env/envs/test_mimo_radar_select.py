@@ -16,7 +16,7 @@ def test_check_env_passes_without_warning(scenario):
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         # check_env also makes a render_mode="human" env; on a machine without a display that
-        # env says so (tests/mimo_radar_env/test_flat_vector.py), which is not a failure of the check
+        # env says so (tests/mimo_radar_env/wrappers/test_flat.py), which is not a failure of the check
         warnings.filterwarnings("ignore", message=".*render_mode='human' shows nothing here")
         check_env(env.unwrapped)
 

@@ -124,7 +124,7 @@ def test_check_env_warns_on_the_raw_id_only_as_the_docs_explain():
     assert messages, "check_env gave no warning: update docs/clients.md"
     unexplained = [m for m in messages if not any(e in m for e in EXPLAINED)]
     assert not unexplained
-    docs = (Path(__file__).parents[2] / "docs" / "clients.md").read_text()
+    docs = (Path(__file__).parents[3] / "docs" / "clients.md").read_text()
     for phrase in ("unconventional shape", "looks like an image", "probed nothing"):
         assert phrase in docs
     with warnings.catch_warnings(record=True) as caught:  # the Flat id: none at all
@@ -179,7 +179,7 @@ def test_gymnasiums_check_env_warns_only_as_the_docs_explain(env_id):
     messages = {str(w.message) for w in caught}
     unexplained = [m for m in messages if not any(e in m for e in GYMNASIUM_EXPLAINED[env_id])]
     assert not unexplained
-    docs = (Path(__file__).parents[2] / "docs" / "clients.md").read_text()
+    docs = (Path(__file__).parents[3] / "docs" / "clients.md").read_text()
     assert "Gymnasium's own `check_env`" in docs and "unbounded" in docs
 
 
