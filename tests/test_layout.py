@@ -9,6 +9,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 
 #: module -> (test file, a regular expression the test file must match)
+# fmt: off
 MODULE_TESTS = {
     "agents/base.py": ("tests/agents/test_agents.py", r"make_agent"),
     "agents/costs.py": ("tests/benchmarks/test_resources.py", r"agents\.costs\."),
@@ -54,10 +55,7 @@ MODULE_TESTS = {
     "benchmarks/studies/planning.py": ("tests/benchmarks/studies/test_planning.py", r"planning"),
     "benchmarks/speed/planning_cost.py": ("tests/benchmarks/studies/test_planning.py", r"planning_cost"),
     "benchmarks/speed/device.py": ("tests/mimo_radar_env/test_device.py", r"episode_differences"),
-    "benchmarks/speed/strong_scaling.py": (
-        "tests/benchmarks/speed/test_strong_scaling.py",
-        r"strong_scaling",
-    ),
+    "benchmarks/speed/strong_scaling.py": ("tests/benchmarks/speed/test_strong_scaling.py", r"strong_scaling"),
     "benchmarks/speed/training_rate.py": ("tests/agents/test_torch_ppo.py", r"training_rate"),
     "benchmarks/training_log.py": ("tests/agents/test_torch_ppo.py", r"LearningCurve"),
     "benchmarks/torch_ppo.py": ("tests/agents/test_torch_ppo.py", r"torch_ppo\.train|compute_gae"),
@@ -67,44 +65,23 @@ MODULE_TESTS = {
     "benchmarks/speed/env_throughput.py": ("tests/benchmarks/speed/test_perf.py", r"env_trial_steps_per_s"),
     "benchmarks/speed/perf.py": ("tests/benchmarks/speed/test_perf.py", r'"perf"'),
     "benchmarks/speed/scaling.py": ("tests/benchmarks/speed/test_perf.py", r"scaling\.measure"),
-    "benchmarks/studies/layout_search.py": (
-        "tests/benchmarks/studies/test_layout_search.py",
-        r"constraint_failure",
-    ),
+    "benchmarks/studies/layout_search.py": ("tests/benchmarks/studies/test_layout_search.py", r"constraint_failure"),
     "benchmarks/studies/ablations.py": ("tests/benchmarks/studies/test_ablations.py", r"exploration_costs"),
-    "benchmarks/studies/mechanisms.py": (
-        "tests/benchmarks/studies/test_mechanisms.py",
-        r"lead_and_sampling_oracles",
-    ),
+    "benchmarks/studies/mechanisms.py": ("tests/benchmarks/studies/test_mechanisms.py", r"lead_and_sampling_oracles"),
     "benchmarks/precompile.py": ("tests/benchmarks/test_precompile.py", r"precompile\.all_kernels"),
     "benchmarks/speed/across_commits.py": ("tests/benchmarks/speed/test_perf.py", r"across_commits"),
     "benchmarks/speed/solver_speed.py": ("tests/benchmarks/speed/test_perf.py", r"bpso_optimality_rate"),
-    "benchmarks/speed/tracker_speed.py": (
-        "tests/benchmarks/speed/test_perf.py",
-        r"tracker_speedup_vs_filterpy",
-    ),
+    "benchmarks/speed/tracker_speed.py": ("tests/benchmarks/speed/test_perf.py", r"tracker_speedup_vs_filterpy"),
     "benchmarks/studies/base.py": ("tests/benchmarks/studies/test_base.py", r"configure"),
     "benchmarks/studies/calibration.py": ("tests/benchmarks/studies/test_calibration.py", r"calibrate"),
-    "benchmarks/studies/claims.py": (
-        "tests/benchmarks/studies/test_claims.py",
-        r"claims\.evaluate|claims\.judge",
-    ),
+    "benchmarks/studies/claims.py": ("tests/benchmarks/studies/test_claims.py", r"claims\.evaluate|claims\.judge"),
     "benchmarks/studies/paper.py": ("tests/benchmarks/test_harness.py", r'"paper"'),
     "benchmarks/studies/settings.py": ("tests/benchmarks/studies/test_settings.py", r"Settings\.from_args"),
     "benchmarks/studies/tracking.py": ("tests/benchmarks/studies/test_tracking.py", r"TRACKING_POLICIES"),
-    "mimo_radar_env/core/compiled.py": (
-        "tests/mimo_radar_env/tracking/fusion/test_average.py",
-        r"HAVE_NUMBA",
-    ),
-    "mimo_radar_env/core/_counter_hash_kernels.py": (
-        "tests/mimo_radar_env/core/test_streams.py",
-        r"_nb\b|numba",
-    ),
+    "mimo_radar_env/core/compiled.py": ("tests/mimo_radar_env/tracking/fusion/test_average.py", r"HAVE_NUMBA"),
+    "mimo_radar_env/core/_counter_hash_kernels.py": ("tests/mimo_radar_env/core/test_streams.py", r"_nb\b|numba"),
     "mimo_radar_env/core/counter_hash.py": ("tests/mimo_radar_env/core/test_streams.py", r"Stream"),
-    "mimo_radar_env/core/geometry.py": (
-        "tests/mimo_radar_env/core/test_geometry.py",
-        r"measurement_jacobian",
-    ),
+    "mimo_radar_env/core/geometry.py": ("tests/mimo_radar_env/core/test_geometry.py", r"measurement_jacobian"),
     "mimo_radar_env/core/model.py": ("tests/mimo_radar_env/core/test_simulation.py", r"RadarModel"),
     "mimo_radar_env/core/motion.py": ("tests/mimo_radar_env/core/test_simulation.py", r"motion"),
     "mimo_radar_env/core/simulation.py": ("tests/mimo_radar_env/core/test_simulation.py", r"simulation"),
@@ -112,10 +89,7 @@ MODULE_TESTS = {
     "mimo_radar_env/core/superarm.py": ("tests/mimo_radar_env/core/test_simulation.py", r"superarm"),
     "mimo_radar_env/envs/cost.py": ("tests/benchmarks/test_resources.py", r"memory_parts"),
     "mimo_radar_env/envs/engine.py": ("tests/mimo_radar_env/envs/test_mimo_radar_select.py", r"vector_env"),
-    "mimo_radar_env/envs/mimo_radar_select.py": (
-        "tests/mimo_radar_env/envs/test_mimo_radar_select.py",
-        r"MimoRadarSelect-v",
-    ),
+    "mimo_radar_env/envs/mimo_radar_select.py": ("tests/mimo_radar_env/envs/test_mimo_radar_select.py", r"MimoRadarSelect-v"),
     "mimo_radar_env/envs/options.py": ("tests/mimo_radar_env/envs/test_options.py", r"option_names"),
     "mimo_radar_env/envs/versions.py": ("tests/mimo_radar_env/envs/test_versions.py", r"VERSIONS"),
     "mimo_radar_env/extras.py": ("tests/agents/test_ppo.py", r"DependencyNotInstalled|extras"),
@@ -125,68 +99,27 @@ MODULE_TESTS = {
     "mimo_radar_env/torchrl_env.py": ("tests/clients/test_packaging.py", r"MimoRadarSelectTorchRLEnv"),
     "mimo_radar_env/sb3.py": ("tests/agents/test_ppo.py", r"make_ppo_env"),
     "mimo_radar_env/scenarios/files.py": ("tests/mimo_radar_env/scenarios/test_scenario.py", r"yaml|toml"),
-    "mimo_radar_env/scenarios/random_layouts.py": (
-        "tests/mimo_radar_env/scenarios/test_scenario.py",
-        r"random_scenario",
-    ),
+    "mimo_radar_env/scenarios/random_layouts.py": ("tests/mimo_radar_env/scenarios/test_scenario.py", r"random_scenario"),
     "mimo_radar_env/scenarios/scenario.py": ("tests/mimo_radar_env/scenarios/test_scenario.py", r"Scenario"),
     "mimo_radar_env/scenarios/validation.py": ("tests/mimo_radar_env/test_bad_input.py", r"ScenarioError"),
     "mimo_radar_env/tracking/bound.py": ("tests/mimo_radar_env/tracking/test_bound.py", r"bound_step"),
-    "mimo_radar_env/tracking/_bound_kernels.py": (
-        "tests/mimo_radar_env/tracking/test_bound.py",
-        r"_compiled_step",
-    ),
-    "mimo_radar_env/tracking/_selection_kernels.py": (
-        "tests/mimo_radar_env/tracking/test_selection.py",
-        r"super_arm_criterion\(\*args, use_numba=False\)",
-    ),
-    "mimo_radar_env/tracking/fusion/_average_kernels.py": (
-        "tests/mimo_radar_env/tracking/fusion/test_average.py",
-        r"kernels\.",
-    ),
-    "mimo_radar_env/tracking/fusion/_centralized_kernels.py": (
-        "tests/mimo_radar_env/tracking/fusion/test_centralized.py",
-        r"kernels\.",
-    ),
-    "mimo_radar_env/tracking/fusion/average.py": (
-        "tests/mimo_radar_env/tracking/fusion/test_average.py",
-        r"average_channels",
-    ),
-    "mimo_radar_env/tracking/fusion/base.py": (
-        "tests/mimo_radar_env/tracking/test_imm_ukf.py",
-        r"use_numba",
-    ),
-    "mimo_radar_env/tracking/fusion/centralized.py": (
-        "tests/mimo_radar_env/tracking/test_imm_ukf.py",
-        r"centralized",
-    ),
-    "mimo_radar_env/tracking/imm.py": (
-        "tests/mimo_radar_env/tracking/test_imm_ukf.py",
-        r"IMMUKFTracker",
-    ),
-    "mimo_radar_env/tracking/imm_ukf.py": (
-        "tests/mimo_radar_env/tracking/test_imm_ukf.py",
-        r"filterpy",
-    ),
-    "mimo_radar_env/tracking/information.py": (
-        "tests/mimo_radar_env/tracking/test_selection.py",
-        r"channel_information",
-    ),
-    "mimo_radar_env/tracking/selection.py": (
-        "tests/mimo_radar_env/tracking/test_selection.py",
-        r"super_arm_criterion",
-    ),
-    "mimo_radar_env/tracking/unscented.py": (
-        "tests/mimo_radar_env/tracking/test_imm_ukf.py",
-        r"unscented|UKF",
-    ),
+    "mimo_radar_env/tracking/_bound_kernels.py": ("tests/mimo_radar_env/tracking/test_bound.py", r"_compiled_step"),
+    "mimo_radar_env/tracking/_selection_kernels.py": ("tests/mimo_radar_env/tracking/test_selection.py", r"super_arm_criterion\(\*args, use_numba=False\)"),
+    "mimo_radar_env/tracking/fusion/_average_kernels.py": ("tests/mimo_radar_env/tracking/fusion/test_average.py", r"kernels\."),
+    "mimo_radar_env/tracking/fusion/_centralized_kernels.py": ("tests/mimo_radar_env/tracking/fusion/test_centralized.py", r"kernels\."),
+    "mimo_radar_env/tracking/fusion/average.py": ("tests/mimo_radar_env/tracking/fusion/test_average.py", r"average_channels"),
+    "mimo_radar_env/tracking/fusion/base.py": ("tests/mimo_radar_env/tracking/test_imm_ukf.py", r"use_numba"),
+    "mimo_radar_env/tracking/fusion/centralized.py": ("tests/mimo_radar_env/tracking/test_imm_ukf.py", r"centralized"),
+    "mimo_radar_env/tracking/imm.py": ("tests/mimo_radar_env/tracking/test_imm_ukf.py", r"IMMUKFTracker"),
+    "mimo_radar_env/tracking/imm_ukf.py": ("tests/mimo_radar_env/tracking/test_imm_ukf.py", r"filterpy"),
+    "mimo_radar_env/tracking/information.py": ("tests/mimo_radar_env/tracking/test_selection.py", r"channel_information"),
+    "mimo_radar_env/tracking/selection.py": ("tests/mimo_radar_env/tracking/test_selection.py", r"super_arm_criterion"),
+    "mimo_radar_env/tracking/unscented.py": ("tests/mimo_radar_env/tracking/test_imm_ukf.py", r"unscented|UKF"),
     "mimo_radar_env/wrappers/actions.py": ("tests/clients/test_clients.py", r"SuperArmDiscreteAction"),
     "mimo_radar_env/wrappers/features.py": ("tests/agents/test_ppo.py", r"features"),
-    "mimo_radar_env/wrappers/flat.py": (
-        "tests/mimo_radar_env/wrappers/test_flat.py",
-        r"MimoRadarSelectFlatVectorEnv",
-    ),
+    "mimo_radar_env/wrappers/flat.py": ("tests/mimo_radar_env/wrappers/test_flat.py", r"MimoRadarSelectFlatVectorEnv"),
 }
+# fmt: on
 
 
 def _modules():
