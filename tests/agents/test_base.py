@@ -1,0 +1,83 @@
+"""Every registered agent acts validly through an episode on the single and the vector env, and
+refuses an env of another scenario and values that are not finite."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+import agents
+from tests.helpers import large_scenario, vector_env
+
+
+def _episode(agent_name, scenario, vector, steps):
+    cls = agents.agent_class(agent_name)
+    kwargs = {"scenario": scenario, **cls.needs.observation_options}
+    if vector:
+        env = vector_env("MimoRadarSelect-v0", 3, **kwargs)
+        sc = env.scenario
+    else:
+        env = gym.make("MimoRadarSelect-v0", **kwargs)
+        sc = env.unwrapped.scenario
+    params = {"seed": 0}
+    if agent_name in ("fix1", "fix2") and sc.num_tx != 4 or agent_name in agents.learned_agents():
+        # the learned agents need a trained model: tests/agents/test_ppo.py, test_learners.py
+        return
+    if agent_name == "fixed":
+        params.update(tx=list(range(sc.tx_per_step)), rx=list(range(sc.rx_per_step)))
+    if agent_name == "mg-crb-cl" and sc.num_tx > 8:
+        params["solver"] = "alternating"
+    if agent_name.startswith("plan-") and sc.num_tx > 8:
+        # it scores every super arm at every planned step: layouts it refuses are tested there
+        with pytest.raises(ValueError, match="planning scores every super arm"):
+            agents.make_agent(agent_name, sc, **params)
+        return
+    options = env.unwrapped.options if not vector else env.options
+    params.update({key: getattr(options, key) for key in cls.needs.env_option_params})
+    agent = agents.make_agent(agent_name, sc, **params)
+    for step in agents.Rollout(agent, env, seed=1).run(steps or sc.horizon):
+        assert np.all(step.info["action_valid"])
+    if steps is None:
+        assert np.all(step.truncated)
+
+
+SCENARIOS = ["paper-1", "paper-2", "paper-3", "large"]
+
+
+def _scenario(name):
+    return large_scenario(16, 16, 5) if name == "large" else name
+
+
+@pytest.mark.parametrize("scenario", SCENARIOS)
+@pytest.mark.parametrize("vector", [False, True])
+def test_every_agent_acts_validly(scenario, vector):
+    for name in agents.available_agents():
+        _episode(name, _scenario(scenario), vector, steps=30)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("scenario", SCENARIOS)
+@pytest.mark.parametrize("vector", [False, True])
+def test_every_agent_runs_a_whole_episode(scenario, vector):
+    for name in agents.available_agents():
+        _episode(name, _scenario(scenario), vector, steps=None)
+
+
+@pytest.mark.parametrize("policy", ["tracking-ucb", "best-tracking", "rbe", "cts", "ucb1", "mg-crb-cl"])
+def test_an_agent_refuses_an_env_of_another_scenario_and_what_is_not_finite(policy):
+    import math
+
+    env = agents.make_env(agents.make_agent(policy, "paper-1-v1"), 2)  # K = 1
+    obs, _ = env.reset(seed=0)
+    stranger = agents.make_agent(policy, "paper-3-v1", seed=0)  # made for K = 2
+    with pytest.raises(ValueError, match=r"was made for scenario 'paper-3-v1' \(K=2 targets, M=4, N=6\)"):
+        stranger.reset(obs)
+    agent = agents.make_agent(policy, "paper-1-v1", seed=0)
+    if agent.needs.oracle:
+        agent.attach(env)
+    agent.reset(obs)
+    obs, reward, *_ = env.step(agent.act(obs))
+    with pytest.raises(ValueError, match="the 'reward' it was given is not finite"):
+        agent.update(obs, np.full_like(reward, math.nan))
+    bad = {**obs, "sinr": np.where(obs["sinr"] > 0, math.inf, obs["sinr"])}
+    with pytest.raises(ValueError, match="the 'sinr' it was given is not finite"):
+        agent.update(bad, reward)

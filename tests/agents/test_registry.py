@@ -1,0 +1,46 @@
+"""The agent registry: its errors list what exists, and bad parameters are named."""
+
+import pytest
+
+import agents
+from mimo_radar_env import load_scenario
+
+PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4]
+
+
+def test_registry_errors_list_what_exists():
+    with pytest.raises(ValueError, match="unknown agent 'ucb2'; available agents are .*mg-crb-cl"):
+        agents.make_agent("ucb2", PAPER)
+    with pytest.raises(
+        ValueError, match=r"unknown parameter\(s\) \['gamma'\] for agent 'ucb1'; allowed: .*beta"
+    ):
+        agents.make_agent("ucb1", PAPER, gamma=3)
+    assert {
+        "mg-crb-cl",
+        "ucb1",
+        "epsilon-greedy",
+        "fix1",
+        "fix2",
+        "best",
+        "discounted-ucb",
+        "sliding-window-ucb",
+        "discounted-thompson",
+        "cucb",
+        "random",
+    } <= set(agents.available_agents())
+
+
+@pytest.mark.parametrize(
+    ("name", "params", "message"),
+    [
+        ("mg-crb-cl", {"alpha": 1.5}, r"alpha must be in \[0, 1\], got 1.5"),
+        ("mg-crb-cl", {"beta": -1}, r"beta must be in \[0, inf\), got -1"),
+        ("discounted-ucb", {"discount": 0.0}, r"discount must be in \(0, 1\], got 0.0"),
+        ("discounted-thompson", {"prior_rate": 0}, r"prior_rate must be in \(0, inf\), got 0"),
+        ("sliding-window-ucb", {"window": 0}, r"window must be in \[1, inf\), got 0"),
+        ("epsilon-greedy", {"epsilon": 2}, r"epsilon must be in \[0, 1\], got 2"),
+    ],
+)
+def test_bad_agent_parameters_are_named(name, params, message):
+    with pytest.raises(ValueError, match=message):
+        agents.make_agent(name, PAPER, **params)
