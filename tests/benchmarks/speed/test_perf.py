@@ -1,9 +1,7 @@
-"""The perf command's quick mode and the speed suite's parts: every figure is produced, and each
-means what it says (a ratio is the quotient of the two figures measured beside it, a rate the
-work done over the time it took, a share within 0 and 1)."""
+"""The perf command's quick mode: every figure is produced, and each means what it says (a ratio is
+the quotient of the two figures measured beside it, a share within 0 and 1)."""
 
 import json
-import sys
 
 import pytest
 
@@ -71,97 +69,3 @@ def test_perf_quick_writes_every_figure(tmp_path, capsys):
         < result["policy_time_measured_over_estimated_min"]
         <= result["policy_time_measured_over_estimated_max"]
     )
-
-
-def test_the_scaling_rows_measure_a_small_layout_and_the_growth_fit_is_a_slope():
-    from benchmarks.speed import scaling
-
-    row = scaling.measure(5, 6, 2, 2, 3, trials=4, steps=2)
-    assert (row["M"], row["N"], row["K"], row["B"], row["solver"]) == (5, 6, 2, 4, "exact")
-    assert row["ms_per_step"] > 0 and row["peak_mib"] > 0
-    assert row["us_per_trial_step"] == pytest.approx(1e3 * row["ms_per_step"] / 4)
-    assert scaling.growth([1, 2, 4, 8], [3, 6, 12, 24]) == pytest.approx(1.0)
-    assert scaling.growth([1, 2, 4], [1, 4, 16]) == pytest.approx(2.0)
-
-
-def test_the_step_stages_add_up_to_the_step_and_name_their_arithmetic():
-    from benchmarks.speed import stages
-
-    record = stages.measure(trials=4, steps=2)
-    rows = record["rows"]
-    env_stages = {"simulation", "tracker", "bound", "oracle search", "observation and info"}
-    for fusion in ("average", "centralized"):
-        assert {r["stage"] for r in rows if r["fusion"] == fusion} == env_stages
-        timed = [r for r in rows if r["fusion"] == fusion and r["stage"] != "observation and info"]
-        assert all(r["ms_per_step"] > 0 for r in timed)
-    tracker = next(r for r in rows if r["stage"] == "tracker" and r["fusion"] == "average")
-    assert tracker["achieved_operations_per_s"] == pytest.approx(
-        tracker["declared_operations_per_trial"] * 4 / (tracker["ms_per_step"] / 1e3)
-    )
-    assert {r["stage"] for r in rows if r["fusion"] == "-"} == {
-        "MG-CRB-CL act, BPSO (paper, rule set)",
-        "MG-CRB-CL act, exact solver",
-    }
-
-
-@pytest.mark.slow
-def test_a_first_run_from_an_empty_cache_writes_the_numba_cache(tmp_path):
-    from benchmarks.speed import first_run
-
-    args = ("paper", "--scenario", "1", "--trials", "2", "--steps", "2", "--quiet", "--no-figures")
-    seconds = first_run.timed_run(tmp_path / "out", tmp_path / "cache", args)
-    assert seconds > 0 and (tmp_path / "out" / "summary.json").is_file()
-    # the kernels the run called are cached for the next run: BPSO's one-thread kernel among them
-    assert any(
-        p.name.startswith("_bpso_kernels.run_numba_serial") for p in (tmp_path / "cache").rglob("*.nbi")
-    )
-
-
-def test_first_run_refuses_no_repeats(capsys):
-    from benchmarks.speed import first_run
-
-    with pytest.raises(SystemExit):
-        first_run.main(["--repeats", "0"])
-    assert "--repeats must be at least 1" in capsys.readouterr().err
-
-
-def test_a_figure_is_compared_across_two_commits_of_a_repository(tmp_path):
-    """Two commits of a small repository whose benchmark prints a known number: the comparison
-    checks each out, runs it there and takes the number from its JSON line."""
-    import subprocess
-
-    from benchmarks.speed import across_commits
-
-    repo = tmp_path / "repo"
-    repo.mkdir()
-
-    def git(*args):
-        subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
-
-    git("init", "-q")
-    commits = []
-    for value in (6.0, 2.0):
-        (repo / "bench.py").write_text(
-            f"import json\nprint('warming up')\nprint(json.dumps({{'ms': {value}}}))\n"
-        )
-        git("add", "bench.py")
-        git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", f"ms {value}")
-        commits.append(
-            subprocess.run(
-                ["git", "-C", str(repo), "rev-parse", "HEAD"], capture_output=True, text=True
-            ).stdout.strip()
-        )
-    out = tmp_path / "compare.json"
-    argv = [commits[0], commits[1], "--key", "ms", "--repeats", "2", "--repo", str(repo), "--json", str(out)]
-    result = across_commits.main([*argv, "--", sys.executable, "bench.py"])
-    assert result["values"] == {commits[0]: [6.0, 6.0], commits[1]: [2.0, 2.0]}
-    assert result["ratio"] == pytest.approx(3.0)
-    assert json.loads(out.read_text())["ratio"] == pytest.approx(3.0)
-    assert (
-        subprocess.run(
-            ["git", "-C", str(repo), "worktree", "list"], capture_output=True, text=True
-        ).stdout.count("\n")
-        == 1
-    )
-    with pytest.raises(RuntimeError, match="did not end with a JSON object holding 'nope'"):
-        across_commits.compare(repo, (commits[0], commits[1]), [sys.executable, "bench.py"], "nope", 1)

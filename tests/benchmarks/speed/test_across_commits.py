@@ -1,0 +1,48 @@
+"""A figure compared across two commits of a repository, each checked out in a worktree."""
+
+import json
+import sys
+
+import pytest
+
+
+def test_a_figure_is_compared_across_two_commits_of_a_repository(tmp_path):
+    """Two commits of a small repository whose benchmark prints a known number: the comparison
+    checks each out, runs it there and takes the number from its JSON line."""
+    import subprocess
+
+    from benchmarks.speed import across_commits
+
+    repo = tmp_path / "repo"
+    repo.mkdir()
+
+    def git(*args):
+        subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
+
+    git("init", "-q")
+    commits = []
+    for value in (6.0, 2.0):
+        (repo / "bench.py").write_text(
+            f"import json\nprint('warming up')\nprint(json.dumps({{'ms': {value}}}))\n"
+        )
+        git("add", "bench.py")
+        git("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", f"ms {value}")
+        commits.append(
+            subprocess.run(
+                ["git", "-C", str(repo), "rev-parse", "HEAD"], capture_output=True, text=True
+            ).stdout.strip()
+        )
+    out = tmp_path / "compare.json"
+    argv = [commits[0], commits[1], "--key", "ms", "--repeats", "2", "--repo", str(repo), "--json", str(out)]
+    result = across_commits.main([*argv, "--", sys.executable, "bench.py"])
+    assert result["values"] == {commits[0]: [6.0, 6.0], commits[1]: [2.0, 2.0]}
+    assert result["ratio"] == pytest.approx(3.0)
+    assert json.loads(out.read_text())["ratio"] == pytest.approx(3.0)
+    assert (
+        subprocess.run(
+            ["git", "-C", str(repo), "worktree", "list"], capture_output=True, text=True
+        ).stdout.count("\n")
+        == 1
+    )
+    with pytest.raises(RuntimeError, match="did not end with a JSON object holding 'nope'"):
+        across_commits.compare(repo, (commits[0], commits[1]), [sys.executable, "bench.py"], "nope", 1)
