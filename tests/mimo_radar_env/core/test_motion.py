@@ -1,0 +1,26 @@
+"""The truth follows the motion model."""
+
+import numpy as np
+
+from mimo_radar_env import RadarModel, load_scenario
+from mimo_radar_env.core.simulation import RadarSimulation
+from mimo_radar_env.core.streams import keys_from_generator
+
+
+def test_truth_follows_the_motion_model():
+    """Increments of the truth have the process-noise covariance Q = G diag(Qs, Qs) G'."""
+    scenario = load_scenario("paper-1")
+    model = RadarModel.from_scenario(scenario)
+    batch = 4000
+    sim = RadarSimulation(model, batch)
+    rng = np.random.default_rng(2)
+    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    start = sim.state.copy()
+    np.testing.assert_allclose(
+        np.cov(start[:, 0].T), np.diag([20.0] * 4), atol=1.5
+    )  # 4.7 sigma of a sample covariance
+    sim.advance()
+    F = np.array([[1, 1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 1], [0, 0, 0, 1.0]])
+    noise = sim.state[:, 0] - start[:, 0] @ F.T
+    Q = 0.1 * np.array([[0.25, 0.5, 0, 0], [0.5, 1, 0, 0], [0, 0, 0.25, 0.5], [0, 0, 0.5, 1]])
+    np.testing.assert_allclose(np.cov(noise.T), Q, atol=0.012)
