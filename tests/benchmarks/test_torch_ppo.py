@@ -1,7 +1,6 @@
-"""The project's own PPO (``benchmarks/torch_ppo.py``, ``agents/networks.py``, the torch-ppo
-agent): its parts against independent computations (GAE by its definition, SB3's running
-statistics, the clipped loss written out in numpy), a training on CPU torch, the agent on numpy
-and on a device env, and the refusals."""
+"""torch-ppo, the project's own PPO: GAE and the loss against their definitions, a training's files,
+reproducible weights, the agent it makes, refusals before anything is written, and both learners
+against random."""
 
 import dataclasses
 import json
@@ -12,7 +11,7 @@ import pytest
 torch = pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
 
 import agents  # noqa: E402
-from agents.networks import ActorCritic, RunningNormalization  # noqa: E402
+from agents.networks import ActorCritic  # noqa: E402
 from benchmarks import torch_ppo  # noqa: E402
 from benchmarks.training import normalize_kwargs, train_ppo  # noqa: E402
 from mimo_radar_env import load_scenario  # noqa: E402
@@ -42,22 +41,6 @@ def test_gae_matches_its_definition_episode_by_episode():
             expected[t, b] = total
     np.testing.assert_allclose(adv.numpy(), expected, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(ret.numpy(), expected + values, rtol=1e-12, atol=1e-12)
-
-
-def test_running_normalisation_is_vecnormalizes():
-    from stable_baselines3.common.running_mean_std import RunningMeanStd
-
-    rng = np.random.default_rng(1)
-    ours, sb3 = RunningNormalization(5), RunningMeanStd(shape=(5,))
-    for size in (3, 1, 17, 8):
-        batch = rng.normal(2.0, 3.0, (size, 5))
-        ours.update(torch.as_tensor(batch))
-        sb3.update(batch)
-    np.testing.assert_allclose(ours.mean.numpy(), sb3.mean, rtol=1e-12)
-    np.testing.assert_allclose(ours.var.numpy(), sb3.var, rtol=1e-12)
-    x = rng.normal(0, 30, (4, 5))
-    expected = np.clip((x - sb3.mean) / np.sqrt(sb3.var + 1e-8), -10, 10).astype(np.float32)
-    np.testing.assert_allclose(ours(torch.as_tensor(x)).numpy(), expected, rtol=1e-6)
 
 
 def test_the_loss_is_the_clipped_surrogate_value_and_entropy_terms():
@@ -159,22 +142,6 @@ def test_an_sb3_key_torch_ppo_does_not_implement_is_refused_by_name():
     assert (config.n_envs, config.gamma, config.net_arch, config.normalize_obs) == (512, 0.9, (32,), True)
 
 
-@pytest.mark.parametrize("learner", ["sb3", "torch-ppo"])
-def test_the_training_rate_times_the_rollouts_after_the_first(learner):
-    """A row's rate is the env steps of its rollouts after the first over their time, each
-    rollout with its update: it counts (rollouts - 1) n_steps B steps, and cannot exceed
-    those steps over the whole call's time."""
-    import time
-
-    from benchmarks.speed import training_rate
-
-    start = time.perf_counter()
-    row = training_rate.training_rate(learner, 4, None if learner == "sb3" else "cpu", rollouts=3, n_steps=8)
-    wall = time.perf_counter() - start
-    assert row["timed_steps"] == 2 * 8 * 4 and row["batch_size"] == 8 * 4 // 8
-    assert row["timed_steps"] / wall < row["env_steps_per_s"] < float("inf")
-
-
 def _returns(agent, trials=200, seed=10_000):
     episode = agents.Rollout(agent, agents.make_env(agent, trials), seed=seed)
     return sum(step.reward for step in episode.run(SHORT.horizon))
@@ -202,20 +169,3 @@ def test_both_learners_beat_random_and_land_within_each_others_across_seed_inter
     welch = stats.ttest_ind(means["ppo"], means["torch-ppo"], equal_var=False)
     low, high = welch.confidence_interval(0.95)
     assert low <= 0 <= high, means
-
-
-def test_the_progress_line_says_the_steps_the_last_episodes_the_rate_and_the_time_left(capsys):
-    from benchmarks.training_log import LearningCurve
-
-    log = LearningCurve(progress=True, every=0.0, name="torch-ppo")
-    log.start(4000)
-    log.add_episodes([10.0, 20.0], [2.0, 4.0])
-    log._start -= 2.0  # two seconds ago
-    log.close_rollout(1000)
-    line = capsys.readouterr().out.strip()
-    assert line.startswith("torch-ppo: 1,000/4,000 steps (25 %) · return 15.0 · ARMSE 3.00 m · ")
-    rate = int(line.split(" · ")[3].split()[0].replace(",", ""))
-    assert 400 <= rate <= 500  # about 1,000 steps in 2 s
-    assert line.endswith("s left") and log.rows == [
-        {"timesteps": 1000, "episodes": 2, "return": 15.0, "armse": 3.0}
-    ]

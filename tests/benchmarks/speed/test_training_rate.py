@@ -1,0 +1,21 @@
+"""The training-rate benchmark times the rollouts after the first, for both learners."""
+
+import pytest
+
+torch = pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
+
+
+@pytest.mark.parametrize("learner", ["sb3", "torch-ppo"])
+def test_the_training_rate_times_the_rollouts_after_the_first(learner):
+    """A row's rate is the env steps of its rollouts after the first over their time, each
+    rollout with its update: it counts (rollouts - 1) n_steps B steps, and cannot exceed
+    those steps over the whole call's time."""
+    import time
+
+    from benchmarks.speed import training_rate
+
+    start = time.perf_counter()
+    row = training_rate.training_rate(learner, 4, None if learner == "sb3" else "cpu", rollouts=3, n_steps=8)
+    wall = time.perf_counter() - start
+    assert row["timed_steps"] == 2 * 8 * 4 and row["batch_size"] == 8 * 4 // 8
+    assert row["timed_steps"] / wall < row["env_steps_per_s"] < float("inf")
