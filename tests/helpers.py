@@ -22,3 +22,13 @@ def vector_env(env_id: str, num_envs: int, **kwargs):
     import gymnasium as gym
 
     return gym.make_vec(env_id, num_envs=num_envs, vectorization_mode="vector_entry_point", **kwargs)
+
+
+def bandit_obs(sinr, probed, track=None, track_pred=None):
+    """An agent's observation written by hand: the SINR, the probed mask and, where given, the
+    tracks and their predictions."""
+    obs = {"sinr": np.asarray(sinr, dtype=float), "probed": np.asarray(probed, dtype=np.int8)}
+    if track is not None:
+        obs["track"] = np.asarray(track, dtype=float)
+        obs["track_pred"] = np.asarray(track_pred, dtype=float)
+    return obs

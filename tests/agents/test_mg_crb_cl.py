@@ -6,17 +6,9 @@ import pytest
 
 import agents
 from mimo_radar_env import load_scenario
-from tests.helpers import vector_env
+from tests.helpers import bandit_obs, vector_env
 
 PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4]
-
-
-def _obs(sinr, probed, track=None, track_pred=None):
-    obs = {"sinr": np.asarray(sinr, dtype=float), "probed": np.asarray(probed, dtype=np.int8)}
-    if track is not None:
-        obs["track"] = np.asarray(track, dtype=float)
-        obs["track_pred"] = np.asarray(track_pred, dtype=float)
-    return obs
 
 
 def _ranges_sq(state, scenario):
@@ -33,9 +25,9 @@ def test_mg_crb_cl_update_rules_by_hand():
     track = np.array([[20e3, 100, 30e3, 50], [40e3, -20, 60e3, 10]])
     track_pred = track + np.array([[100, 0, 50, 0], [-20, 0, 10, 0]])
     agent = agents.make_agent("mg-crb-cl", sc, solver="exact", alpha=0.9, alpha_bar=0.3, beta=2.0)
-    agent.reset(_obs(y0, np.ones((4, 6)), track, track_pred))
+    agent.reset(bandit_obs(y0, np.ones((4, 6)), track, track_pred))
     np.testing.assert_array_equal(agent.counts, np.ones((1, 4, 6)))
-    agent.act(_obs(y0, np.ones((4, 6)), track, track_pred))  # t = 1
+    agent.act(bandit_obs(y0, np.ones((4, 6)), track, track_pred))  # t = 1
     # eq16 by hand: ratio of path gains (R_tx R_rx)^-2 at the prediction and the estimate
     y_bar = np.empty_like(y0)
     for k in range(2):
@@ -50,7 +42,7 @@ def test_mg_crb_cl_update_rules_by_hand():
     probed = np.zeros((4, 6))
     probed[0, 0] = probed[1, 2] = 1
     gamma = rng.exponential(size=(2, 4, 6)) * probed
-    agent.update(_obs(gamma, probed, track, track_pred), 0.0)
+    agent.update(bandit_obs(gamma, probed, track, track_pred), 0.0)
     expected = y_bar.copy()  # eq14: unplayed channels keep Y_bar
     for m, n in ((0, 0), (1, 2)):
         expected[:, m, n] = 0.7 * y_bar[:, m, n] + 0.3 * gamma[:, m, n]
@@ -58,7 +50,7 @@ def test_mg_crb_cl_update_rules_by_hand():
     np.testing.assert_array_equal(agent.counts[0], 1 + probed)  # eq15
     # eq18 + eq34 at t = 2 with K = 2 weights
     agent.t = 2
-    obs2 = _obs(gamma, probed, track, track_pred)
+    obs2 = bandit_obs(gamma, probed, track, track_pred)
     before = (agent.estimate.copy(), agent.counts.copy(), agent.predicted.copy())
     index = agent.index(obs2)
     for was, now in zip(before, (agent.estimate, agent.counts, agent.predicted), strict=True):

@@ -5,6 +5,7 @@ import pytest
 
 import agents
 from mimo_radar_env import load_scenario
+from tests.helpers import bandit_obs
 
 PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4], 4 TX x 6 RX
 
@@ -12,20 +13,16 @@ PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4], 4 TX x 6 RX
 WEIGHTS = np.array([0.6, 0.4])
 
 
-def _obs(sinr, probed):
-    return {"sinr": np.asarray(sinr, dtype=float), "probed": np.asarray(probed, dtype=np.int8)}
-
-
 def test_rbe_index_and_eq29_update_by_hand():
     rng = np.random.default_rng(0)
     y0 = rng.exponential(size=(2, 4, 6))
     agent = agents.make_agent("rbe", PAPER)
-    agent.reset(_obs(y0, np.ones((4, 6))))
-    agent.act(_obs(y0, np.ones((4, 6))))  # t = 1: every channel last probed at c = 1, now c = 2
+    agent.reset(bandit_obs(y0, np.ones((4, 6))))
+    agent.act(bandit_obs(y0, np.ones((4, 6))))  # t = 1: every channel last probed at c = 1, now c = 2
     probed = np.zeros((4, 6))
     probed[1, 2] = probed[3, 5] = 1
     gamma = rng.exponential(size=(2, 4, 6)) * probed
-    agent.update(_obs(gamma, probed), 0.0)
+    agent.update(bandit_obs(gamma, probed), 0.0)
     estimate = y0.copy()
     for m, n in ((1, 2), (3, 5)):
         estimate[:, m, n] = 0.002 * y0[:, m, n] + 0.998 * gamma[:, m, n]  # eq29
@@ -39,16 +36,16 @@ def test_rbe_index_and_eq29_update_by_hand():
 def test_rbe_bonus_grows_while_unprobed_and_resets_when_probed():
     agent = agents.make_agent("rbe", PAPER, estimate="last")
     rng = np.random.default_rng(1)
-    agent.reset(_obs(rng.exponential(size=(2, 4, 6)), np.ones((4, 6))))
+    agent.reset(bandit_obs(rng.exponential(size=(2, 4, 6)), np.ones((4, 6))))
     history = []
     for t in range(1, 40):
-        agent.act(_obs(np.zeros((2, 4, 6)), np.zeros((4, 6))))
+        agent.act(bandit_obs(np.zeros((2, 4, 6)), np.zeros((4, 6))))
         history.append(agent.recency_bonus()[0].copy())
         probed = np.zeros((4, 6))
         if t % 10 == 0:
             probed[2, 1] = 1
         sample = rng.exponential(size=(2, 4, 6)) * probed
-        agent.update(_obs(sample, probed), 0.0)
+        agent.update(bandit_obs(sample, probed), 0.0)
         if probed.any():
             np.testing.assert_array_equal(agent.estimate[0][:, 2, 1], sample[:, 2, 1])  # "last" sample
     history = np.array(history)  # (steps, M, N)
@@ -66,16 +63,16 @@ def test_rbe_sample_mean_variant_and_unprobed_channels():
     probed0 = np.ones((4, 6))
     probed0[0, 0] = 0  # a channel the reset did not probe
     y0 = np.full((2, 4, 6), 2.0)
-    agent.reset(_obs(y0 * probed0, probed0))
-    agent.act(_obs(y0, probed0))
+    agent.reset(bandit_obs(y0 * probed0, probed0))
+    agent.act(bandit_obs(y0, probed0))
     index = agent.index(None)[0]
     assert index[0, 0] == agents.recency.UNPROBED_INDEX and np.all(index[probed0 > 0] < 100)
     samples = [4.0, 6.0, 1.0]
     for x in samples:
         probed = np.zeros((4, 6))
         probed[1, 1] = 1
-        agent.update(_obs(np.full((2, 4, 6), x) * probed, probed), 0.0)
-        agent.act(_obs(y0, probed))
+        agent.update(bandit_obs(np.full((2, 4, 6), x) * probed, probed), 0.0)
+        agent.act(bandit_obs(y0, probed))
     assert agent.estimate[0, 0, 1, 1] == pytest.approx(np.mean([2.0, *samples]), rel=1e-12)
     with pytest.raises(ValueError, match=r"estimate must be one of \['eq29', 'last', 'mean'\]"):
         agents.make_agent("rbe", PAPER, estimate="median")
