@@ -305,16 +305,14 @@ class Compile(Command):
     @staticmethod
     def time_this_machine() -> None:
         """Time the reference step here, for the time estimates (:mod:`benchmarks.machine_rate`)."""
-        from .machine_rate import PLAUSIBLE, calibrate, rate_file
+        from .machine_rate import calibrate
 
-        record = calibrate()
-        where = rate_file()
-        kept = where is not None and PLAUSIBLE[0] <= record["factor"] <= PLAUSIBLE[1]
+        record, kept = calibrate()
         print(
             f"this machine runs the reference step in {record['seconds']:.3f} s, "
             f"{record['factor']:.2f} times the developers' machine: "
             + (
-                f"time estimates use that (kept in {where})"
+                f"time estimates use that (kept in {kept})"
                 if kept
                 else "not kept, estimates stay the developers'"
             )

@@ -258,11 +258,10 @@ def _built_seconds(
 
 
 def run_seconds(config: RunConfig, parallel: int = 1) -> float:
-    """A configured run's estimated wall time (:func:`estimate_seconds`), ``parallel`` tasks at
-    once; its agents are built as :func:`make_config` probes them."""
-    sc, options = config.scenario_object, config.options
-    built = {p: _probe(p, sc, config.agent_params.get(p, {}), config.seed, options) for p in config.policies}
-    return _built_seconds(sc, options, built, (config.trials, config.steps, config.shard_size), parallel)
+    """A configured run's estimated wall time, ``parallel`` tasks at once: its tasks' estimates
+    (:func:`task_seconds`, which add up to :func:`estimate_seconds` of the whole run)."""
+    costs = task_seconds(config)
+    return sum(costs.values()) / max(1, min(parallel, len(costs)))
 
 
 #: The share of the machine's memory the tasks running at once may take together.
@@ -813,24 +812,26 @@ def _queue(
     configs: list[RunConfig], folders: list[Path], max_tasks: int | None
 ) -> tuple[list[tuple[int, str, int]], float]:
     """The (run, policy, shard) tasks not yet saved, each run's longest first
-    (:func:`task_seconds`), run after run; the first ``max_tasks`` of them; and the sum of their
+    (:func:`longest_first`), run after run; the first ``max_tasks`` of them; and the sum of their
     estimated seconds."""
     todo: list[tuple[int, str, int]] = []
     costs: dict[int, dict[tuple[str, int], float]] = {}
     for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
         tasks = _tasks_to_run(out, config, tqdm.write)
-        cost = costs[number] = task_seconds(config) if tasks else {}
-        todo += [(number, policy, shard) for policy, shard in sorted(tasks, key=lambda task: -cost[task])]
+        costs[number] = task_seconds(config) if tasks else {}
+        todo += [(number, policy, shard) for policy, shard in longest_first(config, tasks, costs[number])]
     todo = todo if max_tasks is None else todo[:max_tasks]
     return todo, sum(costs[number][policy, shard] for number, policy, shard in todo)
 
 
-def longest_first(config: RunConfig, tasks: list[tuple[str, int]]) -> list[tuple[str, int]]:
+def longest_first(
+    config: RunConfig, tasks: list[tuple[str, int]], cost: dict[tuple[str, int], float] | None = None
+) -> list[tuple[str, int]]:
     """The (policy, shard) ``tasks`` of a run in the order they start: the longest declared cost
-    first (:func:`task_seconds`), ties in the shard order."""
+    first (``cost``, default :func:`task_seconds`), ties in the shard order."""
     if len(tasks) < 2:
         return list(tasks)
-    cost = task_seconds(config)
+    cost = cost if cost is not None else task_seconds(config)
     return sorted(tasks, key=lambda task: -cost[task])
 
 

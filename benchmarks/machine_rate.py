@@ -60,9 +60,10 @@ def workload_seconds(repeats: int = 3) -> float:
     return float(np.median(times))
 
 
-def calibrate(repeats: int = 3) -> dict[str, Any]:
+def calibrate(repeats: int = 3) -> tuple[dict[str, Any], Path | None]:
     """Time the workload here and keep its ratio to the developers' machine in :func:`rate_file`
-    (when there is one); the record written. A ratio outside :data:`PLAUSIBLE` is not kept."""
+    (when there is one); the record, and the file it was kept in (None: not kept, as a ratio
+    outside :data:`PLAUSIBLE` is not)."""
     seconds = workload_seconds(repeats)
     record = {
         "factor": seconds / REFERENCE_SECONDS,
@@ -73,10 +74,11 @@ def calibrate(repeats: int = 3) -> dict[str, Any]:
         "python": platform.python_version(),
     }
     path = rate_file()
-    if path is not None and PLAUSIBLE[0] <= record["factor"] <= PLAUSIBLE[1]:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(record, indent=2))
-    return record
+    if path is None or not PLAUSIBLE[0] <= record["factor"] <= PLAUSIBLE[1]:
+        return record, None
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(record, indent=2))
+    return record, path
 
 
 _READ: dict[tuple[Path, float], float | None] = {}

@@ -939,16 +939,18 @@ def coverage_values(docs: Path) -> dict[str, str]:
         entry = record[groups]
         for row in entry["coverage"]:
             for statistic in ("mean", "iqm"):
-                text = _rate_with_interval(row[statistic], entry["repeats"])
-                table[f"{key}.{row['runs_per_group']}.{statistic}"] = text.replace(" %", "", 1)
+                table[f"{key}.{row['runs_per_group']}.{statistic}"] = _rate_with_interval(
+                    row[statistic], entry["repeats"], unit=""
+                )
     return table
 
 
-def _rate_with_interval(rate: float, trials: int) -> str:
-    """A fraction of ``trials`` as a percentage with its 95 % Wilson interval (``model_figures.rate``)."""
+def _rate_with_interval(rate: float, trials: int, unit: str = " %") -> str:
+    """A fraction of ``trials`` as a percentage with its 95 % Wilson interval (``model_figures.rate``);
+    ``unit`` after the value (empty where the page writes the % after the interval)."""
     figure = model_figures.rate(np.arange(trials) < round(rate * trials), "")
     low, high = figure["ci"]
-    return f"{100 * rate:.1f} % [{100 * low:.1f}, {100 * high:.1f}]"
+    return f"{100 * rate:.1f}{unit} [{100 * low:.1f}, {100 * high:.1f}]"
 
 
 @generator("bpso-parts")
