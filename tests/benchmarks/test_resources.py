@@ -2,17 +2,14 @@
 harness lowers the shard size to what fits the machine (and says so) or refuses."""
 
 import json
-import tracemalloc
 
-import numpy as np
 import pytest
 
 import agents
 from benchmarks.cli import main
 from benchmarks.harness import HarnessError, fit_shard_size
-from mimo_radar_env import load_scenario, random_scenario
+from mimo_radar_env import load_scenario
 from mimo_radar_env.envs.cost import memory_parts
-from tests.helpers import vector_env
 
 PAPER = load_scenario("paper-1-v1")
 
@@ -52,53 +49,6 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
     assert len(list((out / "shards" / "ucb1").glob("*.npz"))) == 3  # 3 + 3 + 1 trials
 
 
-@pytest.mark.parametrize(
-    "policy",
-    # plan-tracking enumerates super arms: too many at 24 x 24 (its memory: the next test)
-    [
-        p
-        for p in agents.available_agents()
-        if p not in ("fixed", "fix1", "fix2", *agents.learned_agents()) and not p.startswith("plan-")
-    ],
-)
-def test_declared_memory_bounds_what_a_step_allocates(policy):
-    """The declared memory per trial is an upper estimate of what one step of the policy
-    allocates (tracemalloc), on a layout where the tracking search is greedy."""
-
-    scenario = random_scenario(24, 24, 2, 4, 4, horizon=5, seed=0)
-    trials = 3
-    params = {"solver": "alternating"} if issubclass(agents.agent_class(policy), agents.IndexPolicy) else {}
-    agent = agents.make_agent(policy, scenario, seed=0, **params)
-    env = vector_env(
-        "MimoRadarSelect-v1",
-        trials,
-        scenario=scenario,
-        oracle_solver="alternating",
-        **agent.needs.observation_options,
-    )
-    episode = agents.Rollout(agent, env, seed=0)
-    tracemalloc.start()
-    try:
-        step = episode.step()
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    _, env_per_trial = memory_parts(scenario)
-    declared = trials * (agents.costs.memory_per_trial(agent) + env_per_trial)
-    assert peak <= declared, (
-        f"{policy}: {peak / 2**20:.1f} MiB allocated, {declared / 2**20:.1f} MiB declared"
-    )
-    assert np.isfinite(step.reward).all()
-
-
-def test_the_policy_cost_benchmark_measures_within_the_declaration():
-    from benchmarks.speed.policy_cost import measure_policy
-
-    row = measure_policy("tracking-ucb", random_scenario(4, 6, 2, 2, 3, horizon=6, seed=0), trials=2, steps=2)
-    assert row["ms_per_trial_step"] > 0
-    assert 0 < row["measured_mib_per_trial"] <= row["declared_mib_per_trial"]
-
-
 # ---------------------------------------------------------------- time
 def test_the_time_estimate_counts_every_task_and_the_tasks_at_once():
     from benchmarks.harness import SECONDS_PER_OPERATION, STEP_OVERHEAD_SECONDS, estimate_seconds
@@ -116,32 +66,6 @@ def test_the_time_estimate_counts_every_task_and_the_tasks_at_once():
     # one task: more workers do not make it faster
     one = estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=1)
     assert estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=4) == one
-
-
-def test_declared_operations_follow_the_work():
-    scenario = random_scenario(16, 16, 2, 4, 4, horizon=5, seed=0)
-    small = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 10})
-    large = agents.make_agent("mg-crb-cl", scenario, solver="bpso", solver_params={"population": 20})
-    base = agents.costs.BOOKKEEPING.operations_per_trial_step(small)
-    assert agents.costs.operations_per_trial_step(large) - base == pytest.approx(
-        2 * (agents.costs.operations_per_trial_step(small) - base)
-    )
-    # the tracking search: enumerated at 4 x 6, greedy at 64 x 64, more work for more targets
-    costs = {
-        (m, k): agents.costs.operations_per_trial_step(
-            agents.make_agent("best-tracking", random_scenario(m, m, k, 4, 4, horizon=5, seed=0))
-        )
-        for m in (8, 64)
-        for k in (1, 5)
-    }
-    assert costs[8, 1] < costs[8, 5] and costs[64, 1] < costs[64, 5] and costs[8, 5] < costs[64, 5]
-    from mimo_radar_env.envs.cost import operations_per_trial_step
-
-    assert (
-        operations_per_trial_step(scenario, True, "centralized")
-        > operations_per_trial_step(scenario, True, "average")
-        > operations_per_trial_step(scenario, False)
-    )
 
 
 def test_a_run_estimated_beyond_max_hours_is_refused_before_anything_is_written(tmp_path, capsys):
@@ -182,28 +106,3 @@ def test_max_hours_takes_a_positive_number_or_none(tmp_path, capsys, value):
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and "--max-hours" in err and "number of hours > 0 or 'none'" in err
     assert not out.exists()
-
-
-@pytest.mark.parametrize("search", ["beam", "rollout", "mcts"])
-def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
-
-    trials = 3
-    agent = agents.make_agent("plan-tracking", "paper-1-v1", seed=0, horizon=3, search=search)
-    env = vector_env("MimoRadarSelect-v1", trials)
-    agent.attach(env)
-    learner = agents.make_agent("plan-tracking-ucb", "paper-1-v1", horizon=3, search=search)
-    assert agents.costs.memory_per_trial(learner) >= agents.costs.memory_per_trial(
-        agent
-    )  # the same plans, and its estimates
-    obs, _ = env.reset(seed=0)
-    agent.reset(obs)
-    obs, *_ = env.step(agent.act(obs))  # warm-up: first-call caches and imports
-    tracemalloc.start()
-    try:
-        action = agent.act(obs)
-        obs, reward, *_ = env.step(action)
-        peak = tracemalloc.get_traced_memory()[1]
-    finally:
-        tracemalloc.stop()
-    _, env_per_trial = memory_parts(load_scenario("paper-1-v1"))
-    assert peak <= trials * (agents.costs.memory_per_trial(agent) + env_per_trial)

@@ -2,6 +2,9 @@
 valid action steps; anything else is refused by one ``ValueError`` of one line that shows the
 value as given, and the env is unchanged (the next valid step gives what it would have)."""
 
+import math
+from itertools import combinations
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -9,6 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import mimo_radar_env  # noqa: F401  (registers the envs)
+from mimo_radar_env.wrappers import StationScoreAction, SuperArmDiscreteAction, make_ppo_env
+from tests.helpers import large_scenario
 
 ODD = [
     3.0, "3", True, False, None, np.nan, np.inf, -np.inf, -1, 120, 10**20, 2.5, [3], (3,), [], "x",
@@ -79,3 +84,39 @@ def test_station_scores_outside_the_box_are_refused_showing_the_value(scores):
     assert "\n" not in message
     bad = action[~(np.isfinite(action) & (np.abs(action) <= 1))][0]
     assert str(bad) in message or repr(float(bad)) in message or "nan" in message or "inf" in message, message
+
+
+def test_discrete_super_arm_index_is_a_bijection():
+    env = SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario="paper-1"))
+    assert env.action_space.n == math.comb(4, 2) * math.comb(6, 3) == 120
+    actions = env.index.to_action(np.arange(120))
+    assert (actions[:, :4].sum(axis=1) == 2).all() and (actions[:, 4:].sum(axis=1) == 3).all()
+    every = {(t, r) for t in combinations(range(4), 2) for r in combinations(range(6), 3)}
+    seen = {(tuple(np.flatnonzero(a[:4])), tuple(np.flatnonzero(a[4:]))) for a in actions}
+    assert seen == every  # onto and, with 120 distinct images of 120 indices, one-to-one
+    env.reset(seed=0)
+    for i in (0, 57, 119):
+        _, _, _, _, info = env.step(i)
+        assert info["action_valid"]
+    with pytest.raises(ValueError, match=r"super-arm index must be in \[0, 120\)"):
+        env.index.to_action(120)
+
+
+def test_station_scores_give_valid_selections_on_paper_and_16x16_layouts():
+    rng = np.random.default_rng(0)
+    for scenario in ("paper-3", large_scenario(16, 16, 5)):
+        env = StationScoreAction(gym.make("MimoRadarSelect-v0", scenario=scenario))
+        sc = env.unwrapped.scenario
+        env.reset(seed=1)
+        for _ in range(20):
+            scores = rng.uniform(-1, 1, size=sc.num_tx + sc.num_rx).astype(np.float32)
+            action = env.action(scores)
+            assert action[: sc.num_tx].sum() == sc.tx_per_step and action[sc.num_tx :].sum() == sc.rx_per_step
+            top_tx = np.argsort(-scores[: sc.num_tx])[: sc.tx_per_step]
+            assert set(np.flatnonzero(action[: sc.num_tx])) == set(top_tx)
+            assert env.step(scores)[4]["action_valid"]
+        env.step(np.zeros(sc.num_tx + sc.num_rx, dtype=np.float32))  # ties resolve to a valid selection
+    with pytest.raises(ValueError, match="use StationScoreAction"):
+        SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario=large_scenario(16, 16, 5)))
+    assert isinstance(make_ppo_env(large_scenario(16, 16, 5)).env, StationScoreAction)
+    assert isinstance(make_ppo_env("paper-1-v1").env, SuperArmDiscreteAction)

@@ -1,5 +1,5 @@
-"""The docs' generated blocks equal what the committed artefacts give, and a changed artefact
-number is caught."""
+"""The value tables and table generators: values from the figures, each artefact read once per
+rendering, the reading moves computed column against column."""
 
 import json
 import shutil
@@ -8,66 +8,8 @@ from pathlib import Path
 import pytest
 
 from benchmarks.cli import main
-from benchmarks.docs_tooling.pages import regenerate
 
-DOCS = Path(__file__).resolve().parents[2] / "docs"
-
-
-def test_the_committed_docs_match_their_artefacts(capsys):
-    assert regenerate(DOCS, check=True) == []
-    assert main(["docs", "--docs", str(DOCS), "--check"]) == 0
-    assert "match their artefacts" in capsys.readouterr().out
-
-
-def test_a_changed_artefact_number_fails_the_check(tmp_path, capsys):
-    docs = tmp_path / "docs"
-    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
-    path = docs / "results" / "calibration" / "calibration.json"
-    report = json.loads(path.read_text())
-    judged = next(c for c in report["candidates"] if c["index"] == report["best"])
-    judged["scorecards"]["500"]["holds"] += 1  # one number of one artefact
-    path.write_text(json.dumps(report))
-    assert main(["docs", "--docs", str(docs), "--check"]) == 1
-    out = capsys.readouterr().out
-    assert "-| 116 (adopted) | 10 / 2 / 10 | 11 / 1 / 10 |" in out
-    assert "+| 116 (adopted) | 10 / 2 / 10 | 12 / 1 / 10 |" in out
-    before = (docs / "results-layouts.md").read_text()
-    assert main(["docs", "--docs", str(docs)]) == 0  # regenerating writes the new number
-    after = (docs / "results-layouts.md").read_text()
-    assert after != before and "| 116 (adopted) | 10 / 2 / 10 | 12 / 1 / 10 |" in after
-    assert main(["docs", "--docs", str(docs), "--check"]) == 0
-
-
-def test_an_unknown_generator_is_named(tmp_path, capsys):
-    (tmp_path / "page.md").write_text("<!-- generated: no-such-table -->\nx\n<!-- end generated -->\n")
-    with pytest.raises(SystemExit) as exit_info:
-        main(["docs", "--docs", str(tmp_path), "--check"])
-    assert exit_info.value.code == 2 and "no generator called 'no-such-table'" in capsys.readouterr().err
-
-
-def test_prose_numbers_need_an_artefact(tmp_path, capsys):
-    from benchmarks.docs_tooling.pages import unsourced_numbers
-
-    text = (
-        "It took 12.5 s and was 1.7x faster, 3 times more, optimal in 96.0 % [92.3, 98.0] of cases\n"
-        "with 95 % intervals; `clipped to [0.2, 1.2]` in code, 1000 steps, 120 super arms;\n"
-        "<!-- value: model nees-ncv -->4.01 [3.96, 4.06]<!-- end value --> and 17 % of a step.\n"
-    )
-    assert unsourced_numbers(text) == [
-        (1, "12.5 s"),
-        (1, "1.7x"),
-        (1, "96.0 %"),
-        (1, "[92.3, 98.0]"),
-        (3, "17 %"),
-    ]
-    docs = tmp_path / "docs"
-    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
-    page = docs / "model.md"
-    page.write_text(page.read_text() + "\nA step takes 12.5 s here.\n")
-    assert main(["docs", "--docs", str(docs), "--check"]) == 1
-    out = capsys.readouterr().out
-    assert "model.md:" in out and "'12.5 s' is quoted without an artefact" in out
-    assert "1 number(s) in prose rest on no artefact" in out
+DOCS = Path(__file__).resolve().parents[3] / "docs"
 
 
 def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):

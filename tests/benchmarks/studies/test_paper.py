@@ -1,0 +1,95 @@
+"""The paper command: every output of a short run of the paper's policies."""
+
+import csv
+import json
+
+import numpy as np
+import pytest
+
+from benchmarks.cli import main
+
+SUMMARY_KEYS = {
+    "ci",
+    "tracker_repairs",
+    "method",
+    "armse",
+    "armse_per_target",
+    "bound",
+    "bound_per_target",
+    "armse_over_bound",
+    "asr",
+    "final_regret",
+    "mean_sinr_db",
+    "wall_s",
+}
+
+
+def _read_curves(path):
+    with open(path) as handle:
+        return list(csv.DictReader(handle))
+
+
+def test_paper_subcommand_writes_every_output(tmp_path, capsys):
+    out = tmp_path / "paper"
+    code = main(
+        [
+            "paper",
+            "--scenario",
+            "3",
+            "--trials",
+            "4",
+            "--steps",
+            "25",
+            "--shard-size",
+            "2",
+            "--workers",
+            "1",
+            "--out",
+            str(out),
+            "--quiet",
+        ]
+    )
+    assert code == 0
+    printed = capsys.readouterr().out
+    # v1's paper study gives MG-CRB-CL the standard BPSO rule, and its label says so
+    assert "| mg-crb-cl (solver_params.rule=set) |" in printed
+    assert "paper ARMSE" not in printed  # 25 steps: not the paper's 1000
+    for name in (
+        "summary.json",
+        "curves.csv",
+        "table.md",
+        "sinr.png",
+        "regret.png",
+        "rmse.png",
+        "geometry.png",
+        "selection_mg-crb-cl.png",
+        "selection_fix2.png",
+        "config.json",
+    ):
+        assert (out / name).exists(), name
+    summary = json.loads((out / "summary.json").read_text())
+    assert set(summary) >= {"scenario", "trials", "steps", "seed", "policies"}
+    assert summary["scenario"] == "paper-3-v1" and summary["trials"] == 4 and summary["steps"] == 25
+    assert list(summary["policies"]) == ["best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"]
+    rows = _read_curves(out / "curves.csv")
+    for policy, row in summary["policies"].items():
+        assert set(row) == SUMMARY_KEYS and 0.0 <= row["asr"] <= 1.0 and len(row["armse_per_target"]) == 2
+        assert row["tracker_repairs"] == 0  # a healthy run repairs nothing
+        # independent computation from the saved per-step data
+        mine = [r for r in rows if r["policy"] == policy]
+        assert len(mine) == 25
+        per_target = [np.mean([float(r[f"rmse_target{k}"]) for r in mine]) for k in (1, 2)]
+        assert row["armse_per_target"] == pytest.approx(per_target, rel=1e-9)
+        assert row["armse"] == pytest.approx(np.mean(per_target), rel=1e-9)
+        bounds = [np.mean([float(r[f"bound_target{k}"]) for r in mine]) for k in (1, 2)]
+        assert row["bound_per_target"] == pytest.approx(bounds, rel=1e-9)
+        assert row["armse_over_bound"] == pytest.approx(row["armse"] / np.mean(bounds), rel=1e-9)
+        low, high = row["ci"]["bound"]  # from float32 per-trial values: equal to 1e-6
+        assert 0 < row["bound"] and low * (1 - 1e-6) <= row["bound"] <= high * (1 + 1e-6)
+        assert row["asr"] == pytest.approx(np.mean([float(r["asr"]) for r in mine]), rel=1e-9)
+        assert row["final_regret"] == pytest.approx(float(mine[-1]["cumulative_regret"]), rel=1e-9, abs=1e-9)
+        linear = np.mean([10 ** (float(r["mean_sinr_db"]) / 10) for r in mine])
+        assert row["mean_sinr_db"] == pytest.approx(10 * np.log10(linear), rel=1e-9)
+    assert summary["policies"]["best"]["asr"] == 1.0 and summary["policies"]["best"][
+        "final_regret"
+    ] == pytest.approx(0)

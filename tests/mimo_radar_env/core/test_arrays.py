@@ -1,0 +1,72 @@
+"""The array namespaces: numpy's, and torch's on a device, which gives numpy's numbers."""
+
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from mimo_radar_env.core.arrays import NUMPY, device_namespace, namespace  # noqa: E402
+from tests.helpers import vector_env  # noqa: E402
+
+CPU = device_namespace("cpu")
+
+
+def test_the_namespace_follows_the_arrays():
+    assert namespace(np.zeros(2)) is NUMPY and device_namespace(None) is NUMPY
+    assert namespace(np.zeros(2), torch.zeros(2)) is CPU
+
+
+def test_the_torch_namespace_computes_what_numpy_does():
+    rng = np.random.default_rng(0)
+    a, b = rng.normal(size=(3, 4, 5)), rng.normal(size=(3, 4, 5))
+    index = np.argsort(a, axis=-1)[..., :2]
+    cases = {
+        "maximum": lambda xp, x, y: xp.maximum(x, y),
+        "clip": lambda xp, x, y: xp.clip(x, -0.5, 0.5),
+        "trace": lambda xp, x, y: xp.trace(x[..., :4], axis1=-2, axis2=-1),
+        "sum": lambda xp, x, y: xp.sum(x, axis=(0, 2), keepdims=True),
+        "argmin": lambda xp, x, y: xp.argmin(x, axis=1),
+        "sort": lambda xp, x, y: xp.sort(x, axis=-1),
+        "take": lambda xp, x, y: xp.take_along_axis(x, xp.asarray(index), axis=-1),
+        "repeat": lambda xp, x, y: xp.repeat(x, 2, axis=1),
+        "where": lambda xp, x, y: xp.where(x > y, x, y),
+        "stack": lambda xp, x, y: xp.stack([x, y], axis=1),
+    }
+    for name, op in cases.items():
+        expected = op(NUMPY, a, b)
+        got = op(CPU, CPU.asarray(a), CPU.asarray(b))
+        assert isinstance(got, torch.Tensor), name
+        # a sum may add in another order: equal to rounding; every other op bit for bit
+        rtol = 1e-15 if name in ("sum", "trace") else 0
+        np.testing.assert_allclose(CPU.to_numpy(got), expected, rtol=rtol, atol=0, err_msg=name)
+
+
+@pytest.mark.parametrize(
+    ("device", "message"),
+    [("gpu", r"device must be None, 'cpu', 'cuda' or 'cuda:N', got 'gpu'"), ("cuda:7", "CUDA device")],
+)
+def test_a_device_that_is_not_there_is_refused_in_one_line(device, message):
+    if device == "cuda:7" and torch.cuda.device_count() > 7:  # pragma: no cover
+        pytest.skip("this machine has 8 GPUs")
+    with pytest.raises(ValueError, match=message) as caught:
+        vector_env("MimoRadarSelect-v1", 2, device=device)
+    assert "\n" not in str(caught.value)
+
+
+def test_device_none_needs_no_torch_and_a_device_without_torch_is_refused():
+    script = (
+        "import sys; sys.modules['torch'] = None\n"
+        "import gymnasium as gym, numpy as np, mimo_radar_env\n"
+        "env = gym.make_vec('MimoRadarSelect-v1', num_envs=2, vectorization_mode='vector_entry_point')\n"
+        "env.reset(seed=0); env.step(env.oracle_action())\n"
+        "try:\n"
+        "    gym.make_vec('MimoRadarSelect-v1', num_envs=2, vectorization_mode='vector_entry_point',\n"
+        "                 device='cpu')\n"
+        "except ValueError as error:\n"
+        "    print(error)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
+    assert "device='cpu' needs torch" in out

@@ -1,0 +1,58 @@
+"""An env's declared cost: its memory bounds what it allocates, its operations follow the work, and an
+env larger than the machine is refused before it allocates."""
+
+import tracemalloc
+
+import numpy as np
+import pytest
+
+from mimo_radar_env import random_scenario
+from mimo_radar_env.core.superarm import random_super_arms
+from mimo_radar_env.envs import cost
+from tests.helpers import vector_env
+
+
+def test_declared_operations_grow_with_the_fusions_work_and_the_layout():
+    scenario = random_scenario(16, 16, 2, 4, 4, horizon=5, seed=0)
+    assert (
+        cost.operations_per_trial_step(scenario, True, "centralized")
+        > cost.operations_per_trial_step(scenario, True, "average")
+        > cost.operations_per_trial_step(scenario, False)
+    )
+    more_targets = random_scenario(16, 16, 4, 4, 4, horizon=5, seed=0)
+    assert cost.operations_per_trial_step(more_targets) > cost.operations_per_trial_step(scenario)
+
+
+@pytest.mark.parametrize("fusion", ["average", "centralized"])
+def test_the_declared_memory_bounds_what_the_env_allocates(fusion):
+    scenario = random_scenario(12, 12, 3, 3, 4, horizon=6, seed=0)
+    trials = 16
+    model, per_trial = cost.memory_parts(scenario)
+    assert cost.memory_estimate(scenario, trials) == model + trials * per_trial
+    rng = np.random.default_rng(0)
+    actions = random_super_arms(rng, trials, 12, 12, 3, 4)
+    warm = vector_env("MimoRadarSelect-v1", trials, scenario=scenario, fusion=fusion)
+    warm.reset(seed=1)
+    warm.step(actions)  # imports, first-call caches and compilation, outside the count
+    tracemalloc.start()
+    try:
+        env = vector_env("MimoRadarSelect-v1", trials, scenario=scenario, fusion=fusion)
+        env.reset(seed=0)
+        env.step(actions)
+        env.step(actions)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak <= cost.memory_estimate(scenario, trials)
+
+
+def test_an_env_larger_than_the_machine_is_refused_in_one_line(monkeypatch):
+    scenario = random_scenario(8, 8, 2, 2, 2, horizon=5, seed=0)
+    need = cost.memory_estimate(scenario, 1000)
+    monkeypatch.setattr(cost, "machine_memory", lambda: need)  # half of it is allowed
+    cost.check_memory(scenario, 400)
+    with pytest.raises(ValueError) as error:
+        cost.check_memory(scenario, 1000)
+    message = str(error.value)
+    assert "\n" not in message and message.startswith("1000 trials of scenario")
+    assert "use fewer trials, a shorter horizon or a smaller layout" in message
