@@ -3,11 +3,12 @@
 A policy class declares :class:`Needs` (``needs = Needs(tracking=True)``) and the parts of its
 cost (``costs = (BOOKKEEPING, SOLVER)``); the rollout loop and the benchmark harness read them,
 the policy's own code never does. Each part is an upper estimate per trial of the memory at the
-peak of a step and of the arithmetic of a step (the harness sizes shards and estimates a run's
-time with them: :func:`memory_per_trial`, :func:`operations_per_trial_step`), and Python's time
-per step of a whole batch where a search loops over steps (:func:`seconds_per_step`); a
-policy's cost is the sum of its parts. ``benchmarks.speed.policy_cost`` measures every policy
-against what it declares.
+peak of a step and of the arithmetic of a step, with the rate its kind of work runs at on the
+developers' machine (the harness sizes shards and estimates a run's time with them:
+:func:`memory_per_trial`, :func:`seconds_per_trial_step`), and Python's time per step of a
+whole batch where a search loops over steps (:func:`seconds_per_step`); a policy's cost is the
+sum of its parts. ``benchmarks.speed.policy_cost`` measures every policy against what it
+declares, and the rates are fitted to it.
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
-from mimo_radar_env.core.superarm import search_operations, super_arm_count
+from mimo_radar_env.core.superarm import search_operations, search_seconds, super_arm_count
 from mimo_radar_env.tracking.selection import selection_memory_per_trial, selection_operations_per_trial
 
 if TYPE_CHECKING:
@@ -59,8 +60,17 @@ class Needs:
         object.__setattr__(self, "observation_options", MappingProxyType(dict(self.observation_options)))
 
 
+#: Seconds per declared operation of work done in numpy over the batch, on the developers'
+#: machine (a part whose work runs otherwise declares its own :attr:`Cost.seconds_per_operation`).
+NUMPY_SECONDS_PER_OPERATION = 1e-9
+
+
 class Cost:
     """One part of a policy's cost (nothing, unless a subclass says otherwise)."""
+
+    #: How long one of its declared operations takes on the developers' machine: its kind of
+    #: work's speed there, fitted to ``benchmarks.speed.policy_cost``'s measurements.
+    seconds_per_operation: float = NUMPY_SECONDS_PER_OPERATION
 
     def memory_per_trial(self, agent: Agent) -> int:
         return 0
@@ -71,6 +81,10 @@ class Cost:
     def seconds_per_step(self, agent: Agent) -> float:
         return 0.0
 
+    def seconds_per_trial_step(self, agent: Agent) -> float:
+        """Its operations at its :attr:`seconds_per_operation`."""
+        return self.operations_per_trial_step(agent) * self.seconds_per_operation
+
 
 def _channels(agent: Agent) -> int:
     sc = agent.scenario
@@ -79,6 +93,8 @@ def _channels(agent: Agent) -> int:
 
 class Bookkeeping(Cost):
     """Every policy's per-channel state (its estimates and counts) and their update."""
+
+    seconds_per_operation = 1.9e-10
 
     def memory_per_trial(self, agent: Agent) -> int:
         return 8 * 8 * _channels(agent)
@@ -96,11 +112,17 @@ class Solver(Cost):
     def operations_per_trial_step(self, agent: Agent) -> float:
         return agent.solver.operations_per_trial(agent.num_tx, agent.num_rx)  # type: ignore[attr-defined]
 
+    def seconds_per_trial_step(self, agent: Agent) -> float:
+        """At the solver's own rate (:attr:`agents.solvers.SuperArmSolver.seconds_per_operation`)."""
+        return self.operations_per_trial_step(agent) * agent.solver.seconds_per_operation  # type: ignore[attr-defined]
+
 
 class GammaSampler(Cost):
     """A Gamma draw per target and channel (a few rejection rounds): the sampler's scratch
     draws normals and uniforms for every one (``benchmarks.speed.policy_cost`` measured about 38
     float64 per target and channel)."""
+
+    seconds_per_operation = 2.4e-9
 
     def memory_per_trial(self, agent: Agent) -> int:
         return 8 * 48 * _channels(agent)
@@ -116,10 +138,16 @@ class OracleSearch(Cost):
         sc = agent.scenario
         return search_operations(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
 
+    def seconds_per_trial_step(self, agent: Agent) -> float:
+        sc = agent.scenario
+        return search_seconds(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+
 
 class TrackingSearch(Cost):
     """The tracking search (``mimo_radar_env.tracking.selection.select_for_tracking``) on the
     agent's scenario."""
+
+    seconds_per_operation = 6.5e-10
 
     @staticmethod
     def _size(agent: Agent) -> tuple[int, int, int, int, int]:
@@ -135,13 +163,16 @@ class TrackingSearch(Cost):
 
 #: Python's time per planned step of a batch, and per step of an MCTS simulation (s): the
 #: searches loop over them (``benchmarks.speed.policy_cost`` measures them at a few trials).
-PLAN_STEP_SECONDS = 1e-3
+PLAN_STEP_SECONDS = 2e-4
 
 
 class Plan(Cost):
     """A receding-horizon search (``agent.search``, ``width``, ``horizon``, ``simulations``):
     every scored plan extended by every super arm at every planned step (MCTS: at every step of
-    every simulation)."""
+    every simulation). Its later steps sum channels by one matrix product (BLAS), faster per
+    operation than elementwise numpy."""
+
+    seconds_per_operation = 4.1e-10
 
     @staticmethod
     def _states(agent: Any) -> tuple[int, int]:
@@ -200,8 +231,15 @@ def memory_per_trial(agent: Agent) -> int:
 
 def operations_per_trial_step(agent: Agent) -> float:
     """Arithmetic operations one trial of ``agent`` does per step (act and update), roughly (an
-    upper estimate). The harness adds it to the env's to estimate a run's time."""
+    upper estimate): the sum of its parts'."""
     return sum(part.operations_per_trial_step(agent) for part in agent.costs)
+
+
+def seconds_per_trial_step(agent: Agent) -> float:
+    """One trial's share of a step's time on the developers' machine, roughly: each part's
+    share (:meth:`Cost.seconds_per_trial_step`: its operations at its rate). The harness adds the env's
+    (:func:`mimo_radar_env.envs.cost.seconds_per_trial_step`) to estimate a run's time."""
+    return sum(part.seconds_per_trial_step(agent) for part in agent.costs)
 
 
 def seconds_per_step(agent: Agent) -> float:

@@ -38,7 +38,7 @@ from agents.ppo import model_file
 from agents.solvers import compiled_kernels as solver_kernels
 from mimo_radar_env import EnvOptions, Scenario, ScenarioError, load_scenario
 from mimo_radar_env.core.compiled import uncached
-from mimo_radar_env.envs.cost import machine_memory, memory_parts, operations_per_trial_step
+from mimo_radar_env.envs.cost import machine_memory, memory_parts, seconds_per_trial_step
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -252,9 +252,9 @@ def _built_seconds(
 ) -> float:
     """:func:`estimate_seconds` of the built agents' declared costs; ``size`` is the run's
     (trials, steps, shard size)."""
-    operations = {policy: agents.costs.operations_per_trial_step(agent) for policy, agent in built.items()}
+    per_trial = {policy: agents.costs.seconds_per_trial_step(agent) for policy, agent in built.items()}
     fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
-    return estimate_seconds(sc, options, operations, *size, parallel, fixed)
+    return estimate_seconds(sc, options, per_trial, *size, parallel, fixed)
 
 
 def run_seconds(config: RunConfig, parallel: int = 1) -> float:
@@ -324,11 +324,10 @@ def fit_shard_size(
     return shard_size
 
 
-#: Seconds per declared arithmetic operation in the batch, and per step of a shard (Python's
-#: share: calls and small arrays), on the developers' machine: the scale of the declared costs
-#: (``benchmarks.speed.policy_cost`` prints measured / declared time for every policy).
-SECONDS_PER_OPERATION = 1e-9
-STEP_OVERHEAD_SECONDS = 2.5e-3
+#: Seconds per step of a shard that do not grow with its trials (Python's share: calls and small
+#: arrays), on the developers' machine (``benchmarks.speed.policy_cost`` prints measured /
+#: estimated time for every policy).
+STEP_OVERHEAD_SECONDS = 1.7e-3
 #: The longest run ``run`` and the studies start without ``--max-hours`` (hours).
 DEFAULT_MAX_HOURS = 24.0
 
@@ -336,7 +335,7 @@ DEFAULT_MAX_HOURS = 24.0
 def estimate_seconds(
     scenario: Scenario,
     options: EnvOptions,
-    agent_operations: dict[str, float],
+    agent_trial_seconds: dict[str, float],
     trials: int,
     steps: int,
     shard_size: int,
@@ -345,23 +344,19 @@ def estimate_seconds(
 ) -> float:
     """A run's wall time, roughly: every (policy, shard) task takes, per step,
     :data:`STEP_OVERHEAD_SECONDS` and the policy's own fixed time
-    (:meth:`agents.Agent.seconds_per_step`, ``agent_seconds``) plus its trials' operations (the
-    env's, :func:`~mimo_radar_env.envs.cost.operations_per_trial_step`, and the policy's,
-    :meth:`agents.Agent.operations_per_trial_step`) at :data:`SECONDS_PER_OPERATION`;
+    (:func:`agents.costs.seconds_per_step`, ``agent_seconds``) plus each trial's share (the
+    env's, :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step`, and the policy's,
+    :func:`agents.costs.seconds_per_trial_step`, ``agent_trial_seconds``);
     ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
     machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`)."""
-    env = operations_per_trial_step(scenario, options.tracking, options.fusion)
+    env = seconds_per_trial_step(scenario, options.tracking, options.fusion)
     shards = -(-trials // shard_size)
     fixed = agent_seconds or {}
     total = sum(
-        steps
-        * (
-            shards * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0))
-            + trials * (env + agent) * SECONDS_PER_OPERATION
-        )
-        for policy, agent in agent_operations.items()
+        steps * (shards * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0)) + trials * (env + agent))
+        for policy, agent in agent_trial_seconds.items()
     )
-    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, shards * len(agent_operations)))
+    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, shards * len(agent_trial_seconds)))
 
 
 def duration(seconds: float) -> str:
@@ -615,14 +610,14 @@ def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
     for policy in config.policies:
         params = config.agent_params.get(policy, {})
         agent = make_policy(policy, scenario, params, seed=config.seed, options=config.env_options)
-        operations, fixed = (
-            {policy: agents.costs.operations_per_trial_step(agent)},
+        per_trial, fixed = (
+            {policy: agents.costs.seconds_per_trial_step(agent)},
             {policy: agents.costs.seconds_per_step(agent)},
         )
         for shard in range(config.num_shards):
             n = len(config.shard_trials(shard))
             costs[policy, shard] = estimate_seconds(
-                scenario, options, operations, n, config.steps, n, 1, fixed
+                scenario, options, per_trial, n, config.steps, n, 1, fixed
             )
     return costs
 

@@ -21,10 +21,11 @@ import numpy as np
 
 #: The workload: trials of the v1 paper scenario 1 and steps timed after a warm-up step.
 TRIALS, STEPS = 64, 100
-#: The workload's seconds on the developers' machine (2 cores, x86_64, Python 3.11.7, numba;
-#: the median of five, ``python -c "from benchmarks.machine_rate import workload_seconds;
-#: print(workload_seconds(5))"``).
-REFERENCE_SECONDS = 0.224
+#: The workload's seconds on the developers' machine (2 cores, x86_64, Python 3.11.7, numba),
+#: measured in the session that fitted the cost model's rates (``agents.costs``,
+#: ``mimo_radar_env.envs.cost``): the median of seven ``python -c "from benchmarks.machine_rate
+#: import workload_seconds; print(workload_seconds())"``.
+REFERENCE_SECONDS = 0.26
 #: The environment variable that names the file the factor is kept in; empty: no factor.
 RATE_ENV = "MIMO_RADAR_RATE_FILE"
 #: A factor outside this range is refused as a mismeasurement (a machine busy with other work).
@@ -86,7 +87,9 @@ _READ: dict[tuple[Path, float], float | None] = {}
 
 def factor() -> float | None:
     """This machine's factor (its workload's seconds over the developers'), or None where none
-    is kept or the file is not a factor :func:`calibrate` wrote (read once per version of it)."""
+    is kept or the file is not a record :func:`calibrate` wrote (read once per version of it).
+    It is the kept seconds over today's :data:`REFERENCE_SECONDS`, so a record kept before the
+    reference was measured again stays right."""
     path = rate_file()
     try:
         key = (path, path.stat().st_mtime) if path is not None else None
@@ -96,8 +99,9 @@ def factor() -> float | None:
         return None
     if key not in _READ:
         try:
-            value = json.loads(path.read_text())["factor"]
-            ok = isinstance(value, int | float) and PLAUSIBLE[0] <= value <= PLAUSIBLE[1]
+            seconds = json.loads(path.read_text())["seconds"]
+            value = seconds / REFERENCE_SECONDS if isinstance(seconds, int | float) else None
+            ok = value is not None and PLAUSIBLE[0] <= value <= PLAUSIBLE[1]
             _READ[key] = float(value) if ok else None
         except (OSError, ValueError, KeyError, TypeError):
             _READ[key] = None

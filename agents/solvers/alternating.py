@@ -7,7 +7,12 @@ from numpy.typing import NDArray
 
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
-from mimo_radar_env.core.superarm import alternating_operations, alternating_super_arm, top_mask
+from mimo_radar_env.core.superarm import (
+    SEARCH_SECONDS_PER_OPERATION,
+    alternating_operations,
+    alternating_super_arm,
+    top_mask,
+)
 
 from ..parameters import check_integer
 from .base import SuperArmSolver
@@ -34,6 +39,7 @@ class AlternatingSolver(SuperArmSolver):
     """
 
     name = "alternating"
+    seconds_per_operation = SEARCH_SECONDS_PER_OPERATION["alternating"]
 
     def __init__(self, tx_count: int, rx_count: int, restarts: int = 8, max_rounds: int = 50) -> None:
         super().__init__(tx_count, rx_count)

@@ -82,6 +82,7 @@ class BPSOSolver(SuperArmSolver):
     """
 
     name = "bpso"
+    seconds_per_operation = 1.7e-9
 
     def __init__(
         self,

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import (
     MAX_EXACT_SUBSETS,
+    SEARCH_SECONDS_PER_OPERATION,
     exact_operations,
     exact_super_arm,
     is_exact_affordable,
@@ -27,6 +28,7 @@ class ExactSolver(SuperArmSolver):
     """
 
     name = "exact"
+    seconds_per_operation = SEARCH_SECONDS_PER_OPERATION["exact"]
 
     def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
         """The smaller side's subsets, each with the other side's sums (a few float64 copies)."""

@@ -798,46 +798,58 @@ def model_figure(docs: Path, key: str) -> str:
 @generator("policy-cost")
 def policy_cost(docs: Path) -> str:
     """``python -m benchmarks.speed.policy_cost``'s rows: every policy's measured / estimated time
-    per trial-step and measured / declared memory per trial, one column per layout and target
-    count."""
+    per trial-step at each trial count, and its peak memory per trial beside the declared at the
+    largest, one column per layout and target count."""
     record = read_json(docs, "perf/policy_cost.json")
     rows = record["rows"]
+    largest = max(record["trials"])
     configs = sorted(
         {(r["M"], r["N"], r["Ms"], r["Ns"], r["K"]) for r in rows}, key=lambda c: (c[0] * c[1], c[4])
     )
-    cells = {(r["policy"], (r["M"], r["N"], r["Ms"], r["Ns"], r["K"])): r for r in rows}
+    cells: dict[tuple, list[dict]] = {}
+    for r in rows:
+        cells.setdefault((r["policy"], (r["M"], r["N"], r["Ms"], r["Ns"], r["K"])), []).append(r)
     policies = sorted({r["policy"] for r in rows})
     header = " | ".join(f"{m} x {n}, K = {k}" for m, n, _, _, k in configs)
     lines = [f"| policy | {header} |", "|---|" + "---|" * len(configs)]
     for policy in policies:
         values = []
         for config in configs:
-            r = cells.get((policy, config))
-            values.append(
-                "—"
-                if r is None
-                else f"{r['ms_per_trial_step']:.2f} / {r['declared_ms_per_trial_step']:.2f} ms, "
-                f"{r['measured_mib_per_trial']:.2f} / {r['declared_mib_per_trial']:.2f} MiB"
-            )
+            measured = sorted(cells.get((policy, config), []), key=lambda r: r["trials"])
+            if not measured:
+                values.append("—")
+                continue
+            times = " · ".join(f"{_time_ratio(r):.2f}" for r in measured)
+            memory = next(r for r in measured if r["trials"] == largest)
+            mib = f"{memory['measured_mib_per_trial']:.2f} / {memory['declared_mib_per_trial']:.2f} MiB"
+            values.append(f"{times}; {mib}")
         lines.append(f"| `{policy}` | " + " | ".join(values) + " |")
     return "\n".join(lines)
 
 
+def _time_ratio(row: dict[str, Any]) -> float:
+    return row["ms_per_trial_step"] / row["declared_ms_per_trial_step"]
+
+
 @values("policy-cost")
 def policy_cost_values(docs: Path) -> dict[str, str]:
-    """policy_cost.json's run (``trials``, ``steps``, ``machine``), the largest measured /
-    declared memory (``worst-memory``) and measured / estimated time's ``time-range`` and
-    ``time-median``."""
+    """policy_cost.json's run (``trials``: its trial counts, ``steps``, ``machine``), the largest
+    measured / declared memory (``worst-memory``), measured / estimated time's ``time-range``
+    and ``time-median`` over every row, and the rows outside 0.5 to 2 (``outside``: their
+    count)."""
     record = read_json(docs, "perf/policy_cost.json")
     rows = record["rows"]
-    times = sorted(r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows)
+    times = sorted(_time_ratio(r) for r in rows)
+    counts = [str(t) for t in record["trials"]]
     return {
-        "trials": str(record["trials"]),
+        "trials": ", ".join(counts[:-1]) + " and " + counts[-1] if len(counts) > 1 else counts[0],
         "steps": str(record["steps"]),
         "machine": _machine(record["machine"]),
+        "rows": str(len(rows)),
         "worst-memory": f"{max(r['measured_mib_per_trial'] / r['declared_mib_per_trial'] for r in rows):.2f}",
         "time-range": f"{times[0]:.2f} to {times[-1]:.2f}",
         "time-median": f"{times[len(times) // 2]:.2f}",
+        "outside": str(sum(not 0.5 <= t <= 2 for t in times)),
     }
 
 

@@ -175,8 +175,8 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
     )
     start = time.perf_counter()
     layouts = policy_cost.LAYOUTS[:1] if quick else policy_cost.LAYOUTS
-    rows = policy_cost.measure(4, 7, progress=lambda line: None, layouts=layouts)
-    results["policy_cost"] = policy_cost.record(rows, 4, 7, time.perf_counter() - start)
+    rows = policy_cost.measure((4,), 7, progress=lambda line: None, layouts=layouts)
+    results["policy_cost"] = policy_cost.record(rows, (4,), 7, time.perf_counter() - start)
     results.update(policy_cost.ratios(rows))
     results["load_average_1min_after"] = round(os.getloadavg()[0], 2)
     return results

@@ -221,6 +221,22 @@ def alternating_operations(num_tx: int, num_rx: int, starts: int, rounds: int = 
     return 2.0 * (num_rx + 2 + starts) * rounds * num_tx * num_rx
 
 
+#: Seconds per declared operation of each search method on the developers' machine: the exact
+#: search's large vectorised sums run several times faster per operation than the alternating
+#: search's rounds of small arrays (fitted to ``benchmarks.speed.policy_cost``'s measurements).
+SEARCH_SECONDS_PER_OPERATION = {"exact": 3.6e-10, "alternating": 1.3e-9}
+
+
+def search_seconds(num_tx: int, num_rx: int, tx_count: int, rx_count: int, method: str = "auto") -> float:
+    """One trial's time of :func:`best_super_arm` by ``method`` on the developers' machine,
+    roughly: :func:`search_operations` at the method's :data:`SEARCH_SECONDS_PER_OPERATION`."""
+    resolved = resolve_method(num_tx, num_rx, tx_count, rx_count, method)
+    return (
+        search_operations(num_tx, num_rx, tx_count, rx_count, resolved)
+        * SEARCH_SECONDS_PER_OPERATION[resolved]
+    )
+
+
 def search_operations(num_tx: int, num_rx: int, tx_count: int, rx_count: int, method: str = "auto") -> float:
     """Arithmetic operations of :func:`best_super_arm` by ``method`` per trial, roughly."""
     if resolve_method(num_tx, num_rx, tx_count, rx_count, method) == "exact":

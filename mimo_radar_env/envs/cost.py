@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from ..core.superarm import AUTO_EXACT_SUBSETS, search_operations
+from ..core.superarm import AUTO_EXACT_SUBSETS, search_operations, search_seconds
 from ..scenarios import Scenario
 from ..tracking.fusion import DEFAULT_FUSION, fusion_class
 from ..tracking.fusion.base import MODELS
@@ -36,24 +36,53 @@ def memory_parts(scenario: Scenario) -> tuple[int, int]:
     return model, per_trial
 
 
-def operations_per_trial_step(
+#: Seconds per declared operation of the channel draws and of the tracker (its compiled update
+#: and bound) on the developers' machine, fitted to ``benchmarks.speed.policy_cost``'s
+#: measurements at 4 and 50 trials; the oracle's search runs at its method's
+#: (:data:`~mimo_radar_env.core.superarm.SEARCH_SECONDS_PER_OPERATION`).
+SECONDS_PER_OPERATION = {"channels": 1.6e-10, "tracker": 4.3e-10}
+
+
+def operation_parts(
     scenario: Scenario, tracking: bool = True, fusion: str = DEFAULT_FUSION
-) -> float:
-    """Arithmetic operations one trial of an env of ``scenario`` does per step, roughly (an
-    upper estimate, to size runs in time as :func:`memory_parts` sizes them in memory): the
-    channel draws and SINR of all ``K M N`` target-channels, the oracle's search of the
-    optimal super arm, and, with ``tracking``, the IMM-UKF's update of the ``Ms Ns`` probed
-    channels by ``fusion`` (:meth:`~mimo_radar_env.tracking.fusion.Fusion.update_operations`)
-    and the bound's recursion."""
+) -> dict[str, float]:
+    """Arithmetic operations one trial of an env of ``scenario`` does per step, roughly (upper
+    estimates), by part: ``"channels"``, the channel draws and SINR of all ``K M N``
+    target-channels; ``"search"``, the oracle's search of the optimal super arm; ``"tracker"``,
+    with ``tracking``, the IMM-UKF's update of the ``Ms Ns`` probed channels by ``fusion``
+    (:meth:`~mimo_radar_env.tracking.fusion.Fusion.update_operations`) and the bound's
+    recursion (0 without)."""
     sc = scenario
     K, M, N = sc.num_targets, sc.num_tx, sc.num_rx
     channels = sc.tx_per_step * sc.rx_per_step
-    operations = 60.0 * K * M * N + search_operations(M, N, sc.tx_per_step, sc.rx_per_step)
-    if not tracking:
-        return operations
-    update = fusion_class(fusion).update_operations(channels)
-    bound = channels * 200 + 2000
-    return operations + K * (MODELS * (update + 3000) + bound)
+    tracker = 0.0
+    if tracking:
+        update = fusion_class(fusion).update_operations(channels)
+        tracker = K * (MODELS * (update + 3000) + channels * 200 + 2000)
+    return {
+        "channels": 60.0 * K * M * N,
+        "search": float(search_operations(M, N, sc.tx_per_step, sc.rx_per_step)),
+        "tracker": float(tracker),
+    }
+
+
+def operations_per_trial_step(
+    scenario: Scenario, tracking: bool = True, fusion: str = DEFAULT_FUSION
+) -> float:
+    """Arithmetic operations one trial of an env of ``scenario`` does per step, roughly: the sum
+    of :func:`operation_parts` (sizes runs in time as :func:`memory_parts` sizes them in
+    memory)."""
+    return sum(operation_parts(scenario, tracking, fusion).values())
+
+
+def seconds_per_trial_step(scenario: Scenario, tracking: bool = True, fusion: str = DEFAULT_FUSION) -> float:
+    """One trial's share of a step's time on the developers' machine, roughly: each part of
+    :func:`operation_parts` at its rate (:data:`SECONDS_PER_OPERATION`, the search's
+    :func:`~mimo_radar_env.core.superarm.search_seconds`)."""
+    parts = operation_parts(scenario, tracking, fusion)
+    sc = scenario
+    search = search_seconds(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+    return search + sum(SECONDS_PER_OPERATION[part] * parts[part] for part in ("channels", "tracker"))
 
 
 def machine_memory() -> int | None:

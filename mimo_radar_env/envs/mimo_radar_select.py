@@ -444,7 +444,6 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
 
     __repr__ = __str__
 
-
     def __init__(
         self,
         num_envs: int = 1,

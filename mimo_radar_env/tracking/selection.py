@@ -33,6 +33,11 @@ CRITERIA: tuple[str, ...] = ("trace", "logdet")
 MAX_ENUMERATED_SUPER_ARMS = 5_000
 
 
+#: The most bytes of swap candidates :func:`greedy_super_arm` builds at once (a block of
+#: trials), below glibc's largest threshold for serving an allocation from fresh pages (32 MiB).
+GREEDY_BLOCK_BYTES = 8 * 2**20
+
+
 def selection_memory_per_trial(
     num_tx: int, num_rx: int, num_targets: int, tx_count: int, rx_count: int, starts: int = 8
 ) -> int:
@@ -53,13 +58,15 @@ def selection_operations_per_trial(
     """Arithmetic operations of :func:`select_for_tracking` per trial, roughly (an upper
     estimate): the channels' information, then every super arm's posterior when it
     enumerates, or each start's greedy additions and swaps (each scoring every candidate
-    station through row and column sums) when it searches greedily."""
+    station through row and column sums, then choosing among every swap) when it searches
+    greedily."""
     count = super_arm_count(num_tx, num_rx, tx_count, rx_count)
     channels = 60.0 * num_targets * num_tx * num_rx
     if count <= MAX_ENUMERATED_SUPER_ARMS:
         return channels + count * num_targets * (8.0 * num_tx * num_rx + 60)
     candidates = (tx_count + rx_count) * (num_tx + num_rx)
-    return channels * (starts + 1) + starts * num_targets * 3 * candidates * 200.0
+    swaps = starts * (num_tx**2 + num_rx**2) * 60.0  # each start's swap masks and minimum, any K
+    return channels * (starts + 1) + starts * num_targets * 3 * candidates * 200.0 + swaps
 
 
 def super_arm_criterion(
@@ -211,10 +218,32 @@ def greedy_super_arm(
     channels' information, or of their single-channel posteriors), so a candidate that adds or
     swaps one station is scored from the current sum and the station's row or column sum: the
     memory per trial is ``O(K (M^2 + N^2))``, never one array per candidate and channel.
+
+    The trials are searched in blocks whose swap candidates take at most
+    :data:`GREEDY_BLOCK_BYTES` (each trial's search is its own, so the blocks change no
+    selection): larger arrays would be fresh memory from the operating system at every swap
+    round, and at 64 x 64 stations the page faults cost more than the arithmetic.
     """
-    batch = position_cov.shape[0]
     num_tx, num_rx = information.shape[2:4]
     starts = min(starts, num_tx * num_rx)
+    batch = position_cov.shape[0]
+    per_trial = starts * information.shape[1] * (num_tx**2 + num_rx**2) * 4 * 8  # the swap candidates
+    block = max(1, GREEDY_BLOCK_BYTES // per_trial)
+    if batch > block:
+        parts = [
+            greedy_super_arm(
+                position_cov[i : i + block],
+                information[i : i + block],
+                weights,
+                tx_count,
+                rx_count,
+                criterion,
+                fusion,
+                starts,
+            )
+            for i in range(0, batch, block)
+        ]
+        return np.concatenate([tx for tx, _ in parts]), np.concatenate([rx for _, rx in parts])
     scorer = _Scorer(position_cov, information, weights, criterion, fusion)
     single = scorer.score(scorer.terms.transpose(0, 2, 3, 1, 4, 5), 1.0).reshape(batch, -1)  # (B, M * N)
     first = np.argsort(single, axis=1)[:, :starts].reshape(-1)  # (B * starts,), trial-major

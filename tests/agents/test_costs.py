@@ -93,3 +93,32 @@ def test_the_planners_declared_memory_bounds_what_a_step_allocates(search):
         tracemalloc.stop()
     _, env_per_trial = memory_parts(load_scenario("paper-1-v1"))
     assert peak <= trials * (agents.costs.memory_per_trial(agent) + env_per_trial)
+
+
+def test_each_parts_time_is_its_operations_at_its_own_rate():
+    from agents.costs import BOOKKEEPING, ORACLE_SEARCH, SOLVER, TRACKING_SEARCH
+    from mimo_radar_env.core.superarm import SEARCH_SECONDS_PER_OPERATION, search_operations
+
+    scenario = random_scenario(16, 16, 2, 4, 4, horizon=5, seed=0)
+    ucb = agents.make_agent("ucb1", scenario)  # the exact solver
+    by_hand = (
+        BOOKKEEPING.operations_per_trial_step(ucb) * BOOKKEEPING.seconds_per_operation
+        + ucb.solver.operations_per_trial(16, 16) * SEARCH_SECONDS_PER_OPERATION["exact"]
+    )
+    assert agents.costs.seconds_per_trial_step(ucb) == pytest.approx(by_hand, rel=1e-12)
+    assert (
+        SOLVER.seconds_per_trial_step(ucb) / SOLVER.operations_per_trial_step(ucb)
+        == (SEARCH_SECONDS_PER_OPERATION["exact"])
+    )
+    alternating = agents.make_agent("ucb1", scenario, solver="alternating")
+    assert SOLVER.seconds_per_trial_step(alternating) == pytest.approx(
+        alternating.solver.operations_per_trial(16, 16) * SEARCH_SECONDS_PER_OPERATION["alternating"]
+    )
+    best = agents.make_agent("best", scenario)  # the oracle's search: exact at 16 x 16 with 4 of each
+    assert ORACLE_SEARCH.seconds_per_trial_step(best) == pytest.approx(
+        search_operations(16, 16, 4, 4) * SEARCH_SECONDS_PER_OPERATION["exact"]
+    )
+    tracking = agents.make_agent("best-tracking", scenario)
+    assert TRACKING_SEARCH.seconds_per_trial_step(tracking) == pytest.approx(
+        TRACKING_SEARCH.operations_per_trial_step(tracking) * TRACKING_SEARCH.seconds_per_operation
+    )

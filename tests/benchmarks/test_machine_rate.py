@@ -18,7 +18,7 @@ def rate_file(tmp_path, monkeypatch):
 
 def _estimate() -> float:
     sc = load_scenario("paper-1-v1")
-    return harness.estimate_seconds(sc, EnvOptions(), {"ucb1": 1e4}, trials=100, steps=50, shard_size=50)
+    return harness.estimate_seconds(sc, EnvOptions(), {"ucb1": 1e-5}, trials=100, steps=50, shard_size=50)
 
 
 def test_a_kept_factor_scales_every_estimate_and_says_so(rate_file):
@@ -26,13 +26,24 @@ def test_a_kept_factor_scales_every_estimate_and_says_so(rate_file):
     before, said = _estimate(), harness.estimated_where()
     assert "like the developers'" in said
     rate_file.parent.mkdir(parents=True)
-    rate_file.write_text(json.dumps({"factor": 2.5}))
-    assert machine_rate.factor() == 2.5
+    seconds = 2.5 * machine_rate.REFERENCE_SECONDS
+    rate_file.write_text(json.dumps({"factor": 2.5, "seconds": seconds}))
+    assert machine_rate.factor() == pytest.approx(2.5)
     assert _estimate() == pytest.approx(2.5 * before)
     assert "on this machine" in harness.estimated_where()
 
 
-@pytest.mark.parametrize("text", ["not json", '{"factor": "x"}', '{"factor": 1000}', "[]", '{"rate": 2}'])
+def test_a_kept_time_is_read_against_todays_reference(rate_file, monkeypatch):
+    """A record kept against an earlier reference gives this machine's speed against today's."""
+    rate_file.parent.mkdir(parents=True)
+    rate_file.write_text(json.dumps({"factor": 1.2, "seconds": 0.3, "reference_seconds": 0.25}))
+    monkeypatch.setattr(machine_rate, "REFERENCE_SECONDS", 0.2)
+    assert machine_rate.factor() == pytest.approx(1.5)
+
+
+@pytest.mark.parametrize(
+    "text", ["not json", '{"seconds": "x"}', '{"seconds": 1000}', "[]", '{"factor": 2}', '{"seconds": null}']
+)
 def test_a_damaged_or_implausible_file_is_no_factor(rate_file, text):
     rate_file.parent.mkdir(parents=True)
     rate_file.write_text(text)

@@ -51,21 +51,19 @@ def test_a_smaller_shard_that_fits_is_chosen_and_recorded(tmp_path, capsys, monk
 
 # ---------------------------------------------------------------- time
 def test_the_time_estimate_counts_every_task_and_the_tasks_at_once():
-    from benchmarks.harness import SECONDS_PER_OPERATION, STEP_OVERHEAD_SECONDS, estimate_seconds
+    from benchmarks.harness import STEP_OVERHEAD_SECONDS, estimate_seconds
     from mimo_radar_env import VERSIONS
-    from mimo_radar_env.envs.cost import operations_per_trial_step
+    from mimo_radar_env.envs.cost import seconds_per_trial_step
 
     options = VERSIONS["v1"].options()
-    env = operations_per_trial_step(PAPER, options.tracking, options.fusion)
-    ops = {"a": 1e5, "b": 3e4}
+    env = seconds_per_trial_step(PAPER, options.tracking, options.fusion)
+    own = {"a": 1e-4, "b": 3e-5}  # each policy's seconds per trial-step
     # 120 trials in shards of 50: three shards per policy, six tasks, two at once
-    by_hand = sum(
-        10 * (3 * STEP_OVERHEAD_SECONDS + 120 * (env + o) * SECONDS_PER_OPERATION) for o in ops.values()
-    )
-    assert estimate_seconds(PAPER, options, ops, 120, 10, 50, parallel=2) == pytest.approx(by_hand / 2)
+    by_hand = sum(10 * (3 * STEP_OVERHEAD_SECONDS + 120 * (env + o)) for o in own.values())
+    assert estimate_seconds(PAPER, options, own, 120, 10, 50, parallel=2) == pytest.approx(by_hand / 2)
     # one task: more workers do not make it faster
-    one = estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=1)
-    assert estimate_seconds(PAPER, options, {"a": 1e5}, 20, 10, 50, parallel=4) == one
+    one = estimate_seconds(PAPER, options, {"a": 1e-4}, 20, 10, 50, parallel=1)
+    assert estimate_seconds(PAPER, options, {"a": 1e-4}, 20, 10, 50, parallel=4) == one
 
 
 def test_a_run_estimated_beyond_max_hours_is_refused_before_anything_is_written(tmp_path, capsys):
@@ -83,7 +81,7 @@ def test_a_run_estimated_beyond_max_hours_is_refused_before_anything_is_written(
 
 
 def test_a_long_run_says_its_estimate(tmp_path, capsys, monkeypatch):
-    monkeypatch.setattr("benchmarks.harness.SECONDS_PER_OPERATION", 1e-3)  # a very slow machine
+    monkeypatch.setattr("benchmarks.harness.STEP_OVERHEAD_SECONDS", 100.0)  # a very slow machine
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2"]
     assert (

@@ -56,3 +56,19 @@ def test_an_env_larger_than_the_machine_is_refused_in_one_line(monkeypatch):
     message = str(error.value)
     assert "\n" not in message and message.startswith("1000 trials of scenario")
     assert "use fewer trials, a shorter horizon or a smaller layout" in message
+
+
+def test_an_envs_time_per_trial_step_is_each_part_at_its_rate():
+    from mimo_radar_env.core.superarm import SEARCH_SECONDS_PER_OPERATION
+
+    for size, method in ((8, "exact"), (64, "alternating")):
+        scenario = random_scenario(size, size, 3, 4, 4, horizon=5, seed=0)
+        parts = cost.operation_parts(scenario, True, "centralized")
+        assert sum(parts.values()) == cost.operations_per_trial_step(scenario, True, "centralized")
+        by_hand = (
+            parts["channels"] * cost.SECONDS_PER_OPERATION["channels"]
+            + parts["search"] * SEARCH_SECONDS_PER_OPERATION[method]
+            + parts["tracker"] * cost.SECONDS_PER_OPERATION["tracker"]
+        )
+        assert cost.seconds_per_trial_step(scenario, True, "centralized") == pytest.approx(by_hand, rel=1e-12)
+    assert cost.operation_parts(scenario, False)["tracker"] == 0

@@ -275,6 +275,20 @@ def test_greedy_search_equals_the_search_spelt_out(fusion, criterion):
     np.testing.assert_array_equal(found[1], expected[1])
 
 
+@pytest.mark.parametrize("fusion", ["centralized", "average"])
+def test_the_greedy_search_in_blocks_of_trials_selects_what_it_selects_whole(fusion, monkeypatch):
+    from mimo_radar_env.tracking import selection
+
+    pcov, info, weights = _search_inputs(11, batch=13, num_tx=9, num_rx=10)
+    whole = selection.greedy_super_arm(pcov, info, weights, 3, 4, "trace", fusion)
+    per_trial = 8 * info.shape[1] * (9**2 + 10**2) * 4 * 8
+    for block in (1, 4, 13):
+        monkeypatch.setattr(selection, "GREEDY_BLOCK_BYTES", block * per_trial)
+        blocks = selection.greedy_super_arm(pcov, info, weights, 3, 4, "trace", fusion)
+        np.testing.assert_array_equal(blocks[0], whole[0])
+        np.testing.assert_array_equal(blocks[1], whole[1])
+
+
 def test_greedy_search_on_a_64x64_layout_stays_in_bounded_memory():
     """The search scores candidates from row and column sums: well under 100 MB per trial at
     64 x 64 with Ms = Ns = 16 (an array per candidate and channel would need gigabytes)."""
