@@ -32,3 +32,30 @@ def bandit_obs(sinr, probed, track=None, track_pred=None):
         obs["track"] = np.asarray(track, dtype=float)
         obs["track_pred"] = np.asarray(track_pred, dtype=float)
     return obs
+
+
+#: The keys of every policy's row of a run's summary.json.
+SUMMARY_KEYS = {
+    "ci",
+    "tracker_repairs",
+    "method",
+    "armse",
+    "armse_per_target",
+    "bound",
+    "bound_per_target",
+    "armse_over_bound",
+    "asr",
+    "final_regret",
+    "mean_sinr_db",
+    "wall_s",
+}
+
+
+def reset_simulation(model, batch: int, rng: np.random.Generator, **options):
+    """A RadarSimulation of ``batch`` trials of ``model``, reset with keys drawn from ``rng``."""
+    from mimo_radar_env.core.simulation import RadarSimulation
+    from mimo_radar_env.core.streams import keys_from_generator
+
+    sim = RadarSimulation(model, batch, **options)
+    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    return sim

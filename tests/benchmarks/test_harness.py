@@ -13,21 +13,7 @@ import pytest
 from benchmarks.cli import main
 from benchmarks.harness import HarnessError, make_config, run, shard_path
 from benchmarks.report import write_outputs
-
-SUMMARY_KEYS = {
-    "ci",
-    "tracker_repairs",
-    "method",
-    "armse",
-    "armse_per_target",
-    "bound",
-    "bound_per_target",
-    "armse_over_bound",
-    "asr",
-    "final_regret",
-    "mean_sinr_db",
-    "wall_s",
-}
+from tests.helpers import SUMMARY_KEYS
 
 
 def test_run_subcommand_with_agent_params_and_a_scenario_file(tmp_path, capsys):

@@ -43,28 +43,8 @@ def test_short_training_saves_reloads_and_acts_everywhere(tmp_path):
     # the harness, next to the bandits on the same trials
     out = tmp_path / "bench"
     model = str(tmp_path / "ppo" / "model.zip")
-    assert (
-        main(
-            [
-                "run",
-                "--scenario",
-                "paper-1-v1",
-                "--policies",
-                f"ppo:{model},ucb1",
-                "--trials",
-                "3",
-                "--steps",
-                "30",
-                "--workers",
-                "1",
-                "--no-figures",
-                "--quiet",
-                "--out",
-                str(out),
-            ]
-        )
-        == 0
-    )
+    argv = "run --scenario paper-1-v1 --trials 3 --steps 30 --workers 1 --no-figures --quiet".split()
+    assert main([*argv, "--policies", f"ppo:{model},ucb1", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert set(summary["policies"]) == {f"ppo:{model}", "ucb1"}
 

@@ -7,16 +7,14 @@ from scipy import stats
 
 from agents.solvers import BPSOSolver, ExactSolver
 from mimo_radar_env import EnvOptions, RadarModel, load_scenario
-from mimo_radar_env.core.simulation import RadarSimulation
-from mimo_radar_env.core.streams import TrialRandom, keys_from_generator
-from tests.helpers import vector_env
+from mimo_radar_env.core.streams import TrialRandom
+from tests.helpers import reset_simulation, vector_env
 
 
 def _simulation(scenario, batch, **options):
     model = RadarModel.from_scenario(load_scenario(scenario))
-    sim = RadarSimulation(model, batch, **options)
     rng = np.random.default_rng(0)
-    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    sim = reset_simulation(model, batch, rng, **options)
     return model, sim
 
 

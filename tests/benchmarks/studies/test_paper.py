@@ -7,21 +7,7 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
-
-SUMMARY_KEYS = {
-    "ci",
-    "tracker_repairs",
-    "method",
-    "armse",
-    "armse_per_target",
-    "bound",
-    "bound_per_target",
-    "armse_over_bound",
-    "asr",
-    "final_regret",
-    "mean_sinr_db",
-    "wall_s",
-}
+from tests.helpers import SUMMARY_KEYS
 
 
 def _read_curves(path):

@@ -3,8 +3,7 @@
 import numpy as np
 
 from mimo_radar_env import RadarModel, load_scenario
-from mimo_radar_env.core.simulation import RadarSimulation
-from mimo_radar_env.core.streams import keys_from_generator
+from tests.helpers import reset_simulation
 
 
 def test_truth_follows_the_motion_model():
@@ -12,9 +11,8 @@ def test_truth_follows_the_motion_model():
     scenario = load_scenario("paper-1")
     model = RadarModel.from_scenario(scenario)
     batch = 4000
-    sim = RadarSimulation(model, batch)
     rng = np.random.default_rng(2)
-    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    sim = reset_simulation(model, batch, rng)
     start = sim.state.copy()
     np.testing.assert_allclose(
         np.cov(start[:, 0].T), np.diag([20.0] * 4), atol=1.5

@@ -5,9 +5,7 @@ import numpy as np
 from scipy import stats
 
 from mimo_radar_env import RadarModel, load_scenario
-from mimo_radar_env.core.simulation import RadarSimulation
-from mimo_radar_env.core.streams import keys_from_generator
-from tests.helpers import vector_env
+from tests.helpers import reset_simulation, vector_env
 
 
 def test_sinr_samples_are_exponential_with_the_mean_sinr():
@@ -36,9 +34,8 @@ def test_measurement_residuals_have_covariance_sigma0_over_lambda():
     scenario = load_scenario("paper-3")
     model = RadarModel.from_scenario(scenario)
     batch = 3000
-    sim = RadarSimulation(model, batch)
     rng = np.random.default_rng(4)
-    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    sim = reset_simulation(model, batch, rng)
     sim.advance()
     tx_index = np.tile([1, 3], (batch, 1))
     rx_index = np.tile([0, 2, 5], (batch, 1))

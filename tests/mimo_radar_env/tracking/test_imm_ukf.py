@@ -14,6 +14,7 @@ from mimo_radar_env.tracking import (
     IMMUKFTracker,
     markov_matrix,
 )
+from tests.helpers import reset_simulation
 from tests.mimo_radar_env.tracking.filterpy_reference import make_reference_ukf, random_spd
 
 RTOL = 1e-8
@@ -44,6 +45,14 @@ def _set_prior(tracker, means, covs, probs):
     tracker.log_probs[:] = np.log(probs)
 
 
+def _assert_fused_as_filterpy(tracker, imm):
+    """Trial 0, target 0 of ``tracker``: filterpy's fused estimate, model probabilities and
+    covariance."""
+    np.testing.assert_allclose(tracker.estimate[0, 0], imm.x, rtol=RTOL)
+    np.testing.assert_allclose(tracker.model_probabilities[0, 0], imm.mu, rtol=RTOL)
+    np.testing.assert_allclose(tracker.covariance[0, 0], imm.P, rtol=1e-7, atol=1e-10)
+
+
 @pytest.mark.parametrize("fusion", ["average", "centralized"])
 def test_one_imm_cycle_equals_filterpy_imm(fusion):
     """With one channel both fusions are one IMM-UKF cycle; compare to filterpy's IMMEstimator."""
@@ -72,9 +81,7 @@ def test_one_imm_cycle_equals_filterpy_imm(fusion):
         tracker.step(tx[None], rx[None], z[None, None, None], variance[None, None, None], np.array([True]))
         np.testing.assert_allclose(tracker.means[0, 0], [f.x for f in imm.filters], rtol=RTOL)
         np.testing.assert_allclose(tracker.covs[0, 0], [f.P for f in imm.filters], rtol=1e-7, atol=1e-10)
-        np.testing.assert_allclose(tracker.model_probabilities[0, 0], imm.mu, rtol=RTOL)
-        np.testing.assert_allclose(tracker.estimate[0, 0], imm.x, rtol=RTOL)
-        np.testing.assert_allclose(tracker.covariance[0, 0], imm.P, rtol=1e-7, atol=1e-10)
+        _assert_fused_as_filterpy(tracker, imm)
 
 
 def test_average_fusion_is_the_mean_of_per_channel_imm_cycles():
@@ -133,9 +140,7 @@ def test_centralized_fusion_equals_filterpy_with_stacked_measurements():
     _set_prior(tracker, means, covs, probs)
     tx_stations, rx_stations = model.tx[[0, 1]], model.rx[[0, 5]]  # channels 0-0, 0-5, 1-0, 1-5
     tracker.step(tx_stations[None], rx_stations[None], z[None, None], variance[None, None], np.array([True]))
-    np.testing.assert_allclose(tracker.estimate[0, 0], imm.x, rtol=RTOL)
-    np.testing.assert_allclose(tracker.model_probabilities[0, 0], imm.mu, rtol=RTOL)
-    np.testing.assert_allclose(tracker.covariance[0, 0], imm.P, rtol=1e-7, atol=1e-10)
+    _assert_fused_as_filterpy(tracker, imm)
 
 
 def test_predict_only_trials_and_eq24():
@@ -169,13 +174,10 @@ def test_compiled_fusion_equals_the_numpy_path(scenario, fusion):
         pytest.skip("numba is not installed: only the numpy path exists")
     sc = large_scenario(16, 16, 5, horizon=100) if scenario == "large" else load_scenario(scenario)
     model = RadarModel.from_scenario(sc)
-    from mimo_radar_env.core.simulation import RadarSimulation
-    from mimo_radar_env.core.streams import keys_from_generator
 
     batch = 7
-    sim = RadarSimulation(model, batch)
     rng = np.random.default_rng(5)
-    sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
+    sim = reset_simulation(model, batch, rng)
     trackers = [IMMUKFTracker(model, batch, fusion=fusion, use_numba=flag) for flag in (True, False)]
     for _ in range(40):
         sim.advance()
