@@ -20,11 +20,12 @@ import contextlib
 import fcntl
 import functools
 import hashlib
+import heapq
 import json
 import math
 import sys
 import time
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -70,6 +71,10 @@ class RunConfig:
     policies : list of str
         Registered agent names, ``NAME:ARGUMENT`` for agents that take one (``ppo:PATH``).
     trials, steps, seed, shard_size : int
+    shard_sizes : dict
+        ``{policy: trials per shard}`` where a policy's shards differ from ``shard_size`` (the
+        cost-aware schedule, :func:`plan_shard_sizes`); empty: every policy's are
+        ``shard_size``.
     env_options : dict
         Every env option (:class:`~mimo_radar_env.EnvOptions`), defaults included.
     agent_params : dict
@@ -88,14 +93,23 @@ class RunConfig:
     env_options: dict[str, Any] = field(default_factory=lambda: EnvOptions().to_dict())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
     policy_files: dict[str, dict[str, str]] = field(default_factory=dict)
+    shard_sizes: dict[str, int] = field(default_factory=dict)
 
-    @property
-    def num_shards(self) -> int:
-        return -(-self.trials // self.shard_size)
+    def size_of(self, policy: str) -> int:
+        """Trials per shard of ``policy``."""
+        return self.shard_sizes.get(policy, self.shard_size)
 
-    def shard_trials(self, shard: int) -> range:
-        start = shard * self.shard_size
-        return range(start, min(start + self.shard_size, self.trials))
+    def shards_of(self, policy: str) -> int:
+        return -(-self.trials // self.size_of(policy))
+
+    def shard_trials(self, policy: str, shard: int) -> range:
+        size = self.size_of(policy)
+        return range(shard * size, min((shard + 1) * size, self.trials))
+
+    def tasks(self) -> list[tuple[str, int]]:
+        """Every (policy, shard) task, shard by shard."""
+        shards = {policy: self.shards_of(policy) for policy in self.policies}
+        return [(p, s) for s in range(max(shards.values())) for p in self.policies if s < shards[p]]
 
     @functools.cached_property
     def scenario_object(self) -> Scenario:
@@ -107,7 +121,12 @@ class RunConfig:
         return EnvOptions(**self.env_options)
 
     def to_json(self) -> dict[str, Any]:
-        return asdict(self)
+        """The configuration as config.json holds it (``shard_sizes`` only where it says
+        something, so a run written before it existed is the same run)."""
+        out = asdict(self)
+        if not out["shard_sizes"]:
+            del out["shard_sizes"]
+        return out
 
 
 def make_config(
@@ -116,7 +135,7 @@ def make_config(
     trials: int,
     steps: int | None = None,
     seed: int = 0,
-    shard_size: int | None = None,
+    shard_size: int | Mapping[str, int] | None = None,
     agent_params: dict[str, dict[str, Any]] | None = None,
     options: EnvOptions | None = None,
     workers: int = 1,
@@ -133,7 +152,8 @@ def make_config(
     once: the shard size is lowered until it fits, and ``say`` says so, or the run is refused.
     Its time (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is
     said when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
-    ``shard_size`` None is :func:`auto_shard_size` for those tasks.
+    ``shard_size`` None is the cost-aware schedule for those tasks (:func:`plan_shard_sizes`);
+    a mapping gives each policy's (a resumed run's, :func:`recorded_shard_size`).
     """
     try:
         sc = load_scenario(scenario)
@@ -141,14 +161,25 @@ def make_config(
         raise HarnessError(str(exc)) from exc
     options = options or EnvOptions()
     parallel = parallel or workers
+    given = shard_size
+    if isinstance(given, Mapping):
+        if sorted(given) != sorted(policies):
+            raise HarnessError(f"`shard_size` names {sorted(given)}, not the run's policies {list(policies)}")
+        shard_size = max(given.values())
     steps = _check_sizes(sc, trials, steps, seed, shard_size)
     params = _check_policies(policies, agent_params or {})
-    if shard_size is None:
-        shard_size = auto_shard_size(trials, parallel, len(policies))
     built = {policy: _probe(policy, sc, params.get(policy, {}), seed, options) for policy in policies}
+    if given is None:
+        sizes = plan_shard_sizes(_task_costs(sc, options, built), trials, parallel)
+    else:
+        sizes = dict(given) if isinstance(given, Mapping) else dict.fromkeys(policies, shard_size)
     per_trial = {policy: agents.costs.memory_per_trial(agent) for policy, agent in built.items()}
-    shard_size = fit_shard_size(sc, per_trial, shard_size, workers, say)
-    _check_run_time(sc, options, built, trials, steps, shard_size, parallel, max_hours, say)
+    fitted = fit_shard_size(sc, per_trial, max(sizes.values()), workers, say)
+    sizes = {policy: min(size, fitted) for policy, size in sizes.items()}
+    if given is None and len(set(sizes.values())) > 1:
+        say("shards by cost: " + ", ".join(f"{p} {-(-trials // n)} of {n} trials" for p, n in sizes.items()))
+    shard_size = max(sizes.values())
+    _check_run_time(sc, options, built, trials, steps, sizes, parallel, max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
         json.dumps(params, allow_nan=False)
     except (TypeError, ValueError) as exc:
@@ -161,6 +192,7 @@ def make_config(
         steps=steps,
         seed=seed,
         shard_size=shard_size,
+        shard_sizes={p: n for p, n in sizes.items() if n != shard_size},
         env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
@@ -227,7 +259,7 @@ def _check_run_time(
     built: dict[str, agents.Agent],
     trials: int,
     steps: int,
-    shard_size: int,
+    shard_size: int | Mapping[str, int],
     parallel: int,
     max_hours: float | None,
     say: Callable[[str], None],
@@ -247,7 +279,7 @@ def _built_seconds(
     sc: Scenario,
     options: EnvOptions,
     built: dict[str, agents.Agent],
-    size: tuple[int, int, int],
+    size: tuple[int, int, int | Mapping[str, int]],
     parallel: int,
 ) -> float:
     """:func:`estimate_seconds` of the built agents' declared costs; ``size`` is the run's
@@ -283,6 +315,76 @@ def auto_shard_size(trials: int, parallel: int, policies: int = 1) -> int:
     parallel, policies = max(1, parallel), max(1, policies)
     shards = parallel // math.gcd(policies, parallel)
     return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // shards)))
+
+
+def _task_costs(
+    sc: Scenario, options: EnvOptions, built: dict[str, agents.Agent]
+) -> dict[str, tuple[float, float]]:
+    """Each policy's estimated seconds per step of a shard: (the part that does not grow with its
+    trials, each trial's share) (:func:`estimate_seconds`'s terms)."""
+    env = seconds_per_trial_step(sc, options.tracking, options.fusion)
+    return {
+        policy: (
+            STEP_OVERHEAD_SECONDS + agents.costs.seconds_per_step(agent),
+            env + agents.costs.seconds_per_trial_step(agent),
+        )
+        for policy, agent in built.items()
+    }
+
+
+def planned_shard_sizes(config: RunConfig, parallel: int) -> dict[str, int]:
+    """The shard sizes :func:`make_config` plans for ``config``'s run with ``parallel`` tasks at
+    once (without ``shard_size``, before the memory check)."""
+    sc = config.scenario_object
+    built = {
+        policy: make_policy(policy, sc, config.agent_params.get(policy, {}), seed=config.seed,
+                            options=config.env_options)
+        for policy in config.policies
+    }  # fmt: skip
+    return plan_shard_sizes(_task_costs(sc, config.options, built), config.trials, parallel)
+
+
+def plan_shard_sizes(
+    costs: Mapping[str, tuple[float, float]], trials: int, parallel: int, max_size: int = MAX_AUTO_SHARD_SIZE
+) -> dict[str, int]:
+    """Each policy's shard size for ``parallel`` tasks at once, from its cost per step of a shard
+    (``costs``: the fixed part and each trial's share, :func:`_task_costs`): the sizes whose tasks,
+    queued the longest first on ``parallel`` workers, end soonest by that cost model. Splitting a
+    policy's trials into more shards shortens its longest task but pays its fixed part once more
+    per shard (a smaller batch); so the costliest policies get the smallest shards and the cheap
+    ones keep large batches. The search splits, one shard at a time, the policy whose task is
+    the longest (at most :data:`MAX_AUTO_SHARD_SIZE` trials a shard, up to four tasks per
+    worker), and keeps the best plan it met; ties go to the fewest shards."""
+    parallel = max(1, parallel)
+    shards = {policy: -(-trials // max_size) for policy in costs}
+
+    def durations(plan: dict[str, int]) -> list[float]:
+        out = []
+        for policy, n in plan.items():
+            fixed, per_trial = costs[policy]
+            size = -(-trials // n)
+            out += [
+                fixed + (min(start + size, trials) - start) * per_trial for start in range(0, trials, size)
+            ]
+        return sorted(out, reverse=True)
+
+    def makespan(plan: dict[str, int]) -> float:
+        free = [0.0] * parallel
+        for seconds in durations(plan):
+            heapq.heappush(free, heapq.heappop(free) + seconds)
+        return max(free)
+
+    best, best_span = dict(shards), makespan(shards)
+    while sum(shards.values()) < 4 * parallel:
+        splittable = [p for p in shards if shards[p] < trials]
+        if not splittable:
+            break
+        longest = max(splittable, key=lambda p: costs[p][0] + -(-trials // shards[p]) * costs[p][1])
+        shards[longest] += 1
+        span = makespan(shards)
+        if span < best_span * (1 - 1e-9):
+            best, best_span = dict(shards), span
+    return {policy: -(-trials // n) for policy, n in best.items()}
 
 
 def fit_shard_size(
@@ -338,7 +440,7 @@ def estimate_seconds(
     agent_trial_seconds: dict[str, float],
     trials: int,
     steps: int,
-    shard_size: int,
+    shard_size: int | Mapping[str, int],
     parallel: int = 1,
     agent_seconds: dict[str, float] | None = None,
 ) -> float:
@@ -348,15 +450,17 @@ def estimate_seconds(
     env's, :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step`, and the policy's,
     :func:`agents.costs.seconds_per_trial_step`, ``agent_trial_seconds``);
     ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
-    machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`)."""
+    machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`).
+    ``shard_size`` is every policy's, or each policy's (a mapping)."""
     env = seconds_per_trial_step(scenario, options.tracking, options.fusion)
-    shards = -(-trials // shard_size)
+    sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(agent_trial_seconds, shard_size)
+    shards = {policy: -(-trials // sizes[policy]) for policy in agent_trial_seconds}
     fixed = agent_seconds or {}
     total = sum(
-        steps * (shards * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0)) + trials * (env + agent))
+        steps * (shards[policy] * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0)) + trials * (env + agent))
         for policy, agent in agent_trial_seconds.items()
     )
-    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, shards * len(agent_trial_seconds)))
+    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, sum(shards.values())))
 
 
 def duration(seconds: float) -> str:
@@ -416,7 +520,7 @@ def run_task(config: dict[str, Any], policy: str, shard: int, device: Any = None
     the agent on torch there (the same numbers to rounding); the fields come back to numpy."""
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
-    trials = cfg.shard_trials(shard)
+    trials = cfg.shard_trials(policy, shard)
     start = time.perf_counter()
     agent = make_policy(
         policy,
@@ -509,14 +613,31 @@ def policy_name(policy: str | type[agents.Agent], workers: int = 1) -> str:
 
 
 # ------------------------------------------------------------------ storage
-def recorded_shard_size(out: str | Path) -> int | None:
-    """The shard size of the run already in ``out`` (None: no readable run there), which a
-    resumed run without ``--shard-size`` keeps, whatever its number of workers."""
+def recorded_shard_size(
+    out: str | Path, policies: Sequence[str] | None = None
+) -> int | dict[str, int] | None:
+    """The shard size of the run already in ``out``, each policy's where they differ (None: no
+    readable run there, or one of other ``policies``), which a resumed run without
+    ``--shard-size`` keeps, whatever its number of workers."""
     try:
-        size = json.loads((Path(out) / CONFIG_FILE).read_text()).get("shard_size")
+        config = json.loads((Path(out) / CONFIG_FILE).read_text())
+        size, sizes = config.get("shard_size"), config.get("shard_sizes", {})
     except (OSError, ValueError, AttributeError):
         return None
-    return size if isinstance(size, int) and not isinstance(size, bool) and size >= 1 else None
+
+    def count(value: Any) -> bool:
+        return isinstance(value, int) and not isinstance(value, bool) and value >= 1
+
+    if not count(size) or not isinstance(sizes, dict) or not all(map(count, sizes.values())):
+        return None
+    if not sizes:
+        return size
+    recorded = config.get("policies")
+    if not isinstance(recorded, list) or not all(isinstance(p, str) for p in recorded):
+        return None
+    if not set(sizes) <= set(recorded) or (policies is not None and sorted(policies) != sorted(recorded)):
+        return None
+    return {policy: sizes.get(policy, size) for policy in recorded}
 
 
 def prepare_output(out: Path, config: RunConfig) -> None:
@@ -583,17 +704,16 @@ def _tasks_to_run(out: Path, config: RunConfig, warn: Callable[[str], None]) -> 
     """Tasks without a valid shard; damaged or foreign shards are named and set aside."""
     payload = config.to_json()
     todo = []
-    for shard in range(config.num_shards):
-        for policy in config.policies:
-            path = shard_path(out, policy, shard)
-            if path.exists():
-                try:
-                    read_shard(path, config.shard_trials(shard), config_hash(payload, policy))
-                    continue
-                except ValueError as exc:
-                    moved = set_aside(path)
-                    warn(f"shard {path} is not valid ({exc}); set aside as {moved.name}, computing it again")
-            todo.append((policy, shard))
+    for policy, shard in config.tasks():
+        path = shard_path(out, policy, shard)
+        if path.exists():
+            try:
+                read_shard(path, config.shard_trials(policy, shard), config_hash(payload, policy))
+                continue
+            except ValueError as exc:
+                moved = set_aside(path)
+                warn(f"shard {path} is not valid ({exc}); set aside as {moved.name}, computing it again")
+        todo.append((policy, shard))
     return todo
 
 
@@ -614,8 +734,8 @@ def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
             {policy: agents.costs.seconds_per_trial_step(agent)},
             {policy: agents.costs.seconds_per_step(agent)},
         )
-        for shard in range(config.num_shards):
-            n = len(config.shard_trials(shard))
+        for shard in range(config.shards_of(policy)):
+            n = len(config.shard_trials(policy, shard))
             costs[policy, shard] = estimate_seconds(
                 scenario, options, per_trial, n, config.steps, n, 1, fixed
             )
@@ -676,15 +796,15 @@ def run_many(
         started = time.perf_counter()
         left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
         for number, (config, folder) in enumerate(zip(configs, folders, strict=True)):
-            total = config.num_shards * len(config.policies)
+            total = len(config.tasks())
             if total - left[number] > 0 and max_tasks is None:
                 tqdm.write(
                     f"resumed: {total - left[number]} of {total} tasks already done in {folder}",
                     file=sys.stderr,
                 )
         steps_of = [
-            [len(c.shard_trials(s)) * c.steps for s in range(c.num_shards)] for c in configs
-        ]  # trial-steps of each run's shards
+            {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
+        ]  # trial-steps of each run's tasks
         threads = 1 if workers > 1 or backend == "ray" else None
         bar = _progress_bar(configs, todo, steps_of, progress, threads)
         saved = []
@@ -702,11 +822,11 @@ def run_many(
             write_shard(
                 shard_path(folders[number], policy, shard),
                 result,
-                config.shard_trials(shard),
+                config.shard_trials(policy, shard),
                 config_hash(payloads[number], policy),
             )
             saved.append(position)
-            bar.update(steps_of[number][shard])
+            bar.update(steps_of[number][policy, shard])
             bar.set_postfix_str(policy if len(configs) == 1 else f"{config.scenario['name']}: {policy}")
             left[number] -= 1
             if left[number] == 0:
@@ -833,16 +953,16 @@ def longest_first(
 def _progress_bar(
     configs: list[RunConfig],
     todo: list[tuple[int, str, int]],
-    steps_of: list[list[int]],
+    steps_of: list[dict[tuple[str, int], int]],
     progress: bool,
     threads: int | None,
 ) -> tqdm:
     """The runs' progress in trial-steps, from what is already saved; it says when the tasks
     will compile numba kernels first."""
-    total = sum(sum(steps) * len(c.policies) for steps, c in zip(steps_of, configs, strict=True))
+    total = sum(sum(steps.values()) for steps in steps_of)
     bar = tqdm(
         total=total,
-        initial=total - sum(steps_of[n][s] for n, _, s in todo),
+        initial=total - sum(steps_of[n][p, s] for n, p, s in todo),
         unit="trial-step",
         disable=not progress,
         smoothing=0.1,
@@ -858,7 +978,7 @@ def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, ND
     if not path.exists():
         raise HarnessError(f"shard {shard} of {policy!r} is missing in {out}; run again to complete it")
     try:
-        return read_shard(path, config.shard_trials(shard), config_hash(config.to_json(), policy))
+        return read_shard(path, config.shard_trials(policy, shard), config_hash(config.to_json(), policy))
     except ValueError as exc:
         raise HarnessError(f"shard {path} is not valid ({exc}); run again to recompute it") from exc
 
@@ -869,7 +989,7 @@ def load_per_trial(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]
     order, so every backend gives the same numbers)."""
     per_trial: dict[str, dict[str, NDArray]] = {}
     for policy in config.policies:
-        parts = [_read(Path(out), config, policy, shard) for shard in range(config.num_shards)]
+        parts = [_read(Path(out), config, policy, shard) for shard in range(config.shards_of(policy))]
         joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
         for key in ("selections", "wall_s", "tracker_repairs"):
             joined[key] = functools.reduce(np.add, (part[key] for part in parts))

@@ -30,6 +30,10 @@ def _bpso_kernels() -> ModuleType:
     return _bpso_kernels
 
 
+#: Iterations the ``"set"`` rule takes to reach a tabulated optimum, roughly (its cost model).
+SET_RULE_ITERATIONS = 20
+
+
 class BPSOSolver(SuperArmSolver):
     """BPSO as written in the paper, vectorised over trials and particles.
 
@@ -127,9 +131,16 @@ class BPSOSolver(SuperArmSolver):
 
     def operations_per_trial(self, num_tx: int, num_rx: int) -> float:
         """Every particle's velocity, position and value at every iteration (a compiled,
-        vectorised kernel: about one operation per station and per selected channel)."""
+        vectorised kernel: about one operation per station and per selected channel). Where the
+        kernel knows the optimum (a particle of at most ``TABLE_BITS`` stations: every super
+        arm's value is tabulated) it stops on reaching it, which rule ``"set"`` does within
+        about :data:`SET_RULE_ITERATIONS` iterations (measured: 14 us a trial at 4 x 6 against
+        85 us for ``"xor"``, which runs them all about half the time)."""
         per_particle = num_tx + num_rx + self.tx_count * self.rx_count
-        return float(self.population * self.iterations * per_particle)
+        iterations = self.iterations
+        if self.rule == "set" and num_tx + num_rx <= _bpso_kernels().TABLE_BITS:
+            iterations = min(iterations, SET_RULE_ITERATIONS)
+        return float(self.population * iterations * per_particle)
 
     def initial_swarm(
         self, random: TrialRandom, num_tx: int, num_rx: int

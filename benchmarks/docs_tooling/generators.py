@@ -1366,25 +1366,36 @@ def strong_scaling(docs: Path) -> str:
             )
     lines += [
         "",
-        "| machine | model from | workers | shard | predicted wall (s) | measured (s) |",
-        "|---|---|---|---|---|---|",
+        "| machine | model from | workers | schedule | shards (trials) | predicted wall (s) | measured (s) |",
+        "|---|---|---|---|---|---|---|",
     ]
     for machine, relative in SCALING_FILES.items():
         record = read_json(docs, relative)
-        measured = {r["workers"]: r["wall_s"] for r in record["measured"]}
+        measured = {(r["workers"], r.get("schedule", "uniform")): r["wall_s"] for r in record["measured"]}
         for m in record["model"]:
-            seen = measured.get(m["workers"])
+            schedule = m.get("schedule", "uniform")
+            seen = measured.get((m["workers"], schedule))
             lines.append(
-                f"| {machine} | {record['model_from_workers']} workers | {m['workers']} | "
-                f"{m['shard_size']} | {m['wall_s']:.1f} | {'—' if seen is None else f'{seen:.1f}'} |"
+                f"| {machine} | {record['model_from_workers']} workers | {m['workers']} | {schedule} | "
+                f"{_shard_sizes(m)} | {m['wall_s']:.1f} | {'—' if seen is None else f'{seen:.1f}'} |"
             )
     return "\n".join(lines)
+
+
+def _shard_sizes(row: dict[str, Any]) -> str:
+    """A model row's shard sizes: one number where every policy's are the same."""
+    sizes = row.get("shard_sizes") or {}
+    largest = row["shard_size"]
+    smaller = [f"{p} {n}" for p, n in sizes.items() if n != largest]
+    return ", ".join([*smaller, f"the rest {largest}"]) if smaller else str(largest)
 
 
 @value_source("scaling")
 def scaling_value(docs: Path, key: str) -> str:
     """A figure of the strong-scaling runs: ``MACHINE.wall.W``, ``MACHINE.efficiency.W``,
-    ``MACHINE.model.W`` (predicted wall), ``MACHINE.us.W`` (us per trial-step in the tasks),
+    ``MACHINE.model.W`` (predicted wall, every policy's trials in as many shards),
+    ``MACHINE.model-by-cost.W`` (predicted wall, shards sized by cost), ``MACHINE.us.W`` (us per
+    trial-step in the tasks),
     ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker), ``MACHINE.before.W``
     and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
@@ -1398,11 +1409,14 @@ def scaling_value(docs: Path, key: str) -> str:
     relative = SCALING_FILES[SCALING_MACHINES[machine]]
     record = read_json(docs, relative)
     rows = {r["workers"]: r for r in record["measured"]}
-    model = {m["workers"]: m for m in record["model"]}
+    model = {m["workers"]: m for m in record["model"] if m.get("schedule", "uniform") == "uniform"}
+    by_cost = {m["workers"]: m for m in record["model"] if m.get("schedule") == "by cost"}
     w = int(workers)
     try:
         if kind == "model":
             return f"{model[w]['wall_s']:.1f}"
+        if kind == "model-by-cost":
+            return f"{by_cost[w]['wall_s']:.1f}"
         if kind == "probe-ratio":  # the probed tasks' seconds at W's shard size over the model's own
             return f"{model[w]['task_seconds'] / model[record['model_from_workers']]['task_seconds']:.1f}"
         r = rows[w]

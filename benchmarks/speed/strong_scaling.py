@@ -5,7 +5,7 @@ and a model of the measured parts that predicts other worker counts.
         --json docs/results/perf/strong-scaling.json
 
 Each measurement runs ``mimo-radar-bench claims ... --workers W`` as a user does (a fresh
-process, the default shard size for W workers) into a fresh folder, and reads the shards it wrote:
+process, the default shards for W workers: sized by cost) into a fresh folder, and reads the shards it wrote:
 each task's compute seconds (``wall_s``), its trials, and when its file was written. The
 ``W x wall`` worker-seconds of a run split into
 
@@ -17,10 +17,13 @@ each task's compute seconds (``wall_s``), its trials, and when its file was writ
   kernels in each, writing the shards and the report.
 
 The cost of **smaller batches** is the per-trial-step cost of a task at W's shard size against
-the largest shard measured. The model predicts a worker count from one core's view: each
-policy's task is probed at that count's shard size, the tasks are queued in the harness's order
-(the longest declared cost first, run after run) on W workers (list scheduling), and the time
-outside the tasks is the one measured at the most workers. It assumes a core as fast as this
+the largest shard measured. The model predicts a worker count from one core's view, under two
+schedules: ``"uniform"`` (every policy's trials in as many shards, the harness's default before
+the cost-aware one) and ``"by cost"`` (the harness's shard sizes for W workers). Each policy's
+task is probed at the schedule's shard size on one compute thread (as a worker of a
+several-worker run has), the tasks are queued in the harness's order (the longest declared cost
+first, run after run) on W workers (list scheduling), and the time outside the tasks is the one
+measured at the most workers. It assumes a core as fast as this
 machine's when all are busy (no memory-bandwidth contention): a larger machine checks that.
 """
 
@@ -105,55 +108,77 @@ def makespan(durations: list[float], workers: int) -> float:
     return max(free)
 
 
-def queue_order(out: Path, shard_size: int | None = None) -> list[tuple[str, str, int, int]]:
+def _with_sizes(payload: dict[str, Any], sizes: int | dict[str, int] | None) -> dict[str, Any]:
+    """A run's configuration with its shard sizes replaced: every policy's (an int), or each
+    policy's (a mapping)."""
+    if sizes is None:
+        return payload
+    if isinstance(sizes, int):
+        return {**payload, "shard_size": sizes, "shard_sizes": {}}
+    return {**payload, "shard_size": max(sizes.values()), "shard_sizes": dict(sizes)}
+
+
+def queue_order(out: Path, sizes: int | dict[str, int] | None = None) -> list[tuple[str, str, int, int]]:
     """The harness's order of a study's tasks (run after run, the longest declared cost first),
-    as (run, policy, shard, trials), with the runs' shard size replaced by ``shard_size``."""
+    as (run, policy, shard, trials), with the runs' shard sizes replaced by ``sizes``."""
     from ..harness import RunConfig, longest_first
 
     order = []
     for config_file in sorted(out.glob("*/config.json")):
-        payload = json.loads(config_file.read_text())
-        if shard_size is not None:
-            payload["shard_size"] = shard_size
-        config = RunConfig(**payload)
-        tasks = [(p, s) for s in range(config.num_shards) for p in config.policies]
+        config = RunConfig(**_with_sizes(json.loads(config_file.read_text()), sizes))
         order += [
-            (config_file.parent.name, p, s, len(config.shard_trials(s)))
-            for p, s in longest_first(config, tasks)
+            (config_file.parent.name, p, s, len(config.shard_trials(p, s)))
+            for p, s in longest_first(config, config.tasks())
         ]
     return order
 
 
-def probe(out: Path, shard_size: int, steps: int | None = None) -> dict[str, dict[str, float]]:
-    """Each policy's task of ``shard_size`` trials (``steps`` steps, default the run's) run alone
-    on one core in this process: its seconds by run and policy."""
+def probe(out: Path, sizes: int | dict[str, int], steps: int | None = None) -> dict[str, dict[str, float]]:
+    """Each policy's first task with the shard sizes ``sizes`` (``steps`` steps, default the
+    run's) run alone on one core in this process, on one compute thread as in a worker of a
+    several-worker run: its seconds by run and policy."""
     from ..harness import run_task
+    from .policy_cost import one_compute_thread
 
     seconds: dict[str, dict[str, float]] = {}
     for config_file in sorted(out.glob("*/config.json")):
-        payload = json.loads(config_file.read_text())
-        payload["shard_size"] = shard_size
+        payload = _with_sizes(json.loads(config_file.read_text()), sizes)
         if steps is not None:
             payload["steps"] = steps
         run = config_file.parent.name
-        seconds[run] = {p: float(run_task(payload, p, 0)["wall_s"]) for p in payload["policies"]}
+        with one_compute_thread():
+            seconds[run] = {p: float(run_task(payload, p, 0)["wall_s"]) for p in payload["policies"]}
     return seconds
 
 
 def predict(
     out: Path, workers: int, trials: int, overhead: float, probes: dict[int, dict[str, dict[str, float]]]
 ) -> dict[str, Any]:
-    """The model's wall time for ``workers`` workers (module docstring)."""
-    from ..harness import auto_shard_size
+    """The model's wall time for ``workers`` workers (module docstring), under each schedule:
+    ``"uniform"``, every policy's trials in the same number of shards (:func:`auto_shard_size`,
+    the harness's default before the cost-aware one), and ``"by cost"``, the harness's shard
+    sizes (:func:`benchmarks.harness.planned_shard_sizes`)."""
+    from ..harness import RunConfig, auto_shard_size, planned_shard_sizes
 
-    config = json.loads(next(out.glob("*/config.json")).read_text())
-    size = auto_shard_size(trials, workers, len(config["policies"]))
-    if size not in probes:
-        probes[size] = probe(out, size)
-    durations = [probes[size][run][policy] * n / size for run, policy, _, n in queue_order(out, size)]
-    span = makespan(durations, workers)
-    return {"workers": workers, "shard_size": size, "tasks": len(durations), "task_seconds": sum(durations),
-            "makespan_s": span, "wall_s": overhead + span}  # fmt: skip
+    payload = json.loads(next(out.glob("*/config.json")).read_text())
+    policies = payload["policies"]
+    schedules = {
+        "uniform": dict.fromkeys(policies, auto_shard_size(trials, workers, len(policies))),
+        "by cost": planned_shard_sizes(RunConfig(**payload), workers),
+    }
+    rows = []
+    for schedule, sizes in schedules.items():
+        key = tuple(sorted(sizes.items()))
+        if key not in probes:
+            probes[key] = probe(out, sizes)
+        durations = [
+            probes[key][run][policy] * n / sizes[policy] for run, policy, _, n in queue_order(out, sizes)
+        ]
+        span = makespan(durations, workers)
+        rows.append({"workers": workers, "schedule": schedule, "shard_size": max(sizes.values()),
+                     "shard_sizes": sizes, "tasks": len(durations), "task_seconds": sum(durations),
+                     "makespan_s": span, "wall_s": overhead + span})  # fmt: skip
+    return rows
 
 
 def measure(
@@ -181,14 +206,14 @@ def _measure(
     reference = folders[counts[0]]
     probe(reference, 1, steps=1)  # warm-up: the compiled kernels load in this process
     fixed = {p: s for run in probe(reference, 1, steps=1).values() for p, s in run.items()}
-    probes: dict[int, dict[str, dict[str, float]]] = {}
+    probes: dict[tuple, dict[str, dict[str, float]]] = {}
     base = measured[0]
     rows = []
     for m in measured:
         tasks, workers = m["tasks"], m["workers"]
         per_step = sum(t.seconds - fixed[t.policy] for t in tasks) / sum(t.trials * t.steps for t in tasks)
         rows.append({
-            "workers": workers, "wall_s": m["wall_s"], "tasks": len(tasks),
+            "workers": workers, "schedule": "by cost", "wall_s": m["wall_s"], "tasks": len(tasks),
             "shard_trials": max(t.trials for t in tasks),
             "speedup": base["wall_s"] / m["wall_s"] * base["workers"],
             "efficiency": base["wall_s"] * base["workers"] / (m["wall_s"] * workers),
@@ -205,8 +230,9 @@ def _measure(
     by_task = {(t.run, t.policy, t.shard): t.seconds for t in source["tasks"]}
     overhead = source["wall_s"] - makespan([by_task[r, p, s] for r, p, s, _ in order], source["workers"])
     model = [
-        predict(folders[source["workers"]], w, trials, overhead, probes)
+        row
         for w in sorted({source["workers"], *predictions})
+        for row in predict(folders[source["workers"]], w, trials, overhead, probes)
     ]
     return {
         "study": ["mimo-radar-bench", *study],

@@ -83,7 +83,7 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
             # without --shard-size, a run being resumed keeps its own (it may have had other workers);
             # on a device, a policy's trials are one batch
             settings.shard_size
-            or harness.recorded_shard_size(run.folder)
+            or harness.recorded_shard_size(run.folder, run.policies)
             or (settings.trials if settings.device is not None else None),
             settings.agent_params if run.agent_params is None else run.agent_params,
             options=run.options or settings.options,

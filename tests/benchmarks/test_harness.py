@@ -10,8 +10,9 @@ import time
 import numpy as np
 import pytest
 
+from benchmarks import harness
 from benchmarks.cli import main
-from benchmarks.harness import HarnessError, make_config, run, shard_path
+from benchmarks.harness import HarnessError, load_per_trial, make_config, run, shard_path
 from benchmarks.report import write_outputs
 from tests.helpers import SUMMARY_KEYS
 
@@ -161,3 +162,71 @@ def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwar
         make_config("paper-1-v1", ["ucb1"], say=lambda message: None, **given)
     assert python in str(caught.value) and "--" not in str(caught.value)
     assert flag in caught.value.for_command_line()
+
+
+# ---------------------------------------------------------------- the cost-aware schedule
+def _model_makespan(costs, sizes, trials, parallel):
+    """The makespan of the tasks of ``sizes`` by the cost model, queued the longest first (written
+    out apart from the harness's)."""
+    tasks = []
+    for policy, size in sizes.items():
+        fixed, per_trial = costs[policy]
+        for start in range(0, trials, size):
+            tasks.append(fixed + (min(start + size, trials) - start) * per_trial)
+    loads = [0.0] * parallel
+    for seconds in sorted(tasks, reverse=True):
+        loads[loads.index(min(loads))] += seconds
+    return max(loads)
+
+
+def test_the_costliest_policy_gets_the_smallest_shards_and_the_run_ends_sooner():
+    from benchmarks.harness import auto_shard_size, plan_shard_sizes
+
+    # one policy ten times the others' per trial (MG-CRB-CL's BPSO beside the index policies)
+    costs = {"costly": (2e-3, 150e-6), **{f"cheap{i}": (2e-3, 15e-6) for i in range(5)}}
+    for parallel in (1, 2, 4, 8, 16):
+        sizes = plan_shard_sizes(costs, 500, parallel)
+        uniform = dict.fromkeys(costs, auto_shard_size(500, parallel, len(costs)))
+        assert sizes["costly"] == min(sizes.values())
+        planned = _model_makespan(costs, sizes, 500, parallel)
+        assert planned <= _model_makespan(costs, uniform, 500, parallel) * (1 + 1e-12)
+        assert planned <= _model_makespan(costs, dict.fromkeys(costs, 500), 500, parallel) * (1 + 1e-12)
+    assert plan_shard_sizes(costs, 500, 1) == dict.fromkeys(costs, 500)  # one worker: whole batches
+    assert plan_shard_sizes(costs, 500, 16)["cheap0"] > plan_shard_sizes(costs, 500, 16)["costly"]
+    # equal policies and as many workers: one shard each, as the uniform schedule
+    assert plan_shard_sizes(dict.fromkeys("abcd", (1e-3, 1e-5)), 100, 4) == dict.fromkeys("abcd", 100)
+
+
+def test_per_policy_shards_cover_every_trial_once_and_give_the_same_numbers(tmp_path):
+    kinds = dict(steps=6, say=lambda _: None)
+    uniform = make_config("paper-1-v1", ["ucb1", "fix1"], 7, shard_size=7, **kinds)
+    mixed = make_config("paper-1-v1", ["ucb1", "fix1"], 7, shard_size={"ucb1": 3, "fix1": 7}, **kinds)
+    assert mixed.shard_size == 7 and mixed.shard_sizes == {"ucb1": 3}
+    assert mixed.tasks() == [("ucb1", 0), ("fix1", 0), ("ucb1", 1), ("ucb1", 2)]
+    for policy in mixed.policies:
+        covered = [t for s in range(mixed.shards_of(policy)) for t in mixed.shard_trials(policy, s)]
+        assert covered == list(range(7))
+    assert "shard_sizes" not in uniform.to_json() and mixed.to_json()["shard_sizes"] == {"ucb1": 3}
+    for config, name in ((uniform, "uniform"), (mixed, "mixed")):
+        run(config, tmp_path / name, progress=False)
+    a, b = load_per_trial(tmp_path / "uniform", uniform), load_per_trial(tmp_path / "mixed", mixed)
+    for policy in ("ucb1", "fix1"):
+        for key in ("trial_expected", "trial_squared_error", "trial_bound_squared", "trial_matches"):
+            np.testing.assert_allclose(b[policy][key], a[policy][key], rtol=1e-12, atol=0)
+    # resumed without a shard size, the run keeps each policy's
+    assert harness.recorded_shard_size(tmp_path / "mixed") == {"ucb1": 3, "fix1": 7}
+    assert harness.recorded_shard_size(tmp_path / "uniform") == 7
+    # a study resuming the folder with other policies gets none: its configuration differs anyway
+    assert harness.recorded_shard_size(tmp_path / "mixed", ["ucb1"]) is None
+    assert harness.recorded_shard_size(tmp_path / "mixed", ["fix1", "ucb1"]) == {"ucb1": 3, "fix1": 7}
+    with pytest.raises(HarnessError, match=r"`?shard_size`? names \['a'\], not the run's policies"):
+        make_config("paper-1-v1", ["ucb1"], 7, shard_size={"a": 3}, **kinds)
+
+
+def test_a_run_planned_by_cost_says_its_shards(capsys):
+    six = ["best", "mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2"]
+    config = make_config("paper-1-v1", six, 500, 10, workers=1, parallel=8, say=print)
+    said = capsys.readouterr().out
+    assert config.shard_sizes and "shards by cost: " in said
+    assert f"mg-crb-cl {config.shards_of('mg-crb-cl')} of {config.size_of('mg-crb-cl')} trials" in said
+    assert config.size_of("mg-crb-cl") < config.size_of("fix1")

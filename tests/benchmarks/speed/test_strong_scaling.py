@@ -41,6 +41,10 @@ def test_a_tiny_study_is_measured_and_modelled(tmp_path):
         assert parts["task_steps_s"] > 0 and parts["task_fixed_s"] > 0
         assert parts["task_steps_s"] + parts["task_fixed_s"] <= parts["worker_seconds"]
     assert two["efficiency"] == pytest.approx(one["wall_s"] / (2 * two["wall_s"]))
-    four = next(m for m in result["model"] if m["workers"] == 4)
-    assert (four["shard_size"], four["tasks"]) == (6, 12)  # 4 // gcd(6, 4) = 2 shards per policy
-    assert four["makespan_s"] >= four["task_seconds"] / 4
+    four = {m["schedule"]: m for m in result["model"] if m["workers"] == 4}
+    assert (four["uniform"]["shard_size"], four["uniform"]["tasks"]) == (6, 12)  # 4 // gcd(6, 4) each
+    by_cost = four["by cost"]["shard_sizes"]
+    assert len(by_cost) == 6 and four["by cost"]["tasks"] == sum(-(-12 // n) for n in by_cost.values())
+    for row in four.values():
+        assert row["makespan_s"] >= row["task_seconds"] / 4
+        assert row["wall_s"] == pytest.approx(result["outside_tasks_s"] + row["makespan_s"])
