@@ -161,23 +161,17 @@ def make_config(
         raise HarnessError(str(exc)) from exc
     options = options or EnvOptions()
     parallel = parallel or workers
-    given = shard_size
-    if isinstance(given, Mapping):
-        if sorted(given) != sorted(policies):
-            raise HarnessError(f"`shard_size` names {sorted(given)}, not the run's policies {list(policies)}")
-        shard_size = max(given.values())
-    steps = _check_sizes(sc, trials, steps, seed, shard_size)
+    if isinstance(shard_size, Mapping):
+        if sorted(shard_size) != sorted(policies):
+            raise HarnessError(
+                f"`shard_size` names {sorted(shard_size)}, not the run's policies {list(policies)}"
+            )
+        for size in shard_size.values():
+            _check_sizes(sc, trials, steps, seed, size)
+    steps = _check_sizes(sc, trials, steps, seed, None if isinstance(shard_size, Mapping) else shard_size)
     params = _check_policies(policies, agent_params or {})
     built = {policy: _probe(policy, sc, params.get(policy, {}), seed, options) for policy in policies}
-    if given is None:
-        sizes = plan_shard_sizes(_task_costs(sc, options, built), trials, parallel)
-    else:
-        sizes = dict(given) if isinstance(given, Mapping) else dict.fromkeys(policies, shard_size)
-    per_trial = {policy: agents.costs.memory_per_trial(agent) for policy, agent in built.items()}
-    fitted = fit_shard_size(sc, per_trial, max(sizes.values()), workers, say)
-    sizes = {policy: min(size, fitted) for policy, size in sizes.items()}
-    if given is None and len(set(sizes.values())) > 1:
-        say("shards by cost: " + ", ".join(f"{p} {-(-trials // n)} of {n} trials" for p, n in sizes.items()))
+    sizes = _shard_sizes(sc, options, built, trials, shard_size, parallel, workers, say)
     shard_size = max(sizes.values())
     _check_run_time(sc, options, built, trials, steps, sizes, parallel, max_hours, say)
     try:  # config.json is strict JSON: a parameter that is not (NaN, infinity, an object) is refused here
@@ -196,6 +190,31 @@ def make_config(
         env_options=options.to_dict(),
         agent_params={k: dict(v) for k, v in params.items()},
     )
+
+
+def _shard_sizes(
+    sc: Scenario,
+    options: EnvOptions,
+    built: dict[str, agents.Agent],
+    trials: int,
+    given: int | Mapping[str, int] | None,
+    parallel: int,
+    workers: int,
+    say: Callable[[str], None],
+) -> dict[str, int]:
+    """Each policy's shard size: ``given`` (one for all, or each policy's), or planned by cost
+    (:func:`plan_shard_sizes`, said where they differ); lowered where ``workers`` tasks at once
+    would not fit in memory (:func:`fit_shard_size`)."""
+    if given is None:
+        sizes = plan_shard_sizes(_task_costs(sc, options, built), trials, parallel)
+    else:
+        sizes = dict(given) if isinstance(given, Mapping) else dict.fromkeys(built, given)
+    per_trial = {policy: agents.costs.memory_per_trial(agent) for policy, agent in built.items()}
+    fitted = fit_shard_size(sc, per_trial, max(sizes.values()), workers, say)
+    sizes = {policy: min(size, fitted) for policy, size in sizes.items()}
+    if given is None and len(set(sizes.values())) > 1:
+        say("shards by cost: " + ", ".join(f"{p} {-(-trials // n)} of {n} trials" for p, n in sizes.items()))
+    return sizes
 
 
 def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_size: int | None) -> int:
@@ -284,9 +303,24 @@ def _built_seconds(
 ) -> float:
     """:func:`estimate_seconds` of the built agents' declared costs; ``size`` is the run's
     (trials, steps, shard size)."""
-    per_trial = {policy: agents.costs.seconds_per_trial_step(agent) for policy, agent in built.items()}
-    fixed = {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
+    per_trial, fixed = _agent_seconds(built)
     return estimate_seconds(sc, options, per_trial, *size, parallel, fixed)
+
+
+def _agent_seconds(built: dict[str, agents.Agent]) -> tuple[dict[str, float], dict[str, float]]:
+    """Each built agent's declared seconds per trial-step and per step of a batch."""
+    per_trial = {policy: agents.costs.seconds_per_trial_step(agent) for policy, agent in built.items()}
+    return per_trial, {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
+
+
+def _policies(config: RunConfig) -> dict[str, agents.Agent]:
+    """Every policy of ``config``'s run, built as its tasks build it (for its declared costs)."""
+    sc = config.scenario_object
+    return {
+        policy: make_policy(policy, sc, config.agent_params.get(policy, {}), seed=config.seed,
+                            options=config.env_options)
+        for policy in config.policies
+    }  # fmt: skip
 
 
 def run_seconds(config: RunConfig, parallel: int = 1) -> float:
@@ -320,28 +354,42 @@ def auto_shard_size(trials: int, parallel: int, policies: int = 1) -> int:
 def _task_costs(
     sc: Scenario, options: EnvOptions, built: dict[str, agents.Agent]
 ) -> dict[str, tuple[float, float]]:
+    """Each built policy's estimated seconds per step of a shard (:func:`_step_costs`)."""
+    return _step_costs(sc, options, *_agent_seconds(built))
+
+
+def _step_costs(
+    scenario: Scenario,
+    options: EnvOptions,
+    agent_trial_seconds: dict[str, float],
+    agent_seconds: dict[str, float] | None = None,
+) -> dict[str, tuple[float, float]]:
     """Each policy's estimated seconds per step of a shard: (the part that does not grow with its
-    trials, each trial's share) (:func:`estimate_seconds`'s terms)."""
-    env = seconds_per_trial_step(sc, options.tracking, options.fusion)
+    trials, each trial's share): :data:`STEP_OVERHEAD_SECONDS` and its own fixed time
+    (``agent_seconds``); the env's :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step` and
+    its own (``agent_trial_seconds``)."""
+    env = seconds_per_trial_step(scenario, options.tracking, options.fusion)
+    fixed = agent_seconds or {}
     return {
-        policy: (
-            STEP_OVERHEAD_SECONDS + agents.costs.seconds_per_step(agent),
-            env + agents.costs.seconds_per_trial_step(agent),
-        )
-        for policy, agent in built.items()
+        policy: (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0), env + own)
+        for policy, own in agent_trial_seconds.items()
     }
 
 
 def planned_shard_sizes(config: RunConfig, parallel: int) -> dict[str, int]:
     """The shard sizes :func:`make_config` plans for ``config``'s run with ``parallel`` tasks at
     once (without ``shard_size``, before the memory check)."""
-    sc = config.scenario_object
-    built = {
-        policy: make_policy(policy, sc, config.agent_params.get(policy, {}), seed=config.seed,
-                            options=config.env_options)
-        for policy in config.policies
-    }  # fmt: skip
-    return plan_shard_sizes(_task_costs(sc, config.options, built), config.trials, parallel)
+    costs = _task_costs(config.scenario_object, config.options, _policies(config))
+    return plan_shard_sizes(costs, config.trials, parallel)
+
+
+def makespan(durations: Sequence[float], workers: int) -> float:
+    """When tasks of ``durations`` end, queued in that order on ``workers`` workers (list
+    scheduling: each task to the first free worker)."""
+    free = [0.0] * max(1, workers)
+    for seconds in durations:
+        heapq.heappush(free, heapq.heappop(free) + seconds)
+    return max(free)
 
 
 def plan_shard_sizes(
@@ -358,32 +406,24 @@ def plan_shard_sizes(
     parallel = max(1, parallel)
     shards = {policy: -(-trials // max_size) for policy in costs}
 
-    def durations(plan: dict[str, int]) -> list[float]:
-        out = []
+    def span(plan: dict[str, int]) -> float:
+        durations = []
         for policy, n in plan.items():
             fixed, per_trial = costs[policy]
             size = -(-trials // n)
-            out += [
-                fixed + (min(start + size, trials) - start) * per_trial for start in range(0, trials, size)
-            ]
-        return sorted(out, reverse=True)
+            durations += [fixed + (min(s + size, trials) - s) * per_trial for s in range(0, trials, size)]
+        return makespan(sorted(durations, reverse=True), parallel)
 
-    def makespan(plan: dict[str, int]) -> float:
-        free = [0.0] * parallel
-        for seconds in durations(plan):
-            heapq.heappush(free, heapq.heappop(free) + seconds)
-        return max(free)
-
-    best, best_span = dict(shards), makespan(shards)
+    best, best_span = dict(shards), span(shards)
     while sum(shards.values()) < 4 * parallel:
         splittable = [p for p in shards if shards[p] < trials]
         if not splittable:
             break
         longest = max(splittable, key=lambda p: costs[p][0] + -(-trials // shards[p]) * costs[p][1])
         shards[longest] += 1
-        span = makespan(shards)
-        if span < best_span * (1 - 1e-9):
-            best, best_span = dict(shards), span
+        length = span(shards)
+        if length < best_span * (1 - 1e-9):
+            best, best_span = dict(shards), length
     return {policy: -(-trials // n) for policy, n in best.items()}
 
 
@@ -452,14 +492,10 @@ def estimate_seconds(
     ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
     machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`).
     ``shard_size`` is every policy's, or each policy's (a mapping)."""
-    env = seconds_per_trial_step(scenario, options.tracking, options.fusion)
-    sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(agent_trial_seconds, shard_size)
-    shards = {policy: -(-trials // sizes[policy]) for policy in agent_trial_seconds}
-    fixed = agent_seconds or {}
-    total = sum(
-        steps * (shards[policy] * (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0)) + trials * (env + agent))
-        for policy, agent in agent_trial_seconds.items()
-    )
+    costs = _step_costs(scenario, options, agent_trial_seconds, agent_seconds)
+    sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(costs, shard_size)
+    shards = {policy: -(-trials // sizes[policy]) for policy in costs}
+    total = sum(steps * (shards[p] * fixed + trials * per_trial) for p, (fixed, per_trial) in costs.items())
     return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, sum(shards.values())))
 
 
@@ -726,19 +762,13 @@ def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
     """Every (policy, shard) task's estimated seconds (:func:`estimate_seconds` for the shard's
     trials alone): the order in which a run starts its tasks, the longest first."""
     scenario, options = config.scenario_object, config.options
+    per_trial, fixed = _agent_seconds(_policies(config))
     costs = {}
-    for policy in config.policies:
-        params = config.agent_params.get(policy, {})
-        agent = make_policy(policy, scenario, params, seed=config.seed, options=config.env_options)
-        per_trial, fixed = (
-            {policy: agents.costs.seconds_per_trial_step(agent)},
-            {policy: agents.costs.seconds_per_step(agent)},
+    for policy, shard in config.tasks():
+        n = len(config.shard_trials(policy, shard))
+        costs[policy, shard] = estimate_seconds(
+            scenario, options, {policy: per_trial[policy]}, n, config.steps, n, 1, {policy: fixed[policy]}
         )
-        for shard in range(config.shards_of(policy)):
-            n = len(config.shard_trials(policy, shard))
-            costs[policy, shard] = estimate_seconds(
-                scenario, options, per_trial, n, config.steps, n, 1, fixed
-            )
     return costs
 
 

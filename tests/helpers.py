@@ -59,3 +59,12 @@ def reset_simulation(model, batch: int, rng: np.random.Generator, **options):
     sim = RadarSimulation(model, batch, **options)
     sim.reset(np.stack([keys_from_generator(rng) for _ in range(batch)]))
     return sim
+
+
+def simulation(scenario, batch: int, seed: int = 0, **options):
+    """The model of ``scenario`` (a name or a Scenario) and a simulation of ``batch`` trials of it,
+    reset with keys drawn from ``seed`` (:func:`reset_simulation`)."""
+    from mimo_radar_env import RadarModel, load_scenario
+
+    model = RadarModel.from_scenario(load_scenario(scenario))
+    return model, reset_simulation(model, batch, np.random.default_rng(seed), **options)

@@ -800,6 +800,8 @@ def policy_cost(docs: Path) -> str:
     """``python -m benchmarks.speed.policy_cost``'s rows: every policy's measured / estimated time
     per trial-step at each trial count, and its peak memory per trial beside the declared at the
     largest, one column per layout and target count."""
+    from ..speed.policy_cost import time_ratio
+
     record = read_json(docs, "perf/policy_cost.json")
     rows = record["rows"]
     largest = max(record["trials"])
@@ -819,16 +821,12 @@ def policy_cost(docs: Path) -> str:
             if not measured:
                 values.append("—")
                 continue
-            times = " · ".join(f"{_time_ratio(r):.2f}" for r in measured)
+            times = " · ".join(f"{time_ratio(r):.2f}" for r in measured)
             memory = next(r for r in measured if r["trials"] == largest)
             mib = f"{memory['measured_mib_per_trial']:.2f} / {memory['declared_mib_per_trial']:.2f} MiB"
             values.append(f"{times}; {mib}")
         lines.append(f"| `{policy}` | " + " | ".join(values) + " |")
     return "\n".join(lines)
-
-
-def _time_ratio(row: dict[str, Any]) -> float:
-    return row["ms_per_trial_step"] / row["declared_ms_per_trial_step"]
 
 
 @values("policy-cost")
@@ -837,9 +835,11 @@ def policy_cost_values(docs: Path) -> dict[str, str]:
     measured / declared memory (``worst-memory``), measured / estimated time's ``time-range``
     and ``time-median`` over every row, and the rows outside 0.5 to 2 (``outside``: their
     count)."""
+    from ..speed.policy_cost import time_ratio
+
     record = read_json(docs, "perf/policy_cost.json")
     rows = record["rows"]
-    times = sorted(_time_ratio(r) for r in rows)
+    times = sorted(time_ratio(r) for r in rows)
     counts = [str(t) for t in record["trials"]]
     return {
         "trials": ", ".join(counts[:-1]) + " and " + counts[-1] if len(counts) > 1 else counts[0],

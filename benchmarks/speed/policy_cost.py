@@ -167,9 +167,14 @@ def record(rows: list[dict[str, Any]], trials: Sequence[int], steps: int, second
     }
 
 
+def time_ratio(row: dict[str, Any]) -> float:
+    """A row's measured / estimated time."""
+    return row["ms_per_trial_step"] / row["declared_ms_per_trial_step"]
+
+
 def ratios(rows: list[dict[str, Any]]) -> dict[str, float]:
     """The largest measured / declared memory and the range of measured / estimated time."""
-    times = [r["ms_per_trial_step"] / r["declared_ms_per_trial_step"] for r in rows]
+    times = [time_ratio(r) for r in rows]
     return {
         "policy_memory_measured_over_declared_max": max(
             r["measured_mib_per_trial"] / r["declared_mib_per_trial"] for r in rows

@@ -30,7 +30,6 @@ machine's when all are busy (no memory-bandwidth contention): a larger machine c
 from __future__ import annotations
 
 import argparse
-import heapq
 import json
 import os
 import platform
@@ -43,6 +42,8 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..harness import makespan
 
 #: The study measured by default: the v1 claims study's scenario 1, whole episodes.
 STUDY = ("claims", "--scenarios", "1", "--trials", "500")
@@ -98,14 +99,6 @@ def breakdown(
         "tail_idle_s": tail,
         "outside_tasks_s": workers * wall - work - tail,
     }
-
-
-def makespan(durations: list[float], workers: int) -> float:
-    """List scheduling: each task in order goes to the first free worker."""
-    free = [0.0] * workers
-    for seconds in durations:
-        heapq.heappush(free, heapq.heappop(free) + seconds)
-    return max(free)
 
 
 def _with_sizes(payload: dict[str, Any], sizes: int | dict[str, int] | None) -> dict[str, Any]:

@@ -48,8 +48,13 @@ def selection_memory_per_trial(
     channels = 8 * 4 * num_targets * num_tx * num_rx * 3  # information, single posteriors, scratch
     if count <= MAX_ENUMERATED_SUPER_ARMS:
         return channels + 8 * count * (num_tx * num_rx + 3 * 4 * num_targets)
-    swaps = 8 * 4 * num_targets * (num_tx**2 + num_rx**2 + num_tx + num_rx) * 4
-    return channels * (starts + 1) + starts * swaps
+    return channels * (starts + 1) + 4 * _swap_bytes(num_tx, num_rx, num_targets, starts)
+
+
+def _swap_bytes(num_tx: int, num_rx: int, num_targets: int, starts: int) -> int:
+    """One trial's swap candidates and station sums in the greedy search, one copy: every start's
+    (K, 2, 2) sum for each swap and each station (float64)."""
+    return starts * 8 * 4 * num_targets * (num_tx**2 + num_rx**2 + num_tx + num_rx)
 
 
 def selection_operations_per_trial(
@@ -227,8 +232,7 @@ def greedy_super_arm(
     num_tx, num_rx = information.shape[2:4]
     starts = min(starts, num_tx * num_rx)
     batch = position_cov.shape[0]
-    per_trial = starts * information.shape[1] * (num_tx**2 + num_rx**2) * 4 * 8  # the swap candidates
-    block = max(1, GREEDY_BLOCK_BYTES // per_trial)
+    block = max(1, GREEDY_BLOCK_BYTES // _swap_bytes(num_tx, num_rx, information.shape[1], starts))
     if batch > block:
         parts = [
             greedy_super_arm(

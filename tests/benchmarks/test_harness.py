@@ -230,3 +230,10 @@ def test_a_run_planned_by_cost_says_its_shards(capsys):
     assert config.shard_sizes and "shards by cost: " in said
     assert f"mg-crb-cl {config.shards_of('mg-crb-cl')} of {config.size_of('mg-crb-cl')} trials" in said
     assert config.size_of("mg-crb-cl") < config.size_of("fix1")
+
+
+def test_each_policys_shard_size_is_checked_like_one_for_all():
+    with pytest.raises(HarnessError, match=r"`?shard_size`? must be an integer >= 1, got 0"):
+        make_config(
+            "paper-1-v1", ["ucb1", "fix1"], 7, 6, shard_size={"ucb1": 0, "fix1": 7}, say=lambda _: None
+        )

@@ -6,20 +6,13 @@ import pytest
 from scipy import stats
 
 from agents.solvers import BPSOSolver, ExactSolver
-from mimo_radar_env import EnvOptions, RadarModel, load_scenario
+from mimo_radar_env import EnvOptions, load_scenario
 from mimo_radar_env.core.streams import TrialRandom
-from tests.helpers import reset_simulation, vector_env
-
-
-def _simulation(scenario, batch, **options):
-    model = RadarModel.from_scenario(load_scenario(scenario))
-    rng = np.random.default_rng(0)
-    sim = reset_simulation(model, batch, rng, **options)
-    return model, sim
+from tests.helpers import simulation, vector_env
 
 
 def test_lambda_scale_db_is_eq32_on_decibels():
-    model, sim = _simulation("paper-3", 5, lambda_scale="db")
+    model, sim = simulation("paper-3", 5, lambda_scale="db")
     for _ in range(30):
         sim.advance()
     tx, rx = np.tile([0, 3], (5, 1)), np.tile([1, 2, 5], (5, 1))
@@ -29,7 +22,7 @@ def test_lambda_scale_db_is_eq32_on_decibels():
     lam = np.clip((s_db - s_min_db) / (10.0 - s_min_db) + 0.2, 0.2, 1.2)  # S_max = 10 is 10 dB
     expected = np.stack([5.0 / lam, 0.002 / lam], axis=-1)
     np.testing.assert_allclose(obs.noise_variance, expected, rtol=1e-12)
-    linear = _simulation("paper-3", 5)[1]
+    linear = simulation("paper-3", 5)[1]
     for _ in range(30):
         linear.advance()
     assert not np.allclose(linear.observe(tx, rx, np.ones(5, bool)).noise_variance, expected)

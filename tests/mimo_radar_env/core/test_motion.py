@@ -2,17 +2,13 @@
 
 import numpy as np
 
-from mimo_radar_env import RadarModel, load_scenario
-from tests.helpers import reset_simulation
+from tests.helpers import simulation
 
 
 def test_truth_follows_the_motion_model():
     """Increments of the truth have the process-noise covariance Q = G diag(Qs, Qs) G'."""
-    scenario = load_scenario("paper-1")
-    model = RadarModel.from_scenario(scenario)
     batch = 4000
-    rng = np.random.default_rng(2)
-    sim = reset_simulation(model, batch, rng)
+    _, sim = simulation("paper-1", batch, seed=2)
     start = sim.state.copy()
     np.testing.assert_allclose(
         np.cov(start[:, 0].T), np.diag([20.0] * 4), atol=1.5

@@ -4,8 +4,7 @@ covariance sigma0 / lambda."""
 import numpy as np
 from scipy import stats
 
-from mimo_radar_env import RadarModel, load_scenario
-from tests.helpers import reset_simulation, vector_env
+from tests.helpers import simulation, vector_env
 
 
 def test_sinr_samples_are_exponential_with_the_mean_sinr():
@@ -31,11 +30,9 @@ def test_sinr_samples_are_exponential_with_the_mean_sinr():
 
 
 def test_measurement_residuals_have_covariance_sigma0_over_lambda():
-    scenario = load_scenario("paper-3")
-    model = RadarModel.from_scenario(scenario)
     batch = 3000
-    rng = np.random.default_rng(4)
-    sim = reset_simulation(model, batch, rng)
+    model, sim = simulation("paper-3", batch, seed=4)
+    scenario = model.scenario
     sim.advance()
     tx_index = np.tile([1, 3], (batch, 1))
     rx_index = np.tile([0, 2, 5], (batch, 1))

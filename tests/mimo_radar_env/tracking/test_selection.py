@@ -281,7 +281,7 @@ def test_the_greedy_search_in_blocks_of_trials_selects_what_it_selects_whole(fus
 
     pcov, info, weights = _search_inputs(11, batch=13, num_tx=9, num_rx=10)
     whole = selection.greedy_super_arm(pcov, info, weights, 3, 4, "trace", fusion)
-    per_trial = 8 * info.shape[1] * (9**2 + 10**2) * 4 * 8
+    per_trial = 8 * info.shape[1] * (9**2 + 10**2 + 9 + 10) * 4 * 8  # one trial's swap candidates
     for block in (1, 4, 13):
         monkeypatch.setattr(selection, "GREEDY_BLOCK_BYTES", block * per_trial)
         blocks = selection.greedy_super_arm(pcov, info, weights, 3, 4, "trace", fusion)
