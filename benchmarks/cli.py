@@ -7,7 +7,7 @@ answer before numpy, numba, scipy, torch or matplotlib are imported, and a comma
 is imported only when that command is named. A failure a command can name is one line on
 standard error and exit code 2.
 
-A study of one's own is one module defining a :class:`~benchmarks.studies.base.Study` and
+A study of one's own is one module defining a :class:`~benchmarks.study.Study` and
 calling :func:`register_command`; ``mimo-radar-bench --import MODULE NAME ...`` imports it
 first (as rl-zoo3's ``--gym-packages`` does).
 """
@@ -95,9 +95,9 @@ _BUILT_IN = (
         "paper",
         "first steps",
         "the paper's study: six policies on a paper scenario",
-        "studies.paper:PaperStudy",
+        "paper:PaperStudy",
     ),
-    ("run", "first steps", "any scenario, any registered policies", "studies.paper:RunStudy"),
+    ("run", "first steps", "any scenario, any registered policies", "paper:RunStudy"),
     (
         "compile",
         "first steps",
@@ -120,7 +120,7 @@ _BUILT_IN = (
         "compare-claims",
         "studies",
         "the verdicts of several scorecards side by side",
-        "commands:CompareClaims",
+        "studies.claims:CompareClaims",
     ),
     (
         "tracking",
@@ -175,13 +175,13 @@ _BUILT_IN = (
         "model-figures",
         "maintenance",
         "measure the figures docs/model.md and docs/agents.md quote (solvers, tracker, bound)",
-        "model_figures:ModelFigures",
+        "docs_tooling.model_figures:ModelFigures",
     ),
     (
         "perf",
         "maintenance",
         "performance figures, each as a ratio to a reference measured in the same run",
-        "commands:Perf",
+        "speed.perf:Perf",
     ),
 )
 #: Every command, by name, in the help's order within its group.

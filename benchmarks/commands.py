@@ -1,18 +1,17 @@
-"""The subcommands of ``mimo-radar-bench`` that are not studies: ``train-ppo``, ``perf``,
-``compare-claims``, ``agents``, ``demo`` and ``compile``."""
+"""The first steps of ``mimo-radar-bench`` that are not studies: ``train-ppo``, ``agents``,
+``demo`` and ``compile``."""
 
 from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from agents.ppo import LEARNER_NAMES, LEARNERS, TORCH_PPO
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
 
 from .cli import Command
 from .errors import BenchError
-from .studies.settings import add_env_options, add_max_hours, env_options_from, integer
+from .settings import add_env_options, add_max_hours, env_options_from, integer
 
 
 class TrainPPO(Command):
@@ -104,7 +103,7 @@ class TrainPPO(Command):
 
     def main(self) -> int:
         from .harness import HarnessError, RunInterrupted
-        from .studies.settings import local_workers, scenario_for_version
+        from .settings import local_workers, scenario_for_version
         from .training import seed_folder, train_ppo
 
         args = self.args
@@ -151,64 +150,6 @@ class TrainPPO(Command):
             print(
                 f"trained {algorithm}, {args.seeds} seeds of {meta['timesteps']} steps; saved {folder}/seed-*"
             )
-        return 0
-
-
-class Perf(Command):
-    name = "perf"
-    description = (
-        "Measure the tracker against filterpy, BPSO against the kernel it replaced, the v1 vector env "
-        "against its numpy paths, and the v1 claims and tracking studies timed whole; write "
-        "DIR/perf.json and print a table."
-    )
-
-    @classmethod
-    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--out", required=True, help="output directory for perf.json")
-        parser.add_argument("--quick", action="store_true", help="small sizes, a few minutes (CI smoke test)")
-        parser.add_argument(
-            "--workers",
-            type=integer(1),
-            default=None,
-            help="worker processes for the studies (default: cores)",
-        )
-
-    def main(self) -> int:
-        from .speed.perf import main as perf_main
-
-        perf_main(self.args.out, quick=self.args.quick, workers=self.args.workers)
-        return 0
-
-
-class CompareClaims(Command):
-    name = "compare-claims"
-    description = (
-        "Print one row per claim and one verdict column per scorecard (LABEL=PATH, PATH a claims.json "
-        "written by 'claims' or 'calibrate-layout', or its folder)."
-    )
-
-    @classmethod
-    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument(
-            "scorecards", nargs="+", metavar="LABEL=PATH", help="a label and a claims.json (or its folder)"
-        )
-
-    def main(self) -> int:
-        from .studies import claims
-
-        paths: dict[str, Path] = {}
-        for item in self.args.scorecards:
-            label, sep, where = item.partition("=")
-            path = Path(where) / "claims.json" if Path(where).is_dir() else Path(where)
-            if not sep or not label:
-                raise BenchError(f"scorecards are given as LABEL=PATH, got {item!r}")
-            if label in paths:
-                raise BenchError(f"two scorecards are labelled {label!r}; give each its own label")
-            if not path.is_file():
-                raise BenchError(f"{where} is neither a scorecard (.json) nor a folder holding claims.json")
-            paths[label] = path
-        scorecards = {label: claims.load_scorecard(path) for label, path in paths.items()}
-        print(claims.comparison_markdown(scorecards), end="")
         return 0
 
 

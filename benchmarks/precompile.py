@@ -15,6 +15,8 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import as_completed
 from typing import Any
 
+import numpy as np
+
 from mimo_radar_env import VERSIONS
 from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
 from mimo_radar_env.tracking.fusion import FUSIONS, compiled_kernels
@@ -24,6 +26,11 @@ from .errors import BenchError
 
 #: The scenario the workloads run (any scenario calls the kernels with the same argument types).
 SCENARIO = "paper-1-v1"
+
+
+def paper_index(trials: int) -> np.ndarray:
+    """Index matrices at the paper's size: i.i.d. Exponential(1), (B, 4, 6)."""
+    return np.random.default_rng(7).exponential(size=(trials, 4, 6))
 
 
 def _env_and_tracking_search(fusion: str) -> None:
@@ -45,8 +52,6 @@ def _bpso(threads: int) -> None:
     numba threads: a harness worker's one-thread kernel, or a one-process run's parallel one."""
     from agents.solvers import BPSOSolver, _bpso_kernels
     from mimo_radar_env.core.streams import TrialRandom
-
-    from .speed.solver_speed import paper_index
 
     solver = BPSOSolver(2, 3)
     index = solver.check(paper_index(2))

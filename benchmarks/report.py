@@ -211,7 +211,7 @@ def paper_study_parameters(scenario: str) -> dict[str, dict[str, Any]]:
     from mimo_radar_env import VERSIONS
     from mimo_radar_env.envs.versions import SCENARIO_SETS
 
-    from .studies.settings import paper_study_params
+    from .settings import paper_study_params
 
     for version in VERSIONS.values():
         if scenario in version.paper_scenarios:

@@ -11,7 +11,7 @@ import numpy as np
 
 import agents
 import mimo_radar_env
-from benchmarks.studies.settings import paper_study_params
+from benchmarks.settings import paper_study_params
 from tests.helpers import vector_env
 
 GOLDEN = Path(__file__).with_name("data") / "golden.npz"

@@ -14,9 +14,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import model_figures, verdicts
+from .. import verdicts
 from ..errors import BenchError
-from ..model_figures import FIGURES_FILE, format_figure
 from ..report import (
     METHOD_LEGEND,
     PAPER_ARMSE,
@@ -28,6 +27,8 @@ from ..report import (
     paper_armse,
 )
 from ..studies import claims, tracking
+from . import model_figures
+from .model_figures import FIGURES_FILE, format_figure
 
 #: The scorecards of the claims table: label -> artefact.
 SCORECARDS = {"v1": "claims/v1.json", "v1, centralised": "claims/v1-centralized.json", "v0": "claims/v0.json"}

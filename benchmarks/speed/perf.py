@@ -43,6 +43,7 @@ study timings are of a few trials and steps and mark no target.
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import platform
@@ -53,7 +54,9 @@ from typing import Any
 
 from agents.solvers.bpso import BPSO_RULES
 
-from ..studies.settings import default_workers
+from ..cli import Command
+from ..precompile import paper_index
+from ..settings import default_workers, integer
 from . import env_throughput, policy_cost, solver_speed, tracker_speed
 
 SCENARIO = "paper-1-v1"
@@ -126,7 +129,7 @@ def measure(quick: bool = False, workers: int | None = None) -> dict[str, Any]:
         {k: solvers[k] for k in ("exact_ms", "bpso_ms", "exact_vs_bpso_speedup", "bpso_optimality_rate")}
     )
     if solver_speed.HAVE_NUMBA:
-        index = solver_speed.paper_index(sizes["trials"])
+        index = paper_index(sizes["trials"])
         for rule in BPSO_RULES:
             results.update(solver_speed.one_thread(index, sizes["solver_repeats"], rule))
     steps = sizes["env_steps"]
@@ -266,3 +269,27 @@ def main(out: str | Path, quick: bool = False, workers: int | None = None) -> di
     (out / "perf.json").write_text(json.dumps(results, indent=2))
     print(format_table(results))
     return results
+
+
+class Perf(Command):
+    name = "perf"
+    description = (
+        "Measure the tracker against filterpy, BPSO against the kernel it replaced, the v1 vector env "
+        "against its numpy paths, and the v1 claims and tracking studies timed whole; write "
+        "DIR/perf.json and print a table."
+    )
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument("--out", required=True, help="output directory for perf.json")
+        parser.add_argument("--quick", action="store_true", help="small sizes, a few minutes (CI smoke test)")
+        parser.add_argument(
+            "--workers",
+            type=integer(1),
+            default=None,
+            help="worker processes for the studies (default: cores)",
+        )
+
+    def main(self) -> int:
+        main(self.args.out, quick=self.args.quick, workers=self.args.workers)
+        return 0

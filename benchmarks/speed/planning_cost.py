@@ -62,7 +62,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=5)
     parser.add_argument("--json", default=None, help="also write the figures and the machine to this file")
     args = parser.parse_args()
-    from ..studies.base import machine
+    from ..study import machine
 
     before = machine()
     ratios = measure(args.trials, args.steps)

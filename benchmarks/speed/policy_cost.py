@@ -154,7 +154,7 @@ def measure(
 
 def record(rows: list[dict[str, Any]], trials: Sequence[int], steps: int, seconds: float) -> dict[str, Any]:
     """The JSON record of a measurement (``docs/results/perf/policy_cost.json``)."""
-    from ..studies.base import machine
+    from ..study import machine
 
     counts = ",".join(str(t) for t in trials)
     return {

@@ -120,7 +120,7 @@ def main() -> None:
         help="time only the recipes that --json's file has no row for (new or edited ones)",
     )
     args = parser.parse_args()
-    from ..studies.base import machine
+    from ..study import machine
 
     known = json.loads(Path(args.json).read_text())["rows"] if args.changed and args.json else None
     rows = measure(known=known)

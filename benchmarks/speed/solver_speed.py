@@ -23,10 +23,7 @@ from agents.solvers.bpso import BPSO_RULES
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.streams import TrialRandom
 
-
-def paper_index(trials: int) -> np.ndarray:
-    """The benchmark's index matrices at the paper's size: i.i.d. Exponential(1), (B, 4, 6)."""
-    return np.random.default_rng(7).exponential(size=(trials, 4, 6))
+from ..precompile import paper_index
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:

@@ -144,7 +144,7 @@ def main() -> None:
     parser.add_argument("--steps", type=int, default=40)
     parser.add_argument("--json", default=None)
     args = parser.parse_args()
-    from ..studies.base import machine
+    from ..study import machine
 
     record = {
         "command": f"python -m benchmarks.speed.stages --trials {args.trials} --steps {args.steps}",

@@ -1,17 +1,14 @@
-"""The studies of ``mimo-radar-bench``, on one engine (:mod:`benchmarks.studies.base`).
+"""The studies group of ``mimo-radar-bench``: the paper's reproduction and this project's own
+studies, each a :class:`~benchmarks.study.Study` on the one engine.
 
-The built-in studies are ``paper`` and ``run`` (:mod:`~benchmarks.studies.paper`), ``claims``
-(:mod:`~benchmarks.studies.claims`), ``mechanisms`` (:mod:`~benchmarks.studies.mechanisms`),
-``ablations`` (:mod:`~benchmarks.studies.ablations`), ``search-layouts``
-(:mod:`~benchmarks.studies.layout_search`), ``tracking`` (:mod:`~benchmarks.studies.tracking`),
-``planning`` (:mod:`~benchmarks.studies.planning`), ``rl`` (:mod:`~benchmarks.studies.rl`) and
-``calibrate-layout`` (:mod:`~benchmarks.studies.calibration`), each listed in the command
-line's registry (:data:`benchmarks.cli.COMMANDS`). A new study is one module defining a
-:class:`~benchmarks.studies.base.Study` subclass and calling
+``claims`` and ``compare-claims`` (:mod:`~benchmarks.studies.claims`), ``mechanisms``
+(:mod:`~benchmarks.studies.mechanisms`), ``ablations`` (:mod:`~benchmarks.studies.ablations`),
+``search-layouts`` (:mod:`~benchmarks.studies.layout_search`), ``calibrate-layout``
+(:mod:`~benchmarks.studies.calibration`), ``tracking`` (:mod:`~benchmarks.studies.tracking`),
+``planning`` (:mod:`~benchmarks.studies.planning`) and ``rl`` (:mod:`~benchmarks.studies.rl`),
+each listed in the command line's registry (:data:`benchmarks.cli.COMMANDS`). They run from a
+source checkout: the wheel leaves this package out, as it does the speed suite and the docs'
+tooling. The first steps' studies, ``paper`` and ``run``, are :mod:`benchmarks.paper`; a study of
+one's own is one module defining a :class:`~benchmarks.study.Study` and calling
 :func:`benchmarks.cli.register_command`.
 """
-
-from .base import Finished, Run, Study, configure, execute
-from .settings import Settings
-
-__all__ = ["Finished", "Run", "Settings", "Study", "configure", "execute"]

@@ -38,10 +38,10 @@ from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
 from .. import harness, uncertainty
 from ..report import trial_metrics
-from .base import Finished, Run, Study
+from ..settings import add_scenarios_argument, paper_numbers
+from ..study import Finished, Run, Study
 from .claims import paper_runs
 from .mechanisms import super_arm_channels
-from .settings import add_scenarios_argument, paper_numbers
 
 #: The changed learners: label -> (policy, its parameters in place of the paper study's).
 VARIANTS: dict[str, tuple[str, dict[str, Any]]] = {

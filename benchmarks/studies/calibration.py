@@ -43,9 +43,9 @@ from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
 from .. import verdicts
+from ..settings import integer
+from ..study import Study, machine, write_timing
 from . import claims
-from .base import Study, machine, write_timing
-from .settings import integer
 
 REGION_M = 100_000.0
 #: The text's hard constraint: no station this close (m) to a nominal track.

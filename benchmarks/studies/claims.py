@@ -27,11 +27,12 @@ from mimo_radar_env import Scenario, env_version
 from mimo_radar_env.envs.versions import SCENARIO_SETS
 
 from .. import uncertainty, verdicts
+from ..cli import Command
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES, RunConfig, load_per_trial
 from ..report import PAPER_ARMSE, PAPER_ASR, paper_armse, trial_metrics
-from .base import Finished, Run, Study, execute
-from .settings import Settings, add_scenarios_argument, paper_numbers
+from ..settings import Settings, add_scenarios_argument, paper_numbers
+from ..study import Finished, Run, Study, execute
 
 PAPER_KEYS = ("paper-1", "paper-2", "paper-3")
 
@@ -677,3 +678,34 @@ def scorecard_markdown(results: list[dict[str, Any]], title: str, about: str = "
         cells = [r["id"], r["scenario"], f"**{r['verdict']}**", r["claim"], measured, paper or "—"]
         lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+class CompareClaims(Command):
+    """One row per claim, one verdict column per scorecard."""
+
+    name = "compare-claims"
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        parser.add_argument(
+            "scorecards",
+            nargs="+",
+            metavar="LABEL=PATH",
+            help="a label and a claims.json written by 'claims' or 'calibrate-layout' (or its folder)",
+        )
+
+    def main(self) -> int:
+        paths: dict[str, Path] = {}
+        for item in self.args.scorecards:
+            label, sep, where = item.partition("=")
+            path = Path(where) / "claims.json" if Path(where).is_dir() else Path(where)
+            if not sep or not label:
+                raise BenchError(f"scorecards are given as LABEL=PATH, got {item!r}")
+            if label in paths:
+                raise BenchError(f"two scorecards are labelled {label!r}; give each its own label")
+            if not path.is_file():
+                raise BenchError(f"{where} is neither a scorecard (.json) nor a folder holding claims.json")
+            paths[label] = path
+        scorecards = {label: load_scorecard(path) for label, path in paths.items()}
+        print(comparison_markdown(scorecards), end="")
+        return 0

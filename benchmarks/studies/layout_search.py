@@ -36,9 +36,9 @@ from mimo_radar_env import RadarModel, Scenario, load_scenario
 
 from .. import harness
 from ..errors import BenchError
+from ..settings import integer
+from ..study import Study, configure, machine, write_timing
 from . import calibration, claims, mechanisms
-from .base import Study, configure, machine, write_timing
-from .settings import integer
 
 #: v1's paper scenarios: the layouts searched replace their stations.
 V1_SCENARIOS = ("paper-1-v1", "paper-2-v1", "paper-3-v1")

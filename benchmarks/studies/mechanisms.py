@@ -54,8 +54,8 @@ from .. import uncertainty
 from ..cli import Command
 from ..errors import BenchError
 from ..report import paired_difference
-from .base import machine, write_timing
-from .settings import folder, integer
+from ..settings import folder, integer
+from ..study import machine, write_timing
 
 #: Swerling-I samples per channel of the sampling oracles.
 SAMPLES = (1, 3, 10, 30, 100, 300, 1000)

@@ -38,7 +38,7 @@ from mimo_radar_env import MimoRadarSelectVectorEnv
 
 from ..errors import BenchError
 from ..report import format_estimate, paired_difference
-from .base import Finished, Run, Study
+from ..study import Finished, Run, Study
 from .tracking import add_fusion_run_arguments, fusion_runs
 
 HORIZONS = (1, 2, 5, 10)

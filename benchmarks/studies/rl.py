@@ -42,9 +42,9 @@ from mimo_radar_env import env_version, load_scenario
 
 from ..errors import BenchError
 from ..report import format_estimate, paired_difference
+from ..settings import Settings, add_scenarios_argument, integer, local_workers, paper_numbers
+from ..study import Finished, Run, Study
 from ..uncertainty import across_seeds
-from .base import Finished, Run, Study
-from .settings import Settings, add_scenarios_argument, integer, local_workers, paper_numbers
 
 #: (learner, reward, seeds option) of the study's trainings.
 TRAININGS = (
@@ -230,7 +230,7 @@ class RLStudy(Study):
         import time
 
         from ..harness import HarnessError, duration
-        from .base import configure, execute, machine, write_timing
+        from ..study import configure, execute, machine, write_timing
 
         start, load_before = time.perf_counter(), machine()
         if self.settings.backend != "local":

@@ -35,8 +35,8 @@ from .. import verdicts
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES
 from ..report import format_estimate, paired_difference
-from .base import Finished, Run, Study
-from .settings import add_scenarios_argument, paper_numbers
+from ..settings import add_scenarios_argument, paper_numbers
+from ..study import Finished, Run, Study
 
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
 TRADEOFF_WEIGHTS = (0.25, 0.5, 0.75)

@@ -10,8 +10,8 @@ import json
 
 from benchmarks import verdicts
 from benchmarks.cli import register_command
-from benchmarks.studies import Run, Study
-from benchmarks.studies.tracking import paired
+from benchmarks.report import paired_difference
+from benchmarks.study import Run, Study
 
 
 class ToyStudy(Study):
@@ -29,8 +29,9 @@ class ToyStudy(Study):
     def judge(self, finished):
         out = {}
         for name, run in finished.items():
-            estimate, ci = paired(run.summary, "best", "random", "final_regret")
-            out[name] = {"estimate": estimate, "ci": ci, "verdict": verdicts.verdict(ci, -1)}
+            difference = paired_difference(run.summary, "best", "random", "final_regret")
+            ci = list(difference["ci"])
+            out[name] = {"estimate": difference["estimate"], "ci": ci, "verdict": verdicts.verdict(ci, -1)}
         return out
 
     def report(self, finished, judged) -> str:

@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from agents.solvers import ExactSolver
+from benchmarks.precompile import paper_index
 from benchmarks.speed import solver_speed
 from mimo_radar_env.core.streams import TrialRandom
 
@@ -21,7 +22,7 @@ def _brute_force_best(index, ms, ns):
 
 
 def test_optimality_and_gap_are_against_the_brute_force_optimum():
-    index = solver_speed.paper_index(40)
+    index = paper_index(40)
     etx, erx = ExactSolver(2, 3).solve(index, TrialRandom.for_batch(0, 40))
     best = _brute_force_best(index, 2, 3)
     np.testing.assert_allclose(np.einsum("bm,bmn,bn->b", etx, index, erx), best, rtol=1e-12)

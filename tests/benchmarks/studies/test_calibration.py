@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from benchmarks.cli import main
+from benchmarks.settings import study_agent_params
 from benchmarks.studies import calibration, claims
-from benchmarks.studies.settings import study_agent_params
 from mimo_radar_env import RadarModel, load_scenario
 
 

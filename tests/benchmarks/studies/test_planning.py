@@ -67,7 +67,7 @@ def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, caps
 
 def _run(folder, policies, trials, seed=0, **changes):
     from benchmarks import harness
-    from benchmarks.studies.base import Finished, Run
+    from benchmarks.study import Finished, Run
     from mimo_radar_env import VERSIONS
 
     options = VERSIONS["v1"].options(**changes)

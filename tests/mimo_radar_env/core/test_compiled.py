@@ -6,7 +6,7 @@ import sys
 
 import pytest
 
-from benchmarks.studies.settings import paper_study_params
+from benchmarks.settings import paper_study_params
 from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
 
 pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed")

@@ -5,7 +5,7 @@ import pytest
 
 import mimo_radar_env
 from benchmarks.cli import build_parser
-from benchmarks.studies.settings import study_agent_params
+from benchmarks.settings import study_agent_params
 from mimo_radar_env import VERSIONS, EnvOptions, default_config, env_version
 
 
@@ -31,7 +31,7 @@ def test_the_views_are_derived_from_the_versions():
 
 
 def test_the_paper_study_owns_its_parameters_and_hands_out_copies():
-    from benchmarks.studies.settings import PAPER_AGENT_PARAMS
+    from benchmarks.settings import PAPER_AGENT_PARAMS
 
     assert study_agent_params("v1", []) == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}
     assert study_agent_params("v0", []) == {}

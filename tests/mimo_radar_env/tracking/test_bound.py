@@ -52,7 +52,7 @@ def test_position_bound_equals_the_covariance_form_riccati_recursion():
 
 
 def test_the_bound_is_below_the_rmse_of_a_centralised_tracker_with_true_noise():
-    from benchmarks.model_figures import error_and_bound
+    from benchmarks.docs_tooling.model_figures import error_and_bound
 
     squared, bounds = error_and_bound(200, 300)
     rmse = np.sqrt(np.mean(squared, axis=1))  # per step, over trials

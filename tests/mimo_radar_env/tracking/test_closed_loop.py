@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from benchmarks.model_figures import nees_per_step, vector_run
+from benchmarks.docs_tooling.model_figures import nees_per_step, vector_run
 from mimo_radar_env import load_scenario
 from tests.helpers import large_scenario, random_valid_actions, vector_env
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 import agents
-from benchmarks.model_figures import plan_instances
+from benchmarks.docs_tooling.model_figures import plan_instances
 from mimo_radar_env import MimoRadarSelectVectorEnv, random_scenario
 from mimo_radar_env.tracking.planning import Planner, plan_cost, posterior_covariance, sequences, smallest
 

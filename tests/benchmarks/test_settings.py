@@ -4,7 +4,7 @@ import pytest
 
 from benchmarks.cli import build_parser
 from benchmarks.errors import BenchError
-from benchmarks.studies.settings import Settings, paper_numbers, parse_agent_params
+from benchmarks.settings import Settings, paper_numbers, parse_agent_params
 
 
 def test_parse_agent_params_reads_yaml_values():

@@ -14,16 +14,16 @@ from agents import Agent
 from mimo_radar_env import VERSIONS, EnvOptions, Scenario, env_version
 from mimo_radar_env.envs.versions import check_scenario_version
 
-from .. import harness
-from ..harness import PAPER_POLICIES
-from .base import Finished, Run, Study
+from . import harness
+from .harness import PAPER_POLICIES
+from .study import Finished, Run, Study
 
 
 class _OneRun(Study):
     def report(self, finished: dict[Hashable, Finished], judged: object) -> str:
         """table.md without how its intervals are computed (it is one file away), and where the
         run's files are, on the last line."""
-        from ..report import outputs_line, paired_markdown, table_markdown
+        from .report import outputs_line, paired_markdown, table_markdown
 
         (one,) = finished.values()
         reference = one.config.policies[0] if self.settings.pairs == "reference" else None
@@ -93,7 +93,7 @@ def run_policies(
     with their 95 % intervals, the paired differences, and ``table`` (table.md's text) and
     ``out``. ``options`` is an :class:`~mimo_radar_env.EnvOptions` or a mapping over env
     ``version``'s defaults (v1's, as the command line's)."""
-    from .. import report
+    from . import report
 
     names = [harness.policy_name(p, workers) for p in policies]
     if not isinstance(options, EnvOptions):

@@ -12,7 +12,7 @@ them:
 4. :meth:`Study.judge` turns the finished runs into results (verdicts, targets), and
    :meth:`Study.report` into the text the command prints (and the files it writes).
 
-Every study shares one :class:`~benchmarks.studies.settings.Settings`.
+Every study shares one :class:`~benchmarks.settings.Settings`.
 """
 
 from __future__ import annotations
@@ -31,8 +31,8 @@ from typing import Any, ClassVar
 
 from mimo_radar_env import EnvOptions, Scenario
 
-from .. import harness
-from ..cli import Command
+from . import harness
+from .cli import Command
 from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments, scenario_for_version
 
 
@@ -103,7 +103,7 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
     soon as its last task is saved, while the workers go on with the next run's tasks."""
     configs = configure(runs, settings)
-    from .. import report  # scipy's statistics: imported once the runs are checked
+    from . import report  # scipy's statistics: imported once the runs are checked
 
     written: dict[int, Finished] = {}
 

@@ -31,10 +31,10 @@ from mimo_radar_env.core.simulation import RadarSimulation
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms, subset_masks
 
-from .cli import Command
-from .errors import BenchError
-from .studies.base import machine
-from .uncertainty import estimate
+from ..cli import Command
+from ..errors import BenchError
+from ..study import machine
+from ..uncertainty import estimate
 
 FIGURES_FILE = "model/figures.json"
 Figure = dict[str, Any]
@@ -106,17 +106,25 @@ def format_figure(figure: Figure) -> str:
 
 
 # ---------------------------------------------------------------- solvers
-@figure("bpso-set-optimal", "bpso-xor-optimal")
-def bpso_rules() -> dict[str, Figure]:
-    from agents.solvers import BPSOSolver, ExactSolver
+def _exact_on_random_indices(seed: int, shape: tuple[int, int, int], tx_count: int, rx_count: int):
+    """i.i.d. Exponential(1) index matrices of ``shape`` (B, M, N), the exact solver's selections
+    on them, and the trials' streams a solver under test is given."""
+    from agents.solvers import ExactSolver
     from mimo_radar_env.core.streams import TrialRandom
 
-    index = np.random.default_rng(1).exponential(size=(500, 4, 6))
-    streams = TrialRandom.for_batch(0, len(index))
-    etx, erx = ExactSolver(2, 3).solve(index, streams)
+    index = np.random.default_rng(seed).exponential(size=shape)
+    etx, erx = ExactSolver(tx_count, rx_count).solve(index, TrialRandom.for_batch(0, shape[0]))
+    return index, etx, erx, TrialRandom.for_batch(0, shape[0])
+
+
+@figure("bpso-set-optimal", "bpso-xor-optimal")
+def bpso_rules() -> dict[str, Figure]:
+    from agents.solvers import BPSOSolver
+
     out = {}
     for rule in ("set", "xor"):
-        tx, rx = BPSOSolver(2, 3, rule=rule).solve(index, TrialRandom.for_batch(0, len(index)))
+        index, etx, erx, streams = _exact_on_random_indices(1, (500, 4, 6), 2, 3)
+        tx, rx = BPSOSolver(2, 3, rule=rule).solve(index, streams)
         optimal = (tx == etx).all(axis=1) & (rx == erx).all(axis=1)
         out[f"bpso-{rule}-optimal"] = rate(
             optimal,
@@ -128,13 +136,10 @@ def bpso_rules() -> dict[str, Figure]:
 
 @figure("alternating-optimal", "alternating-gap")
 def alternating() -> dict[str, Figure]:
-    from agents.solvers import AlternatingSolver, ExactSolver
-    from mimo_radar_env.core.streams import TrialRandom
+    from agents.solvers import AlternatingSolver
 
-    index = np.random.default_rng(3).exponential(size=(400, 10, 12))
-    streams = TrialRandom.for_batch(0, len(index))
+    index, etx, erx, streams = _exact_on_random_indices(3, (400, 10, 12), 3, 4)
     tx, rx = AlternatingSolver(3, 4).solve(index, streams)
-    etx, erx = ExactSolver(3, 4).solve(index, streams)
     value = np.einsum("bm,bmn,bn->b", tx.astype(float), index, rx.astype(float))
     best = np.einsum("bm,bmn,bn->b", etx.astype(float), index, erx.astype(float))
     where = "400 i.i.d. Exponential(1) index matrices of 10 x 12, 3 TX and 4 RX"
@@ -396,7 +401,7 @@ def bound_tightness() -> dict[str, Figure]:
 
 @figure("bound-share-paper-1-v1", "bound-share-paper-3-v1")
 def bound_cost() -> dict[str, Figure]:
-    from .speed.stages import env_stages
+    from ..speed.stages import env_stages
 
     out = {}
     for name in ("paper-1-v1", "paper-3-v1"):

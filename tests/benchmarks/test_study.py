@@ -6,7 +6,8 @@ import sys
 import pytest
 
 from benchmarks.cli import COMMANDS, GROUPS, Command, build_parser, main, register_command
-from benchmarks.studies import Run, Settings, configure
+from benchmarks.settings import Settings
+from benchmarks.study import Run, configure
 
 
 def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsys):
@@ -108,7 +109,7 @@ def test_the_study_written_in_the_docs_runs_as_written(tmp_path):
     import sys
     from pathlib import Path
 
-    text = (Path(__file__).parents[3] / "docs" / "benchmark.md").read_text()
+    text = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text()
     start = text.index("```python\nfrom benchmarks import verdicts") + len("```python\n")
     (tmp_path / "docs_study.py").write_text(text[start : text.index("```", start)])
     argv = ["best-vs-random", "--out", str(tmp_path / "out"), "--trials", "3", "--steps", "10"]

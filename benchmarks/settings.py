@@ -21,8 +21,8 @@ from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
 from mimo_radar_env.envs.versions import version_conflict
 
-from ..errors import BenchError
-from ..harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
+from .errors import BenchError
+from .harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
 
 DEFAULT_TRIALS = 500
 #: The most Monte-Carlo trials a study takes (a million trials of the paper study take days).

@@ -7,7 +7,7 @@ import pytest
 from scipy import stats
 
 from benchmarks.cli import main
-from benchmarks.model_figures import FIGURES, format_figure, measure, rate
+from benchmarks.docs_tooling.model_figures import FIGURES, format_figure, measure, rate
 from mimo_radar_env.core.superarm import subset_masks
 
 
