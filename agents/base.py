@@ -73,16 +73,25 @@ class Agent(ABC):
     seed : int, optional
         Seed of the agent's random streams: trial ``i`` of a batch draws from ``seed + i``
         (:class:`~mimo_radar_env.core.streams.TrialRandom`), as trial ``i`` of the vector env does.
+    **keywords
+        The fields of :attr:`keyword_parameters`, where the class declares one (its instance is
+        ``self.parameters``); a class without one takes no other keyword (``TypeError``).
     """
 
     #: Registry name.
     name: ClassVar[str] = ""
+    #: A dataclass of keyword parameters declared once and shared by several agents (say,
+    #: MG-CRB-CL's estimator parameters); the registry lists its fields beside the signature's.
+    keyword_parameters: ClassVar[type | None] = None
     #: What it needs from the env (:class:`~agents.costs.Needs`), and the parts of its cost
     #: (:mod:`agents.costs`): declarations the rollout loop and the harness read.
     needs: ClassVar[Needs] = Needs()
     costs: ClassVar[tuple[Cost, ...]] = (BOOKKEEPING,)
 
-    def __init__(self, scenario: Scenario | str, seed: int | None = None) -> None:
+    def __init__(self, scenario: Scenario | str, seed: int | None = None, **keywords: Any) -> None:
+        if self.keyword_parameters is None and keywords:
+            raise TypeError(f"{type(self).__name__}() got unexpected keyword argument(s) {sorted(keywords)}")
+        self.parameters = None if self.keyword_parameters is None else self.keyword_parameters(**keywords)
         self.scenario = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
         if seed is not None and (
             isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
@@ -227,8 +236,9 @@ class IndexPolicy(Agent):
         seed: int | None = None,
         solver: str | SuperArmSolver | None = None,
         solver_params: dict[str, Any] | None = None,
+        **keywords: Any,
     ) -> None:
-        super().__init__(scenario, seed)
+        super().__init__(scenario, seed, **keywords)
         if solver_params is not None and not isinstance(solver_params, dict):
             raise ValueError(f"solver_params must be a mapping of solver parameters, got {solver_params!r}")
         self.solver = make_solver(

@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
-from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -16,7 +15,6 @@ from mimo_radar_env.core.geometry import path_gain
 from .base import IndexPolicy, Observation, blend_samples, ucb_bonus
 from .costs import Needs
 from .parameters import check_parameter
-from .solvers import SuperArmSolver
 
 
 @dataclass(frozen=True)
@@ -121,26 +119,15 @@ class MGCRBCL(IndexPolicy):
     name = "mg-crb-cl"
     default_solver = "bpso"
     needs = Needs(tracking=True, device=True)
-    #: Its keyword parameters beyond the signature's (the registry lists them).
-    keyword_parameters: ClassVar[type] = LearningParameters
-
-    def __init__(
-        self,
-        scenario: Scenario | str,
-        seed: int | None = None,
-        solver: str | SuperArmSolver | None = None,
-        solver_params: dict[str, Any] | None = None,
-        **learning: float,
-    ) -> None:
-        super().__init__(scenario, seed, solver, solver_params)
-        self.alpha, self.alpha_bar, self.beta = dataclasses.astuple(LearningParameters(**learning))
+    keyword_parameters = LearningParameters
+    parameters: LearningParameters
 
     def predict(self, obs: Observation) -> NDArray[np.float64]:
         """eq16 from the tracker's estimate and prediction."""
-        return geometric_prediction(self.estimate, obs, self.scenario, self.alpha)
+        return geometric_prediction(self.estimate, obs, self.scenario, self.parameters.alpha)
 
     def step_size(self, counts: NDArray[np.float64]) -> float:
-        return self.alpha_bar  # eq14
+        return self.parameters.alpha_bar  # eq14
 
     def compute_index(self, predicted: NDArray[np.float64], obs: Observation) -> NDArray[np.float64]:
-        return self.fuse(predicted + self.bonus(self.beta)[:, None])  # eq18, eq34
+        return self.fuse(predicted + self.bonus(self.parameters.beta)[:, None])  # eq18, eq34

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from typing import ClassVar
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -163,8 +161,7 @@ class TrackingUCB(Agent):
         device=True,
     )
     costs = (BOOKKEEPING, TRACKING_SEARCH)
-    #: Its keyword parameters beyond the signature's (the registry lists them).
-    keyword_parameters: ClassVar[type] = LearningParameters
+    keyword_parameters = LearningParameters
 
     def __init__(
         self,
@@ -177,9 +174,9 @@ class TrackingUCB(Agent):
         measurement_quality: float | None = None,
         **learning: float,
     ) -> None:
-        super().__init__(scenario, seed)
+        super().__init__(scenario, seed, **learning)
         #: What it learns (MG-CRB-CL's estimates) and how it selects.
-        self.learning = MGCRBCLEstimator(self.scenario, LearningParameters(**learning))
+        self.learning = MGCRBCLEstimator(self.scenario, self.parameters)
         self.selector = TrackingSelector(
             self.scenario, criterion, fusion, lambda_scale, measurement_quality, sinr_weight
         )

@@ -83,22 +83,30 @@ class EnvVersion:
         return {"scenario": self.default_scenario, **self.options().to_dict()}
 
 
-VERSIONS: dict[str, EnvVersion] = {
-    version.name: version
-    for version in (
-        EnvVersion(
-            "v0",
-            "reading 0: the first reading of the paper's ambiguous points, unchanged since release",
-        ),
-        EnvVersion(
-            "v1",
-            "reading 1 of the paper's ambiguous points (eq32 on dB, a shared truth, BPSO's standard "
-            "rule in the paper study, the calibrated layout)",
-            option_defaults={"lambda_scale": "db", "truth": "shared"},
-            paper_scenarios=("paper-1-v1", "paper-2-v1", "paper-3-v1"),
-        ),
-    )
-}
+def by_name(*entries: Any) -> dict[str, Any]:
+    """``{entry.name: entry}``, in the order given; two entries of one name are a ``ValueError``
+    (a dict built by name would keep the last silently)."""
+    table: dict[str, Any] = {}
+    for entry in entries:
+        if entry.name in table:
+            raise ValueError(f"two entries are called {entry.name!r}")
+        table[entry.name] = entry
+    return table
+
+
+VERSIONS: dict[str, EnvVersion] = by_name(
+    EnvVersion(
+        "v0",
+        "reading 0: the first reading of the paper's ambiguous points, unchanged since release",
+    ),
+    EnvVersion(
+        "v1",
+        "reading 1 of the paper's ambiguous points (eq32 on dB, a shared truth, BPSO's standard "
+        "rule in the paper study, the calibrated layout)",
+        option_defaults={"lambda_scale": "db", "truth": "shared"},
+        paper_scenarios=("paper-1-v1", "paper-2-v1", "paper-3-v1"),
+    ),
+)
 #: The version ``mimo-radar-bench`` runs unless told otherwise.
 DEFAULT_VERSION = "v1"
 
@@ -133,18 +141,15 @@ class ScenarioSet:
 
 
 #: Named calibrations shipped as scenario sets (docs/results-layouts.md, "A global layout search").
-SCENARIO_SETS: dict[str, ScenarioSet] = {
-    s.name: s
-    for s in (
-        ScenarioSet(
-            "search-5",
-            "v1",
-            "v1's paper scenarios with layout 5 of the global layout search (search-layouts, seed 0): "
-            "12 claims hold at 500 trials, against layout 116's 11",
-            ("paper-1-v1-search5", "paper-2-v1-search5", "paper-3-v1-search5"),
-        ),
-    )
-}
+SCENARIO_SETS: dict[str, ScenarioSet] = by_name(
+    ScenarioSet(
+        "search-5",
+        "v1",
+        "v1's paper scenarios with layout 5 of the global layout search (search-layouts, seed 0): "
+        "12 claims hold at 500 trials, against layout 116's 11",
+        ("paper-1-v1-search5", "paper-2-v1-search5", "paper-3-v1-search5"),
+    ),
+)
 
 # Views of VERSIONS, by version name.
 ENV_IDS = {name: v.env_id for name, v in VERSIONS.items()}

@@ -81,3 +81,27 @@ def test_an_agent_refuses_an_env_of_another_scenario_and_what_is_not_finite(poli
     bad = {**obs, "sinr": np.where(obs["sinr"] > 0, math.inf, obs["sinr"])}
     with pytest.raises(ValueError, match="the 'sinr' it was given is not finite"):
         agent.update(bad, reward)
+
+
+def test_keyword_parameters_are_declared_once_and_other_keywords_are_refused():
+    """MG-CRB-CL and tracking-ucb build their estimator parameters from the one dataclass; an
+    agent that declares none refuses any keyword beyond its signature, as Gymnasium does."""
+    from agents.base import IndexPolicy
+    from agents.fixed import FixedAgent
+    from agents.mg_crb_cl import MGCRBCL, LearningParameters
+    from agents.tracking import TrackingUCB
+
+    assert MGCRBCL("paper-1-v1", beta=1.5).parameters == LearningParameters(beta=1.5)
+    assert TrackingUCB("paper-1-v1", alpha=0.9).learning.parameters == LearningParameters(alpha=0.9)
+    with pytest.raises(TypeError, match="gamma"):
+        MGCRBCL("paper-1-v1", gamma=1.0)
+
+    class Plain(IndexPolicy):
+        def compute_index(self, predicted, obs):
+            return self.fuse(predicted)
+
+    assert Plain("paper-1-v1").parameters is None
+    with pytest.raises(TypeError, match=r"Plain\(\) got unexpected keyword argument\(s\) \['beta'\]"):
+        Plain("paper-1-v1", beta=1.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'beta'"):  # its own signature
+        FixedAgent("paper-1-v1", (0,), (0,), beta=1.0)

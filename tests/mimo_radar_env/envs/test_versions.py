@@ -143,3 +143,12 @@ def test_the_command_line_refuses_another_versions_scenario_name(capsys):
     with pytest.raises(SystemExit):
         main(["run", "--scenario", "paper-2", "--policies", "ucb1", "--out", "never-written"])
     assert "use 'paper-2-v1' or --env-version v0" in capsys.readouterr().err
+
+
+def test_the_version_and_scenario_set_tables_refuse_two_entries_of_one_name():
+    from mimo_radar_env.envs.versions import SCENARIO_SETS, EnvVersion, by_name
+
+    assert list(VERSIONS) == ["v0", "v1"] and list(SCENARIO_SETS) == ["search-5"]
+    assert all(name == entry.name for name, entry in {**VERSIONS, **SCENARIO_SETS}.items())
+    with pytest.raises(ValueError, match="two entries are called 'v1'"):
+        by_name(EnvVersion("v1", "one"), EnvVersion("v1", "another"))
