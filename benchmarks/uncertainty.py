@@ -112,13 +112,38 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
 def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     """``{"estimate", "ci", "method"}``: the metric at equal weights and its 95 % interval
     (``ci`` None with a single trial, which has no interval)."""
-    value = float(metric(_shared_weights(np.arange(num_trials), num_trials)))
+    return estimates({"": metric}, num_trials, seed)[""]
+
+
+def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> dict[Any, dict[str, Any]]:
+    """:func:`estimate` of each of ``metrics``, by key, from one bootstrap of all of them: the
+    same numbers as one call each (every call resamples the trials with ``seed``, and scipy
+    treats each output of a vector-valued statistic on its own), drawn and set up once."""
+    keys = list(metrics)
+    equal = _shared_weights(np.arange(num_trials), num_trials)
+    values = [float(metrics[key](equal)) for key in keys]
     if num_trials < 2:
-        return {"estimate": value, "ci": None, "method": "none (one trial)"}
+        one = {"ci": None, "method": "none (one trial)"}
+        return {key: {"estimate": v, **one} for key, v in zip(keys, values, strict=True)}
     method = "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"
-    result = _bootstrap(metric, num_trials, RESAMPLES, method, seed)
-    low, high = float(result.confidence_interval.low), float(result.confidence_interval.high)
-    distribution = np.asarray(result.bootstrap_distribution, np.float64)
+
+    def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
+        # (..., metrics), a view of a contiguous (metrics, ...) array: each metric's resamples stay
+        # contiguous after _bootstrap moves the axis back, so scipy sums them in the same order
+        return np.moveaxis(np.stack([metrics[key](weights) for key in keys]), 0, -1)
+
+    result = _bootstrap(stacked, num_trials, RESAMPLES, method, seed)
+    lows = np.atleast_1d(result.confidence_interval.low)
+    highs = np.atleast_1d(result.confidence_interval.high)
+    distributions = np.asarray(result.bootstrap_distribution, np.float64).reshape(len(keys), -1)
+    return {
+        key: _interval(values[i], float(lows[i]), float(highs[i]), distributions[i], method)
+        for i, key in enumerate(keys)
+    }
+
+
+def _interval(value: float, low: float, high: float, distribution: NDArray, method: str) -> dict[str, Any]:
+    """One metric's estimate from its bootstrap: constant, BCa, or percentile where BCa fails."""
     spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
         return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
@@ -151,19 +176,22 @@ def policy_estimates(metrics: TrialMetrics, seed: int = 0) -> dict[str, Any]:
     """Every table metric of one policy: ``{metric: {"estimate", "ci", "method"}}``, and
     ``{metric_per_target: [one such dict per target]}``."""
     n = metrics.num_trials
-    out: dict[str, Any] = {name: estimate(fn, n, seed) for name, fn in metrics.scalar_metrics().items()}
-    for name, per_target in metrics.per_target_metrics().items():
-        out[name] = [estimate(fn, n, seed) for fn in per_target]
+    per_target = metrics.per_target_metrics()
+    every: dict[Any, Metric] = dict(metrics.scalar_metrics())
+    every.update({(name, k): fn for name, fns in per_target.items() for k, fn in enumerate(fns)})
+    judged = estimates(every, n, seed)
+    out: dict[str, Any] = {name: judged[name] for name in metrics.scalar_metrics()}
+    for name, fns in per_target.items():
+        out[name] = [judged[name, k] for k in range(len(fns))]
     return out
 
 
 def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
     """``{"A - B": {metric: {"estimate", "ci", "method"}}}`` for every pair of policies, paired on
     trials."""
-    out: dict[str, dict[str, dict]] = {}
+    differences: dict[tuple[str, str], Metric] = {}
     for a, b in combinations(all_metrics, 2):
         fa_all, fb_all = all_metrics[a].scalar_metrics(), all_metrics[b].scalar_metrics()
-        pair = {}
         for name in ("armse", "asr", "final_regret", "mean_sinr_db"):
             if name not in fa_all or name not in fb_all:
                 continue
@@ -171,8 +199,13 @@ def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -
             def difference(w: NDArray, fa: Metric = fa_all[name], fb: Metric = fb_all[name]) -> NDArray:
                 return fa(w) - fb(w)
 
-            pair[name] = estimate(difference, all_metrics[a].num_trials, seed)
-        out[f"{a} - {b}"] = pair
+            differences[f"{a} - {b}", name] = difference
+    if not differences:
+        return {f"{a} - {b}": {} for a, b in combinations(all_metrics, 2)}
+    judged = estimates(differences, next(iter(all_metrics.values())).num_trials, seed)
+    out: dict[str, dict[str, dict]] = {f"{a} - {b}": {} for a, b in combinations(all_metrics, 2)}
+    for (pair, name), result in judged.items():
+        out[pair][name] = result
     return out
 
 

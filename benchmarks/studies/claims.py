@@ -353,40 +353,58 @@ def paper_claims() -> tuple[Claim, ...]:
 
 def judge(comparison: Comparison, policies: Policies, seed: int = 0) -> dict[str, Any]:
     """The comparison's estimate, 95 % interval (and its method) and verdict."""
-    if comparison.reaches > policies.steps or any(p not in policies for p in comparison.policies):
-        return {"comparison": comparison.text, "verdict": verdicts.NOT_EVALUATED}
-    judged = uncertainty.estimate(lambda w: comparison.statistic(policies, w), policies.num_trials, seed)
-    if judged["ci"] is None:  # one trial: no interval, no verdict
-        return {
-            "comparison": comparison.text,
-            "estimate": judged["estimate"],
-            "verdict": verdicts.NOT_EVALUATED,
-        }
-    return {
-        "comparison": comparison.text,
-        **judged,
-        "verdict": verdicts.verdict(judged["ci"], comparison.sign),
+    return judge_all([comparison], policies, seed)[0]
+
+
+def judge_all(comparisons: Sequence[Comparison], policies: Policies, seed: int = 0) -> list[dict[str, Any]]:
+    """Each comparison judged as :func:`judge` judges it, those the run can evaluate from one
+    bootstrap (the same numbers as one each)."""
+    evaluable = {
+        i: c
+        for i, c in enumerate(comparisons)
+        if c.reaches <= policies.steps and all(p in policies for p in c.policies)
     }
+    statistics = {i: (lambda w, c=c: c.statistic(policies, w)) for i, c in evaluable.items()}
+    estimated = uncertainty.estimates(statistics, policies.num_trials, seed) if statistics else {}
+    results = []
+    for i, comparison in enumerate(comparisons):
+        judged = estimated.get(i)
+        if judged is None:
+            results.append({"comparison": comparison.text, "verdict": verdicts.NOT_EVALUATED})
+        elif judged["ci"] is None:  # one trial: no interval, no verdict
+            results.append(
+                {
+                    "comparison": comparison.text,
+                    "estimate": judged["estimate"],
+                    "verdict": verdicts.NOT_EVALUATED,
+                }
+            )
+        else:
+            verdict = verdicts.verdict(judged["ci"], comparison.sign)
+            results.append({"comparison": comparison.text, **judged, "verdict": verdict})
+    return results
 
 
 def evaluate(policies_by_scenario: dict[str, Policies], seed: int = 0) -> list[dict[str, Any]]:
-    """Every claim whose scenario was run, judged."""
-    results = []
-    for claim in paper_claims():
-        if claim.scenario not in policies_by_scenario:
-            continue
-        judged = [judge(c, policies_by_scenario[claim.scenario], seed) for c in claim.comparisons]
-        results.append(
-            {
-                "id": claim.id,
-                "scenario": claim.scenario,
-                "claim": claim.text,
-                "verdict": verdicts.combine([j["verdict"] for j in judged]),
-                "comparisons": judged,
-                "paper": claim.paper,
-            }
-        )
-    return results
+    """Every claim whose scenario was run, judged (each scenario's comparisons from one bootstrap)."""
+    claims = [claim for claim in paper_claims() if claim.scenario in policies_by_scenario]
+    judged: dict[int, list[dict[str, Any]]] = {}
+    for scenario, policies in policies_by_scenario.items():
+        mine = [i for i, claim in enumerate(claims) if claim.scenario == scenario]
+        flat = judge_all([c for i in mine for c in claims[i].comparisons], policies, seed)
+        for i in mine:
+            judged[i], flat = flat[: len(claims[i].comparisons)], flat[len(claims[i].comparisons) :]
+    return [
+        {
+            "id": claim.id,
+            "scenario": claim.scenario,
+            "claim": claim.text,
+            "verdict": verdicts.combine([j["verdict"] for j in judged[i]]),
+            "comparisons": judged[i],
+            "paper": claim.paper,
+        }
+        for i, claim in enumerate(claims)
+    ]
 
 
 def paper_runs(scenarios: Sequence[str | Scenario], out: Path) -> list[Run]:
