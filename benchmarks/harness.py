@@ -825,13 +825,8 @@ def run_many(
         todo, estimated = _queue(configs, folders, max_tasks)
         started = time.perf_counter()
         left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
-        for number, (config, folder) in enumerate(zip(configs, folders, strict=True)):
-            total = len(config.tasks())
-            if total - left[number] > 0 and max_tasks is None:
-                tqdm.write(
-                    f"resumed: {total - left[number]} of {total} tasks already done in {folder}",
-                    file=sys.stderr,
-                )
+        if max_tasks is None:
+            _say_resumed(configs, folders, left)
         steps_of = [
             {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
         ]  # trial-steps of each run's tasks
@@ -868,12 +863,7 @@ def run_many(
             for number in range(len(configs)):
                 if left[number] == 0:
                     run_done(number)
-            if backend == "ray":
-                backends.run_ray(run_task, tasks, finished, address)
-            elif workers == 1:
-                backends.run_inline(run_task, tasks, finished)
-            else:
-                backends.run_processes(run_task, tasks, finished, workers)
+            _dispatch(tasks, finished, workers, backend, address)
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
@@ -883,6 +873,26 @@ def run_many(
         finally:
             bar.close()
         return complete
+
+
+def _say_resumed(configs: Sequence[RunConfig], folders: Sequence[Path], left: Sequence[int]) -> None:
+    """Says, for each run some of whose tasks are already saved, how many."""
+    for config, folder, todo in zip(configs, folders, left, strict=True):
+        total = len(config.tasks())
+        if total - todo > 0:
+            tqdm.write(f"resumed: {total - todo} of {total} tasks already done in {folder}", file=sys.stderr)
+
+
+def _dispatch(
+    tasks: list[backends.Task], finished: backends.Finished, workers: int, backend: str, address: str | None
+) -> None:
+    """Runs ``tasks`` on the backend: Ray, this process (one worker), or local worker processes."""
+    if backend == "ray":
+        backends.run_ray(run_task, tasks, finished, address)
+    elif workers == 1:
+        backends.run_inline(run_task, tasks, finished)
+    else:
+        backends.run_processes(run_task, tasks, finished, workers)
 
 
 #: A run slower than its estimate by this factor says so at its end (from this many seconds).

@@ -312,10 +312,7 @@ def train_ppo(
                 meta = _train(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
                 )
-            if record:
-                meta.update(record)
-                (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
-            return meta
+            return _recorded(meta, record, out)
     if device is not None and workers > 1:
         raise ValueError(f"a training on device {device!r} runs its seeds one after another: workers=1")
     with output_lock(out):
@@ -327,6 +324,14 @@ def train_ppo(
         "timesteps": timesteps,
         "algo": algo,
     }
+
+
+def _recorded(meta: dict[str, Any], record: dict[str, Any] | None, out: Path) -> dict[str, Any]:
+    """A training's ppo.json with ``record``'s entries added (and written again where there are any)."""
+    if record:
+        meta.update(record)
+        (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))
+    return meta
 
 
 def _check_counts(n_envs: int | None, timesteps: int | None, seeds: int, workers: int) -> None:

@@ -1893,6 +1893,27 @@ def _require(shown: bool, statement: str) -> None:
         raise BenchError(f"the artefacts no longer show that {statement}: rewrite the sentence that says so")
 
 
+def _rmse_window_values(windows: list[dict[str, Any]]) -> dict[str, str]:
+    """S1.8's values per RMSE window (:func:`per_claim_values` lists them)."""
+    table = {}
+    for w, row in enumerate(windows, 1):
+        top, claimed, worst = row["bound_extreme"], row["policy"], row["armse_extreme"]
+        table |= {
+            f"S1.8.{w}.span": "-".join(map(str, row["window"])),
+            f"S1.8.{w}.extreme": row["extreme"],
+            f"S1.8.{w}.top": top,
+            f"S1.8.{w}.top-bound": _m(row["bound"][top]),
+            f"S1.8.{w}.claimed": claimed,
+            f"S1.8.{w}.claimed-bound": _m(row["bound"][claimed]),
+            f"S1.8.{w}.worst": worst,
+            f"S1.8.{w}.ratio-worst": _m(row["armse_over_bound"][worst]),
+            f"S1.8.{w}.ratio-top": _m(row["armse_over_bound"][top]),
+        }
+    table["S1.8.windows"] = str(len(windows))
+    table["S1.8.follow"] = str(sum(r["armse_extreme"] == r["bound_extreme"] for r in windows))
+    return table
+
+
 @values("per-claim")
 def per_claim_values(docs: Path) -> dict[str, str]:
     """One measured mechanism per claim contradicted under v1, from mechanisms.json and
@@ -1922,22 +1943,7 @@ def per_claim_values(docs: Path) -> dict[str, str]:
         "S1.7.epsilon-greedy": _m(early["epsilon_greedy_minus_greedy"], "{:.0f}"),
         "S1.7.crossing": str(explore["crossing"]),
     }
-    windows = a["paper-1-v1"]["rmse_windows"]
-    for w, row in enumerate(windows, 1):
-        top, claimed, worst = row["bound_extreme"], row["policy"], row["armse_extreme"]
-        table |= {
-            f"S1.8.{w}.span": "-".join(map(str, row["window"])),
-            f"S1.8.{w}.extreme": row["extreme"],
-            f"S1.8.{w}.top": top,
-            f"S1.8.{w}.top-bound": _m(row["bound"][top]),
-            f"S1.8.{w}.claimed": claimed,
-            f"S1.8.{w}.claimed-bound": _m(row["bound"][claimed]),
-            f"S1.8.{w}.worst": worst,
-            f"S1.8.{w}.ratio-worst": _m(row["armse_over_bound"][worst]),
-            f"S1.8.{w}.ratio-top": _m(row["armse_over_bound"][top]),
-        }
-    table["S1.8.windows"] = str(len(windows))
-    table["S1.8.follow"] = str(sum(r["armse_extreme"] == r["bound_extreme"] for r in windows))
+    table |= _rmse_window_values(a["paper-1-v1"]["rmse_windows"])
     for claim in ("S1.9", "S2.4", "S3.2", "S3.3"):
         mine = [r for r in m["armse_comparisons"] if r["claim"] == claim]
         broken = [r for r in mine if r["verdict"] == "contradicted"]
