@@ -72,6 +72,15 @@ class CommandEntry:
     help: str
     target: str
 
+    @property
+    def installed(self) -> bool:
+        """Whether the command's module is here: the wheel leaves the studies and the maintenance
+        commands out (they run from a source checkout). Asked without importing the module."""
+        try:
+            return importlib.util.find_spec(self.target.partition(":")[0]) is not None
+        except ModuleNotFoundError:
+            return False
+
     def load(self) -> type[Command]:
         module, _, attribute = self.target.partition(":")
         try:
@@ -206,14 +215,24 @@ class OneLineParser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see '{self.prog} --help')\n")
 
 
+#: How the help marks commands whose module is not installed (a wheel without the studies).
+NOT_INSTALLED = "from a source checkout, not installed here"
+
+
 def _listing() -> str:
     width = max(len(name) for name in COMMANDS) + 2
     lines = []
     for group in GROUPS:
         entries = [entry for entry in COMMANDS.values() if entry.group == group]
         if entries:
-            lines.append(f"{group}:")
-            lines += [f"  {entry.name:<{width}}{entry.help}" for entry in entries]
+            installed = {entry.name: entry.installed for entry in entries}
+            none_here = not any(installed.values())
+            lines.append(f"{group} ({NOT_INSTALLED}):" if none_here else f"{group}:")
+            lines += [
+                f"  {entry.name:<{width}}{entry.help}"
+                + ("" if installed[entry.name] or none_here else f" ({NOT_INSTALLED})")
+                for entry in entries
+            ]
             lines.append("")
     return "\n".join(lines)
 

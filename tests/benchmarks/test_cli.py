@@ -319,3 +319,26 @@ def test_referenced_files_and_folders_are_checked_before_anything_runs(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+def test_the_help_marks_commands_whose_module_is_not_installed(monkeypatch):
+    """From a wheel the studies' modules are absent: their group's heading says they run from a
+    source checkout; one absent command in a group of present ones is marked on its own line."""
+    from benchmarks import cli
+
+    assert all(entry.installed for entry in cli.COMMANDS.values())  # a source checkout has them all
+    assert not cli.CommandEntry("x", "studies", "", "no_such_package.mod:X").installed
+    assert not cli.CommandEntry("x", "studies", "", "benchmarks.no_such_module:X").installed
+    monkeypatch.setitem(
+        cli.COMMANDS, "ghost", cli.CommandEntry("ghost", "maintenance", "a command", "no_such_package.mod:X")
+    )
+    monkeypatch.setattr(
+        cli.CommandEntry,
+        "installed",
+        property(lambda entry: not entry.target.startswith(("benchmarks.studies.", "no_such_package."))),
+    )
+    listing = cli._listing()
+    assert f"studies ({cli.NOT_INSTALLED}):" in listing
+    assert "  claims " in listing and f"scorecards side by side ({cli.NOT_INSTALLED})" not in listing
+    assert f"  ghost             a command ({cli.NOT_INSTALLED})" in listing
+    assert "first steps:\n" in listing and "maintenance:\n" in listing

@@ -16,7 +16,10 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
     )
     assert result.returncode == 0, result.stdout[-2000:] + result.stderr[-4000:]
     assert "oracle" in result.stdout and "steps (300 asked, in whole rollouts)" in result.stdout
-    assert "wheel check: 'docs', 'claims' and 'perf' say they run from a source checkout" in result.stdout
+    assert (
+        "wheel check: 'docs', 'claims' and 'perf' say they run from a source checkout, and so does --help"
+        in result.stdout
+    )
     assert "torchrl: GymEnv('MimoRadarSelectFlat-v1') checked and rolled out" in result.stdout
     assert "torchrl: MimoRadarSelectTorchRLEnv checked and rolled out" in result.stdout
     assert result.stdout.count("torchrl: the docs' recipe clients.md-") == 3
