@@ -1400,7 +1400,9 @@ def scaling_value(docs: Path, key: str) -> str:
     ``MACHINE.outside-per-worker.W`` (seconds outside the tasks per worker), ``MACHINE.before.W``
     and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
-    shard size of the count the model starts from), MACHINE a key of :data:`SCALING_MACHINES`;
+    shard size of the count the model starts from), ``MACHINE.fixed.W`` (the seconds of all the
+    tasks' fixed parts: agent, env, first step) and ``MACHINE.tasks.W`` (how many tasks), MACHINE a
+    key of :data:`SCALING_MACHINES`;
     ``study`` the study's command (as code)."""
     if key == "study":
         return f"`{' '.join(read_json(docs, SCALING_FILES['2 cores'])['study'])}`"
@@ -1429,6 +1431,10 @@ def scaling_value(docs: Path, key: str) -> str:
         return f"{r['efficiency']:.2f}"
     if kind == "us":
         return f"{r['us_per_trial_step_in_tasks']:.1f}"
+    if kind == "fixed":
+        return f"{r['breakdown']['task_fixed_s']:.2f}"
+    if kind == "tasks":
+        return str(r["tasks"])
     if kind == "outside-per-worker":
         return f"{r['breakdown']['outside_tasks_s'] / w:.1f}"
     if kind in ("before", "after"):  # wall seconds before the first task, after the last
