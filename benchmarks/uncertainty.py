@@ -120,6 +120,8 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
     same numbers as one call each (every call resamples the trials with ``seed``, and scipy
     treats each output of a vector-valued statistic on its own), drawn and set up once."""
     keys = list(metrics)
+    if not keys:
+        return {}
     equal = _shared_weights(np.arange(num_trials), num_trials)
     values = [float(metrics[key](equal)) for key in keys]
     if num_trials < 2:
@@ -200,10 +202,10 @@ def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -
                 return fa(w) - fb(w)
 
             differences[f"{a} - {b}", name] = difference
-    if not differences:
-        return {f"{a} - {b}": {} for a, b in combinations(all_metrics, 2)}
-    judged = estimates(differences, next(iter(all_metrics.values())).num_trials, seed)
     out: dict[str, dict[str, dict]] = {f"{a} - {b}": {} for a, b in combinations(all_metrics, 2)}
+    if not differences:
+        return out
+    judged = estimates(differences, next(iter(all_metrics.values())).num_trials, seed)
     for (pair, name), result in judged.items():
         out[pair][name] = result
     return out

@@ -365,7 +365,7 @@ def judge_all(comparisons: Sequence[Comparison], policies: Policies, seed: int =
         if c.reaches <= policies.steps and all(p in policies for p in c.policies)
     }
     statistics = {i: (lambda w, c=c: c.statistic(policies, w)) for i, c in evaluable.items()}
-    estimated = uncertainty.estimates(statistics, policies.num_trials, seed) if statistics else {}
+    estimated = uncertainty.estimates(statistics, policies.num_trials, seed)
     results = []
     for i, comparison in enumerate(comparisons):
         judged = estimated.get(i)

@@ -265,6 +265,7 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
         "constant": lambda w: w.sum(axis=-1) * 2.0,
     }
     together = uncertainty.estimates(metrics, trials, seed=3)
+    assert uncertainty.estimates({}, trials) == {}
     method = "BCa" if trials >= uncertainty.BCA_MIN_TRIALS else "percentile"
     for name, metric in metrics.items():
 
