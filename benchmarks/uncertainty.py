@@ -32,7 +32,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy import stats
 
 from benchmarks.metrics import REMEMBERED_WEIGHTS, TrialMetrics, trial_weights
 
@@ -89,6 +88,7 @@ def _shared_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
 
 def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, seed: int) -> Any:
     """``scipy.stats.bootstrap`` over resampled trials of ``metric(weights) -> (...,) or (..., T)``."""
+    from scipy import stats  # imported at the first interval: a study's set-up does without it
 
     def statistic(index: NDArray, axis: int = -1) -> NDArray:
         value = metric(_shared_weights(index, num_trials))
@@ -225,6 +225,8 @@ SEED_METHOD = (
 def iqm(values: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
     """The interquartile mean: the mean of the middle 50 % of ``values`` along ``axis``
     (``scipy.stats.trim_mean`` cutting 25 % at each end, as rliable's ``aggregate_iqm``)."""
+    from scipy import stats
+
     return stats.trim_mean(values, 0.25, axis=axis)
 
 
@@ -259,6 +261,8 @@ def across_seeds(groups: list[NDArray[np.float64]], statistic: str = "iqm", seed
 
     def pooled(*samples: NDArray[np.float64], axis: int = -1) -> NDArray[np.float64]:
         return function(np.concatenate(samples, axis=axis), axis=axis)
+
+    from scipy import stats
 
     result = stats.bootstrap(
         tuple(groups),
