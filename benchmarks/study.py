@@ -19,10 +19,12 @@ from __future__ import annotations
 
 import argparse
 import datetime
+import importlib
 import json
 import os
 import platform
 import sys
+import threading
 import time
 from collections.abc import Hashable, Sequence
 from dataclasses import dataclass, field
@@ -103,7 +105,11 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
     soon as its last task is saved, while the workers go on with the next run's tasks."""
     configs = configure(runs, settings)
-    from . import report  # scipy's statistics: imported once the runs are checked
+    from . import report
+
+    # scipy's statistics, which the first interval needs, load in this process while the workers
+    # start on the tasks rather than before the first task or after the last
+    threading.Thread(target=importlib.import_module, args=("scipy.stats",), daemon=True).start()
 
     written: dict[int, Finished] = {}
 
