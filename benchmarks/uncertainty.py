@@ -178,11 +178,11 @@ def policy_estimates(metrics: TrialMetrics, seed: int = 0) -> dict[str, Any]:
     """Every table metric of one policy: ``{metric: {"estimate", "ci", "method"}}``, and
     ``{metric_per_target: [one such dict per target]}``."""
     n = metrics.num_trials
-    per_target = metrics.per_target_metrics()
-    every: dict[Any, Metric] = dict(metrics.scalar_metrics())
+    scalar, per_target = metrics.scalar_metrics(), metrics.per_target_metrics()
+    every: dict[Any, Metric] = dict(scalar)
     every.update({(name, k): fn for name, fns in per_target.items() for k, fn in enumerate(fns)})
     judged = estimates(every, n, seed)
-    out: dict[str, Any] = {name: judged[name] for name in metrics.scalar_metrics()}
+    out: dict[str, Any] = {name: judged[name] for name in scalar}
     for name, fns in per_target.items():
         out[name] = [judged[name, k] for k in range(len(fns))]
     return out
