@@ -9,14 +9,13 @@ without it the numpy kernel runs.
 
 from __future__ import annotations
 
-import types
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env.core.arrays import namespace
-from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
+from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA, numba, twins
 from mimo_radar_env.core.counter_hash import (
     Stream,
     element_bits,
@@ -133,9 +132,6 @@ def _fitness_np(
 #: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
 #: trial); longer particles sum their selected channels directly.
 TABLE_BITS = 14
-#: Trials per chunk of the compiled kernel: a chunk's trials share one set of scratch arrays
-#: (allocated once, not per trial); the chunks are what ``prange`` spreads over threads.
-CHUNK = 64
 #: Particles are padded to a multiple of this (the vector width of float64 on AVX-512), so that
 #: the inner loops have no scalar remainder; padded particles never enter a best.
 LANES = 8
@@ -379,18 +375,10 @@ if HAVE_NUMBA:  # pragma: no branch
                     result[b, j] = np.int8(global_best[j])
         return result
 
-    def _twin(function: Any, name: str) -> Any:
-        """``function`` under another name: numba keys its on-disk cache by the qualified name, so
-        two dispatchers of one source need two names, or each would load the other's machine code."""
-        twin = types.FunctionType(function.__code__, function.__globals__, name, function.__defaults__)
-        twin.__qualname__ = name
-        return twin
-
-    #: Trials spread over numba's threads (``prange``).
-    run_numba = numba.njit(cache=True, parallel=True)(_twin(_run_numba, "run_numba"))
-    #: The same kernel for one thread (a harness worker): ``prange`` is ``range`` there, the
-    #: numbers are the same, and it compiles in about half the time of the parallel one.
-    run_numba_serial = numba.njit(cache=True)(_twin(_run_numba, "run_numba_serial"))
+    #: Trials spread over numba's threads (``prange``), and the same kernel for one thread (a
+    #: harness worker): ``prange`` is ``range`` there, the numbers are the same, and it compiles
+    #: in about half the time of the parallel one.
+    run_numba_serial, run_numba = twins(_run_numba, ("run_numba_serial", "run_numba"))
 
 
 def numba_kernel(threads: int | None = None) -> Any:

@@ -11,7 +11,8 @@ import importlib
 import importlib.util
 import os
 import sys
-from collections.abc import Iterable
+import types
+from collections.abc import Callable, Iterable, Iterator
 from typing import Any
 
 HAVE_NUMBA = importlib.util.find_spec("numba") is not None
@@ -50,10 +51,74 @@ class LazyKernels:
             namespace[name] = kernel
         return namespace[name]
 
+    def for_batch(self, name: str, batch: int) -> Any:
+        """Kernel ``name`` for a batch of ``batch`` trials: its threaded twin ``name + "_threaded"``
+        (:func:`twins`, where the module names one) when there are threads to spread over and
+        more than one chunk of trials to spread, else ``name``."""
+        threaded = f"{name}_threaded"
+        if threaded in self.kernels and batch > CHUNK and threads() > 1:
+            return self.get(threaded)
+        return self.get(name)
+
     def module_getattr(self, name: str) -> Any:
         if name in self.kernels and HAVE_NUMBA:
             return self.get(name)
         raise AttributeError(f"module {self.module!r} has no attribute {name!r}")
+
+
+#: Trials per chunk of a threaded kernel (:func:`twins`): a chunk's trials share one set of
+#: scratch arrays (allocated once per chunk, not per trial); the chunks are what ``prange``
+#: spreads over numba's threads.
+CHUNK = 64
+
+
+def twins(
+    function: Callable[..., Any], names: tuple[str, str] | None = None, **options: Any
+) -> tuple[Any, Any]:
+    """``function`` compiled twice, serially and with ``parallel=True`` (its ``prange`` over
+    chunks of trials spread over numba's threads), under ``names`` (default: its name without
+    the leading underscore, and that with ``_threaded``): numba keys its on-disk cache by the
+    qualified name, so two dispatchers of one source need two names or each would load the
+    other's machine code. Each trial's arithmetic is the same in both, so are the numbers; the
+    serial one compiles in about half the time."""
+    import numba
+
+    stem = function.__name__.lstrip("_")
+    compiled = []
+    for name, parallel in zip(names or (stem, f"{stem}_threaded"), (False, True), strict=True):
+        twin = types.FunctionType(function.__code__, function.__globals__, name, function.__defaults__)
+        twin.__qualname__ = name
+        compiled.append(numba.njit(cache=True, parallel=parallel, **options)(twin))
+    return compiled[0], compiled[1]
+
+
+def threads() -> int:
+    """The threads a compiled kernel may spread its trials over: numba's thread count (all the
+    cores unless set: a harness worker sets its own, :func:`set_threads`)."""
+    import numba
+
+    return numba.get_num_threads()
+
+
+def set_threads(count: int) -> None:
+    """Let the compiled kernels use ``count`` threads (numba's ``set_num_threads``)."""
+    import numba
+
+    numba.set_num_threads(count)
+
+
+@contextlib.contextmanager
+def with_threads(count: int | None) -> Iterator[None]:
+    """The compiled kernels on ``count`` threads while the block runs (None: as they are)."""
+    if count is None or not HAVE_NUMBA:
+        yield
+        return
+    before = threads()
+    set_threads(count)
+    try:
+        yield
+    finally:
+        set_threads(before)
 
 
 def repair_cache(kernel: Any) -> bool:
@@ -90,4 +155,13 @@ def uncached(kernels: Iterable[Any]) -> list[str]:
     return names
 
 
-__all__ = ["HAVE_NUMBA", "LazyKernels", "repair_cache", "uncached"]
+__all__ = [
+    "CHUNK",
+    "HAVE_NUMBA",
+    "LazyKernels",
+    "repair_cache",
+    "set_threads",
+    "threads",
+    "twins",
+    "uncached",
+]

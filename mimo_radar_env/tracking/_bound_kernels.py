@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.compiled import numba
+from ..core.compiled import CHUNK, numba, twins
 
 # numpy's error model: a division by a zero determinant gives inf or NaN, which the condition
 # checks refuse (the numpy path then repairs the matrix), where Python's would raise
@@ -93,39 +93,50 @@ def inverse(a, out):
     return det
 
 
-@njit
-def bound_step(covariance, transition, process_cov, measured, max_condition):
+def _bound_step(covariance, transition, process_cov, measured, max_condition):
     """Returns ``(next covariance (B, K, 4, 4), healthy)``: ``healthy`` is False when a matrix
-    failed a condition check (the result is then not to be used)."""
+    failed a condition check (the result is then not to be used). A chunk of trials stops at its
+    first failure; the others go on (their work is thrown away with the result)."""
     B, K = covariance.shape[:2]
     out = np.empty((B, K, 4, 4))
-    prior = np.empty((4, 4))
-    temp = np.empty((4, 4))
-    information = np.empty((4, 4))
-    for b in range(B):
-        for k in range(K):
-            F = transition[k]
-            P = covariance[b, k]
-            # F P F' + Q, as (F @ P) @ F' + Q
-            for i in range(4):
-                for j in range(4):
-                    acc = 0.0
-                    for p in range(4):
-                        acc += F[i, p] * P[p, j]
-                    temp[i, j] = acc
-            for i in range(4):
-                for j in range(4):
-                    acc = 0.0
-                    for p in range(4):
-                        acc += temp[i, p] * F[j, p]
-                    prior[i, j] = acc + process_cov[i, j]
-            det = inverse(prior, information)  # used only if the prior passes the check
-            if not certainly_conditioned(prior, det, max_condition):
-                return out, False
-            for i in range(2):
-                for j in range(2):
-                    information[2 * i, 2 * j] += measured[b, k, i, j]
-            inverse(information, out[b, k])
-            if not certainly_conditioned(out[b, k], determinant(out[b, k]), max_condition):
-                return out, False
-    return out, True
+    chunks = (B + CHUNK - 1) // CHUNK
+    healthy = np.ones(chunks, dtype=np.bool_)
+    for chunk in numba.prange(chunks):
+        prior = np.empty((4, 4))
+        temp = np.empty((4, 4))
+        information = np.empty((4, 4))
+        for b in range(chunk * CHUNK, min(B, (chunk + 1) * CHUNK)):
+            if not healthy[chunk]:
+                break
+            for k in range(K):
+                F = transition[k]
+                P = covariance[b, k]
+                # F P F' + Q, as (F @ P) @ F' + Q
+                for i in range(4):
+                    for j in range(4):
+                        acc = 0.0
+                        for p in range(4):
+                            acc += F[i, p] * P[p, j]
+                        temp[i, j] = acc
+                for i in range(4):
+                    for j in range(4):
+                        acc = 0.0
+                        for p in range(4):
+                            acc += temp[i, p] * F[j, p]
+                        prior[i, j] = acc + process_cov[i, j]
+                det = inverse(prior, information)  # used only if the prior passes the check
+                if not certainly_conditioned(prior, det, max_condition):
+                    healthy[chunk] = False
+                    break
+                for i in range(2):
+                    for j in range(2):
+                        information[2 * i, 2 * j] += measured[b, k, i, j]
+                inverse(information, out[b, k])
+                if not certainly_conditioned(out[b, k], determinant(out[b, k]), max_condition):
+                    healthy[chunk] = False
+                    break
+    return out, healthy.all()
+
+
+#: The kernel, serial and over threads (:func:`~mimo_radar_env.core.compiled.twins`).
+bound_step, bound_step_threaded = twins(_bound_step, error_model="numpy")

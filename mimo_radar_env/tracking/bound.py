@@ -37,7 +37,7 @@ def bound_step(
     if use_numba and HAVE_NUMBA and not xp.is_torch:
         # writable C arrays always: numba compiles a read-only array (a one-trial env's
         # broadcast initial bound) as another signature, a second compilation of the same kernel
-        out, healthy = _KERNELS.get("_compiled_step")(
+        out, healthy = _KERNELS.for_batch("_compiled_step", len(covariance))(
             *(np.require(a, np.float64, ["C", "W"]) for a in (covariance, transition, process_cov, measured)),
             MAX_CONDITION,
         )
@@ -54,5 +54,9 @@ def position_bound(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     return namespace(covariance).sqrt(covariance[..., 0, 0] + covariance[..., 2, 2])
 
 
-_KERNELS = LazyKernels(__name__, _compiled_step="._bound_kernels:bound_step")
+_KERNELS = LazyKernels(
+    __name__,
+    _compiled_step="._bound_kernels:bound_step",
+    _compiled_step_threaded="._bound_kernels:bound_step_threaded",
+)
 __getattr__ = _KERNELS.module_getattr

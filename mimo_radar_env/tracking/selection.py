@@ -112,7 +112,7 @@ def super_arm_criterion(
         # the channel sums, the posteriors and their traces or determinants in one pass: the same
         # numbers as the numpy path below, without its (B, K, A, 2, 2) intermediates
         values = np.empty((batch, terms.shape[1], tx_masks.shape[1]))
-        _KERNELS.get("_compiled_posteriors")(
+        _KERNELS.for_batch("_compiled_posteriors", batch)(
             tx_masks,
             rx_masks,
             np.ascontiguousarray(terms, dtype=np.float64),
@@ -355,10 +355,19 @@ def _swap_search(
     return tx, rx
 
 
-def compiled_kernels() -> list:
-    """The numba kernels the tracking search runs (none without numba)."""
-    return [_KERNELS.get("_compiled_posteriors")] if HAVE_NUMBA else []
+def compiled_kernels(threaded: bool = False) -> list:
+    """The numba kernels the tracking search runs (its twin over threads with ``threaded``; none
+    without numba)."""
+    return (
+        [_KERNELS.get("_compiled_posteriors_threaded" if threaded else "_compiled_posteriors")]
+        if HAVE_NUMBA
+        else []
+    )
 
 
-_KERNELS = LazyKernels(__name__, _compiled_posteriors="._selection_kernels:posterior_values")
+_KERNELS = LazyKernels(
+    __name__,
+    _compiled_posteriors="._selection_kernels:posterior_values",
+    _compiled_posteriors_threaded="._selection_kernels:posterior_values_threaded",
+)
 __getattr__ = _KERNELS.module_getattr

@@ -46,16 +46,17 @@ def make_fusion(name: str, **params: Any) -> Fusion:
     return fusion_class(name)(**params)
 
 
-def compiled_kernels(name: str) -> list[Any]:
+def compiled_kernels(name: str, threaded: bool = False) -> list[Any]:
     """The numba kernels a tracked env step with fusion ``name`` runs (the fusion's update and
-    the bound's step); none without numba."""
+    the bound's step; their twins over threads with ``threaded``); none without numba."""
     from ...core.compiled import HAVE_NUMBA
 
     if not HAVE_NUMBA:
         return []
     from .. import bound
 
-    return [*fusion_class(name).compiled_kernels(), bound._compiled_step]
+    step = bound._compiled_step_threaded if threaded else bound._compiled_step
+    return [*fusion_class(name).compiled_kernels(threaded), step]
 
 
 __all__ = [

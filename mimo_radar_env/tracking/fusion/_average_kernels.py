@@ -22,11 +22,11 @@ import math
 
 import numpy as np
 
-from ...core.compiled import numba
+from ...core.compiled import CHUNK, numba, twins
 
 _TWO_PI = 2.0 * math.pi
 _LOG_2PI = math.log(2.0 * math.pi)
-# serial: numba threads contend with OpenBLAS's spinning threads here. numpy's error model: a
+# The helpers are serial (a threaded kernel spreads whole chunks of trials). numpy's error model: a
 # division by zero (a singular innovation covariance, a target on a receiver) gives inf or NaN
 # as the numpy path does, and the update's finiteness check falls back to the prediction in
 # that trial, where Python's would raise ZeroDivisionError out of the env's step
@@ -195,8 +195,7 @@ def average_channels(
     symmetrize(covariance)
 
 
-@njit
-def update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, variance):
+def _update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, variance):
     """Returns ``(model_means, model_covs, log_probs, estimate, covariance)``.
 
     Shapes: sigmas (B, K, R, S, 4), pred_means (B, K, R, 4), pred_covs (B, K, R, 4, 4),
@@ -210,52 +209,68 @@ def update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, va
     log_probs = np.empty((B, K, R))
     estimate = np.zeros((B, K, n))
     covariance = np.empty((B, K, n, n))
-    h0 = np.empty(S)
-    h1 = np.empty(S)
-    sn = np.empty(S)
-    cs = np.empty(S)
-    p0 = np.empty(n)
-    p1 = np.empty(n)
-    means = np.empty((C, R, n))
-    gain = np.empty((C, R, n, 2))
-    cross = np.empty((C, R, n, 2))
-    log_post = np.empty((C, R))
-    channel = np.empty(n)
-    for b in range(B):
-        for k in range(K):
-            for c in range(C):
-                i = c // num_rx
-                j = c - i * num_rx
-                for r in range(R):
-                    station_geometry(
-                        sigmas, b, k, r, tx[b, i, 0], tx[b, i, 1], rx[b, j, 0], rx[b, j, 1], h0, h1, sn, cs
-                    )
-                    z0, z1 = measurement_mean(wm, h0, sn, cs)
-                    s00, s01, s11 = innovation_moments(
-                        sigmas, pred_means, b, k, r, wc, h0, h1, z0, z1, p0, p1
-                    )
-                    y0 = measurement[b, k, c, 0] - z0
-                    y1 = wrap_residual(measurement[b, k, c, 1] - z1)
-                    s00 += variance[b, k, c, 0]
-                    s11 += variance[b, k, c, 1]
-                    log_likelihood = kalman_update(
-                        pred_means, b, k, r, p0, p1, s00, s01, s11, y0, y1, c, gain, cross, means
-                    )
-                    log_post[c, r] = log_likelihood + log_c[b, k, r]
-                norm = logsumexp(log_post[c])
-                for r in range(R):
-                    log_post[c, r] -= norm
-            average_channels(
-                pred_covs[b, k],
-                means,
-                log_post,
-                gain,
-                cross,
-                model_means[b, k],
-                model_covs[b, k],
-                log_probs[b, k],
-                estimate[b, k],
-                covariance[b, k],
-                channel,
-            )
+    for chunk in numba.prange((B + CHUNK - 1) // CHUNK):
+        h0 = np.empty(S)
+        h1 = np.empty(S)
+        sn = np.empty(S)
+        cs = np.empty(S)
+        p0 = np.empty(n)
+        p1 = np.empty(n)
+        means = np.empty((C, R, n))
+        gain = np.empty((C, R, n, 2))
+        cross = np.empty((C, R, n, 2))
+        log_post = np.empty((C, R))
+        channel = np.empty(n)
+        for b in range(chunk * CHUNK, min(B, (chunk + 1) * CHUNK)):
+            for k in range(K):
+                for c in range(C):
+                    i = c // num_rx
+                    j = c - i * num_rx
+                    for r in range(R):
+                        station_geometry(
+                            sigmas,
+                            b,
+                            k,
+                            r,
+                            tx[b, i, 0],
+                            tx[b, i, 1],
+                            rx[b, j, 0],
+                            rx[b, j, 1],
+                            h0,
+                            h1,
+                            sn,
+                            cs,
+                        )
+                        z0, z1 = measurement_mean(wm, h0, sn, cs)
+                        s00, s01, s11 = innovation_moments(
+                            sigmas, pred_means, b, k, r, wc, h0, h1, z0, z1, p0, p1
+                        )
+                        y0 = measurement[b, k, c, 0] - z0
+                        y1 = wrap_residual(measurement[b, k, c, 1] - z1)
+                        s00 += variance[b, k, c, 0]
+                        s11 += variance[b, k, c, 1]
+                        log_likelihood = kalman_update(
+                            pred_means, b, k, r, p0, p1, s00, s01, s11, y0, y1, c, gain, cross, means
+                        )
+                        log_post[c, r] = log_likelihood + log_c[b, k, r]
+                    norm = logsumexp(log_post[c])
+                    for r in range(R):
+                        log_post[c, r] -= norm
+                average_channels(
+                    pred_covs[b, k],
+                    means,
+                    log_post,
+                    gain,
+                    cross,
+                    model_means[b, k],
+                    model_covs[b, k],
+                    log_probs[b, k],
+                    estimate[b, k],
+                    covariance[b, k],
+                    channel,
+                )
     return model_means, model_covs, log_probs, estimate, covariance
+
+
+#: The kernel, serial and over threads (:func:`~mimo_radar_env.core.compiled.twins`).
+update, update_threaded = twins(_update, error_model="numpy")

@@ -25,7 +25,7 @@ import math
 
 import numpy as np
 
-from ...core.compiled import numba
+from ...core.compiled import CHUNK, numba, twins
 from ._average_kernels import logsumexp, measurement_mean, station_geometry, symmetrize, wrap_residual
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -115,8 +115,7 @@ def backward(lower, x):
         x[i] = acc / lower[i, i]
 
 
-@njit
-def update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, variance):
+def _update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, variance):
     """Returns ``(model_means, model_covs, log_probs, estimate, covariance)``.
 
     Shapes: sigmas (B, K, R, S, 4), pred_means (B, K, R, 4), pred_covs (B, K, R, 4, 4),
@@ -130,80 +129,85 @@ def update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, va
     log_probs = np.empty((B, K, R))
     estimate = np.empty((B, K, n))
     covariance = np.empty((B, K, n, n))
-    h = np.empty((S, D))
-    z = np.empty(D)
-    dz = np.empty((S, D))
-    pxz = np.empty((n, D))
-    innovation = np.empty((D, D))
-    residual = np.empty(D)
-    gain = np.empty((n, D))
-    h0 = np.empty(S)
-    h1 = np.empty(S)
-    sn = np.empty(S)
-    cs = np.empty(S)
-    for b in range(B):
-        for k in range(K):
-            for r in range(R):
-                stacked_moments(
-                    sigmas, pred_means, b, k, r, wm, wc, tx, rx, h, z, dz, pxz, innovation, h0, h1, sn, cs
-                )
-                for c in range(C):
-                    innovation[2 * c, 2 * c] += variance[b, k, c, 0]
-                    innovation[2 * c + 1, 2 * c + 1] += variance[b, k, c, 1]
-                    residual[2 * c] = measurement[b, k, c, 0] - z[2 * c]
-                    residual[2 * c + 1] = wrap_residual(measurement[b, k, c, 1] - z[2 * c + 1])
-                logdet = cholesky(innovation)  # in place: the lower factor L, S = L L'
-                if not math.isfinite(logdet):
-                    model_means[b, k, r, :] = np.nan
-                    model_covs[b, k, r, :, :] = np.nan
-                    log_probs[b, k, r] = np.nan
-                    continue
-                # the gain P_xz S^-1 = (L^-T L^-1 P_xz')' and the whitened residual L^-1 y
-                for q in range(n):
+    for chunk in numba.prange((B + CHUNK - 1) // CHUNK):
+        h = np.empty((S, D))
+        z = np.empty(D)
+        dz = np.empty((S, D))
+        pxz = np.empty((n, D))
+        innovation = np.empty((D, D))
+        residual = np.empty(D)
+        gain = np.empty((n, D))
+        h0 = np.empty(S)
+        h1 = np.empty(S)
+        sn = np.empty(S)
+        cs = np.empty(S)
+        for b in range(chunk * CHUNK, min(B, (chunk + 1) * CHUNK)):
+            for k in range(K):
+                for r in range(R):
+                    stacked_moments(
+                        sigmas, pred_means, b, k, r, wm, wc, tx, rx, h, z, dz, pxz, innovation, h0, h1, sn, cs
+                    )
+                    for c in range(C):
+                        innovation[2 * c, 2 * c] += variance[b, k, c, 0]
+                        innovation[2 * c + 1, 2 * c + 1] += variance[b, k, c, 1]
+                        residual[2 * c] = measurement[b, k, c, 0] - z[2 * c]
+                        residual[2 * c + 1] = wrap_residual(measurement[b, k, c, 1] - z[2 * c + 1])
+                    logdet = cholesky(innovation)  # in place: the lower factor L, S = L L'
+                    if not math.isfinite(logdet):
+                        model_means[b, k, r, :] = np.nan
+                        model_covs[b, k, r, :, :] = np.nan
+                        log_probs[b, k, r] = np.nan
+                        continue
+                    # the gain P_xz S^-1 = (L^-T L^-1 P_xz')' and the whitened residual L^-1 y
+                    for q in range(n):
+                        for d in range(D):
+                            gain[q, d] = pxz[q, d]
+                        forward(innovation, gain[q])
+                        backward(innovation, gain[q])
+                    forward(innovation, residual)
+                    mahalanobis = 0.0
                     for d in range(D):
-                        gain[q, d] = pxz[q, d]
-                    forward(innovation, gain[q])
-                    backward(innovation, gain[q])
-                forward(innovation, residual)
-                mahalanobis = 0.0
-                for d in range(D):
-                    mahalanobis += residual[d] * residual[d]
-                for c in range(C):  # the residual again, for the mean's update
-                    residual[2 * c] = measurement[b, k, c, 0] - z[2 * c]
-                    residual[2 * c + 1] = wrap_residual(measurement[b, k, c, 1] - z[2 * c + 1])
-                for q in range(n):
-                    acc = 0.0
-                    for d in range(D):
-                        acc += gain[q, d] * residual[d]
-                    model_means[b, k, r, q] = pred_means[b, k, r, q] + acc
-                    for u in range(n):
+                        mahalanobis += residual[d] * residual[d]
+                    for c in range(C):  # the residual again, for the mean's update
+                        residual[2 * c] = measurement[b, k, c, 0] - z[2 * c]
+                        residual[2 * c + 1] = wrap_residual(measurement[b, k, c, 1] - z[2 * c + 1])
+                    for q in range(n):
                         acc = 0.0
                         for d in range(D):
-                            acc += gain[q, d] * pxz[u, d]
-                        model_covs[b, k, r, q, u] = pred_covs[b, k, r, q, u] - acc
-                symmetrize(model_covs[b, k, r])
-                log_probs[b, k, r] = -0.5 * (mahalanobis + logdet + D * _LOG_2PI) + log_c[b, k, r]
-            if not np.isfinite(log_probs[b, k]).all():
-                log_probs[b, k, :] = np.nan
-                estimate[b, k, :] = np.nan
-                covariance[b, k, :, :] = np.nan
-                continue
-            norm = logsumexp(log_probs[b, k])
-            for r in range(R):
-                log_probs[b, k, r] -= norm
-            # imm.combine: the moment-matched mixture of the models
-            for q in range(n):
-                acc = 0.0
+                            acc += gain[q, d] * residual[d]
+                        model_means[b, k, r, q] = pred_means[b, k, r, q] + acc
+                        for u in range(n):
+                            acc = 0.0
+                            for d in range(D):
+                                acc += gain[q, d] * pxz[u, d]
+                            model_covs[b, k, r, q, u] = pred_covs[b, k, r, q, u] - acc
+                    symmetrize(model_covs[b, k, r])
+                    log_probs[b, k, r] = -0.5 * (mahalanobis + logdet + D * _LOG_2PI) + log_c[b, k, r]
+                if not np.isfinite(log_probs[b, k]).all():
+                    log_probs[b, k, :] = np.nan
+                    estimate[b, k, :] = np.nan
+                    covariance[b, k, :, :] = np.nan
+                    continue
+                norm = logsumexp(log_probs[b, k])
                 for r in range(R):
-                    acc += math.exp(log_probs[b, k, r]) * model_means[b, k, r, q]
-                estimate[b, k, q] = acc
-            for q in range(n):
-                for u in range(n):
+                    log_probs[b, k, r] -= norm
+                # imm.combine: the moment-matched mixture of the models
+                for q in range(n):
                     acc = 0.0
                     for r in range(R):
-                        dq = model_means[b, k, r, q] - estimate[b, k, q]
-                        du = model_means[b, k, r, u] - estimate[b, k, u]
-                        acc += math.exp(log_probs[b, k, r]) * (model_covs[b, k, r, q, u] + dq * du)
-                    covariance[b, k, q, u] = acc
-            symmetrize(covariance[b, k])
+                        acc += math.exp(log_probs[b, k, r]) * model_means[b, k, r, q]
+                    estimate[b, k, q] = acc
+                for q in range(n):
+                    for u in range(n):
+                        acc = 0.0
+                        for r in range(R):
+                            dq = model_means[b, k, r, q] - estimate[b, k, q]
+                            du = model_means[b, k, r, u] - estimate[b, k, u]
+                            acc += math.exp(log_probs[b, k, r]) * (model_covs[b, k, r, q, u] + dq * du)
+                        covariance[b, k, q, u] = acc
+                symmetrize(covariance[b, k])
     return model_means, model_covs, log_probs, estimate, covariance
+
+
+#: The kernel, serial and over threads (:func:`~mimo_radar_env.core.compiled.twins`).
+update, update_threaded = twins(_update, error_model="numpy")

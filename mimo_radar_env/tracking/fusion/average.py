@@ -57,11 +57,11 @@ class AverageFusion(Fusion):
         return channels * (CHANNEL_OPERATIONS + 300)  # one update per channel, then eq22's average
 
     @classmethod
-    def compiled_kernels(cls) -> list:
-        return [_KERNELS.get("_update_numba")] if HAVE_NUMBA else []
+    def compiled_kernels(cls, threaded: bool = False) -> list:
+        return [_KERNELS.get("_update_numba_threaded" if threaded else "_update_numba")] if HAVE_NUMBA else []
 
     def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
-        path = _KERNELS.get("_update_numba") if self.use_numba else _update_numpy
+        path = _KERNELS.for_batch("_update_numba", len(measurement)) if self.use_numba else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
@@ -152,5 +152,9 @@ def average_channels(
     return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
 
 
-_KERNELS = LazyKernels(__name__, _update_numba="._average_kernels:update")
+_KERNELS = LazyKernels(
+    __name__,
+    _update_numba="._average_kernels:update",
+    _update_numba_threaded="._average_kernels:update_threaded",
+)
 __getattr__ = _KERNELS.module_getattr

@@ -145,9 +145,16 @@ class Fusion(ABC):
         channels, roughly (an upper estimate, in the units of :data:`CHANNEL_OPERATIONS`)."""
 
     @classmethod
-    def compiled_kernels(cls) -> list[Any]:
-        """The numba kernels its update runs (none without numba or a compiled path)."""
+    def compiled_kernels(cls, threaded: bool = False) -> list[Any]:
+        """The numba kernels its update runs (their twins over threads with ``threaded``; none
+        without numba or a compiled path)."""
         return []
+
+    @classmethod
+    def compiled_update(cls, channels: int) -> bool:
+        """Whether its update of ``channels`` selected channels runs a compiled kernel (the cost
+        model counts that kernel's work as shared by a task's threads)."""
+        return bool(cls.compiled_kernels())
 
     @staticmethod
     def run_path(

@@ -54,13 +54,16 @@ class CentralizedFusion(Fusion):
         return 2 * (channels * CHANNEL_OPERATIONS + SIGMA_POINTS * size**2 + 8 * size**2 + inverse)
 
     @classmethod
-    def compiled_kernels(cls) -> list:
-        return [_KERNELS.get("_update_numba")] if HAVE_NUMBA else []
+    def compiled_kernels(cls, threaded: bool = False) -> list:
+        return [_KERNELS.get("_update_numba_threaded" if threaded else "_update_numba")] if HAVE_NUMBA else []
+
+    @classmethod
+    def compiled_update(cls, channels: int) -> bool:
+        return HAVE_NUMBA and 2 * channels < unscented.WOODBURY_MIN_DIMENSION
 
     def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
-        dimension = 2 * tx_positions.shape[1] * rx_positions.shape[1]
-        compiled = self.use_numba and dimension < unscented.WOODBURY_MIN_DIMENSION
-        path = _KERNELS.get("_update_numba") if compiled else _update_numpy
+        compiled = self.use_numba and self.compiled_update(tx_positions.shape[1] * rx_positions.shape[1])
+        path = _KERNELS.for_batch("_update_numba", len(measurement)) if compiled else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
 
 
@@ -101,5 +104,9 @@ def _update_numpy(
     return means, covs, log_post, estimate, covariance
 
 
-_KERNELS = LazyKernels(__name__, _update_numba="._centralized_kernels:update")
+_KERNELS = LazyKernels(
+    __name__,
+    _update_numba="._centralized_kernels:update",
+    _update_numba_threaded="._centralized_kernels:update_threaded",
+)
 __getattr__ = _KERNELS.module_getattr

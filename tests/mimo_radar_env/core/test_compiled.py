@@ -95,3 +95,81 @@ def test_a_run_lists_its_fusion_bound_and_solver_kernels():
     assert run_kernels(exact) == [centralized._update_numba, bound._compiled_step]
     untracked = make_config("paper-1-v1", ["ucb1"], 2, 3, options=v1.options(tracking=False), **quiet)
     assert run_kernels(untracked) == []
+
+
+# ------------------------------------------------------------------ kernels over threads
+@pytest.fixture
+def two_threads():
+    """numba's threads set to 2 for the test (the kernels' twins over threads are taken)."""
+    from mimo_radar_env.core import compiled
+
+    with compiled.with_threads(2):
+        yield
+
+
+def _episode(fusion: str, trials: int, steps: int = 4):
+    """Every observation and info of a tracked v1 episode under random super arms, stepped by
+    tracking-ucb (so the tracking search runs too)."""
+    import numpy as np
+
+    import agents
+    from mimo_radar_env import VERSIONS
+
+    agent = agents.make_agent("tracking-ucb", "paper-1-v1", seed=0, fusion=fusion)
+    env = agents.make_env(agent, trials, VERSIONS["v1"].options(fusion=fusion).to_dict(), "paper-1-v1")
+    out = []
+    for step in agents.Rollout(agent, env, seed=3).run(steps):
+        out.append({key: np.asarray(value).copy() for key, value in step.info.items()})
+        out[-1]["action"] = np.asarray(step.action).copy()
+    return out
+
+
+@pytest.mark.parametrize("fusion", ["average", "centralized"])
+def test_an_episode_over_two_threads_gives_the_numbers_of_one_thread_bit_for_bit(fusion):
+    import numpy as np
+
+    from mimo_radar_env.core import compiled
+
+    trials = 2 * compiled.CHUNK + 5  # three chunks, the last one partial
+    with compiled.with_threads(1):
+        serial = _episode(fusion, trials)
+    with compiled.with_threads(2):
+        threaded = _episode(fusion, trials)
+    for one, two in zip(serial, threaded, strict=True):
+        assert one.keys() == two.keys()
+        for key in one:
+            assert np.array_equal(one[key], two[key], equal_nan=True), key
+
+
+def test_a_batch_takes_the_threaded_twin_only_with_threads_and_more_than_one_chunk(two_threads):
+    from mimo_radar_env.core import compiled
+    from mimo_radar_env.tracking.fusion import average
+
+    kernels = average._KERNELS
+    assert kernels.for_batch("_update_numba", compiled.CHUNK + 1) is average._update_numba_threaded
+    assert kernels.for_batch("_update_numba", compiled.CHUNK) is average._update_numba
+    compiled.set_threads(1)
+    assert kernels.for_batch("_update_numba", 10 * compiled.CHUNK) is average._update_numba
+    assert average._update_numba.py_func.__qualname__ != average._update_numba_threaded.py_func.__qualname__
+
+
+@pytest.mark.parametrize("bad_trial", [3, 100, 139])
+def test_the_bound_over_threads_says_unhealthy_wherever_the_failing_trial_is(two_threads, bad_trial):
+    import numpy as np
+
+    from mimo_radar_env.tracking import bound
+
+    rng = np.random.default_rng(0)
+    trials = 140
+    root = rng.normal(size=(trials, 2, 4, 4))
+    covariance = root @ np.swapaxes(root, -1, -2) + 4 * np.eye(4)
+    transition = np.stack([np.eye(4)] * 2)
+    process = 0.1 * np.eye(4)
+    measured = np.stack([np.eye(2)] * 2)[None].repeat(trials, axis=0)
+    args = (covariance, transition, process, measured, bound.MAX_CONDITION)
+    serial, healthy = bound._compiled_step(*args)
+    threaded, healthy_threaded = bound._compiled_step_threaded(*args)
+    assert healthy and healthy_threaded and np.array_equal(serial, threaded)
+    covariance[bad_trial, 1] = -np.eye(4)  # not a covariance: its prediction fails the check
+    assert not bound._compiled_step(*args)[1]
+    assert not bound._compiled_step_threaded(*args)[1]
