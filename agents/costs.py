@@ -71,6 +71,9 @@ class Cost:
     #: How long one of its declared operations takes on the developers' machine: its kind of
     #: work's speed there, fitted to ``benchmarks.speed.policy_cost``'s measurements.
     seconds_per_operation: float = NUMPY_SECONDS_PER_OPERATION
+    #: Its work runs in a compiled kernel that spreads a batch's trials over threads (numba's
+    #: ``prange``): the harness counts it as shared by a task's threads.
+    threaded: bool = False
 
     def memory_per_trial(self, agent: Agent) -> int:
         return 0
@@ -84,6 +87,10 @@ class Cost:
     def seconds_per_trial_step(self, agent: Agent) -> float:
         """Its operations at its :attr:`seconds_per_operation`."""
         return self.operations_per_trial_step(agent) * self.seconds_per_operation
+
+    def is_threaded(self, agent: Agent) -> bool:
+        """Whether ``agent``'s work of this part is :attr:`threaded`."""
+        return self.threaded
 
 
 def _channels(agent: Agent) -> int:
@@ -115,6 +122,9 @@ class Solver(Cost):
     def seconds_per_trial_step(self, agent: Agent) -> float:
         """At the solver's own rate (:attr:`agents.solvers.SuperArmSolver.seconds_per_operation`)."""
         return self.operations_per_trial_step(agent) * agent.solver.seconds_per_operation  # type: ignore[attr-defined]
+
+    def is_threaded(self, agent: Agent) -> bool:
+        return agent.solver.threaded  # type: ignore[attr-defined]
 
 
 class GammaSampler(Cost):
@@ -148,6 +158,7 @@ class TrackingSearch(Cost):
     agent's scenario."""
 
     seconds_per_operation = 6.5e-10
+    threaded = True  # most of its arithmetic: the compiled sums of the super arms' channels
 
     @staticmethod
     def _size(agent: Agent) -> tuple[int, int, int, int, int]:
@@ -240,6 +251,12 @@ def seconds_per_trial_step(agent: Agent) -> float:
     share (:meth:`Cost.seconds_per_trial_step`: its operations at its rate). The harness adds the env's
     (:func:`mimo_radar_env.envs.cost.seconds_per_trial_step`) to estimate a run's time."""
     return sum(part.seconds_per_trial_step(agent) for part in agent.costs)
+
+
+def threaded_seconds_per_trial_step(agent: Agent) -> float:
+    """The part of :func:`seconds_per_trial_step` that a task's threads share (its
+    :attr:`Cost.threaded` parts)."""
+    return sum(part.seconds_per_trial_step(agent) for part in agent.costs if part.is_threaded(agent))
 
 
 def seconds_per_step(agent: Agent) -> float:

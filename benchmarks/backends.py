@@ -28,19 +28,11 @@ Finished = Callable[[int, dict], None]
 Runner = Callable[[dict[str, Any], str, int], dict]
 
 
-def worker_init(parent: int) -> None:
-    """Worker set-up: one compute thread, SIGINT left to the parent, exit when the parent dies."""
+def worker_init(parent: int, threads: int = 1) -> None:
+    """Worker set-up: ``threads`` compute threads for the compiled kernels, SIGINT left to the
+    parent, exit when the parent dies."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    # libraries imported later (torch, for a trained PPO policy) start one thread each too;
-    # with their default of one per core, two workers on two cores ran PPO 3x slower
-    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ[name] = "1"
-    try:
-        import numba
-
-        numba.set_num_threads(1)
-    except ImportError:  # pragma: no cover
-        pass
+    set_threads(threads)
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -50,21 +42,33 @@ def worker_init(parent: int) -> None:
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
 
+def set_threads(threads: int) -> None:
+    """This process's compute threads: ``threads`` for numba's kernels, one for BLAS and the
+    libraries imported later (torch, for a trained PPO policy, starts one per core by default:
+    two workers on two cores ran PPO 3x slower)."""
+    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        os.environ[name] = "1"
+    from mimo_radar_env.core import compiled
+
+    if compiled.HAVE_NUMBA:
+        compiled.set_threads(threads)
+
+
 def run_inline(runner: Runner, todo: list[Task], finished: Finished) -> None:
     for number, task in enumerate(todo):
         finished(number, runner(*task))
 
 
 @contextlib.contextmanager
-def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
-    """Spawned worker processes (:func:`worker_init`: one compute thread each, exiting when this
-    process dies); on an error or an interrupt the running ones are terminated at once, their
-    results not wanted."""
+def worker_pool(workers: int, threads: int = 1) -> Iterator[ProcessPoolExecutor]:
+    """Spawned worker processes (:func:`worker_init`: ``threads`` compute threads each, exiting
+    when this process dies); on an error or an interrupt the running ones are terminated at once,
+    their results not wanted."""
     import multiprocessing
 
     context = multiprocessing.get_context("spawn")  # no inherited threads or state
     pool = ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=worker_init, initargs=(os.getpid(),)
+        max_workers=workers, mp_context=context, initializer=worker_init, initargs=(os.getpid(), threads)
     )
     try:
         yield pool
@@ -76,8 +80,10 @@ def worker_pool(workers: int) -> Iterator[ProcessPoolExecutor]:
     pool.shutdown()
 
 
-def run_processes(runner: Runner, todo: list[Task], finished: Finished, workers: int) -> None:
-    with worker_pool(workers) as pool:
+def run_processes(
+    runner: Runner, todo: list[Task], finished: Finished, workers: int, threads: int = 1
+) -> None:
+    with worker_pool(workers, threads) as pool:
         pending = {pool.submit(runner, *task): number for number, task in enumerate(todo)}
         while pending:
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
@@ -124,7 +130,17 @@ def _resolve_auto_address() -> str:
         ) from None
 
 
-def run_ray(runner: Runner, todo: list[Task], finished: Finished, address: str | None) -> None:
+def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
+    """``runner(*task)`` on ``threads`` compute threads (a Ray task: its worker process serves
+    tasks of any thread count)."""
+    set_threads(threads)
+    return runner(*task)
+
+
+def run_ray(
+    runner: Runner, todo: list[Task], finished: Finished, address: str | None, threads: int = 1
+) -> None:
+    """The tasks on Ray, each reserving ``threads`` CPUs and running on as many threads."""
     from mimo_radar_env.extras import require
 
     ray = require("ray", "ray", "--backend ray")
@@ -134,12 +150,12 @@ def run_ray(runner: Runner, todo: list[Task], finished: Finished, address: str |
         ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
     pending: dict[Any, int] = {}
     try:
-        remote_task = ray.remote(runner)
+        remote_task = ray.remote(num_cpus=threads)(threaded_task)
         payloads: dict[int, Any] = {}  # each run's configuration is put in the object store once
         for number, (payload, policy, shard) in enumerate(todo):
             if id(payload) not in payloads:
                 payloads[id(payload)] = ray.put(payload)
-            pending[remote_task.remote(payloads[id(payload)], policy, shard)] = number
+            pending[remote_task.remote(runner, threads, payloads[id(payload)], policy, shard)] = number
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
             for ref in done:

@@ -22,6 +22,7 @@ FLAGS = {
     "shard_size": "--shard-size",
     "agent_params": "--agent-param",
     "workers": "--workers",
+    "threads": "--threads",
     "backend": "--backend",
     "max_hours": "--max-hours",
     "device": "--device",

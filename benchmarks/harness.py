@@ -38,8 +38,14 @@ import agents
 from agents.ppo import model_file
 from agents.solvers import compiled_kernels as solver_kernels
 from mimo_radar_env import EnvOptions, Scenario, ScenarioError, load_scenario
+from mimo_radar_env.core import compiled
 from mimo_radar_env.core.compiled import uncached
-from mimo_radar_env.envs.cost import machine_memory, memory_parts, seconds_per_trial_step
+from mimo_radar_env.envs.cost import (
+    machine_memory,
+    memory_parts,
+    seconds_per_trial_step,
+    threaded_seconds_per_trial_step,
+)
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -119,6 +125,11 @@ class RunConfig:
     @property
     def options(self) -> EnvOptions:
         return EnvOptions(**self.env_options)
+
+    @functools.cached_property
+    def step_costs(self) -> dict[str, StepCost]:
+        """Each policy's declared cost per step of a shard (:func:`_task_costs`), built once."""
+        return _task_costs(self.scenario_object, self.options, _policies(self))
 
     def to_json(self) -> dict[str, Any]:
         """The configuration as config.json holds it (``shard_sizes`` only where it says
@@ -303,14 +314,21 @@ def _built_seconds(
 ) -> float:
     """:func:`estimate_seconds` of the built agents' declared costs; ``size`` is the run's
     (trials, steps, shard size)."""
-    per_trial, fixed = _agent_seconds(built)
+    per_trial, fixed, _ = _agent_seconds(built)
     return estimate_seconds(sc, options, per_trial, *size, parallel, fixed)
 
 
-def _agent_seconds(built: dict[str, agents.Agent]) -> tuple[dict[str, float], dict[str, float]]:
-    """Each built agent's declared seconds per trial-step and per step of a batch."""
-    per_trial = {policy: agents.costs.seconds_per_trial_step(agent) for policy, agent in built.items()}
-    return per_trial, {policy: agents.costs.seconds_per_step(agent) for policy, agent in built.items()}
+def _agent_seconds(
+    built: dict[str, agents.Agent],
+) -> tuple[dict[str, float], dict[str, float], dict[str, float]]:
+    """Each built agent's declared seconds per trial-step, per step of a batch, and the part of
+    the first that a task's threads share."""
+    costs = agents.costs
+    return (
+        {policy: costs.seconds_per_trial_step(agent) for policy, agent in built.items()},
+        {policy: costs.seconds_per_step(agent) for policy, agent in built.items()},
+        {policy: costs.threaded_seconds_per_trial_step(agent) for policy, agent in built.items()},
+    )
 
 
 def _policies(config: RunConfig) -> dict[str, agents.Agent]:
@@ -351,9 +369,12 @@ def auto_shard_size(trials: int, parallel: int, policies: int = 1) -> int:
     return max(1, min(MAX_AUTO_SHARD_SIZE, -(-trials // shards)))
 
 
-def _task_costs(
-    sc: Scenario, options: EnvOptions, built: dict[str, agents.Agent]
-) -> dict[str, tuple[float, float]]:
+#: A policy's estimated seconds per step of a shard: the part that does not grow with its
+#: trials, each trial's share, and the part of that share a task's threads share.
+StepCost = tuple[float, float, float]
+
+
+def _task_costs(sc: Scenario, options: EnvOptions, built: dict[str, agents.Agent]) -> dict[str, StepCost]:
     """Each built policy's estimated seconds per step of a shard (:func:`_step_costs`)."""
     return _step_costs(sc, options, *_agent_seconds(built))
 
@@ -363,24 +384,44 @@ def _step_costs(
     options: EnvOptions,
     agent_trial_seconds: dict[str, float],
     agent_seconds: dict[str, float] | None = None,
-) -> dict[str, tuple[float, float]]:
-    """Each policy's estimated seconds per step of a shard: (the part that does not grow with its
-    trials, each trial's share): :data:`STEP_OVERHEAD_SECONDS` and its own fixed time
-    (``agent_seconds``); the env's :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step` and
-    its own (``agent_trial_seconds``)."""
+    agent_threaded_seconds: dict[str, float] | None = None,
+) -> dict[str, StepCost]:
+    """Each policy's estimated seconds per step of a shard (:data:`StepCost`):
+    :data:`STEP_OVERHEAD_SECONDS` and its own fixed time (``agent_seconds``); the env's
+    :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step` and its own
+    (``agent_trial_seconds``); of which the env's threaded part
+    (:func:`~mimo_radar_env.envs.cost.threaded_seconds_per_trial_step`) and its own
+    (``agent_threaded_seconds``)."""
     env = seconds_per_trial_step(scenario, options.tracking, options.fusion)
-    fixed = agent_seconds or {}
+    env_threaded = threaded_seconds_per_trial_step(scenario, options.tracking, options.fusion)
+    fixed, threaded = agent_seconds or {}, agent_threaded_seconds or {}
     return {
-        policy: (STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0), env + own)
+        policy: (
+            STEP_OVERHEAD_SECONDS + fixed.get(policy, 0.0),
+            env + own,
+            env_threaded + threaded.get(policy, 0.0),
+        )
         for policy, own in agent_trial_seconds.items()
     }
+
+
+def step_seconds(cost: StepCost, trials: int, threads: int = 1) -> float:
+    """Seconds per step of a task of ``trials`` trials on ``threads`` threads by ``cost``: its
+    fixed part, and each trial's share, whose threaded part runs in chunks of
+    :data:`~mimo_radar_env.core.compiled.CHUNK` trials spread over the threads (a batch of one
+    chunk runs on one thread)."""
+    fixed, per_trial, threaded = cost
+    spread = trials
+    if threads > 1 and trials > compiled.CHUNK:
+        chunks = -(-trials // compiled.CHUNK)
+        spread = min(trials, compiled.CHUNK * -(-chunks // threads))
+    return fixed + (per_trial - threaded) * trials + threaded * spread
 
 
 def planned_shard_sizes(config: RunConfig, parallel: int) -> dict[str, int]:
     """The shard sizes :func:`make_config` plans for ``config``'s run with ``parallel`` tasks at
     once (without ``shard_size``, before the memory check)."""
-    costs = _task_costs(config.scenario_object, config.options, _policies(config))
-    return plan_shard_sizes(costs, config.trials, parallel)
+    return plan_shard_sizes(config.step_costs, config.trials, parallel)
 
 
 def makespan(durations: Sequence[float], workers: int) -> float:
@@ -393,10 +434,10 @@ def makespan(durations: Sequence[float], workers: int) -> float:
 
 
 def plan_shard_sizes(
-    costs: Mapping[str, tuple[float, float]], trials: int, parallel: int, max_size: int = MAX_AUTO_SHARD_SIZE
+    costs: Mapping[str, StepCost], trials: int, parallel: int, max_size: int = MAX_AUTO_SHARD_SIZE
 ) -> dict[str, int]:
     """Each policy's shard size for ``parallel`` tasks at once, from its cost per step of a shard
-    (``costs``: the fixed part and each trial's share, :func:`_task_costs`): the sizes whose tasks,
+    (``costs``, :func:`_task_costs`, on one thread: :func:`step_seconds`): the sizes whose tasks,
     queued the longest first on ``parallel`` workers, end soonest by that cost model. Splitting a
     policy's trials into more shards shortens its longest task but pays its fixed part once more
     per shard (a smaller batch); so the costliest policies get the smallest shards and the cheap
@@ -409,9 +450,10 @@ def plan_shard_sizes(
     def span(plan: dict[str, int]) -> float:
         durations = []
         for policy, n in plan.items():
-            fixed, per_trial = costs[policy]
             size = -(-trials // n)
-            durations += [fixed + (min(s + size, trials) - s) * per_trial for s in range(0, trials, size)]
+            durations += [
+                step_seconds(costs[policy], min(s + size, trials) - s) for s in range(0, trials, size)
+            ]
         return makespan(sorted(durations, reverse=True), parallel)
 
     best, best_span = dict(shards), span(shards)
@@ -419,7 +461,7 @@ def plan_shard_sizes(
         splittable = [p for p in shards if shards[p] < trials]
         if not splittable:
             break
-        longest = max(splittable, key=lambda p: costs[p][0] + -(-trials // shards[p]) * costs[p][1])
+        longest = max(splittable, key=lambda p: step_seconds(costs[p], -(-trials // shards[p])))
         shards[longest] += 1
         length = span(shards)
         if length < best_span * (1 - 1e-9):
@@ -495,7 +537,9 @@ def estimate_seconds(
     costs = _step_costs(scenario, options, agent_trial_seconds, agent_seconds)
     sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(costs, shard_size)
     shards = {policy: -(-trials // sizes[policy]) for policy in costs}
-    total = sum(steps * (shards[p] * fixed + trials * per_trial) for p, (fixed, per_trial) in costs.items())
+    total = sum(
+        steps * (shards[p] * fixed + trials * per_trial) for p, (fixed, per_trial, _) in costs.items()
+    )
     return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, sum(shards.values())))
 
 
@@ -597,12 +641,15 @@ def run_task(config: dict[str, Any], policy: str, shard: int, device: Any = None
 
 def run_kernels(config: RunConfig, threads: int | None = None) -> list[Any]:
     """The numba kernels a run's tasks call (the env's fusion and bound, the policies' solvers),
-    with ``threads`` numba threads in each task."""
-    kernels = compiled_kernels(config.options.fusion) if config.options.tracking else []
+    with ``threads`` numba threads in each task (None: numba's count here): the twins over
+    threads where a task has threads and more than one chunk of trials to spread."""
+    threads = threads or (compiled.threads() if compiled.HAVE_NUMBA else 1)
+    threaded = threads > 1 and max(config.size_of(p) for p in config.policies) > compiled.CHUNK
+    kernels = compiled_kernels(config.options.fusion, threaded) if config.options.tracking else []
     for policy in config.policies:
         cls = agents.agent_class(agents.split_policy(policy)[0])
         if cls.needs.tracking_search:
-            kernels += selection_kernels()
+            kernels += selection_kernels(threaded)
         solver = config.agent_params.get(policy, {}).get("solver", getattr(cls, "default_solver", None))
         if isinstance(solver, str):
             kernels += solver_kernels(solver, threads)
@@ -758,18 +805,18 @@ class RunInterrupted(HarnessError):
     """Ctrl-C stopped the run; every finished task is saved and the run can be resumed."""
 
 
-def task_seconds(config: RunConfig) -> dict[tuple[str, int], float]:
-    """Every (policy, shard) task's estimated seconds (:func:`estimate_seconds` for the shard's
-    trials alone): the order in which a run starts its tasks, the longest first."""
-    scenario, options = config.scenario_object, config.options
-    per_trial, fixed = _agent_seconds(_policies(config))
-    costs = {}
-    for policy, shard in config.tasks():
-        n = len(config.shard_trials(policy, shard))
-        costs[policy, shard] = estimate_seconds(
-            scenario, options, {policy: per_trial[policy]}, n, config.steps, n, 1, {policy: fixed[policy]}
-        )
-    return costs
+def task_seconds(config: RunConfig, threads: int = 1) -> dict[tuple[str, int], float]:
+    """Every (policy, shard) task's estimated seconds on ``threads`` threads
+    (:func:`step_seconds` of its trials, at this machine's speed as :func:`estimate_seconds`):
+    the order in which a run starts its tasks, the longest first."""
+    costs = config.step_costs
+    factor = machine_rate.factor() or 1.0
+    return {
+        (policy, shard): config.steps
+        * step_seconds(costs[policy], len(config.shard_trials(policy, shard)), threads)
+        * factor
+        for policy, shard in config.tasks()
+    }
 
 
 def run(
@@ -781,15 +828,18 @@ def run(
     progress: bool = True,
     max_tasks: int | None = None,
     device: Any = None,
+    threads: int | None = None,
 ) -> dict[str, dict[str, NDArray]] | None:
     """Run every (policy, shard) task not yet in ``out``; return every policy's shard fields
     joined over trials (:func:`load_per_trial`).
 
     ``max_tasks`` stops after that many new tasks (to test resumption); the run is
     then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
-    the finished tasks are saved.
+    the finished tasks are saved. ``workers`` and ``threads`` as in :func:`run_many`.
     """
-    complete = run_many([(config, out)], workers, backend, address, progress, max_tasks, device=device)
+    complete = run_many(
+        [(config, out)], workers, backend, address, progress, max_tasks, device=device, threads=threads
+    )
     return load_per_trial(Path(out), config) if complete[0] else None
 
 
@@ -802,6 +852,7 @@ def run_many(
     max_tasks: int | None = None,
     on_complete: Callable[[int], None] | None = None,
     device: Any = None,
+    threads: int | None = None,
 ) -> list[bool]:
     """Run the tasks of several runs (a study's) on one set of workers; whether each run is
     complete.
@@ -813,10 +864,17 @@ def run_many(
     the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
     and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
     process on torch on that device (``workers=1``, the local backend).
+
+    ``workers`` counts cores: with more than one (or on Ray) the tasks run on
+    ``workers // threads`` worker processes of ``threads`` compute threads each (the compiled
+    kernels spread a task's trials over them). ``threads`` None chooses it from the tasks'
+    declared costs (:func:`choose_threads`) and says so where it is more than one. One worker
+    runs the tasks in this process, on numba's threads (all the cores unless ``threads``).
+    The numbers are the same whatever the threads.
     """
     folders = [Path(out) for _, out in runs]
     configs = [config for config, _ in runs]
-    _check_execution(backend, workers, address, folders, device, configs)
+    _check_execution(backend, workers, address, folders, device, configs, threads)
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
@@ -830,7 +888,7 @@ def run_many(
         steps_of = [
             {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
         ]  # trial-steps of each run's tasks
-        threads = 1 if workers > 1 or backend == "ray" else None
+        threads = _threads_for(configs, todo, workers, backend, threads)
         bar = _progress_bar(configs, todo, steps_of, progress, threads)
         saved = []
         complete = [False] * len(configs)
@@ -863,7 +921,7 @@ def run_many(
             for number in range(len(configs)):
                 if left[number] == 0:
                     run_done(number)
-            _dispatch(tasks, finished, workers, backend, address)
+            _dispatch(tasks, finished, workers, backend, address, threads)
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
@@ -884,15 +942,62 @@ def _say_resumed(configs: Sequence[RunConfig], folders: Sequence[Path], left: Se
 
 
 def _dispatch(
-    tasks: list[backends.Task], finished: backends.Finished, workers: int, backend: str, address: str | None
+    tasks: list[backends.Task],
+    finished: backends.Finished,
+    workers: int,
+    backend: str,
+    address: str | None,
+    threads: int | None,
 ) -> None:
-    """Runs ``tasks`` on the backend: Ray, this process (one worker), or local worker processes."""
+    """Runs ``tasks`` on the backend: Ray (tasks of ``threads`` CPUs), this process (one
+    worker, on ``threads`` numba threads, None: numba's own count), or ``workers // threads``
+    local worker processes of ``threads`` threads each."""
     if backend == "ray":
-        backends.run_ray(run_task, tasks, finished, address)
+        backends.run_ray(run_task, tasks, finished, address, threads or 1)
     elif workers == 1:
-        backends.run_inline(run_task, tasks, finished)
+        with compiled.with_threads(threads):
+            backends.run_inline(run_task, tasks, finished)
     else:
-        backends.run_processes(run_task, tasks, finished, workers)
+        backends.run_processes(run_task, tasks, finished, workers // (threads or 1), threads or 1)
+
+
+def _threads_for(
+    configs: Sequence[RunConfig],
+    todo: Sequence[tuple[int, str, int]],
+    workers: int,
+    backend: str,
+    threads: int | None,
+) -> int | None:
+    """The threads per worker: ``threads`` where given; None for one local worker (numba's own
+    count in this process); else :func:`choose_threads`, said where it is more than one."""
+    if threads is not None or (workers == 1 and backend == "local") or not todo:
+        return threads
+    threads, seconds, one_each = choose_threads(configs, todo, workers)
+    if threads > 1:
+        tqdm.write(
+            f"{workers // threads} worker(s) of {threads} threads each: by the declared costs the tasks take "
+            f"about {duration(seconds)}, against {duration(one_each)} on {workers} workers of one thread",
+            file=sys.stderr,
+        )
+    return threads
+
+
+def choose_threads(
+    configs: Sequence[RunConfig], todo: Sequence[tuple[int, str, int]], workers: int
+) -> tuple[int, float, float]:
+    """The threads per worker process for the ``todo`` (run, policy, shard) tasks on ``workers``
+    cores, in their order: of every split into ``workers // threads`` processes of ``threads``
+    threads, the one whose tasks end soonest by their declared costs (:func:`task_seconds`; ties
+    go to fewer threads); with its estimated seconds and those of one thread per worker."""
+    spans = []
+    for threads in range(1, workers + 1):
+        seconds = {number: task_seconds(configs[number], threads) for number in {n for n, _, _ in todo}}
+        spans.append(makespan([seconds[n][p, s] for n, p, s in todo], workers // threads))
+    best = 0
+    for index, span in enumerate(spans):
+        if span < spans[best] * (1 - 1e-9):
+            best = index
+    return best + 1, spans[best], spans[0]
 
 
 #: A run slower than its estimate by this factor says so at its end (from this many seconds).
@@ -921,14 +1026,20 @@ def _check_execution(
     folders: list[Path],
     device: Any = None,
     configs: Sequence[RunConfig] = (),
+    threads: int | None = None,
 ) -> None:
-    """Refuses an unknown backend, a worker count that is not a whole number >= 1, an
+    """Refuses an unknown backend, a worker count that is not a whole number >= 1, threads that
+    are not a whole number from 1 to the workers, an
     unreachable Ray address, two runs into one folder, and a device that is not there, with
     other workers than this process, or with a policy of ``configs`` that acts on numpy only."""
     if backend not in ("local", "ray"):
         raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
         raise HarnessError(f"`workers` must be an integer >= 1, got {workers!r}")
+    if threads is not None and (
+        isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= workers
+    ):
+        raise HarnessError(f"`threads` must be an integer from 1 to `workers` ({workers}), got {threads!r}")
     if device is not None:
         if backend != "local" or workers != 1:
             raise HarnessError(

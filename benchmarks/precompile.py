@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from mimo_radar_env import VERSIONS
-from mimo_radar_env.core.compiled import HAVE_NUMBA, uncached
+from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA, uncached, with_threads
 from mimo_radar_env.tracking.fusion import FUSIONS, compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -33,18 +33,29 @@ def paper_index(trials: int) -> np.ndarray:
     return np.random.default_rng(7).exponential(size=(trials, 4, 6))
 
 
-def _env_and_tracking_search(fusion: str) -> None:
+def _env_and_tracking_search(fusion: str, threads: int = 1) -> None:
     """Two-step harness tasks of best-tracking under ``fusion``, of two trials and of one: the
     fusion's update, the bound and the tracking search's posteriors (whose super-arm masks, a
-    broadcast view, are typed differently for one trial)."""
+    broadcast view, are typed differently for one trial); with ``threads``, one task of more
+    than one chunk of trials on that many threads (their twins over threads)."""
+
     from . import harness
 
     options = VERSIONS["v1"].options(fusion=fusion)
-    for trials in (2, 1):
+    for trials in (2, 1) if threads == 1 else (CHUNK + 1,):
         config = harness.make_config(
             SCENARIO, ["best-tracking"], trials, 2, options=options, say=lambda _: None
         )
-        harness.run_task(config.to_json(), "best-tracking", 0)
+        with with_threads(threads):
+            harness.run_task(config.to_json(), "best-tracking", 0)
+
+
+def _threads() -> int:
+    """Threads for the twins over threads: two where numba has them (one core has one, and a
+    run there never takes those twins)."""
+    from mimo_radar_env.core.compiled import numba
+
+    return min(2, numba.config.NUMBA_NUM_THREADS)
 
 
 def _bpso(threads: int) -> None:
@@ -70,19 +81,27 @@ WORKLOADS: dict[str, tuple[Callable[[], None], float]] = {
         for fusion in FUSIONS
     },
     "BPSO, one thread (a harness worker)": (lambda: _bpso(1), 2.8),
+    # both fusions in one worker, in turn: the second loads the threaded bound and tracking search
+    # the first compiled, rather than compiling them again beside it
+    "env over threads, each fusion, and the tracking search": (
+        lambda: [_env_and_tracking_search(fusion, _threads()) for fusion in FUSIONS],
+        13.0,
+    ),
 }
 
 
 def all_kernels() -> list[Any]:
     """Every numba kernel a run can call: each fusion's update and the bound, the tracking
-    search's, BPSO's starting swarm and its one-thread and parallel kernels."""
+    search's, and their twins over threads where numba has more than one; BPSO's starting swarm
+    and its one-thread and parallel kernels."""
     from agents.solvers import _bpso_kernels
     from agents.solvers import compiled_kernels as solver_kernels
 
     kernels: list[Any] = []
-    for fusion in FUSIONS:
-        kernels += compiled_kernels(fusion)
-    kernels += selection_kernels()
+    for threaded in (False, True) if _threads() > 1 else (False,):
+        for fusion in FUSIONS:
+            kernels += compiled_kernels(fusion, threaded)
+        kernels += selection_kernels(threaded)
     kernels += solver_kernels("bpso", threads=1) + [_bpso_kernels.run_numba]
     return list(dict.fromkeys(kernels))  # the bound is every fusion's: listed once
 

@@ -30,13 +30,13 @@ MAX_TRIALS = 1_000_000
 
 
 def default_workers() -> int:
-    """Local worker processes when none are given: the machine's cores."""
+    """The cores local workers use when none are given: all of them."""
     return os.cpu_count() or 1
 
 
 def local_workers(requested: int | None) -> int:
-    """Local worker processes: ``requested``, capped at the machine's cores with a message
-    (each worker is one compute thread; more than the cores only share them)."""
+    """The cores local workers use: ``requested``, capped at the machine's cores with a message
+    (more compute threads than the cores only share them)."""
     cores = default_workers()
     if requested is None:
         return cores
@@ -64,8 +64,10 @@ class Settings:
     shard_size : int or None
         Trials per shard (None: :func:`benchmarks.harness.auto_shard_size` for the workers and
         policies).
-    workers, backend, address
-        Local worker processes, ``"local"`` or ``"ray"``, and the Ray cluster's address.
+    workers, threads, backend, address
+        The cores the local workers use, the compute threads of each worker process (None: chosen
+        from the policies' declared costs, :func:`benchmarks.harness.choose_threads`),
+        ``"local"`` or ``"ray"``, and the Ray cluster's address.
     progress, figures : bool
         A progress bar; the PNG figures.
     max_hours : float or None
@@ -84,6 +86,7 @@ class Settings:
     seed: int = 0
     shard_size: int | None = None
     workers: int = field(default_factory=default_workers)
+    threads: int | None = None
     backend: str = "local"
     address: str | None = None
     progress: bool = True
@@ -112,6 +115,7 @@ class Settings:
             else local_workers(args.workers)
             if args.backend == "local"
             else (args.workers if args.workers is not None else default_workers()),
+            threads=args.threads,
             backend=args.backend,
             address=args.address,
             progress=not args.quiet,
@@ -128,6 +132,7 @@ class Settings:
         """The keywords of :func:`benchmarks.harness.run` besides the configuration and folder."""
         return {
             "workers": self.workers,
+            "threads": self.threads,
             "backend": self.backend,
             "address": self.address,
             "device": self.device,
@@ -386,7 +391,15 @@ def add_run_arguments(
         "--workers",
         type=integer(1),
         default=None,
-        help="local worker processes (default: the number of cores)",
+        help="cores the local workers use (default: all of them), as worker processes of --threads "
+        "compute threads each",
+    )
+    parser.add_argument(
+        "--threads",
+        type=integer(1),
+        default=None,
+        help="compute threads of each worker process, at most --workers (default: chosen from the "
+        "policies' declared costs, said when more than one; the numbers are the same)",
     )
     parser.add_argument(
         "--backend",

@@ -30,6 +30,8 @@ class SuperArmSolver(ABC):
     #: Seconds per declared operation (:meth:`operations_per_trial`) on the developers' machine,
     #: fitted to ``benchmarks.speed.policy_cost``'s measurements (the harness's time estimates).
     seconds_per_operation: float = 1e-9
+    #: Its selection runs in a compiled kernel that spreads the trials over threads.
+    threaded: bool = False
 
     def __init__(self, tx_count: int, rx_count: int) -> None:
         if tx_count < 1 or rx_count < 1:

@@ -125,6 +125,11 @@ class BPSOSolver(SuperArmSolver):
         self.rule = rule
         self.use_numba = use_numba
 
+    @property
+    def threaded(self) -> bool:  # type: ignore[override]
+        """The compiled kernel (numba installed and ``use_numba``) spreads the trials over threads."""
+        return self.use_numba and _bpso_kernels().HAVE_NUMBA
+
     def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
         """The swarm: positions, velocities, personal bests and draws of every particle."""
         return 8 * 8 * self.population * (num_tx + num_rx) + super().memory_per_trial(num_tx, num_rx)

@@ -1445,6 +1445,104 @@ def scaling_value(docs: Path, key: str) -> str:
     raise BenchError(f"unknown scaling figure {key!r}")
 
 
+@generator("threads")
+def threads_table(docs: Path) -> str:
+    """``python -m benchmarks.speed.threads``'s runs: one task on all the cores, on one thread
+    and on the threads the harness chose, with the speed-up it predicted."""
+    record = read_json(docs, "perf/threads.json")
+    lines = [
+        "| fusion | threads chosen | the task, one thread (s) | the task, chosen (s) | speed-up of the task "
+        "| predicted | the run, one thread (s) | the run, chosen (s) | same numbers |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for row in record["fusions"]:
+        one, chosen = row["runs"]["one thread"], row["runs"]["chosen"]
+        cells = [
+            row["fusion"],
+            str(row["predicted"]["threads"]),
+            f"{one['task_s']:.1f}",
+            f"{chosen['task_s']:.1f}",
+            f"{row['measured_task_speedup']:.2f}",
+            f"{row['predicted']['speedup']:.2f}",
+            f"{one['wall_s']:.1f}",
+            f"{chosen['wall_s']:.1f}",
+            "yes" if row["same_numbers"] else "NO",
+        ]
+        lines.append("| " + " | ".join(cells) + " |")
+    lines += [
+        "",
+        "| fusion | cores | shards | tasks | threads chosen | predicted (s) | one thread each (s) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for plan in record["plans"]:
+        lines.append(
+            f"| {plan['fusion']} | {plan['workers']} | {plan['shards']} | {plan['tasks']} | "
+            f"{plan['threads']} | {plan['seconds']:.1f} | {plan['one_thread_seconds']:.1f} |"
+        )
+    return "\n".join(lines)
+
+
+@value_source("threads")
+def threads_value(docs: Path, key: str) -> str:
+    """A figure of the threads runs: ``workers``, ``machine``, ``run`` (its command, as code),
+    ``said`` (what the harness said when it chose, under the average fusion)."""
+    record = read_json(docs, "perf/threads.json")
+    if key == "workers":
+        return str(record["workers"])
+    if key == "run":
+        return f"`{' '.join(record['run'])}`"
+    if key == "said":
+        said = record["fusions"][0]["runs"]["chosen"]["said"]
+        return f'"{said[0]}"' if said else "nothing"
+    raise BenchError(f"unknown threads figure {key!r}: workers, run, said")
+
+
+@generator("ray-backend")
+def ray_backend(docs: Path) -> str:
+    """``python -m benchmarks.speed.ray_cluster``'s runs: each backend's wall times, and Ray's
+    minus the local backend's paired by repeat, with a 95 % t interval."""
+    from scipy import stats
+
+    record = read_json(docs, "perf/ray.json")
+    walls: dict[str, list[float]] = {}
+    for run in record["runs"]:
+        walls.setdefault(run["backend"], []).append(run["wall_s"])
+    lines = ["| backend | wall of each run (s) | mean (s) |", "|---|---|---|"]
+    for backend, values in walls.items():
+        lines.append(f"| {backend} | {', '.join(f'{v:.1f}' for v in values)} | {np.mean(values):.1f} |")
+    differences = np.subtract(walls["ray"], walls["local"])
+    low, high = stats.t.interval(0.95, len(differences) - 1, differences.mean(), stats.sem(differences))
+    lines.append(
+        f"| Ray minus local, paired by repeat | {', '.join(f'{d:+.1f}' for d in differences)} | "
+        f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}] |"
+    )
+    same = all(run["same_numbers"] for run in record["runs"])
+    if low > 0:
+        reading = "Ray was slower than the local backend at these workers: the interval lies above 0."
+    elif high < 0:
+        reading = "Ray was faster than the local backend at these workers: the interval lies below 0."
+    else:
+        reading = (
+            "The interval contains 0: at these repeats the two backends' wall times are not told apart, "
+            "so neither is shown faster."
+        )
+    lines += ["", reading, f"Every run wrote the numbers of the first: {'yes' if same else 'NO'}."]
+    return "\n".join(lines)
+
+
+@value_source("ray")
+def ray_value(docs: Path, key: str) -> str:
+    """A figure of the Ray runs: ``study`` (its command, as code), ``workers``, ``repeats``."""
+    record = read_json(docs, "perf/ray.json")
+    if key == "study":
+        return f"`{' '.join(record['study'])}`"
+    if key == "workers":
+        return str(record["workers"])
+    if key == "repeats":
+        return str(max(run["repeat"] for run in record["runs"]) + 1)
+    raise BenchError(f"unknown Ray figure {key!r}: study, workers, repeats")
+
+
 # ------------------------------------------------------------------ the planning study
 #: The planners the planning targets judge, chosen before the study ran: the oracle and the
 #: learning planner at their default horizon and search.

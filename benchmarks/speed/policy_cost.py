@@ -23,12 +23,11 @@ Index policies use the exact solver where the smaller side has at most 200,000 s
 from __future__ import annotations
 
 import argparse
-import contextlib
 import dataclasses
 import json
 import time
 import tracemalloc
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -36,7 +35,7 @@ import numpy as np
 
 import agents
 from mimo_radar_env import VERSIONS, random_scenario
-from mimo_radar_env.core.compiled import HAVE_NUMBA
+from mimo_radar_env.core.compiled import with_threads
 from mimo_radar_env.core.superarm import is_exact_affordable
 from mimo_radar_env.envs.cost import memory_parts
 
@@ -52,23 +51,6 @@ TRIALS = (4, 50)
 SKIPPED = (*agents.learned_agents(), "fixed")
 
 
-@contextlib.contextmanager
-def one_compute_thread() -> Iterator[None]:
-    """numba's kernels on one thread while the block runs, as in a harness worker (what the
-    estimates are for): BPSO's kernel spreads a batch's trials over the threads otherwise."""
-    if not HAVE_NUMBA:
-        yield
-        return
-    import numba
-
-    threads = numba.get_num_threads()
-    numba.set_num_threads(1)
-    try:
-        yield
-    finally:
-        numba.set_num_threads(threads)
-
-
 def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[str, Any]:
     """One policy on one scenario: seconds per trial-step, measured and declared MiB per trial."""
     params: dict[str, Any] = {}
@@ -80,7 +62,7 @@ def measure_policy(policy: str, scenario: Any, trials: int, steps: int) -> dict[
     agent = agents.make_agent(policy, scenario, seed=0, **params)
     env = agents.make_env(agent, trials, VERSIONS["v1"].options().to_dict(), scenario)
     episode = agents.Rollout(agent, env, seed=0)
-    with one_compute_thread():
+    with with_threads(1):  # as in a harness worker (what the estimates are for)
         episode.step()  # warm-up: compilation and first allocations
         times = []
         for _ in range(steps):

@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import platform
 import subprocess
 import sys
 import tempfile
@@ -44,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ..harness import makespan
+from ..study import machine
 
 #: The study measured by default: the v1 claims study's scenario 1, whole episodes.
 STUDY = ("claims", "--scenarios", "1", "--trials", "500")
@@ -130,8 +130,9 @@ def probe(out: Path, sizes: int | dict[str, int], steps: int | None = None) -> d
     """Each policy's first task with the shard sizes ``sizes`` (``steps`` steps, default the
     run's) run alone on one core in this process, on one compute thread as in a worker of a
     several-worker run: its seconds by run and policy."""
+    from mimo_radar_env.core.compiled import with_threads
+
     from ..harness import run_task
-    from .policy_cost import one_compute_thread
 
     seconds: dict[str, dict[str, float]] = {}
     for config_file in sorted(out.glob("*/config.json")):
@@ -139,7 +140,7 @@ def probe(out: Path, sizes: int | dict[str, int], steps: int | None = None) -> d
         if steps is not None:
             payload["steps"] = steps
         run = config_file.parent.name
-        with one_compute_thread():
+        with with_threads(1):
             seconds[run] = {p: float(run_task(payload, p, 0)["wall_s"]) for p in payload["policies"]}
     return seconds
 
@@ -229,11 +230,7 @@ def _measure(
     ]
     return {
         "study": ["mimo-radar-bench", *study],
-        "machine": {
-            "platform": platform.platform(),
-            "cores": os.cpu_count(),
-            "python": platform.python_version(),
-        },
+        "machine": machine(),
         "measured": rows,
         "fixed_per_task_s": fixed,
         "model_from_workers": source["workers"],

@@ -41,6 +41,10 @@ def memory_parts(scenario: Scenario) -> tuple[int, int]:
 #: measurements at 4 and 50 trials; the oracle's search runs at its method's
 #: (:data:`~mimo_radar_env.core.superarm.SEARCH_SECONDS_PER_OPERATION`).
 SECONDS_PER_OPERATION = {"channels": 1.6e-10, "tracker": 4.3e-10}
+#: Of the tracker's time, seconds per declared operation of the fusion's compiled update (its
+#: kernel alone runs faster than the tracker's numpy parts): the average fusion's kernel on one
+#: thread, ``paper-1-v1`` at 500 trials, on the developers' machine.
+COMPILED_UPDATE_SECONDS_PER_OPERATION = 2.7e-10
 
 
 def operation_parts(
@@ -83,6 +87,25 @@ def seconds_per_trial_step(scenario: Scenario, tracking: bool = True, fusion: st
     sc = scenario
     search = search_seconds(sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
     return search + sum(SECONDS_PER_OPERATION[part] * parts[part] for part in ("channels", "tracker"))
+
+
+def threaded_seconds_per_trial_step(
+    scenario: Scenario, tracking: bool = True, fusion: str = DEFAULT_FUSION
+) -> float:
+    """The part of :func:`seconds_per_trial_step` that a task's threads share: the fusion's
+    compiled update, whose kernel spreads chunks of trials over numba's threads (0 without the
+    tracker or where the fusion's update is not compiled)."""
+    if not tracking:
+        return 0.0
+    sc = scenario
+    channels = sc.tx_per_step * sc.rx_per_step
+    kind = fusion_class(fusion)
+    if not kind.compiled_update(channels):
+        return 0.0
+    operations = sc.num_targets * MODELS * kind.update_operations(channels)
+    return min(
+        COMPILED_UPDATE_SECONDS_PER_OPERATION * operations, seconds_per_trial_step(sc, tracking, fusion)
+    )
 
 
 def machine_memory() -> int | None:

@@ -122,3 +122,17 @@ def test_each_parts_time_is_its_operations_at_its_own_rate():
     assert TRACKING_SEARCH.seconds_per_trial_step(tracking) == pytest.approx(
         TRACKING_SEARCH.operations_per_trial_step(tracking) * TRACKING_SEARCH.seconds_per_operation
     )
+
+
+def test_the_threaded_part_is_the_parts_whose_compiled_kernels_spread_trials_over_threads():
+    from agents.costs import SOLVER, TRACKING_SEARCH, threaded_seconds_per_trial_step
+
+    scenario = load_scenario("paper-1-v1")
+    assert threaded_seconds_per_trial_step(agents.make_agent("ucb1", scenario)) == 0.0  # the exact solver
+    bpso = agents.make_agent("mg-crb-cl", scenario)
+    assert threaded_seconds_per_trial_step(bpso) == SOLVER.seconds_per_trial_step(bpso) > 0
+    numpy_bpso = agents.make_agent("mg-crb-cl", scenario, solver_params={"use_numba": False})
+    assert threaded_seconds_per_trial_step(numpy_bpso) == 0.0
+    tracking = agents.make_agent("best-tracking", scenario)
+    assert threaded_seconds_per_trial_step(tracking) == TRACKING_SEARCH.seconds_per_trial_step(tracking) > 0
+    assert threaded_seconds_per_trial_step(tracking) < agents.costs.seconds_per_trial_step(tracking)

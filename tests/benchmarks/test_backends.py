@@ -1,9 +1,10 @@
-"""Every backend and worker count gives the numbers of one process."""
+"""Every backend, worker count and thread count gives the numbers of one process."""
 
 import numpy as np
 import pytest
 
-from benchmarks.harness import load_per_trial, make_config, run, run_many
+from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many
+from mimo_radar_env.core.compiled import CHUNK
 
 
 def test_local_workers_give_the_numbers_of_one_process(tmp_path):
@@ -15,11 +16,39 @@ def test_local_workers_give_the_numbers_of_one_process(tmp_path):
             np.testing.assert_array_equal(one[policy][key], two[policy][key])
 
 
+def test_threads_inside_a_task_give_the_numbers_of_one_thread(tmp_path, capsys):
+    """Two-thread worker processes (their kernels' twins over threads, two chunks of trials a
+    task) against this process on one thread; chosen, then said, for a run of one task."""
+    config = make_config(
+        "paper-1-v1", ["mg-crb-cl", "tracking-ucb"], trials=CHUNK + 6, steps=4, shard_size=CHUNK + 6
+    )
+    one = run(config, tmp_path / "one", workers=1, threads=1, progress=False)
+    two = run(config, tmp_path / "two", workers=2, threads=2, progress=False)
+    for policy in config.policies:
+        for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
+            np.testing.assert_array_equal(one[policy][key], two[policy][key])
+    capsys.readouterr()
+    alone = make_config("paper-1-v1", ["mg-crb-cl"], trials=CHUNK + 6, steps=4, shard_size=CHUNK + 6)
+    chosen = run(alone, tmp_path / "chosen", workers=2, progress=False)
+    assert "1 worker(s) of 2 threads each" in capsys.readouterr().err
+    np.testing.assert_array_equal(chosen["mg-crb-cl"]["trial_expected"], one["mg-crb-cl"]["trial_expected"])
+
+
+@pytest.mark.parametrize("threads", [0, 3, 1.5, True])
+def test_threads_outside_one_to_the_workers_are_refused_naming_both(tmp_path, threads):
+    config = make_config("paper-1", ["fix1"], trials=2, steps=2)
+    with pytest.raises(HarnessError) as caught:
+        run(config, tmp_path / "out", workers=2, threads=threads, progress=False)
+    assert str(caught.value) == f"threads must be an integer from 1 to workers (2), got {threads!r}"
+    assert caught.value.for_command_line().startswith("--threads must be an integer from 1 to --workers")
+    assert not (tmp_path / "out").exists()
+
+
 def test_ray_backend_gives_the_numbers_of_the_local_path(tmp_path):
     pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
-    config = make_config("paper-3", ["mg-crb-cl", "fix2"], trials=4, steps=15, shard_size=2)
+    config = make_config("paper-3", ["mg-crb-cl", "fix2"], trials=CHUNK + 2, steps=6, shard_size=CHUNK + 2)
     local = run(config, tmp_path / "local", workers=1, progress=False)
-    remote = run(config, tmp_path / "ray", backend="ray", progress=False)
+    remote = run(config, tmp_path / "ray", backend="ray", workers=2, threads=2, progress=False)
     for policy in config.policies:
         for key in ("trial_expected", "trial_optimal", "trial_squared_error", "trial_matches", "selections"):
             np.testing.assert_array_equal(local[policy][key], remote[policy][key])

@@ -170,7 +170,7 @@ def _model_makespan(costs, sizes, trials, parallel):
     out apart from the harness's)."""
     tasks = []
     for policy, size in sizes.items():
-        fixed, per_trial = costs[policy]
+        fixed, per_trial, _ = costs[policy]
         for start in range(0, trials, size):
             tasks.append(fixed + (min(start + size, trials) - start) * per_trial)
     loads = [0.0] * parallel
@@ -183,7 +183,7 @@ def test_the_costliest_policy_gets_the_smallest_shards_and_the_run_ends_sooner()
     from benchmarks.harness import auto_shard_size, plan_shard_sizes
 
     # one policy ten times the others' per trial (MG-CRB-CL's BPSO beside the index policies)
-    costs = {"costly": (2e-3, 150e-6), **{f"cheap{i}": (2e-3, 15e-6) for i in range(5)}}
+    costs = {"costly": (2e-3, 150e-6, 0.0), **{f"cheap{i}": (2e-3, 15e-6, 0.0) for i in range(5)}}
     for parallel in (1, 2, 4, 8, 16):
         sizes = plan_shard_sizes(costs, 500, parallel)
         uniform = dict.fromkeys(costs, auto_shard_size(500, parallel, len(costs)))
@@ -194,7 +194,68 @@ def test_the_costliest_policy_gets_the_smallest_shards_and_the_run_ends_sooner()
     assert plan_shard_sizes(costs, 500, 1) == dict.fromkeys(costs, 500)  # one worker: whole batches
     assert plan_shard_sizes(costs, 500, 16)["cheap0"] > plan_shard_sizes(costs, 500, 16)["costly"]
     # equal policies and as many workers: one shard each, as the uniform schedule
-    assert plan_shard_sizes(dict.fromkeys("abcd", (1e-3, 1e-5)), 100, 4) == dict.fromkeys("abcd", 100)
+    assert plan_shard_sizes(dict.fromkeys("abcd", (1e-3, 1e-5, 0.0)), 100, 4) == dict.fromkeys("abcd", 100)
+
+
+# ---------------------------------------------------------------- threads inside a task
+def test_a_steps_threaded_part_is_spread_over_the_threads_by_whole_chunks():
+    from benchmarks.harness import step_seconds
+    from mimo_radar_env.core.compiled import CHUNK
+
+    fixed, serial, threaded = 1e-3, 4e-6, 6e-6
+    cost = (fixed, serial + threaded, threaded)
+    trials = 3 * CHUNK + 8  # four chunks, the last of 8 trials
+    # the slowest thread's chunks, counted by hand: 4 chunks over 2 or 3 threads leave one thread two
+    for threads, slowest in [(1, trials), (2, 2 * CHUNK), (3, 2 * CHUNK), (4, CHUNK), (16, CHUNK)]:
+        expected = fixed + serial * trials + threaded * slowest
+        assert step_seconds(cost, trials, threads) == pytest.approx(expected, rel=1e-12)
+    assert step_seconds(cost, CHUNK, 8) == step_seconds(cost, CHUNK, 1)  # one chunk: one thread
+
+
+def _by_hand(configs, todo, workers):
+    """Every thread count's makespan of ``todo`` on ``workers // threads`` processes, each task's
+    seconds summed from its policy's declared parts (apart from the harness's own)."""
+    from mimo_radar_env.core.compiled import CHUNK
+
+    spans = {}
+    for threads in range(1, workers + 1):
+        loads = [0.0] * (workers // threads)
+        for number, policy, shard in todo:
+            config = configs[number]
+            fixed, per_trial, threaded = config.step_costs[policy]
+            n = len(config.shard_trials(policy, shard))
+            chunks = -(-n // CHUNK)
+            slowest = n if threads == 1 or n <= CHUNK else min(n, CHUNK * -(-chunks // threads))
+            seconds = config.steps * (fixed + (per_trial - threaded) * n + threaded * slowest)
+            loads[loads.index(min(loads))] += seconds
+        spans[threads] = max(loads)
+    return spans
+
+
+@pytest.mark.parametrize(
+    ("policies", "workers", "chosen"),
+    [
+        (["mg-crb-cl"], 2, 2),  # one task: both cores on it
+        (["ucb1", "fix1"], 2, 1),  # two alike tasks, one per core: threads would idle in their serial part
+        (["mg-crb-cl", "ucb1"], 2, None),  # BPSO's threads against the second core: by the costs
+        (["mg-crb-cl"], 5, 5),  # five chunks of trials, one per thread
+    ],
+)
+def test_the_threads_chosen_are_those_whose_tasks_end_soonest_by_the_declared_costs(
+    policies, workers, chosen, monkeypatch
+):
+    from benchmarks import harness, machine_rate
+
+    monkeypatch.setattr(machine_rate, "factor", lambda: None)
+    config = make_config("paper-1-v1", policies, 300, 4, shard_size=300, say=lambda message: None)
+    todo = [(0, policy, 0) for policy in policies]
+    threads, seconds, one_each = harness.choose_threads([config], todo, workers)
+    spans = _by_hand([config], todo, workers)
+    assert threads == min(spans, key=lambda t: (round(spans[t] / spans[1], 9), t))
+    assert chosen is None or threads == chosen
+    assert seconds == pytest.approx(spans[threads], rel=1e-9)
+    assert one_each == pytest.approx(spans[1], rel=1e-9)
+    assert all(0 < config.step_costs[p][2] < config.step_costs[p][1] for p in policies)
 
 
 def test_per_policy_shards_cover_every_trial_once_and_give_the_same_numbers(tmp_path):

@@ -13,7 +13,7 @@ from benchmarks.cli import main
 from benchmarks.errors import BenchError
 from benchmarks.harness import PAPER_POLICIES, make_config, run_kernels
 from mimo_radar_env import VERSIONS
-from mimo_radar_env.core.compiled import HAVE_NUMBA
+from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA
 
 pytestmark = pytest.mark.skipif(not HAVE_NUMBA, reason="numba is not installed")
 
@@ -37,10 +37,16 @@ def test_every_compiled_kernel_is_one_a_run_can_list():
     v1 = VERSIONS["v1"]
     listed = []
     for fusion in ("average", "centralized"):
-        config = make_config(
-            "paper-1-v1", ["mg-crb-cl", "best-tracking"], 2, 3, options=v1.options(fusion=fusion), **QUIET
-        )
-        listed += run_kernels(config, 1) + run_kernels(config, 2)
+        for trials in (2, CHUNK + 1):  # one chunk of trials, and more than one (the twins over threads)
+            config = make_config(
+                "paper-1-v1",
+                ["mg-crb-cl", "best-tracking"],
+                trials,
+                3,
+                options=v1.options(fusion=fusion),
+                **QUIET,
+            )
+            listed += run_kernels(config, 1) + run_kernels(config, 2)
     assert set(precompile.all_kernels()) == set(listed)
     assert len(precompile.all_kernels()) == len(set(precompile.all_kernels()))
 

@@ -119,7 +119,9 @@ def test_a_run_far_slower_than_its_estimate_says_so_at_its_end(tmp_path, monkeyp
     monkeypatch.setattr(harness, "SLOW_RUN_MIN_SECONDS", 0.0)
     real = harness.task_seconds
     monkeypatch.setattr(
-        harness, "task_seconds", lambda config: {k: v * scale for k, v in real(config).items()}
+        harness,
+        "task_seconds",
+        lambda config, threads=1: {k: v * scale for k, v in real(config, threads).items()},
     )
     config = make_config("paper-1", ["fix1", "random"], trials=2, steps=3, shard_size=1, say=lambda m: None)
     assert run_many([(config, tmp_path / "out")], progress=False) == [True]

@@ -15,15 +15,17 @@ def test_parse_agent_params_reads_yaml_values():
 
 def test_settings_come_from_the_arguments_once():
     args = build_parser().parse_args(
-        ["claims", "--out", "o", "--trials", "7", "--workers", "2", "--fusion", "centralized", "--quiet"]
-    )
+        ["claims", "--out", "o", "--trials", "7", "--workers", "2", "--threads", "2", "--fusion",
+         "centralized", "--quiet"]
+    )  # fmt: skip
     settings = Settings.from_args(args, paper_study=True)
     assert (settings.trials, settings.workers, settings.progress, settings.figures) == (7, 2, False, True)
     assert settings.options.fusion == "centralized" and settings.options.lambda_scale == "db"
     assert settings.agent_params == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}
-    assert settings.execution() == {"workers": 2, "backend": "local", "address": None, "device": None}
+    execution = {"workers": 2, "threads": 2, "backend": "local", "address": None, "device": None}
+    assert settings.execution() == execution
     on_device = Settings.from_args(build_parser().parse_args(["claims", "--out", "o", "--device", "cuda"]))
-    assert on_device.execution() == {"workers": 1, "backend": "local", "address": None, "device": "cuda"}
+    assert on_device.execution() == {**execution, "workers": 1, "threads": None, "device": "cuda"}
 
 
 def test_paper_numbers_are_checked():

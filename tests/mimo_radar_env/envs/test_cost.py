@@ -72,3 +72,22 @@ def test_an_envs_time_per_trial_step_is_each_part_at_its_rate():
         )
         assert cost.seconds_per_trial_step(scenario, True, "centralized") == pytest.approx(by_hand, rel=1e-12)
     assert cost.operation_parts(scenario, False)["tracker"] == 0
+
+
+def test_the_threaded_part_of_a_step_is_the_compiled_updates_operations_at_their_rate():
+    from mimo_radar_env.core.compiled import HAVE_NUMBA
+    from mimo_radar_env.tracking.fusion.base import CHANNEL_OPERATIONS, MODELS
+
+    scenario = random_scenario(8, 8, 3, 2, 3, horizon=5, seed=0)
+    average = 3 * MODELS * 6 * (CHANNEL_OPERATIONS + 300)  # K models' updates of Ms Ns = 6 channels each
+    expected = cost.COMPILED_UPDATE_SECONDS_PER_OPERATION * average if HAVE_NUMBA else 0.0
+    assert cost.threaded_seconds_per_trial_step(scenario, True, "average") == pytest.approx(
+        expected, rel=1e-12
+    )
+    for fusion in ("average", "centralized"):
+        share = cost.threaded_seconds_per_trial_step(scenario, True, fusion)
+        assert 0 < share < cost.seconds_per_trial_step(scenario, True, fusion) or not HAVE_NUMBA
+        assert cost.threaded_seconds_per_trial_step(scenario, False, fusion) == 0.0
+    # 4 x 8 channels stack a 64-dimensional measurement: the centralised update stays in numpy
+    wide = random_scenario(8, 8, 3, 4, 8, horizon=5, seed=0)
+    assert cost.threaded_seconds_per_trial_step(wide, True, "centralized") == 0.0

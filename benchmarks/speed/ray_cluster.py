@@ -1,0 +1,103 @@
+"""The Ray backend against the local one: a study's wall time at the same number of workers, on
+a Ray cluster started beforehand on this machine.
+
+    python -m benchmarks.speed.ray_cluster --json docs/results/perf/ray.json
+
+It starts a Ray cluster on this machine (``ray start --head --num-cpus W``), runs the study
+(default: the strong-scaling study, the v1 claims study's scenario 1) with ``--workers W``
+alternately on the local backend and on the cluster (``--backend ray --address auto``),
+``--repeats`` times each, every run a fresh command into a fresh folder, then stops the
+cluster. It gives each run's wall time and checks that every run wrote the same numbers as the
+first: every shard's arrays, bit for bit (the compute time and the checksum over it aside).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..study import machine
+from .strong_scaling import STUDY, run_study
+
+BACKENDS = {"local": (), "ray": ("--backend", "ray", "--address", "auto")}
+
+
+def shard_arrays(out: Path) -> dict[str, np.ndarray]:
+    """Every shard array a study wrote under ``out`` by ``run/policy/shard/field``, less its compute
+    time and the checksum over it."""
+    arrays = {}
+    for path in sorted(out.glob("*/shards/*/shard_*.npz")):
+        with np.load(path) as shard:
+            for key in shard.files:
+                if key not in ("wall_s", "checksum"):
+                    arrays[f"{path.relative_to(out)}/{key}"] = shard[key]
+    return arrays
+
+
+def same(one: dict[str, np.ndarray], two: dict[str, np.ndarray]) -> bool:
+    return one.keys() == two.keys() and all(
+        np.array_equal(one[k], two[k], equal_nan=one[k].dtype.kind == "f") for k in one
+    )
+
+
+def ray(*arguments: str, check: bool = True) -> None:
+    """``ray ARGUMENTS`` (the cluster's start and stop), its output dropped."""
+    command = [sys.executable, "-m", "ray.scripts.scripts", *arguments]
+    subprocess.run(command, check=check, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+
+
+def measure(study: tuple[str, ...], workers: int, repeats: int) -> dict[str, Any]:
+    ray("start", "--head", f"--num-cpus={workers}", "--include-dashboard=false")
+    runs: list[dict[str, Any]] = []
+    reference: dict[str, np.ndarray] | None = None
+    try:
+        with tempfile.TemporaryDirectory(prefix="ray-cluster-") as scratch:
+            for repeat in range(repeats):
+                for backend, extra in BACKENDS.items():
+                    out = Path(scratch) / f"{backend}-{repeat}"
+                    wall = run_study((*study, *extra), workers, out)
+                    arrays = shard_arrays(out)
+                    reference = arrays if reference is None else reference
+                    runs.append({"backend": backend, "repeat": repeat, "wall_s": wall,
+                                 "same_numbers": same(reference, arrays)})  # fmt: skip
+                    print(f"  {backend:>5}, repeat {repeat}: {wall:.1f} s", flush=True)
+    finally:
+        ray("stop", check=False)
+    return {
+        "study": ["mimo-radar-bench", *study],
+        "workers": workers,
+        "machine": machine(),
+        "runs": runs,
+    }
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="workers (default: cores)")
+    parser.add_argument("--repeats", type=int, default=2, help="runs on each backend, alternating")
+    parser.add_argument(
+        "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
+    )
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args(argv)
+    print(f"local against Ray: mimo-radar-bench {args.study}, {args.workers} workers")
+    result = measure(tuple(args.study.split()), args.workers, args.repeats)
+    for backend in BACKENDS:
+        walls = [r["wall_s"] for r in result["runs"] if r["backend"] == backend]
+        print(f"  {backend}: {', '.join(f'{w:.1f}' for w in walls)} s")
+    print(f"  same numbers in every run: {all(r['same_numbers'] for r in result['runs'])}")
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result, indent=2) + "\n")
+
+
+if __name__ == "__main__":
+    main()
