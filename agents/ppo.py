@@ -34,11 +34,6 @@ NORMALIZATION_FILE = "vecnormalize.npz"
 SB3_NORMALIZATION_FILE = "vecnormalize.pkl"
 
 
-def require_sb3() -> Any:
-    """The ``stable_baselines3`` module, or ``DependencyNotInstalled`` naming the ``rl`` extra."""
-    return require("stable_baselines3", "rl", "PPO")
-
-
 @dataclass(frozen=True)
 class Learner:
     """A deep-RL learner the project trains and evaluates.

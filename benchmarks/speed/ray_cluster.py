@@ -14,7 +14,6 @@ first: every shard's arrays, bit for bit (the compute time and the checksum over
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import subprocess
 import sys
@@ -25,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..study import machine
+from . import write_json
 from .strong_scaling import STUDY, run_study
 
 BACKENDS = {"local": (), "ray": ("--backend", "ray", "--address", "auto")}
@@ -94,9 +94,7 @@ def main(argv: list[str] | None = None) -> None:
         walls = [r["wall_s"] for r in result["runs"] if r["backend"] == backend]
         print(f"  {backend}: {', '.join(f'{w:.1f}' for w in walls)} s")
     print(f"  same numbers in every run: {all(r['same_numbers'] for r in result['runs'])}")
-    if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.json, result)
 
 
 if __name__ == "__main__":

@@ -44,6 +44,7 @@ import numpy as np
 
 from ..harness import makespan
 from ..study import machine
+from . import write_json
 
 #: The study measured by default: the v1 claims study's scenario 1, whole episodes.
 STUDY = ("claims", "--scenarios", "1", "--trials", "500")
@@ -268,9 +269,7 @@ def main(argv: list[str] | None = None) -> None:
         print(f"  measured {row['workers']:>3} workers: {wall:7.1f} s, efficiency {efficiency:.2f}")
     for row in result["model"]:
         print(f"  model    {row['workers']:>3} workers: {row['wall_s']:7.1f} s")
-    if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.json, result)
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..study import machine
+from . import write_json
 
 #: The run measured: one policy's trials in one task.
 RUN = ("run", "--scenario", "paper-1-v1", "--policies", "mg-crb-cl", "--trials", "500", "--shard-size", "500")
@@ -149,9 +150,7 @@ def main(argv: list[str] | None = None) -> None:
             f"{row['measured_task_speedup']:.2f}x faster (predicted {row['predicted']['speedup']:.2f}x), "
             f"same numbers: {row['same_numbers']}"
         )
-    if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.json, result)
 
 
 if __name__ == "__main__":

@@ -14,7 +14,6 @@ do, at the B values of ``--cpu-sizes`` (thousands of trials take minutes there).
 from __future__ import annotations
 
 import argparse
-import json
 import platform
 import tempfile
 import time
@@ -25,6 +24,7 @@ from mimo_radar_env import EnvOptions, load_scenario
 
 from ..training import algorithm_kwargs, load_hyperparams, normalize_kwargs
 from ..training_log import LearningCurve
+from . import write_json
 
 SCENARIO = "paper-1-v1"
 SIZES = (8, 512, 4096)
@@ -147,9 +147,7 @@ def main(argv: list[str] | None = None) -> None:
         import torch
 
         result["device_name"] = torch.cuda.get_device_name(args.device)
-    if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=2) + "\n")
+    write_json(args.json, result)
 
 
 if __name__ == "__main__":

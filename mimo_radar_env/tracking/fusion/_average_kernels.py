@@ -210,17 +210,12 @@ def _update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, v
     estimate = np.zeros((B, K, n))
     covariance = np.empty((B, K, n, n))
     for chunk in numba.prange((B + CHUNK - 1) // CHUNK):
-        h0 = np.empty(S)
-        h1 = np.empty(S)
-        sn = np.empty(S)
-        cs = np.empty(S)
-        p0 = np.empty(n)
-        p1 = np.empty(n)
-        means = np.empty((C, R, n))
-        gain = np.empty((C, R, n, 2))
-        cross = np.empty((C, R, n, 2))
-        log_post = np.empty((C, R))
-        channel = np.empty(n)
+        # the chunk's scratch: a sigma point's geometry, a model's channel moments, the channels'
+        # posteriors (each trial overwrites what it reads)
+        h0, h1, sn, cs = np.empty(S), np.empty(S), np.empty(S), np.empty(S)
+        p0, p1, channel = np.empty(n), np.empty(n), np.empty(n)
+        means, log_post = np.empty((C, R, n)), np.empty((C, R))
+        gain, cross = np.empty((C, R, n, 2)), np.empty((C, R, n, 2))
         for b in range(chunk * CHUNK, min(B, (chunk + 1) * CHUNK)):
             for k in range(K):
                 for c in range(C):

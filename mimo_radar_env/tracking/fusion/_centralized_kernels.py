@@ -130,17 +130,12 @@ def _update(sigmas, pred_means, pred_covs, log_c, wm, wc, tx, rx, measurement, v
     estimate = np.empty((B, K, n))
     covariance = np.empty((B, K, n, n))
     for chunk in numba.prange((B + CHUNK - 1) // CHUNK):
-        h = np.empty((S, D))
-        z = np.empty(D)
-        dz = np.empty((S, D))
-        pxz = np.empty((n, D))
+        # the chunk's scratch (each trial overwrites what it reads)
+        h, dz = np.empty((S, D)), np.empty((S, D))
+        z, residual = np.empty(D), np.empty(D)
+        pxz, gain = np.empty((n, D)), np.empty((n, D))
         innovation = np.empty((D, D))
-        residual = np.empty(D)
-        gain = np.empty((n, D))
-        h0 = np.empty(S)
-        h1 = np.empty(S)
-        sn = np.empty(S)
-        cs = np.empty(S)
+        h0, h1, sn, cs = np.empty(S), np.empty(S), np.empty(S), np.empty(S)
         for b in range(chunk * CHUNK, min(B, (chunk + 1) * CHUNK)):
             for k in range(K):
                 for r in range(R):
