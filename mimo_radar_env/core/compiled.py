@@ -164,4 +164,5 @@ __all__ = [
     "threads",
     "twins",
     "uncached",
+    "with_threads",
 ]
