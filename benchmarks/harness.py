@@ -974,9 +974,15 @@ def _threads_for(
         return threads
     threads, seconds, one_each = choose_threads(configs, todo, workers)
     if threads > 1:
+        processes = workers // threads
+        pool = (
+            f"{processes} workers of {threads} threads each"
+            if processes > 1
+            else f"1 worker of {threads} threads"
+        )
         tqdm.write(
-            f"{workers // threads} worker(s) of {threads} threads each: by the declared costs the tasks take "
-            f"about {duration(seconds)}, against {duration(one_each)} on {workers} workers of one thread",
+            f"{pool}: by the declared costs the tasks take about {duration(seconds)}, against "
+            f"{duration(one_each)} on {workers} workers of one thread",
             file=sys.stderr,
         )
     return threads

@@ -77,7 +77,7 @@ def measure_fusion(fusion: str, workers: int, scratch: Path) -> dict[str, Any]:
         runs[name] = {
             "wall_s": wall,
             "task_s": float(fields[name]["wall_s"]),
-            "said": [line for line in said.splitlines() if "threads each" in line],
+            "said": [line for line in said.splitlines() if "by the declared costs" in line],
         }
         print(f"  {fusion}, {name}: {wall:.1f} s, the task {runs[name]['task_s']:.1f} s", flush=True)
     same = all(

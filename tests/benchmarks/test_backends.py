@@ -30,7 +30,7 @@ def test_threads_inside_a_task_give_the_numbers_of_one_thread(tmp_path, capsys):
     capsys.readouterr()
     alone = make_config("paper-1-v1", ["mg-crb-cl"], trials=CHUNK + 6, steps=4, shard_size=CHUNK + 6)
     chosen = run(alone, tmp_path / "chosen", workers=2, progress=False)
-    assert "1 worker(s) of 2 threads each" in capsys.readouterr().err
+    assert "1 worker of 2 threads:" in capsys.readouterr().err
     np.testing.assert_array_equal(chosen["mg-crb-cl"]["trial_expected"], one["mg-crb-cl"]["trial_expected"])
 
 

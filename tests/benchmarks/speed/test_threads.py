@@ -15,9 +15,7 @@ def test_a_tiny_run_is_measured_on_one_thread_and_on_the_chosen_threads(tmp_path
     row = threads.measure_fusion("average", 2, tmp_path)
     one, chosen = row["runs"]["one thread"], row["runs"]["chosen"]
     assert row["predicted"]["threads"] == 2 and row["predicted"]["speedup"] > 1
-    assert (
-        one["said"] == [] and chosen["said"] and chosen["said"][0].startswith("1 worker(s) of 2 threads each")
-    )
+    assert one["said"] == [] and chosen["said"] and chosen["said"][0].startswith("1 worker of 2 threads:")
     assert row["measured_task_speedup"] == pytest.approx(one["task_s"] / chosen["task_s"])
     assert row["same_numbers"]
     assert one["wall_s"] > one["task_s"] > 0
