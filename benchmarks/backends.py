@@ -32,7 +32,7 @@ def worker_init(parent: int, threads: int = 1) -> None:
     """Worker set-up: ``threads`` compute threads for the compiled kernels, SIGINT left to the
     parent, exit when the parent dies."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
-    set_threads(threads)
+    pin_threads(threads)
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -42,7 +42,7 @@ def worker_init(parent: int, threads: int = 1) -> None:
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
 
-def set_threads(threads: int) -> None:
+def pin_threads(threads: int) -> None:
     """This process's compute threads: ``threads`` for numba's kernels, one for BLAS and the
     libraries imported later (torch, for a trained PPO policy, starts one per core by default:
     two workers on two cores ran PPO 3x slower)."""
@@ -133,7 +133,7 @@ def _resolve_auto_address() -> str:
 def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
     """``runner(*task)`` on ``threads`` compute threads (a Ray task: its worker process serves
     tasks of any thread count)."""
-    set_threads(threads)
+    pin_threads(threads)
     return runner(*task)
 
 
