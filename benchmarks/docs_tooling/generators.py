@@ -1148,7 +1148,14 @@ def stage_values(docs: Path) -> dict[str, str]:
 DEVICE_FILE = "perf/device.json"
 DEVICE_CHECKS_FILE = "perf/device-checks.json"
 #: The speed rows' backends by a short key (value spans name them): the backend's label begins so.
-DEVICE_BACKENDS = {"numpy": "numpy + numba", "torch-cpu": "torch cpu", "device": "torch cuda"}
+#: A backend of the device figures: the start of its rows' name, and the form of the step.
+DEVICE_BACKENDS = {
+    "numpy": ("numpy + numba", "eager"),
+    "torch-cpu": ("torch cpu", "eager"),
+    "device": ("torch cuda", "eager"),
+    "device-graph": ("torch cuda", "graph"),
+    "device-compiled": ("torch cuda", "compiled"),
+}
 
 
 def _trials_grid(
@@ -1175,18 +1182,19 @@ def _rate(rate: float) -> str:
 @generator("device-equality")
 def device_equality(docs: Path) -> str:
     """``python -m benchmarks.speed.device``'s equality: the largest normwise relative difference of
-    the torch engine on the device from the numpy engine over whole episodes, per version and
-    fusion, and the entry it was found in."""
+    the torch engine on the device from the numpy engine over whole episodes, per version, fusion
+    and form of the step (runs before the forms existed were eager), and the entry it was found
+    in."""
     record = read_json(docs, DEVICE_FILE)
     lines = [
-        "| env | fusion | trials | steps | largest relative difference | in | oracle's actions |",
-        "|---|---|---|---|---|---|---|",
+        "| env | fusion | form | trials | steps | largest relative difference | in | oracle's actions |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for e in record["equality"]:
         agree = "identical" if e["differences"]["oracle_action"] == 0 else "differ"
         lines.append(
-            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e['trials']} | {e['steps']} | "
-            f"{e['largest']:.1e} | `{e['largest_entry']}` | {agree} |"
+            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e.get('mode', 'eager')} | {e['trials']} | "
+            f"{e['steps']} | {e['largest']:.1e} | `{e['largest_entry']}` | {agree} |"
         )
     return "\n".join(lines)
 
@@ -1244,11 +1252,12 @@ def device_value(docs: Path, key: str) -> str:
     kind, *parts = key.split(".")
 
     def rate(backend: str, fusion: str, trials: str) -> float:
-        prefix = DEVICE_BACKENDS.get(backend)
+        prefix, mode = DEVICE_BACKENDS.get(backend, ("", ""))
         for r in record["speed"]:
             if (
                 prefix
                 and r["backend"].startswith(prefix)
+                and r.get("mode", "eager") == mode
                 and r["fusion"] == fusion
                 and r["trials"] == int(trials)
             ):

@@ -12,8 +12,11 @@ Two parts, in one run:
 * **speed** (:func:`measure`): trial-steps per second of the whole v1 step (simulation,
   IMM-UKF tracker, position bound, the oracle's search, observation and ``info``) for each
   fusion and each trial count B, on numpy + numba pinned to one core, on torch on the CPU and
-  on torch on ``--device`` (eager), with the device's peak memory per row. A row stops growing
-  B once a step takes longer than ``--max-step-seconds`` or the device runs out of memory.
+  on torch on ``--device`` in each form of ``--modes`` (eager, one CUDA graph per step,
+  ``torch.compile``: :mod:`mimo_radar_env.envs.device_forms`), with the device's peak memory
+  and the first step's seconds (tracing, capture, compilation) per row. A row stops growing B
+  once a step takes longer than ``--max-step-seconds`` or the device runs out of memory. The
+  equality part also plays each traced form against numpy.
 
 docs/performance.md's "The engine on a device" tables are generated from its JSON.
 """
@@ -37,6 +40,7 @@ from mimo_radar_env import VERSIONS, load_scenario
 from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms
+from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.envs.engine import RadarEngine
 
 SCENARIO = "paper-1-v1"
@@ -59,11 +63,13 @@ def _keys(trials: int, seed: int = 0) -> np.ndarray:
     return np.stack([keys_from_generator(seeding.np_random(seed + i)[0]) for i in range(trials)])
 
 
-def _engine(version: str, fusion: str, trials: int, device: Any, scenario: str | None = None) -> RadarEngine:
+def _engine(
+    version: str, fusion: str, trials: int, device: Any, scenario: str | None = None, mode: str = "eager"
+) -> RadarEngine:
     env_version = VERSIONS[version]
     options = env_version.options(fusion=fusion)
     name = scenario or env_version.default_scenario
-    return RadarEngine(options, load_scenario(name), batch_size=trials, device=device)
+    return RadarEngine(options, load_scenario(name), batch_size=trials, device=device, device_mode=mode)
 
 
 def _numpy(a: Any) -> np.ndarray:
@@ -90,14 +96,21 @@ def relative_difference(a: Any, b: Any, scale: Any = None) -> float:
 
 
 def episode_differences(
-    version: str, fusion: str, trials: int, device: Any, steps: int | None = None, seed: int = 0
+    version: str,
+    fusion: str,
+    trials: int,
+    device: Any,
+    steps: int | None = None,
+    seed: int = 0,
+    mode: str = "eager",
 ) -> dict[str, float]:
     """The largest relative difference of each observation, the reward and each ``info`` entry
     between the numpy engine and the torch engine on ``device`` over ``steps`` steps (default:
     the whole episode) of ``version``'s default scenario. Both get the same keys and actions;
-    the oracle's actions must also agree exactly (key ``"oracle_action"``: 0 or 1)."""
+    the oracle's actions must also agree exactly (key ``"oracle_action"``: 0 or 1). ``mode`` is
+    the torch step's form."""
     reference = _engine(version, fusion, trials, None)
-    other = _engine(version, fusion, trials, device)
+    other = _engine(version, fusion, trials, device, mode=mode)
     keys = _keys(trials, seed)
     worst: dict[str, float] = {}
 
@@ -227,11 +240,19 @@ def _synchronizer(device: Any) -> Callable[[], None]:
 
 
 def measure(
-    fusion: str, trials: int, device: Any, keys: np.ndarray, steps: int, scenario: str = SCENARIO
+    fusion: str,
+    trials: int,
+    device: Any,
+    keys: np.ndarray,
+    steps: int,
+    scenario: str = SCENARIO,
+    mode: str = "eager",
 ) -> dict[str, Any]:
     """Trial-steps per second of ``steps`` v1 steps of ``trials`` trials on ``device`` (``None``:
-    numpy + numba) after one warm-up step, random valid actions drawn beforehand (not timed)."""
-    engine = _engine("v1", fusion, trials, device, scenario)
+    numpy + numba; ``mode``, the torch step's form) after two untimed steps (the first traces,
+    captures or compiles a traced form: its seconds are ``first_step_s``), random valid
+    actions drawn beforehand (not timed)."""
+    engine = _engine("v1", fusion, trials, device, scenario, mode)
     xp = engine.xp
     sc = engine.scenario
     rng = np.random.default_rng(0)
@@ -246,7 +267,11 @@ def measure(
 
         torch.cuda.reset_peak_memory_stats()
     engine.reset_from_keys(keys[:trials])
+    start = time.perf_counter()
     engine.step(actions[0])
+    sync()
+    first_step = time.perf_counter() - start
+    engine.step(actions[-1])
     sync()
     start = time.perf_counter()
     for t in range(steps):
@@ -259,8 +284,12 @@ def measure(
         "steps": steps,
         "seconds_per_step": elapsed / steps,
         "trial_steps_per_s": trials * steps / elapsed,
+        "first_step_s": first_step,
         "peak_device_memory_gib": None,
     }
+    forms = engine._forms
+    if forms is not None:
+        row["steps_redone_eagerly"] = forms.eager_steps
     if cuda:
         row["peak_device_memory_gib"] = torch.cuda.max_memory_allocated() / 2**30
     return row
@@ -273,6 +302,7 @@ def speed_rows(
     keys: np.ndarray,
     max_step_seconds: float,
     target_seconds: float,
+    mode: str = "eager",
 ) -> Iterator[dict[str, Any]]:
     """The speed rows of one backend: every fusion, B growing until a step would take longer than
     ``max_step_seconds`` (judged from the last row, linearly) or the device runs out of memory
@@ -284,9 +314,9 @@ def speed_rows(
                 yield {"backend": backend, "fusion": fusion, "trials": trials, "skipped": "too slow"}
                 break
             try:
-                probe = measure(fusion, trials, device, keys, 1)
+                probe = measure(fusion, trials, device, keys, 1, mode=mode)
                 steps = int(np.clip(target_seconds / probe["seconds_per_step"], 2, 50))
-                row = measure(fusion, trials, device, keys, steps)
+                row = measure(fusion, trials, device, keys, steps, mode=mode)
             except Exception as error:  # out of memory ends the backend's rows for the fusion, named
                 if "out of memory" not in str(error).lower():
                     raise
@@ -299,7 +329,7 @@ def speed_rows(
                 f"trial-steps/s ({row['seconds_per_step'] * 1e3:.2f} ms per step)",
                 flush=True,
             )
-            yield {"backend": backend, **row}
+            yield {"backend": backend, "mode": mode, **row}
             _free(device)
 
 
@@ -324,6 +354,19 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--max-step-seconds", type=float, default=2.0)
     parser.add_argument("--target-seconds", type=float, default=2.0, help="timed seconds per row")
     parser.add_argument("--skip-equality", action="store_true")
+    parser.add_argument(
+        "--modes",
+        default="eager,graph,compiled",
+        help="the forms of the step on --device, comma-separated (default %(default)s)",
+    )
+    parser.add_argument(
+        "--compiled-sizes",
+        default="500,50000",
+        help="trial counts B of the compiled form, each compiled anew (default %(default)s)",
+    )
+    parser.add_argument(
+        "--form-equality-steps", type=int, default=50, help="steps of the traced forms' equality"
+    )
     parser.add_argument("--json", type=Path, default=None)
     parser.add_argument(
         "--compare-studies",
@@ -355,39 +398,56 @@ def main(argv: list[str] | None = None) -> None:
         "equality": [],
         "speed": [],
     }
+    modes = tuple(args.modes.split(","))
+    for mode in modes:
+        check_device_mode(mode, device)
     if not args.skip_equality:
-        for version in ("v1", "v0"):
-            for fusion in ("average", "centralized"):
-                start = time.perf_counter()
-                worst = episode_differences(
-                    version, fusion, args.equality_trials, device, args.equality_steps
-                )
-                largest = max(worst, key=lambda k: worst[k])
-                entry = {
-                    "version": version,
-                    "fusion": fusion,
-                    "trials": args.equality_trials,
-                    "steps": args.equality_steps or load_scenario(VERSIONS[version].default_scenario).horizon,
-                    "largest": worst[largest],
-                    "largest_entry": largest,
-                    "differences": worst,
-                    "seconds": time.perf_counter() - start,
-                }
-                result["equality"].append(entry)
-                print(
-                    f"equality {version} {fusion}: largest relative difference "
-                    f"{worst[largest]:.2e} ({largest})",
-                    flush=True,
-                )
+        # every version and fusion eagerly; the traced forms (each traced or compiled once per
+        # engine) on v1 under both fusions, over --form-equality-steps steps
+        runs = [
+            (v, f, "eager", args.equality_steps) for v in ("v1", "v0") for f in ("average", "centralized")
+        ]
+        runs += [
+            ("v1", f, m, args.form_equality_steps)
+            for m in modes
+            if m != "eager"
+            for f in ("average", "centralized")
+        ]
+        for version, fusion, mode, steps in runs:
+            start = time.perf_counter()
+            worst = episode_differences(version, fusion, args.equality_trials, device, steps, mode=mode)
+            largest = max(worst, key=lambda k: worst[k])
+            entry = {
+                "version": version,
+                "fusion": fusion,
+                "mode": mode,
+                "trials": args.equality_trials,
+                "steps": steps or load_scenario(VERSIONS[version].default_scenario).horizon,
+                "largest": worst[largest],
+                "largest_entry": largest,
+                "differences": worst,
+                "seconds": time.perf_counter() - start,
+            }
+            result["equality"].append(entry)
+            print(
+                f"equality {version} {fusion} {mode}: largest relative difference "
+                f"{worst[largest]:.2e} ({largest})",
+                flush=True,
+            )
     keys = _keys(max(sizes))
-    backends = [("numpy + numba, 1 core", None), (f"torch cpu ({torch.get_num_threads()} threads)", "cpu")]
+    backends = [("numpy + numba, 1 core", None, "eager", sizes)]
+    backends.append((f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes))
     if device != "cpu":
-        backends.append((f"torch {device} eager", device))
-    for backend, where in backends:
+        compiled_sizes = tuple(int(b) for b in args.compiled_sizes.split(","))
+        for mode in modes:
+            backends.append(
+                (f"torch {device} {mode}", device, mode, compiled_sizes if mode == "compiled" else sizes)
+            )
+    for backend, where, mode, row_sizes in backends:
         context = one_core() if where is None else contextlib.nullcontext()
         with context:
             result["speed"].extend(
-                speed_rows(backend, where, sizes, keys, args.max_step_seconds, args.target_seconds)
+                speed_rows(backend, where, row_sizes, keys, args.max_step_seconds, args.target_seconds, mode)
             )
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)

@@ -17,6 +17,7 @@ from __future__ import annotations
 import contextlib
 import functools
 import math
+from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
@@ -75,15 +76,63 @@ class NumpyNamespace:
 NUMPY = NumpyNamespace()
 
 
+#: The device flags of the checks deferred in the current :func:`deferred_checks` block, or None.
+_DEFERRED: list[Any] | None = None
+
+
+@contextlib.contextmanager
+def deferred_checks() -> Iterator[list[Any]]:
+    """Run torch code with no question to the host: the checks that would read a device value
+    (a Cholesky factorisation or inverse that failed, a covariance to repair, a batch with some
+    update left out) take the path of a healthy batch, which gives the same numbers whenever every
+    check passes, and append a device boolean to the yielded list instead. The caller reads
+    :func:`all_passed` once, after the work, and redoes the step with the checks where it is False:
+    what a step must do to run as a CUDA graph or under ``torch.compile``."""
+    global _DEFERRED
+    previous, _DEFERRED = _DEFERRED, []
+    try:
+        yield _DEFERRED
+    finally:
+        _DEFERRED = previous
+
+
+def deferring() -> bool:
+    """Whether the code runs inside :func:`deferred_checks`."""
+    return _DEFERRED is not None
+
+
+def defer(passed: Any) -> None:
+    """Record a deferred check: ``passed`` is a device boolean tensor, True where it passed."""
+    assert _DEFERRED is not None
+    _DEFERRED.append(passed.all())
+
+
+def all_passed(flags: list[Any]) -> Any:
+    """The device boolean that every check of ``flags`` passed (Python True when there were none)."""
+    if not flags:
+        return True
+    import torch
+
+    return torch.stack(flags).all()
+
+
 class _TorchLinalg:
     def __init__(self, torch: Any) -> None:
         self._torch = torch
         self.LinAlgError = torch.linalg.LinAlgError
 
     def cholesky(self, a: Any) -> Any:
+        if deferring():
+            factor, info = self._torch.linalg.cholesky_ex(a)
+            defer(info == 0)
+            return factor
         return self._torch.linalg.cholesky(a)
 
     def inv(self, a: Any) -> Any:
+        if deferring():
+            inverse, info = self._torch.linalg.inv_ex(a)
+            defer(info == 0)
+            return inverse
         return self._torch.linalg.inv(a)
 
     def eigh(self, a: Any) -> Any:
@@ -110,6 +159,7 @@ class TorchNamespace:
         self.torch = torch
         self.device = torch.device(device)
         self.linalg = _TorchLinalg(torch)
+        self._words: dict[int, Any] = {}
         self.pi, self.nan, self.inf = math.pi, math.nan, math.inf
         self.newaxis = None
         self.float64, self.int64, self.int8, self.bool_ = torch.float64, torch.int64, torch.int8, torch.bool
@@ -287,6 +337,13 @@ class TorchNamespace:
         """A 64-bit word of the hash: its bits as a signed ``int64`` Python integer."""
         value &= _MASK64
         return value - (1 << 64) if value >= 1 << 63 else value
+
+    def word_array(self, value: int) -> Any:
+        """A 64-bit word as a 0-d ``int64`` tensor on the device (made once per value)."""
+        cached = self._words.get(value)
+        if cached is None:
+            cached = self._words[value] = self.torch.tensor(self.word(value), device=self.device)
+        return cached
 
     def words(self, a: Any) -> Any:
         """An ``int64`` tensor of 64-bit words from numpy ``uint64`` (or ``int64``) bits."""

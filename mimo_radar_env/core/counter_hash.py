@@ -18,6 +18,7 @@ compute the same integers as the numpy functions.
 from __future__ import annotations
 
 from enum import IntEnum
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -79,17 +80,25 @@ def counter(stream: int, step: int) -> np.uint64:
     return np.uint64((int(stream) << STEP_BITS) + step + 1)
 
 
-def stream_base(keys: NDArray[np.uint64], stream: int, step: int) -> NDArray[np.uint64]:
-    """``mix(key ^ mix(counter * GOLDEN))`` for every key."""
+def stream_base(keys: NDArray[np.uint64], stream: int, step: Any) -> NDArray[np.uint64]:
+    """``mix(key ^ mix(counter * GOLDEN))`` for every key. ``step`` is an integer, or on torch a
+    0-d ``int64`` tensor on the keys' device (a step read on the device, never by the host: a
+    CUDA graph replays it at every step); both give the same bits."""
     xp = namespace(keys)
-    salt = int(mix(np.array([counter(stream, step)]) * GOLDEN)[0])
-    return mix(xp.words(keys) ^ xp.word(salt))
+    if not xp.is_torch or not isinstance(step, xp.torch.Tensor):
+        salt = int(mix(np.array([counter(stream, step)]) * GOLDEN)[0])
+        return mix(xp.words(keys) ^ xp.word(salt))
+    count = step + xp.word((int(stream) << STEP_BITS) + 1)  # counter(stream, step), wrapped alike
+    return mix(xp.words(keys) ^ mix(count * xp.word(int(GOLDEN))))
 
 
 def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDArray[np.uint64]:
     """64 hashed bits per element: ``mix(base + (element + 1) * GOLDEN)``."""
     xp = namespace(base)
-    return mix(base + (xp.word_index(element) + xp.word(1)) * xp.word(int(GOLDEN)))
+    # the constant as an array: a compiler that folds an arange's arithmetic into its index
+    # expressions would overflow on a 64-bit product (torch inductor does); an array it loads
+    golden = xp.word_array(int(GOLDEN)) if xp.is_torch else xp.word(int(GOLDEN))
+    return mix(base + (xp.word_index(element) + xp.word(1)) * golden)
 
 
 def to_unit(bits: NDArray[np.uint64]) -> NDArray[np.float64]:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +40,8 @@ class RadarModel:
         ``S_min_k`` of eq32, from the nominal trajectory of target k.
     transitions : array (K, T, 4, 4)
         ``F`` of the transition ``t -> t+1`` for each target.
+    straight : array (4, 4)
+        ``F`` of straight motion (NCV), the truth's motion past the schedule.
     nominal : array (K, T+1, 4)
         Noise-free trajectories from the initial estimates.
     """
@@ -50,6 +53,7 @@ class RadarModel:
     sinr_constant: float
     min_sinr: NDArray[np.float64]
     transitions: NDArray[np.float64]
+    straight: NDArray[np.float64]
     nominal: NDArray[np.float64]
     process_cov: NDArray[np.float64]
     noise_gain: NDArray[np.float64]
@@ -96,6 +100,7 @@ class RadarModel:
             sinr_constant=float(constant),
             min_sinr=constant * raw_min,
             transitions=transitions,
+            straight=transition_matrix(0.0, sc.sample_time),
             nominal=nominal,
             process_cov=process_covariance(sc.sample_time, sc.process_noise),
             noise_gain=noise_gain(sc.sample_time),
@@ -117,6 +122,17 @@ class RadarModel:
     @property
     def num_targets(self) -> int:
         return self.gain.shape[0]
+
+    def transition_at(self, step: Any) -> NDArray[np.float64]:
+        """``F`` (K, 4, 4) of the truth's step ``step -> step + 1``; past the schedule, straight
+        motion. ``step`` is an integer, or on torch a 0-d ``int64`` tensor read on the device."""
+        xp, last = self.xp, self.transitions.shape[1] - 1
+        if xp.is_torch and isinstance(step, xp.torch.Tensor):
+            scheduled = self.transitions.index_select(1, xp.minimum(step, last).reshape(1))[:, 0]
+            return xp.where(step <= last, scheduled, self.straight)
+        if step <= last:
+            return self.transitions[:, step]
+        return xp.broadcast_to(self.straight, (self.num_targets, 4, 4))
 
     # ---------------------------------------------------------- physics
     def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:

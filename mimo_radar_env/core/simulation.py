@@ -12,6 +12,7 @@ Time: reset puts the targets at step 0 (``X_0 ~ N(X1_hat, P1_hat)``); each
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -19,7 +20,6 @@ from numpy.typing import NDArray
 from .counter_hash import Stream
 from .geometry import bistatic_measurement, wrap_angle
 from .model import RadarModel
-from .motion import transition_matrix
 from .streams import TrialStreams, full_index, shared_truth_key
 
 
@@ -95,6 +95,9 @@ class RadarSimulation:
         shape = (batch_size, model.num_targets, 4)
         self.initial_estimates = xp.copy(xp.broadcast_to(model.initial_states, shape))
         self.step_index = 0
+        #: on torch, the step also as a 0-d tensor on the device, which the draws and the motion
+        #: read there (a CUDA graph of the step replays with it); on numpy, the step itself
+        self.clock: Any = xp.zeros((), dtype=np.int64) if xp.is_torch else 0
         self.state = xp.zeros((batch_size, model.num_targets, 4))
         self._streams: TrialStreams | None = None
         self._upcoming: NDArray[np.float64] | None = None
@@ -133,8 +136,8 @@ class RadarSimulation:
             self.state = model.initial_states + offset
             self.initial_estimates = xp.copy(xp.broadcast_to(model.initial_states, offset.shape))
         self.step_index = 0
-        self._upcoming = None
-        self._mean_sinr = None
+        self.clock = xp.zeros((), dtype=np.int64) if xp.is_torch else 0
+        self.forget()
 
     @property
     def streams(self) -> TrialStreams:
@@ -149,18 +152,14 @@ class RadarSimulation:
         one step ahead; steps past the horizon continue with NCV.
         """
         if self._upcoming is None:
-            self._upcoming = self._next_state(self.state, self.step_index)
+            self._upcoming = self._next_state(self.state, self.clock)
         return self._upcoming
 
     def _next_state(self, state: NDArray[np.float64], t: int) -> NDArray[np.float64]:
         """The true state after step ``t`` from ``state`` (the step's transition and its draw of
         the process noise)."""
         model, xp = self.model, self.xp
-        if t < model.transitions.shape[1]:
-            F = model.transitions[:, t]
-        else:
-            straight = xp.asarray(transition_matrix(0.0, model.scenario.sample_time))
-            F = xp.broadcast_to(straight, (model.num_targets, 4, 4))
+        F = model.transition_at(t)
         noise = self._process_std * self.streams.normal(
             Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2), xp)
         )
@@ -181,6 +180,11 @@ class RadarSimulation:
         """Move every trial's targets from step ``t`` to ``t + 1``."""
         self.state = self.upcoming_state()
         self.step_index += 1
+        self.clock = self.clock + 1
+        self.forget()
+
+    def forget(self) -> None:
+        """Drop the values kept for the current step (the coming state, the mean SINR)."""
         self._upcoming = None
         self._mean_sinr = None
 
@@ -203,9 +207,7 @@ class RadarSimulation:
         """
         model = self.model
         shape = (model.num_targets, model.num_tx, model.num_rx)
-        draws = self.streams.exponential(
-            Stream.SINR, self.step_index, full_index(self.batch_size, shape, self.xp)
-        )
+        draws = self.streams.exponential(Stream.SINR, self.clock, full_index(self.batch_size, shape, self.xp))
         return self.mean_sinr() * draws
 
     def quality(self, mean_sinr: NDArray[np.float64], target_axis: int = -3) -> NDArray[np.float64]:
@@ -231,14 +233,14 @@ class RadarSimulation:
         targets = xp.arange(num_targets)[None, :, None]
         mean = self.mean_sinr()[batch, targets, channel_tx[:, None, :], channel_rx[:, None, :]]
         flat = (targets * num_tx + channel_tx[:, None, :]) * num_rx + channel_rx[:, None, :]  # (B, K, C)
-        sinr = mean * self.streams.exponential(Stream.SINR, self.step_index, flat)
+        sinr = mean * self.streams.exponential(Stream.SINR, self.clock, flat)
         lam = self.quality(mean, target_axis=1)
         variance = model.measurement_variance(lam)  # (B, K, C, 2)
         clean = bistatic_measurement(
             self.positions[:, :, None, :], model.tx[channel_tx][:, None], model.rx[channel_rx][:, None]
         )
         noise_index = flat[..., None] * 2 + xp.arange(2)
-        noise = xp.sqrt(variance) * self.streams.normal(Stream.MEASUREMENT, self.step_index, noise_index)
+        noise = xp.sqrt(variance) * self.streams.normal(Stream.MEASUREMENT, self.clock, noise_index)
         measurement = clean + noise
         measurement[..., 1] = wrap_angle(measurement[..., 1])
         return ChannelObservations(

@@ -29,6 +29,7 @@ from ..tracking.information import channel_information, jacobian_information, po
 from ..tracking.planning import Forecast
 from ..tracking.selection import select_for_tracking
 from .cost import check_memory
+from .device_forms import check_device_mode, make_forms
 from .options import EnvOptions
 
 
@@ -70,9 +71,22 @@ class RadarEngine:
     options : EnvOptions
     scenario : Scenario
     batch_size : int
+    device : None, or a torch device
+        numpy (None) or torch on that device.
+    device_mode : str
+        The torch step's form (:mod:`.device_forms`): ``"eager"`` (default), ``"graph"`` or
+        ``"compiled"``.
     """
 
-    def __init__(self, options: EnvOptions, scenario: Scenario, batch_size: int, device: Any = None) -> None:
+    def __init__(
+        self,
+        options: EnvOptions,
+        scenario: Scenario,
+        batch_size: int,
+        device: Any = None,
+        device_mode: str = "eager",
+    ) -> None:
+        check_device_mode(device_mode, device)
         self.xp = xp = device_namespace(device)
         self.device = xp.device
         self.options = options
@@ -101,6 +115,8 @@ class RadarEngine:
         self.last_valid = xp.zeros(batch_size, dtype=bool)
         self.invalid_steps = xp.zeros(batch_size, dtype=np.int64)  # this episode's, per trial
         self._warned_invalid = False
+        self.device_mode = device_mode
+        self._forms = make_forms(self, device_mode)
 
     @property
     def horizon(self) -> int:
@@ -138,20 +154,41 @@ class RadarEngine:
             raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
         xp = self.xp
         actions = xp.asarray(check_actions(actions, (self.batch_size, self.action_size)))
+        if self.options.invalid_action == "raise":
+            self._refuse_invalid(actions)
+        obs, reward, info = self._forms.step(actions) if self._forms is not None else self.advance(actions)
+        self.step_index += 1
+        self.simulation.step_index = self.step_index
+        if self.step_index == self.horizon:
+            self._warn_if_invalid_dominated()
+        terminated = xp.zeros(self.batch_size, dtype=bool)
+        truncated = xp.full(self.batch_size, self.step_index >= self.horizon)
+        return obs, reward, terminated, truncated, info
+
+    def _refuse_invalid(self, actions: Any) -> None:
+        sc, xp = self.scenario, self.xp
+        tx_count = actions[:, : self.num_tx].sum(axis=1)
+        rx_count = actions[:, self.num_tx :].sum(axis=1)
+        valid = (tx_count == sc.tx_per_step) & (rx_count == sc.rx_per_step)
+        if not valid.all():
+            bad = int(np.flatnonzero(~xp.to_numpy(valid))[0])
+            raise ValueError(
+                f"action of trial {bad} selects {int(tx_count[bad])} TX and {int(rx_count[bad])} RX; "
+                f"exactly tx_per_step={sc.tx_per_step} and rx_per_step={sc.rx_per_step} are required "
+                "(or make the env with invalid_action='probe-nothing')"
+            )
+
+    def advance(self, actions: Any) -> tuple[dict[str, NDArray], NDArray, dict[str, NDArray]]:
+        """The step's work on checked actions: the truth, the probed channels, the tracker, the
+        bound, the observation, the reward and ``info``. It reads the step from the device
+        (``simulation.clock``) and asks the host nothing but what :func:`deferred_checks` defers, so
+        :mod:`.device_forms` can replay it as one graph; :meth:`step` keeps the count on the host."""
+        xp = self.xp
         tx_mask = xp.astype(actions[:, : self.num_tx], bool)
         rx_mask = xp.astype(actions[:, self.num_tx :], bool)
         sc = self.scenario
         valid = (tx_mask.sum(axis=1) == sc.tx_per_step) & (rx_mask.sum(axis=1) == sc.rx_per_step)
-        if self.options.invalid_action == "raise" and not valid.all():
-            bad = int(np.flatnonzero(~xp.to_numpy(valid))[0])
-            num_tx, num_rx = int(tx_mask[bad].sum()), int(rx_mask[bad].sum())
-            raise ValueError(
-                f"action of trial {bad} selects {num_tx} TX and {num_rx} RX; "
-                f"exactly tx_per_step={sc.tx_per_step} and rx_per_step={sc.rx_per_step} are required "
-                "(or make the env with invalid_action='probe-nothing')"
-            )
         self.simulation.advance()
-        self.step_index += 1
         # invalid trials get placeholder channels (the first stations) and are masked out
         tx_index = xp.where(valid[:, None], true_indices(tx_mask, sc.tx_per_step), xp.arange(sc.tx_per_step))
         rx_index = xp.where(valid[:, None], true_indices(rx_mask, sc.rx_per_step), xp.arange(sc.rx_per_step))
@@ -170,9 +207,7 @@ class RadarEngine:
             self._advance_bound(channels)
         self.last_action = actions
         self.last_valid = valid
-        self.invalid_steps += ~valid
-        if self.step_index == self.horizon:
-            self._warn_if_invalid_dominated()
+        self.invalid_steps = self.invalid_steps + ~valid
 
         info = self._truth_info()
         weights = self.model.channel_weights(self.simulation.mean_sinr())
@@ -193,10 +228,20 @@ class RadarEngine:
                 reward = info["reward_information"]
         if self.options.measurements:
             info |= self._measurement_info(channels)
-        obs = self._observation(sinr, probed)
-        terminated = xp.zeros(self.batch_size, dtype=bool)
-        truncated = xp.full(self.batch_size, self.step_index >= self.horizon)
-        return obs, reward, terminated, truncated, info
+        return self._observation(sinr, probed), reward, info
+
+    def state_slots(self) -> list[tuple[Any, str]]:
+        """``(object, attribute)`` of every array the step carries to the next: the truth, the
+        clock and keys, the tracker, the bound and the action counts (:mod:`.device_forms` passes
+        them through a graph and back)."""
+        sim = self.simulation
+        slots = [(sim, "state"), (sim, "clock"), (sim.streams, "keys")]
+        slots += [(self, "last_action"), (self, "last_valid"), (self, "invalid_steps")]
+        if self.tracker is not None:
+            slots += [(self, "_bound_covariance")]
+            names = ("means", "covs", "log_probs", "estimate", "covariance", "prior_covariance", "repairs")
+            slots += [(self.tracker, name) for name in names]
+        return slots
 
     def _warn_if_invalid_dominated(self) -> None:
         """Warns once per env when, in an episode just ended, most actions of a trial probed
@@ -315,7 +360,7 @@ class RadarEngine:
         jac = channel_jacobian(positions, tx, rx)  # (B, K, C, 2, 2)
         per_channel = jacobian_information(jac, channels.noise_variance)  # the true Sigma0 / lambda
         measured = per_channel.sum(axis=2) * channels.valid[:, None, None, None]
-        transition = self.model.transitions[:, self.step_index - 1]  # (K, 4, 4): step t-1 -> t
+        transition = self.model.transition_at(self.simulation.clock - 1)  # (K, 4, 4): step t-1 -> t
         process_cov = self.model.process_cov
         self._bound_covariance = bound_step(self._bound_covariance, transition, process_cov, measured)
 

@@ -427,7 +427,9 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
     after that resets them all (``AutoresetMode.NEXT_STEP``) and returns the
     reset observation, or, with ``autoreset_mode="disabled"``, raises until the
     caller resets. ``spec.max_episode_steps`` is the horizon. ``device="cuda"``
-    (or ``"cpu"``, ``"cuda:1"``) runs it on torch there, every array a tensor.
+    (or ``"cpu"``, ``"cuda:1"``) runs it on torch there, every array a tensor;
+    ``device_mode="graph"`` replays each step as one CUDA graph and ``"compiled"`` runs it
+    through ``torch.compile`` (:mod:`~mimo_radar_env.envs.device_forms`; default ``"eager"``).
     ``reset(seed=s)`` seeds trial ``i`` with ``s + i``, exactly like a single env
     reset with ``seed=s + i``; ``seed`` may also be a list of per-trial seeds.
     :meth:`oracle_action` returns the optimal super arms of the coming step,
@@ -450,6 +452,7 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
         render_mode: str | None = None,
         device: Any = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
+        device_mode: str = "eager",
         **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -459,7 +462,9 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
         xp = device_namespace(device)  # a bad device is refused before the scenario is built
         self.options, self.scenario = _resolve(kwargs)
         self.num_envs = num_envs
-        self.engine = RadarEngine(self.options, self.scenario, batch_size=num_envs, device=device)
+        self.engine = RadarEngine(
+            self.options, self.scenario, batch_size=num_envs, device=device, device_mode=device_mode
+        )
         #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned
         self.device = xp.device
         #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).

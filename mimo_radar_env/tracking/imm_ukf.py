@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.arrays import namespace
+from ..core.arrays import deferring, namespace
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from . import imm
@@ -163,8 +163,8 @@ class IMMUKFTracker:
         """Sigma points of the predicted models; a repaired covariance is also the prior of the update."""
         scale = self.sigma_params.scale(4)
         chol, repaired = robust_cholesky(scale * covs)
-        self.repairs += repaired.reshape(self.batch_size, -1).sum(axis=1)
-        if repaired.any():
+        self.repairs = self.repairs + repaired.reshape(self.batch_size, -1).sum(axis=1)
+        if not deferring() and repaired.any():  # deferred: a failed factor fails the step's checks
             rebuilt = chol @ self.xp.swapaxes(chol, -1, -2) / scale
             covs = self.xp.where(repaired[..., None, None], rebuilt, covs)
         return Prior(means, covs, log_c, sigma_points(means, chol), self.wm, self.wc)
@@ -173,24 +173,27 @@ class IMMUKFTracker:
         """The update where it is valid and finite, the prediction elsewhere (per trial and target)."""
         xp = self.xp
         finite = posterior.finite()  # (B, K)
-        self.repairs += (~finite & valid[:, None]).sum(axis=1)
+        self.repairs = self.repairs + (~finite & valid[:, None]).sum(axis=1)
         use_update = finite & valid[:, None]
         log_pred = prior.log_c - imm.logsumexp(prior.log_c, axis=-1, keepdims=True)
         # the condition-number guard: a posterior that lost positive definiteness to rounding
         # (a prior far wider than the measurements) is repaired in its trial and target alone
-        everywhere = use_update.all()
+        # (with deferred checks, the masked forms run always: the same numbers, no host read)
+        everywhere = not deferring() and bool(use_update.all())
         covs, covariance = posterior.covs, posterior.covariance
         if not everywhere:  # the others are not used: keep their NaN out of the guard
             covs = xp.where(use_update[..., None, None, None], covs, xp.eye(4))
             covariance = xp.where(use_update[..., None, None], covariance, xp.eye(4))
         posterior_covs, repaired_models = repair_covariance(covs)
         covariance, repaired_fused = repair_covariance(covariance)
-        self.repairs += ((repaired_models.any(axis=-1) | repaired_fused) & use_update).sum(axis=1)
+        self.repairs = self.repairs + ((repaired_models.any(axis=-1) | repaired_fused) & use_update).sum(
+            axis=1
+        )
         self.means = xp.where(use_update[..., None, None], posterior.means, prior.means)
         self.covs = xp.where(use_update[..., None, None, None], posterior_covs, prior.covs)
         self.log_probs = xp.where(use_update[..., None], posterior.log_probs, log_pred)
         estimate = posterior.estimate
-        if not use_update.all():
+        if not everywhere:
             pred_est, pred_cov = imm.combine(prior.means, prior.covs, xp.exp(log_pred))
             estimate = xp.where(use_update[..., None], estimate, pred_est)
             covariance = xp.where(use_update[..., None, None], covariance, pred_cov)

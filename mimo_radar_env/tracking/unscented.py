@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.arrays import namespace
+from ..core.arrays import defer, deferring, namespace
 
 _LOG_2PI = float(np.log(2.0 * np.pi))
 _TWO_PI = 2.0 * np.pi
@@ -126,6 +126,9 @@ def repair_covariance(
     raised to ``relative_floor`` times the largest; the others are returned as given.
     """
     xp = namespace(matrix)
+    if matrix.shape[-1] == 4 and deferring():  # the check is left to the caller (deferred_checks)
+        defer(_certainly_conditioned(matrix, 1.0 / relative_floor))
+        return matrix, xp.zeros(matrix.shape[:-2], dtype=bool)
     if matrix.shape[-1] == 4 and xp.all(_certainly_conditioned(matrix, 1.0 / relative_floor)):
         return matrix, xp.zeros(matrix.shape[:-2], dtype=bool)  # the fast path of every healthy step
     try:

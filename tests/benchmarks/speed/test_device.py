@@ -34,16 +34,22 @@ def test_the_device_benchmark_writes_its_rows(tmp_path):
             "3",
             "--target-seconds",
             "0.05",
+            "--modes",
+            "eager,graph",
+            "--form-equality-steps",
+            "3",
             "--json",
             str(path),
         ]
     )
     result = json.loads(path.read_text())
-    assert [(e["version"], e["fusion"]) for e in result["equality"]] == [
-        ("v1", "average"),
-        ("v1", "centralized"),
-        ("v0", "average"),
-        ("v0", "centralized"),
+    assert [(e["version"], e["fusion"], e["mode"]) for e in result["equality"]] == [
+        ("v1", "average", "eager"),
+        ("v1", "centralized", "eager"),
+        ("v0", "average", "eager"),
+        ("v0", "centralized", "eager"),
+        ("v1", "average", "graph"),
+        ("v1", "centralized", "graph"),
     ]
     assert all(e["largest"] <= device_bench.TOLERANCE for e in result["equality"])
     rows = [r for r in result["speed"] if "skipped" not in r]

@@ -1,0 +1,176 @@
+"""The torch engine's step in three forms: eager, graph and compiled (``device_mode=``).
+
+* ``"eager"`` runs :meth:`RadarEngine.advance` op by op, as the numpy engine does: every check
+  that reads a device value (a failed factorisation, a covariance to repair) asks the host.
+* ``"graph"`` traces that same method once (``torch.fx``'s ``make_fx``, with the checks deferred:
+  :func:`~mimo_radar_env.core.arrays.deferred_checks`) into a function of the step's arrays
+  (:meth:`RadarEngine.state_slots`) and the actions. On CUDA it is captured as one CUDA graph and
+  replayed at every step; on the CPU the traced function runs.
+* ``"compiled"`` runs the traced function through ``torch.compile`` (on CUDA with
+  ``mode="reduce-overhead"``, which also replays CUDA graphs).
+
+The step is the eager code itself, traced: no second copy of the model. The host reads one
+boolean per step, whether every deferred check passed; where one failed, the step is undone and
+run again eagerly with its checks, so every form gives the eager numbers (to round-off, which a
+compiler may reorder).
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from ..core.arrays import all_passed, deferred_checks
+
+if TYPE_CHECKING:
+    from .engine import RadarEngine
+
+#: The forms of the torch step (:mod:`.device_forms`); ``"eager"`` is the reference.
+DEVICE_MODES = ("eager", "graph", "compiled")
+
+
+def check_device_mode(device_mode: Any, device: Any) -> None:
+    """Refuse a form that is not one of :data:`DEVICE_MODES`, or a traced form on numpy."""
+    if device_mode not in DEVICE_MODES:
+        raise ValueError(f"device_mode must be one of {', '.join(DEVICE_MODES)}; got {device_mode!r}")
+    if device_mode != "eager" and device is None:
+        raise ValueError(f"device_mode={device_mode!r} runs on torch: give a device ('cpu', 'cuda')")
+
+
+class TracedStep:
+    """The engine's :meth:`~RadarEngine.advance` as one traced function, run in ``mode``."""
+
+    def __init__(self, engine: RadarEngine, mode: str) -> None:
+        self.engine = engine
+        self.mode = mode
+        self.cuda = engine.xp.device.type == "cuda"
+        self._function: Any = None
+        self._graph: Any = None
+        #: steps redone eagerly because a deferred check failed (the rest ran traced)
+        self.eager_steps = 0
+
+    # ------------------------------------------------------------------ the trace
+    def _functional(self) -> Any:
+        """``f(actions, *state) -> (new state, passed, (obs, reward, info))`` over the engine."""
+        engine = self.engine
+        xp = engine.xp
+
+        def step(actions: Any, *state: Any) -> Any:
+            slots = engine.state_slots()
+            for (owner, name), value in zip(slots, state, strict=True):
+                setattr(owner, name, value)
+            engine.simulation.forget()  # nothing kept from before may enter the trace as a constant
+            with deferred_checks() as flags:
+                outputs = engine.advance(actions)
+            passed = all_passed(flags)
+            if passed is True:
+                passed = xp.ones((), dtype=bool)
+            return [getattr(owner, name) for owner, name in slots], passed, outputs
+
+        return step
+
+    def _trace(self, actions: Any, state: list[Any]) -> Any:
+        from torch.fx.experimental.proxy_tensor import make_fx
+
+        saved = [getattr(owner, name) for owner, name in self.engine.state_slots()]
+        try:
+            traced = make_fx(self._functional(), tracing_mode="fake", _allow_non_fake_inputs=True)(
+                actions, *state
+            )
+        finally:
+            self._put(saved)
+        if self.mode == "compiled":
+            import torch
+
+            return torch.compile(traced, mode="reduce-overhead" if self.cuda else None, dynamic=False)
+        return traced
+
+    # ------------------------------------------------------------------ a step
+    def step(self, actions: Any) -> tuple[dict[str, Any], Any, dict[str, Any]]:
+        engine = self.engine
+        # one layout whatever made the arrays (a reset leaves broadcast views): the trace's
+        state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
+        if self._function is None:
+            self._function = self._trace(actions, state)
+        if self.cuda and self.mode == "graph":
+            new_state, passed, outputs = self._replay(actions, state)
+        elif self.cuda:  # compiled with CUDA graphs: its outputs are rewritten by the next call
+            import torch
+
+            torch.compiler.cudagraph_mark_step_begin()
+            new_state, passed, outputs = torch.utils._pytree.tree_map(
+                lambda a: a.clone(), self._function(actions, *state)
+            )
+        else:
+            new_state, passed, outputs = self._function(actions, *state)
+        if not bool(passed):  # the one read of the step: redo it with the checks
+            self._put([b.clone() for b in self._backup] if self._graph is not None else state)
+            self.eager_steps += 1
+            return engine.advance(actions)
+        self._put(new_state)
+        return outputs
+
+    def _put(self, state: list[Any]) -> None:
+        for (owner, name), value in zip(self.engine.state_slots(), state, strict=True):
+            setattr(owner, name, value)
+        self.engine.simulation.forget()
+
+    # ------------------------------------------------------------------ CUDA graphs
+    def _replay(self, actions: Any, state: list[Any]) -> tuple[list[Any], Any, Any]:
+        """The traced step as one CUDA graph over static buffers. The graph copies the state it
+        reads into a backup (for a step redone eagerly) and writes the new state back over it,
+        so the engine's arrays are the static buffers between steps; its other outputs are
+        copied out before the next replay overwrites them."""
+        import torch
+
+        if self._graph is None:
+            self._actions = actions.clone()
+            self._state = [value.clone() for value in state]
+            self._backup = [value.clone() for value in state]
+            self._graph = cuda_graph(self._graph_body, lambda: self._function(self._actions, *self._state))
+        self._actions.copy_(actions)
+        for static, value in zip(self._state, state, strict=True):
+            if value is not static:  # after a reset or a step redone eagerly
+                static.copy_(value)
+        passed, outputs = self._graph.replay()
+        return self._state, passed, torch.utils._pytree.tree_map(lambda a: a.clone(), outputs)
+
+    def _graph_body(self) -> tuple[Any, Any]:
+        for backup, static in zip(self._backup, self._state, strict=True):
+            backup.copy_(static)
+        new_state, passed, outputs = self._function(self._actions, *self._state)
+        for static, new in zip(self._state, new_state, strict=True):
+            static.copy_(new)
+        return passed, outputs
+
+
+class _CUDAGraph:
+    """``body`` captured once as a CUDA graph; :meth:`replay` runs it and returns its outputs
+    (the same tensors every time, rewritten). ``warm_up`` runs the same kernels with no effect
+    on the buffers, as torch asks before a capture."""
+
+    def __init__(self, body: Any, warm_up: Any) -> None:
+        import torch
+
+        side = torch.cuda.Stream()
+        side.wait_stream(torch.cuda.current_stream())
+        with torch.cuda.stream(side):
+            warm_up()
+        torch.cuda.current_stream().wait_stream(side)
+        self._graph = torch.cuda.CUDAGraph()
+        with torch.cuda.graph(self._graph):
+            self._outputs = body()
+
+    def replay(self) -> Any:
+        self._graph.replay()
+        return self._outputs
+
+
+def cuda_graph(body: Any, warm_up: Any) -> Any:
+    """``body`` (a function of no arguments that reads and writes static buffers) as a replayable
+    graph: a CUDA graph (the tests put a stand-in with the same contract here)."""
+    return _CUDAGraph(body, warm_up)
+
+
+def make_forms(engine: RadarEngine, device_mode: str) -> TracedStep | None:
+    """The engine's step runner for ``device_mode`` (None: eager, the engine's own method)."""
+    return None if device_mode == "eager" else TracedStep(engine, device_mode)

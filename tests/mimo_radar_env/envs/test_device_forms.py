@@ -1,0 +1,157 @@
+"""The torch step's traced forms (``device_mode="graph"``, ``"compiled"``) against the eager step,
+on CPU torch (on a GPU where .ci/device-check sets MIMO_RADAR_TEST_DEVICE): the same numbers over
+episodes, a step redone eagerly where a deferred check fails, no read of a device value inside the
+step, and the CUDA graph's buffers handled as a real graph would hold them (a stand-in graph with
+the same contract)."""
+
+import os
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from benchmarks.speed.device import _keys, relative_difference  # noqa: E402
+from mimo_radar_env import VERSIONS, load_scenario  # noqa: E402
+from mimo_radar_env.core.arrays import deferred_checks  # noqa: E402
+from mimo_radar_env.core.superarm import random_super_arms  # noqa: E402
+from mimo_radar_env.envs import device_forms  # noqa: E402
+from mimo_radar_env.envs.engine import RadarEngine  # noqa: E402
+from mimo_radar_env.tracking import unscented  # noqa: E402
+
+DEVICE = os.environ.get("MIMO_RADAR_TEST_DEVICE", "cpu")
+
+
+def _engine(version, fusion, trials, mode):
+    env_version = VERSIONS[version]
+    options = env_version.options(fusion=fusion)
+    scenario = load_scenario(env_version.default_scenario)
+    return RadarEngine(options, scenario, batch_size=trials, device=DEVICE, device_mode=mode)
+
+
+def _play(version, fusion, mode, trials=3, steps=25, reset_at=None):
+    """The largest relative difference of every output between the eager engine and one in
+    ``mode`` over ``steps`` steps (random valid actions, the first trial probing nothing every
+    fifth step, the oracle's action read between steps), and the traced engine."""
+    eager, other = _engine(version, fusion, trials, "eager"), _engine(version, fusion, trials, mode)
+    keys = _keys(trials)
+    eager.reset_from_keys(keys)
+    other.reset_from_keys(keys)
+    sc = eager.scenario
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    for t in range(steps):
+        if t == reset_at:  # a new episode mid-way: the graph's buffers take the fresh state
+            keys = _keys(trials, seed=7)
+            eager.reset_from_keys(keys)
+            other.reset_from_keys(keys)
+        action = random_super_arms(rng, trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+        if t % 5 == 0:
+            action[0] = 0
+        assert torch.equal(eager.oracle_action(), other.oracle_action())
+        obs_a, reward_a, _, trunc_a, info_a = eager.step(torch.as_tensor(action, device=DEVICE))
+        obs_b, reward_b, _, trunc_b, info_b = other.step(torch.as_tensor(action, device=DEVICE))
+        assert torch.equal(trunc_a, trunc_b)
+        for ours, theirs in ((obs_a, obs_b), (info_a, info_b)):
+            assert set(ours) == set(theirs)
+            worst = max([worst, *(relative_difference(ours[k], theirs[k]) for k in ours)])
+        worst = max(worst, relative_difference(reward_a, reward_b))
+    return worst, other
+
+
+@pytest.mark.parametrize(("version", "fusion"), [("v1", "average"), ("v1", "centralized"), ("v0", "average")])
+def test_the_graph_form_gives_the_eager_numbers_bit_for_bit(version, fusion):
+    worst, engine = _play(version, fusion, "graph", reset_at=17)
+    assert worst == 0.0
+    assert engine._forms.eager_steps == 0  # every step ran traced
+
+
+def test_a_failed_deferred_check_redoes_the_step_eagerly_with_the_same_numbers(monkeypatch):
+    """The closed-form test of the covariance guard made to fail everywhere: each traced step's
+    flag is False, so each step is undone and run again with its checks (which then factorise
+    and find nothing to repair): the eager numbers, every step redone."""
+    monkeypatch.setattr(
+        unscented,
+        "_certainly_conditioned",
+        lambda m, c: torch.zeros(m.shape[:-2], dtype=bool, device=m.device),
+    )
+    worst, engine = _play("v1", "average", "graph", steps=6)
+    assert worst == 0.0
+    assert engine._forms.eager_steps == 6
+
+
+def test_the_traced_step_reads_no_device_value(monkeypatch):
+    """Inside the deferred checks, the step asks the host nothing: bool() or item() of a tensor
+    there would stall a GPU and cannot be captured in a graph."""
+    engine = _engine("v1", "centralized", 4, "eager")
+    engine.reset_from_keys(_keys(4))
+    sc = engine.scenario
+    action = random_super_arms(np.random.default_rng(0), 4, sc.num_tx, sc.num_rx, 2, 3)
+    action = torch.as_tensor(action, device=DEVICE)
+    reads = []
+    for name in ("__bool__", "item", "__int__", "__float__", "tolist"):
+        original = getattr(torch.Tensor, name)
+
+        def spy(self, *args, _name=name, _original=original, **kwargs):
+            reads.append(_name)
+            return _original(self, *args, **kwargs)
+
+        monkeypatch.setattr(torch.Tensor, name, spy)
+    with deferred_checks() as flags:
+        engine.advance(action)
+    monkeypatch.undo()
+    assert reads == []
+    assert len(flags) >= 4  # the prior's factors, both guards of the update, the bound's
+
+
+class _StandInGraph:
+    """What a CUDA graph does, on the CPU: capturing runs nothing; each replay runs the body
+    and leaves its outputs in the same tensors as the first replay (a graph's fixed buffers)."""
+
+    def __init__(self, body, warm_up):
+        warm_up()
+        self.body = body
+        self.outputs = None
+
+    def replay(self):
+        fresh = self.body()
+        if self.outputs is None:
+            self.outputs = fresh
+        else:
+            torch.utils._pytree.tree_map(lambda old, new: old.copy_(new), self.outputs, fresh)
+        return self.outputs
+
+
+def test_the_cuda_graph_path_keeps_the_engines_arrays_in_its_buffers(monkeypatch):
+    monkeypatch.setattr(device_forms, "cuda_graph", _StandInGraph)
+    monkeypatch.setattr(device_forms.TracedStep, "__init__", _as_if_on_cuda)
+    worst, engine = _play("v1", "average", "graph", steps=30, reset_at=12)
+    assert worst == 0.0
+    forms = engine._forms
+    assert forms._graph is not None
+    assert engine.tracker.means is forms._state[engine.state_slots().index((engine.tracker, "means"))]
+
+
+_init = device_forms.TracedStep.__init__
+
+
+def _as_if_on_cuda(self, engine, mode):
+    _init(self, engine, mode)
+    self.cuda = True
+    self.mode = mode
+
+
+def test_a_traced_form_needs_a_device_and_a_known_name():
+    with pytest.raises(ValueError, match="device_mode must be one of eager, graph, compiled; got 'jit'"):
+        device_forms.check_device_mode("jit", "cpu")
+    with pytest.raises(ValueError, match="runs on torch"):
+        device_forms.check_device_mode("graph", None)
+
+
+@pytest.mark.slow
+def test_the_compiled_form_gives_the_eager_numbers_to_round_off():
+    """torch.compile (inductor, C++ on the CPU; about two minutes to compile on two cores) may
+    reorder floating-point sums: within the torch engine's tolerance of the numpy engine."""
+    worst, engine = _play("v1", "average", "compiled", steps=12)
+    assert worst <= 1e-9
+    assert engine._forms.eager_steps == 0
