@@ -44,18 +44,22 @@ def make_env(
     scenario: Scenario | str | Path | None = None,
     version: str = DEFAULT_VERSION,
     device: Any = None,
+    device_mode: str = "eager",
 ) -> MimoRadarSelectVectorEnv:
     """The native vector env of ``num_envs`` trials of ``scenario`` (default: the agent's) with
     the options the agent needs: ``options`` an :class:`~mimo_radar_env.EnvOptions` (as it is) or
     a mapping of options over env version ``version``'s defaults (default: v1's, as
     ``gym.make_vec("MimoRadarSelect-v1", ...)`` has them). ``device`` (``"cuda"``, ``"cpu"``)
-    runs it on torch there, the agent acting on its tensors; ``None`` on numpy."""
+    runs it on torch there, the agent acting on its tensors, the step in form ``device_mode``
+    (``"eager"``, ``"graph"``, ``"compiled"``: :mod:`mimo_radar_env.envs.device_forms`);
+    ``None`` on numpy."""
     if not isinstance(options, EnvOptions):
         options = env_version(version).options(**(options or {}))
     return MimoRadarSelectVectorEnv(
         num_envs=num_envs,
         scenario=agent.scenario if scenario is None else scenario,
         device=device,
+        device_mode=device_mode,
         **env_options_for(agent, options),
     )
 

@@ -26,6 +26,7 @@ FLAGS = {
     "backend": "--backend",
     "max_hours": "--max-hours",
     "device": "--device",
+    "device_mode": "--device-mode",
     "out": "--out",
     "timesteps": "--timesteps",
     "seeds": "--seeds",

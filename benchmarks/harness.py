@@ -46,6 +46,7 @@ from mimo_radar_env.envs.cost import (
     seconds_per_trial_step,
     threaded_seconds_per_trial_step,
 )
+from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -592,12 +593,15 @@ def _policy_files(policy: str, agent: Any) -> dict[str, str]:
 
 
 # ------------------------------------------------------------------ one task
-def run_task(config: dict[str, Any], policy: str, shard: int, device: Any = None) -> dict[str, NDArray]:
+def run_task(
+    config: dict[str, Any], policy: str, shard: int, device: Any = None, device_mode: str = "eager"
+) -> dict[str, NDArray]:
     """Run ``policy`` on shard ``shard`` of the run; the shard's fields
     (:mod:`benchmarks.shards` lists them): per-trial float64 arrays of the mean rewards, the
     squared position errors and bounds, the matches with the optimal super arm, the station
     selection counts, the compute time and the first trial's truth. ``device`` runs the env and
-    the agent on torch there (the same numbers to rounding); the fields come back to numpy."""
+    the agent on torch there (the same numbers to rounding), the step in form ``device_mode``;
+    the fields come back to numpy."""
     cfg = RunConfig(**config)
     scenario = cfg.scenario_object
     trials = cfg.shard_trials(policy, shard)
@@ -609,7 +613,9 @@ def run_task(config: dict[str, Any], policy: str, shard: int, device: Any = None
         seed=cfg.seed + trials.start,
         options=cfg.env_options,
     )
-    env = agents.make_env(agent, len(trials), cfg.env_options, scenario, device=device)
+    env = agents.make_env(
+        agent, len(trials), cfg.env_options, scenario, device=device, device_mode=device_mode
+    )
     episode = agents.Rollout(agent, env, seed=cfg.seed + trials.start)
     host = env.engine.xp.to_numpy
     n, T, K = len(trials), cfg.steps, scenario.num_targets
@@ -829,16 +835,26 @@ def run(
     max_tasks: int | None = None,
     device: Any = None,
     threads: int | None = None,
+    device_mode: str = "eager",
 ) -> dict[str, dict[str, NDArray]] | None:
     """Run every (policy, shard) task not yet in ``out``; return every policy's shard fields
     joined over trials (:func:`load_per_trial`).
 
     ``max_tasks`` stops after that many new tasks (to test resumption); the run is
     then incomplete and ``None`` is returned. Ctrl-C raises :class:`RunInterrupted` after
-    the finished tasks are saved. ``workers`` and ``threads`` as in :func:`run_many`.
+    the finished tasks are saved. ``workers``, ``threads``, ``device`` and ``device_mode`` as in
+    :func:`run_many`.
     """
     complete = run_many(
-        [(config, out)], workers, backend, address, progress, max_tasks, device=device, threads=threads
+        [(config, out)],
+        workers,
+        backend,
+        address,
+        progress,
+        max_tasks,
+        device=device,
+        threads=threads,
+        device_mode=device_mode,
     )
     return load_per_trial(Path(out), config) if complete[0] else None
 
@@ -853,6 +869,7 @@ def run_many(
     on_complete: Callable[[int], None] | None = None,
     device: Any = None,
     threads: int | None = None,
+    device_mode: str = "eager",
 ) -> list[bool]:
     """Run the tasks of several runs (a study's) on one set of workers; whether each run is
     complete.
@@ -863,7 +880,9 @@ def run_many(
     process as soon as run ``i`` has all its shards (at once for a run already complete), while
     the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
     and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
-    process on torch on that device (``workers=1``, the local backend).
+    process on torch on that device (``workers=1``, the local backend), the step in form
+    ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`: ``"eager"``, ``"graph"``,
+    ``"compiled"``).
 
     ``workers`` counts cores: with more than one (or on Ray) the tasks run on
     ``workers // threads`` worker processes of ``threads`` compute threads each (the compiled
@@ -874,7 +893,7 @@ def run_many(
     """
     folders = [Path(out) for _, out in runs]
     configs = [config for config, _ in runs]
-    _check_execution(backend, workers, address, folders, device, configs, threads)
+    _check_execution(backend, workers, address, folders, device, configs, threads, device_mode)
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
@@ -915,7 +934,7 @@ def run_many(
             if left[number] == 0:
                 run_done(number)
 
-        on_device = () if device is None else (str(device),)
+        on_device = () if device is None else (str(device), device_mode)
         tasks = [(payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
         try:
             for number in range(len(configs)):
@@ -1033,11 +1052,13 @@ def _check_execution(
     device: Any = None,
     configs: Sequence[RunConfig] = (),
     threads: int | None = None,
+    device_mode: str = "eager",
 ) -> None:
     """Refuses an unknown backend, a worker count that is not a whole number >= 1, threads that
     are not a whole number from 1 to the workers, an
     unreachable Ray address, two runs into one folder, and a device that is not there, with
-    other workers than this process, or with a policy of ``configs`` that acts on numpy only."""
+    other workers than this process, or with a policy of ``configs`` that acts on numpy only, and
+    a form of the step (``device_mode``) that is unknown or without a device."""
     if backend not in ("local", "ray"):
         raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
     if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
@@ -1046,6 +1067,12 @@ def _check_execution(
         isinstance(threads, bool) or not isinstance(threads, int) or not 1 <= threads <= workers
     ):
         raise HarnessError(f"`threads` must be an integer from 1 to `workers` ({workers}), got {threads!r}")
+    try:
+        check_device_mode(device_mode, device)
+    except ValueError as exc:
+        raise HarnessError(
+            str(exc).replace("device_mode", "`device_mode`", 1).replace("a device", "a `device`")
+        ) from None
     if device is not None:
         if backend != "local" or workers != 1:
             raise HarnessError(

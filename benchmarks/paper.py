@@ -86,13 +86,15 @@ def run_policies(
     device: Any = None,
     progress: bool = True,
     figures: bool = False,
+    device_mode: str = "eager",
 ) -> dict[str, Any]:
     """``mimo-radar-bench run`` as a Python call: the policies (registered names, ``module:Class``
     or :class:`agents.Agent` subclasses) on ``scenario``, on the same trials, resumably in ``out``
     (default: a new temporary folder). Returns summary.json's content: every policy's metrics
     with their 95 % intervals, the paired differences, and ``table`` (table.md's text) and
     ``out``. ``options`` is an :class:`~mimo_radar_env.EnvOptions` or a mapping over env
-    ``version``'s defaults (v1's, as the command line's)."""
+    ``version``'s defaults (v1's, as the command line's). ``device`` runs the tasks on torch there,
+    the step in form ``device_mode`` (:func:`benchmarks.harness.run_many`)."""
     from . import report
 
     names = [harness.policy_name(p, workers) for p in policies]
@@ -107,6 +109,6 @@ def run_policies(
     shard = trials if device is not None else None
     config = harness.make_config(scenario, names, trials, steps, seed, shard, agent_params, options, workers)
     folder = Path(out) if out is not None else Path(tempfile.mkdtemp(prefix="mimo-radar-run-"))
-    harness.run_many([(config, folder)], workers, progress=progress, device=device)
+    harness.run_many([(config, folder)], workers, progress=progress, device=device, device_mode=device_mode)
     summary = report.write_outputs(config, None, folder, figures=figures)
     return {**summary, "table": (folder / "table.md").read_text(), "out": str(folder)}

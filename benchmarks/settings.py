@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, env_version
+from mimo_radar_env.envs.device_forms import DEVICE_MODES
 from mimo_radar_env.envs.options import option_choices, option_help, option_names
 from mimo_radar_env.envs.versions import version_conflict
 
@@ -96,6 +97,7 @@ class Settings:
     options: EnvOptions = field(default_factory=lambda: VERSIONS[DEFAULT_VERSION].options())
     agent_params: dict[str, dict[str, Any]] = field(default_factory=dict)
     device: str | None = None
+    device_mode: str = "eager"
     pairs: str = "reference"
 
     @classmethod
@@ -125,6 +127,7 @@ class Settings:
             options=env_options_from(args),
             agent_params=params,
             device=args.device,
+            device_mode=args.device_mode,
             pairs=args.pairs,
         )
 
@@ -136,6 +139,7 @@ class Settings:
             "backend": self.backend,
             "address": self.address,
             "device": self.device,
+            "device_mode": self.device_mode,
         }
 
 
@@ -416,6 +420,13 @@ def add_run_arguments(
         help="run every task in this process on torch on this device ('cuda', 'cuda:1', 'cpu'): the "
         "same numbers as numpy to rounding; a policy's trials are one batch unless --shard-size, and "
         "--max-hours (a CPU estimate) is not applied (default: numpy, no torch needed)",
+    )
+    parser.add_argument(
+        "--device-mode",
+        choices=DEVICE_MODES,
+        default="eager",
+        help="the form of each step on --device: 'eager' (default), 'graph' (one CUDA graph per "
+        "step) or 'compiled' (torch.compile); the same numbers",
     )
     add_max_hours(parser)
     parser.add_argument(

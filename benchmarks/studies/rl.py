@@ -223,7 +223,9 @@ class RLStudy(Study):
         evaluated policy acts on numpy too, and a hundred trials launch-bind a device)."""
         if not self.on_device:
             return self.settings
-        return dataclasses.replace(self.settings, device=None, workers=local_workers(self.args.workers))
+        return dataclasses.replace(
+            self.settings, device=None, device_mode="eager", workers=local_workers(self.args.workers)
+        )
 
     def main(self) -> int:
         import sys

@@ -29,6 +29,18 @@ def test_the_claims_study_on_torch_gives_the_numpy_studys_verdicts_and_estimates
     assert 0 < compared["largest_relative"] <= device_bench.TOLERANCE  # rounding, not identity
 
 
+def test_a_run_with_the_step_as_one_graph_gives_the_eager_runs_numbers(tmp_path):
+    """``--device-mode graph`` through the harness: each policy's batch steps through the traced
+    step (on CPU torch, the traced function), and every number of the run is the eager run's."""
+    common = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,mg-crb-cl", "--trials", "4"]
+    common += ["--steps", "12", "--quiet", "--no-figures", "--device", "cpu"]
+    assert main([*common, "--out", str(tmp_path / "eager")]) == 0
+    assert main([*common, "--out", str(tmp_path / "graph"), "--device-mode", "graph"]) == 0
+    compared = device_bench.study_differences(tmp_path / "eager", tmp_path / "graph")
+    assert "summary.json" in compared["files"]
+    assert not compared["differing"] and compared["largest_relative"] == 0.0
+
+
 def test_study_differences_find_a_changed_number_and_skip_the_times():
     a = {"x": [1.0, 2.0], "wall_s": 3.0, "v": "holds", "zero": 6.7e-16}
     assert not device_bench.json_differences(a, {**a, "wall_s": 9.0, "zero": 2.2e-16})
@@ -56,6 +68,10 @@ def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
         (
             ["--device", "cpu", "--policies", "ucb1,cts"],
             r"--device 'cpu': cts act\(s\) on numpy arrays only; run",
+        ),
+        (
+            ["--device-mode", "graph"],
+            r"--device-mode='graph' runs on torch: give a --device \('cpu', 'cuda'\)$",
         ),
     ],
 )
