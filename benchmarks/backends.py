@@ -12,6 +12,7 @@ ignore SIGINT (the parent decides) and exit by themselves when their parent dies
 from __future__ import annotations
 
 import contextlib
+import multiprocessing
 import os
 import signal
 import socket
@@ -21,6 +22,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
+_SPAWN = multiprocessing.get_context("spawn")
 #: ``(payload, policy, shard)``: the run's configuration (``RunConfig.to_json()``) and one task.
 Task = tuple[dict[str, Any], str, int]
 #: Called with a task's position in the list and its result.
@@ -28,11 +30,21 @@ Finished = Callable[[int, dict], None]
 Runner = Callable[[dict[str, Any], str, int], dict]
 
 
-def worker_init(parent: int, threads: int = 1) -> None:
-    """Worker set-up: ``threads`` compute threads for the compiled kernels, SIGINT left to the
-    parent, exit when the parent dies."""
+#: In a worker of :func:`run_processes`: the threads it starts each task on, the run's shared
+#: thread budget (one entry per task, 0 until the parent raises it) and the entry of the task it
+#: is running (:func:`follow_thread_budget`).
+_BASE_THREADS = 1
+_BUDGET: Any = None
+_ENTRY: int | None = None
+
+
+def worker_init(parent: int, threads: int = 1, budget: Any = None) -> None:
+    """Worker set-up: ``threads`` compute threads for the compiled kernels, the run's shared
+    thread ``budget``, SIGINT left to the parent, exit when the parent dies."""
+    global _BASE_THREADS, _BUDGET
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     pin_threads(threads)
+    _BASE_THREADS, _BUDGET = threads, budget
 
     def watch() -> None:
         while os.getppid() == parent:
@@ -54,21 +66,60 @@ def pin_threads(threads: int) -> None:
         compiled.set_threads(threads)
 
 
+def budgeted_task(runner: Runner, entry: int, *task: Any) -> dict:
+    """``runner(*task)`` in a worker, as task ``entry`` of the run's thread budget: it starts on
+    the worker's threads and takes up more where :func:`follow_thread_budget` finds them."""
+    global _ENTRY
+    from mimo_radar_env.core import compiled
+
+    if compiled.HAVE_NUMBA:
+        compiled.set_threads(_BASE_THREADS)
+    _ENTRY = entry
+    try:
+        return runner(*task)
+    finally:
+        _ENTRY = None
+
+
+def follow_thread_budget() -> None:
+    """Between two steps of a task: take up the threads the parent has given it since (the
+    tasks still running at a run's tail share the cores of those that ended). Outside a worker
+    of :func:`run_processes`, nothing. The numbers do not depend on the threads."""
+    if _BUDGET is None or _ENTRY is None:
+        return
+    wanted = _BUDGET[_ENTRY]
+    from mimo_radar_env.core import compiled
+
+    if wanted > 0 and compiled.HAVE_NUMBA and wanted != compiled.threads():
+        compiled.set_threads(wanted)
+
+
+def share_idle_cores(budget: Any, unfinished: list[int], workers: int, threads: int) -> None:
+    """Once fewer tasks are left than workers (every one running: a pool starts them in order),
+    their entries of ``budget`` get the ``workers * threads`` cores shared among them, the
+    first ones one more where they do not divide; an entry is never lowered."""
+    if not unfinished or len(unfinished) >= workers:
+        return
+    each, extra = divmod(workers * threads, len(unfinished))
+    for rank, entry in enumerate(sorted(unfinished)):
+        budget[entry] = max(budget[entry], each + (rank < extra))
+
+
 def run_inline(runner: Runner, todo: list[Task], finished: Finished) -> None:
     for number, task in enumerate(todo):
         finished(number, runner(*task))
 
 
 @contextlib.contextmanager
-def worker_pool(workers: int, threads: int = 1) -> Iterator[ProcessPoolExecutor]:
-    """Spawned worker processes (:func:`worker_init`: ``threads`` compute threads each, exiting
-    when this process dies); on an error or an interrupt the running ones are terminated at once,
-    their results not wanted."""
-    import multiprocessing
-
-    context = multiprocessing.get_context("spawn")  # no inherited threads or state
+def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[ProcessPoolExecutor]:
+    """Spawned worker processes (:func:`worker_init`: ``threads`` compute threads each, the shared
+    thread ``budget``, exiting when this process dies); on an error or an interrupt the running
+    ones are terminated at once, their results not wanted."""
     pool = ProcessPoolExecutor(
-        max_workers=workers, mp_context=context, initializer=worker_init, initargs=(os.getpid(), threads)
+        max_workers=workers,
+        mp_context=_SPAWN,  # no inherited threads or state
+        initializer=worker_init,
+        initargs=(os.getpid(), threads, budget),
     )
     try:
         yield pool
@@ -81,11 +132,24 @@ def worker_pool(workers: int, threads: int = 1) -> Iterator[ProcessPoolExecutor]
 
 
 def run_processes(
-    runner: Runner, todo: list[Task], finished: Finished, workers: int, threads: int = 1
+    runner: Runner,
+    todo: list[Task],
+    finished: Finished,
+    workers: int,
+    threads: int = 1,
+    share_tail: bool = True,
 ) -> None:
-    with worker_pool(workers, threads) as pool:
-        pending = {pool.submit(runner, *task): number for number, task in enumerate(todo)}
+    """The tasks on ``workers`` local processes of ``threads`` compute threads each; at the tail,
+    with ``share_tail``, the tasks still running take up the cores of those that ended
+    (:func:`share_idle_cores`)."""
+    budget = _SPAWN.Array("i", max(1, len(todo)), lock=False)
+    with worker_pool(workers, threads, budget) as pool:
+        pending = {
+            pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)
+        }
         while pending:
+            if share_tail:
+                share_idle_cores(budget, list(pending.values()), workers, threads)
             done, _ = wait(pending, return_when=FIRST_COMPLETED)
             for future in sorted(done, key=pending.__getitem__):
                 finished(pending.pop(future), future.result())

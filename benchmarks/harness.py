@@ -630,6 +630,7 @@ def run_task(
     }
     out[TRUTH_FIELD][0] = host(episode.info["true_state"][0][:, [0, 2]])
     for t, step in enumerate(episode.run(T)):
+        backends.follow_thread_budget()
         info, action = {key: host(value) for key, value in step.info.items()}, host(step.action)
         out["trial_expected"][:, t] = info["expected_reward"]
         out["trial_optimal"][:, t] = info["optimal_reward"]
@@ -940,7 +941,10 @@ def run_many(
             for number in range(len(configs)):
                 if left[number] == 0:
                     run_done(number)
-            _dispatch(tasks, finished, workers, backend, address, threads)
+            # the tail's tasks take up freed cores only with their threaded kernels compiled: a
+            # kernel compiled in mid-task would cost more than the cores give
+            share_tail = workers > 1 and not any(uncached(run_kernels(c, workers)) for c in configs)
+            _dispatch(tasks, finished, workers, backend, address, threads, share_tail)
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
@@ -967,17 +971,21 @@ def _dispatch(
     backend: str,
     address: str | None,
     threads: int | None,
+    share_tail: bool = False,
 ) -> None:
     """Runs ``tasks`` on the backend: Ray (tasks of ``threads`` CPUs), this process (one
     worker, on ``threads`` numba threads, None: numba's own count), or ``workers // threads``
-    local worker processes of ``threads`` threads each."""
+    local worker processes of ``threads`` threads each, the last tasks taking up the cores of
+    those that ended where ``share_tail`` (their kernels over threads are compiled already)."""
     if backend == "ray":
         backends.run_ray(run_task, tasks, finished, address, threads or 1)
     elif workers == 1:
         with compiled.with_threads(threads):
             backends.run_inline(run_task, tasks, finished)
     else:
-        backends.run_processes(run_task, tasks, finished, workers // (threads or 1), threads or 1)
+        backends.run_processes(
+            run_task, tasks, finished, workers // (threads or 1), threads or 1, share_tail=share_tail
+        )
 
 
 def _threads_for(

@@ -1,9 +1,13 @@
 """Every backend, worker count and thread count gives the numbers of one process."""
 
+import time
+
 import numpy as np
 import pytest
 
+from benchmarks import backends
 from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many
+from mimo_radar_env.core import compiled
 from mimo_radar_env.core.compiled import CHUNK
 
 
@@ -67,3 +71,37 @@ def test_ray_backend_runs_a_studys_runs_together_with_the_numbers_of_each_alone(
         for policy in config.policies:
             for key in ("trial_expected", "trial_squared_error", "trial_matches", "selections"):
                 np.testing.assert_array_equal(alone[policy][key], together[policy][key])
+
+
+def test_idle_cores_are_shared_by_the_tasks_left_at_the_tail_and_never_taken_back():
+    budget = [0] * 6
+    backends.share_idle_cores(budget, [2, 3, 4, 5], workers=4, threads=2)  # as many left as workers
+    assert budget == [0] * 6
+    backends.share_idle_cores(budget, [3, 4, 5], workers=4, threads=2)  # 8 cores over 3 tasks
+    assert budget == [0, 0, 0, 3, 3, 2]
+    backends.share_idle_cores(budget, [5, 3], workers=4, threads=2)
+    assert budget == [0, 0, 0, 4, 3, 4]  # task 4 ended; 3 and 5 get 4 each
+    backends.share_idle_cores(budget, [3], workers=4, threads=2)
+    assert budget[3] == 8
+
+
+def _threads_seen(seconds):
+    """A task of ``seconds`` that follows the thread budget every 50 ms: the most threads it had."""
+    seen = compiled.threads()
+    end = time.monotonic() + seconds
+    while time.monotonic() < end:
+        backends.follow_thread_budget()
+        seen = max(seen, compiled.threads())
+        time.sleep(0.05)
+    return {"threads": seen}
+
+
+def test_the_last_task_running_takes_up_the_cores_the_others_left():
+    pytest.importorskip("numba")
+    results = {}
+    tasks = [(0.2,), (6.0,), (0.2,)]
+    backends.run_processes(_threads_seen, tasks, results.__setitem__, workers=2, threads=1)
+    assert results == {0: {"threads": 1}, 1: {"threads": 2}, 2: {"threads": 1}}
+    results.clear()
+    backends.run_processes(_threads_seen, tasks, results.__setitem__, workers=2, threads=1, share_tail=False)
+    assert results == {0: {"threads": 1}, 1: {"threads": 1}, 2: {"threads": 1}}

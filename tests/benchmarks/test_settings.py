@@ -23,9 +23,16 @@ def test_settings_come_from_the_arguments_once():
     assert settings.options.fusion == "centralized" and settings.options.lambda_scale == "db"
     assert settings.agent_params == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}
     execution = {"workers": 2, "threads": 2, "backend": "local", "address": None, "device": None}
-    assert settings.execution() == execution
-    on_device = Settings.from_args(build_parser().parse_args(["claims", "--out", "o", "--device", "cuda"]))
-    assert on_device.execution() == {**execution, "workers": 1, "threads": None, "device": "cuda"}
+    assert settings.execution() == {**execution, "device_mode": "eager"}
+    args = ["claims", "--out", "o", "--device", "cuda", "--device-mode", "graph"]
+    on_device = Settings.from_args(build_parser().parse_args(args))
+    assert on_device.execution() == {
+        **execution,
+        "workers": 1,
+        "threads": None,
+        "device": "cuda",
+        "device_mode": "graph",
+    }
 
 
 def test_paper_numbers_are_checked():
