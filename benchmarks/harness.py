@@ -55,6 +55,7 @@ from .errors import BenchError, HarnessError
 from .shards import (
     TRIAL_FIELDS,
     TRUTH_FIELD,
+    ShardRecorder,
     config_hash,
     read_shard,
     set_aside,
@@ -618,30 +619,21 @@ def run_task(
     )
     episode = agents.Rollout(agent, env, seed=cfg.seed + trials.start)
     host = env.engine.xp.to_numpy
-    n, T, K = len(trials), cfg.steps, scenario.num_targets
-    out = {
-        "trial_expected": np.zeros((n, T)),
-        "trial_optimal": np.zeros((n, T)),
-        "trial_squared_error": np.full((n, T, K), np.nan),
-        "trial_bound_squared": np.full((n, T, K), np.nan),
-        "trial_matches": np.zeros((n, T), np.uint8),
-        "selections": np.zeros((T, scenario.num_tx + scenario.num_rx)),
-        TRUTH_FIELD: np.empty((T + 1, K, 2)),
-    }
-    out[TRUTH_FIELD][0] = host(episode.info["true_state"][0][:, [0, 2]])
-    for t, step in enumerate(episode.run(T)):
+    record = ShardRecorder(
+        env.engine.xp,
+        host,
+        len(trials),
+        cfg.steps,
+        scenario.num_targets,
+        scenario.num_tx + scenario.num_rx,
+        episode.info["true_state"][0],
+    )
+    for step in episode.run(cfg.steps):
         backends.follow_thread_budget()
-        info, action = {key: host(value) for key, value in step.info.items()}, host(step.action)
-        out["trial_expected"][:, t] = info["expected_reward"]
-        out["trial_optimal"][:, t] = info["optimal_reward"]
-        out["trial_matches"][:, t] = np.all(action == info["optimal_action"], axis=1)
-        if "position_error" in info:
-            out["trial_squared_error"][:, t] = info["position_error"] ** 2
-            out["trial_bound_squared"][:, t] = info["position_bound"] ** 2
-        out["selections"][t] = action.sum(axis=0)
-        out[TRUTH_FIELD][t + 1] = info["true_state"][0][:, [0, 2]]
-    info = {key: host(value) for key, value in episode.info.items()}
-    out["tracker_repairs"] = np.array(float(np.sum(info.get("tracker_repairs", 0))))
+        record.add(step.action, step.info)
+    out = record.result()
+    repairs = episode.info.get("tracker_repairs")
+    out["tracker_repairs"] = np.array(float(0 if repairs is None else np.sum(host(repairs))))
     out["wall_s"] = np.array(time.perf_counter() - start)
     return out
 

@@ -145,3 +145,67 @@ def set_aside(path: Path) -> Path:
         target = path.with_name(f"{path.name}.damaged-{count}")
     os.replace(path, target)
     return target
+
+
+class ShardRecorder:
+    """A task's shard fields, filled step by step from the env's ``info`` and the actions where
+    the env runs (numpy, or torch on a device) and brought to the host :attr:`FLUSH_STEPS` steps
+    at a time: a run on a device reads from it once per field every ``FLUSH_STEPS`` steps, not
+    every step. The values are those the host would compute: the same operations, in one place.
+
+    ``trials`` x ``steps``, ``targets`` K and ``stations`` M + N; ``first_truth`` the reset's
+    true state of the first trial (K, 4) and ``host`` the env's to-numpy function."""
+
+    FLUSH_STEPS = 64
+
+    def __init__(
+        self, xp: Any, host: Any, trials: int, steps: int, targets: int, stations: int, first_truth: Any
+    ) -> None:
+        self.xp, self.host = xp, host
+        self.out = {
+            "trial_expected": np.zeros((trials, steps)),
+            "trial_optimal": np.zeros((trials, steps)),
+            "trial_squared_error": np.full((trials, steps, targets), np.nan),
+            "trial_bound_squared": np.full((trials, steps, targets), np.nan),
+            "trial_matches": np.zeros((trials, steps), np.uint8),
+            "selections": np.zeros((steps, stations)),
+            TRUTH_FIELD: np.empty((steps + 1, targets, 2)),
+        }
+        self.out[TRUTH_FIELD][0] = host(first_truth[:, [0, 2]])
+        self._pending: list[dict[str, Any]] = []
+        self._done = 0
+
+    def add(self, action: Any, info: dict[str, Any]) -> None:
+        """One step's fields from the action played and the ``info`` it returned."""
+        values = {
+            "trial_expected": info["expected_reward"],
+            "trial_optimal": info["optimal_reward"],
+            "trial_matches": self.xp.all(action == info["optimal_action"], axis=1),
+            "selections": action.sum(axis=0),
+            TRUTH_FIELD: info["true_state"][0][:, [0, 2]],
+        }
+        if "position_error" in info:
+            values["trial_squared_error"] = info["position_error"] ** 2
+            values["trial_bound_squared"] = info["position_bound"] ** 2
+        self._pending.append(values)
+        if len(self._pending) == self.FLUSH_STEPS:
+            self.flush()
+
+    def flush(self) -> None:
+        """The pending steps' fields to the host arrays."""
+        if not self._pending:
+            return
+        start, end = self._done, self._done + len(self._pending)
+        for name in self._pending[0]:
+            per_trial = name not in ("selections", TRUTH_FIELD)
+            stacked = self.host(self.xp.stack([v[name] for v in self._pending], axis=1 if per_trial else 0))
+            if per_trial:
+                self.out[name][:, start:end] = stacked
+            else:
+                offset = 1 if name == TRUTH_FIELD else 0
+                self.out[name][start + offset : end + offset] = stacked
+        self._pending, self._done = [], end
+
+    def result(self) -> dict[str, NDArray]:
+        self.flush()
+        return self.out

@@ -5,6 +5,7 @@ import pytest
 
 from benchmarks import shards
 from benchmarks.harness import make_config, run_task
+from benchmarks.shards import TRUTH_FIELD, ShardRecorder
 
 
 @pytest.fixture(scope="module")
@@ -49,3 +50,49 @@ def test_the_format_is_part_of_the_identity(one_shard, monkeypatch):
 def test_policy_folders_are_readable_and_distinct():
     assert shards.policy_folder("mg-crb-cl") == "mg-crb-cl"
     assert shards.policy_folder("ppo:a/b_c.zip") != shards.policy_folder("ppo:a_b/c.zip")
+
+
+@pytest.mark.parametrize("where", ["numpy", "torch"])
+def test_the_recorder_gives_the_fields_computed_step_by_step_across_its_flushes(where):
+    """130 steps (two flushes of 64 and a remainder) of random actions and infos: every field
+    equals the field filled one step at a time on the host, bit for bit."""
+    from mimo_radar_env.core.arrays import device_namespace
+
+    rng = np.random.default_rng(4)
+    n, T, K, S = 5, 130, 2, 7
+    steps = []
+    for _ in range(T):
+        action = rng.integers(0, 2, (n, S)).astype(np.int8)
+        optimal = action.copy()
+        optimal[rng.random(n) < 0.5, 0] ^= 1
+        info = {
+            "expected_reward": rng.random(n),
+            "optimal_reward": rng.random(n),
+            "optimal_action": optimal,
+            "true_state": rng.normal(size=(n, K, 4)),
+            "position_error": rng.random((n, K)),
+            "position_bound": rng.random((n, K)),
+        }
+        steps.append((action, info))
+    first = rng.normal(size=(K, 4))
+    if where == "torch":
+        torch = pytest.importorskip("torch")
+        xp = device_namespace("cpu")
+        convert = torch.as_tensor
+    else:
+        xp, convert = device_namespace(None), np.asarray
+    recorder = ShardRecorder(xp, xp.to_numpy, n, T, K, S, convert(first))
+    for action, info in steps:
+        recorder.add(convert(action), {key: convert(value) for key, value in info.items()})
+    out = recorder.result()
+    for t, (action, info) in enumerate(steps):
+        np.testing.assert_array_equal(out["trial_expected"][:, t], info["expected_reward"])
+        np.testing.assert_array_equal(out["trial_optimal"][:, t], info["optimal_reward"])
+        matches = np.all(action == info["optimal_action"], axis=1)
+        np.testing.assert_array_equal(out["trial_matches"][:, t], matches)
+        np.testing.assert_array_equal(out["trial_squared_error"][:, t], info["position_error"] ** 2)
+        np.testing.assert_array_equal(out["trial_bound_squared"][:, t], info["position_bound"] ** 2)
+        np.testing.assert_array_equal(out["selections"][t], action.sum(axis=0))
+        np.testing.assert_array_equal(out[TRUTH_FIELD][t + 1], info["true_state"][0][:, [0, 2]])
+    np.testing.assert_array_equal(out[TRUTH_FIELD][0], first[:, [0, 2]])
+    assert out["trial_matches"].dtype == np.uint8 and set(np.unique(out["trial_matches"])) == {0, 1}
