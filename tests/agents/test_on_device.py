@@ -84,3 +84,17 @@ def test_an_agent_that_acts_on_numpy_only_refuses_a_device_env_by_name():
     env = agents.make_env(agent, 2, device="cpu")
     with pytest.raises(ValueError, match=r"cts acts on numpy arrays only, .* make its env with device=None"):
         agents.Rollout(agent, env, seed=0)
+
+
+def test_an_agent_on_a_device_names_what_is_not_finite_after_one_read_of_all():
+    agent = agents.make_agent("ucb1", "paper-1-v1", seed=0)
+    episode = agents.Rollout(agent, agents.make_env(agent, 4, device=DEVICE), seed=0)
+    obs = episode.obs
+    reward = torch.zeros(4, dtype=torch.float64, device=DEVICE)
+    agent.update(obs, reward)  # all finite: accepted
+    with pytest.raises(ValueError, match="ucb1: the 'reward' it was given is not finite"):
+        agent.update(obs, torch.full_like(reward, float("nan")))
+    bad = {**obs, "track": obs["track"].clone()}
+    bad["track"][1, 0, 2] = float("inf")
+    with pytest.raises(ValueError, match="ucb1: the 'track' it was given is not finite"):
+        agent.update(bad, reward)
