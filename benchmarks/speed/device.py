@@ -247,12 +247,14 @@ def measure(
     steps: int,
     scenario: str = SCENARIO,
     mode: str = "eager",
+    engine: RadarEngine | None = None,
 ) -> dict[str, Any]:
     """Trial-steps per second of ``steps`` v1 steps of ``trials`` trials on ``device`` (``None``:
     numpy + numba; ``mode``, the torch step's form) after two untimed steps (the first traces,
     captures or compiles a traced form: its seconds are ``first_step_s``), random valid
-    actions drawn beforehand (not timed)."""
-    engine = _engine("v1", fusion, trials, device, scenario, mode)
+    actions drawn beforehand (not timed). ``engine``: one of these made before, reset again (a
+    traced form keeps its trace)."""
+    engine = engine or _engine("v1", fusion, trials, device, scenario, mode)
     xp = engine.xp
     sc = engine.scenario
     rng = np.random.default_rng(0)
@@ -314,12 +316,15 @@ def speed_rows(
                 yield {"backend": backend, "fusion": fusion, "trials": trials, "skipped": "too slow"}
                 break
             try:
-                probe = measure(fusion, trials, device, keys, 1, mode=mode)
+                engine = _engine("v1", fusion, trials, device, SCENARIO, mode)  # traced once
+                probe = measure(fusion, trials, device, keys, 1, mode=mode, engine=engine)
                 steps = int(np.clip(target_seconds / probe["seconds_per_step"], 2, 50))
-                row = measure(fusion, trials, device, keys, steps, mode=mode)
+                row = measure(fusion, trials, device, keys, steps, mode=mode, engine=engine)
+                row["first_step_s"] = probe["first_step_s"]  # the trace, capture or compilation
             except Exception as error:  # out of memory ends the backend's rows for the fusion, named
                 if "out of memory" not in str(error).lower():
                     raise
+                engine = None
                 _free(device)
                 yield {"backend": backend, "fusion": fusion, "trials": trials, "skipped": "out of memory"}
                 break
@@ -330,6 +335,7 @@ def speed_rows(
                 flush=True,
             )
             yield {"backend": backend, "mode": mode, **row}
+            engine = None  # its arrays (and graph) freed before the next size
             _free(device)
 
 
