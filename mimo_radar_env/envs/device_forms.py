@@ -17,6 +17,7 @@ compiler may reorder).
 
 from __future__ import annotations
 
+import warnings
 from typing import TYPE_CHECKING, Any
 
 from ..core.arrays import all_passed, deferred_checks
@@ -91,7 +92,7 @@ class TracedStep:
         state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
         if self._function is None:
             self._function = self._trace(actions, state)
-        if self.cuda and self.mode == "graph":
+        if self.cuda and self.mode == "graph" and self._graph is not False:
             new_state, passed, outputs = self._replay(actions, state)
         elif self.cuda:  # compiled with CUDA graphs: its outputs are rewritten by the next call
             import torch
@@ -103,7 +104,7 @@ class TracedStep:
         else:
             new_state, passed, outputs = self._function(actions, *state)
         if not bool(passed):  # the one read of the step: redo it with the checks
-            self._put([b.clone() for b in self._backup] if self._graph is not None else state)
+            self._put([b.clone() for b in self._backup] if self._graph else state)
             self.eager_steps += 1
             return engine.advance(actions)
         self._put(new_state)
@@ -126,7 +127,19 @@ class TracedStep:
             self._actions = actions.clone()
             self._state = [value.clone() for value in state]
             self._backup = [value.clone() for value in state]
-            self._graph = cuda_graph(self._graph_body, lambda: self._function(self._actions, *self._state))
+            try:
+                self._graph = cuda_graph(
+                    self._graph_body, lambda: self._function(self._actions, *self._state)
+                )
+            except RuntimeError as error:  # a kernel this GPU's torch cannot capture: run traced
+                self._graph = False
+                warnings.warn(
+                    f"the step could not be captured as a CUDA graph ({error}); it runs as the traced "
+                    "function instead, with the same numbers",
+                    RuntimeWarning,
+                    stacklevel=4,
+                )
+                return self._function(actions, *state)
         self._actions.copy_(actions)
         for static, value in zip(self._state, state, strict=True):
             if value is not static:  # after a reset or a step redone eagerly

@@ -155,3 +155,15 @@ def test_the_compiled_form_gives_the_eager_numbers_to_round_off():
     worst, engine = _play("v1", "average", "compiled", steps=12)
     assert worst <= 1e-9
     assert engine._forms.eager_steps == 0
+
+
+def test_a_step_that_cannot_be_captured_runs_traced_with_a_warning(monkeypatch):
+    def refuse(body, warm_up):
+        raise RuntimeError("operation not permitted when stream is capturing")
+
+    monkeypatch.setattr(device_forms, "cuda_graph", refuse)
+    monkeypatch.setattr(device_forms.TracedStep, "__init__", _as_if_on_cuda)
+    with pytest.warns(RuntimeWarning, match="could not be captured as a CUDA graph"):
+        worst, engine = _play("v1", "average", "graph", steps=8)
+    assert worst == 0.0
+    assert engine._forms._graph is False
