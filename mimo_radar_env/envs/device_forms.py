@@ -90,25 +90,47 @@ class TracedStep:
         engine = self.engine
         # one layout whatever made the arrays (a reset leaves broadcast views): the trace's
         state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
-        if self._function is None:
-            self._function = self._trace(actions, state)
-        if self.cuda and self.mode == "graph" and self._graph is not False:
-            new_state, passed, outputs = self._replay(actions, state)
-        elif self.cuda:  # compiled with CUDA graphs: its outputs are rewritten by the next call
-            import torch
-
-            torch.compiler.cudagraph_mark_step_begin()
-            new_state, passed, outputs = torch.utils._pytree.tree_map(
-                lambda a: a.clone(), self._function(actions, *state)
-            )
-        else:
-            new_state, passed, outputs = self._function(actions, *state)
+        first = self._function is None
+        if first:
+            try:
+                self._function = self._trace(actions, state)
+            except Exception as error:  # a path of the step with no traced form (a numpy-only solver)
+                self._give_up("traced", error)
+        if self._function is False:
+            return engine.advance(actions)
+        try:
+            new_state, passed, outputs = self._run(actions, state)
+        except Exception as error:  # the first call compiles: a compiler's failure is its own
+            if not first:
+                raise
+            self._give_up("compiled" if self.mode == "compiled" else "run traced", error)
+            return engine.advance(actions)
         if not bool(passed):  # the one read of the step: redo it with the checks
             self._put([b.clone() for b in self._backup] if self._graph else state)
             self.eager_steps += 1
             return engine.advance(actions)
         self._put(new_state)
         return outputs
+
+    def _run(self, actions: Any, state: list[Any]) -> tuple[list[Any], Any, Any]:
+        if self.cuda and self.mode == "graph" and self._graph is not False:
+            return self._replay(actions, state)
+        if self.cuda and self.mode == "compiled":  # CUDA graphs: the next call rewrites its outputs
+            import torch
+
+            torch.compiler.cudagraph_mark_step_begin()
+            return torch.utils._pytree.tree_map(lambda a: a.clone(), self._function(actions, *state))
+        return self._function(actions, *state)
+
+    def _give_up(self, what: str, error: Exception) -> None:
+        """From now on the eager step, said once in a warning."""
+        self._function = False
+        warnings.warn(
+            f"device_mode={self.mode!r}: the step could not be {what} ({type(error).__name__}: "
+            f"{str(error).splitlines()[0] if str(error) else ''}); it runs eagerly, with the same numbers",
+            RuntimeWarning,
+            stacklevel=5,
+        )
 
     def _put(self, state: list[Any]) -> None:
         for (owner, name), value in zip(self.engine.state_slots(), state, strict=True):

@@ -167,3 +167,32 @@ def test_a_step_that_cannot_be_captured_runs_traced_with_a_warning(monkeypatch):
         worst, engine = _play("v1", "average", "graph", steps=8)
     assert worst == 0.0
     assert engine._forms._graph is False
+
+
+def test_a_step_with_no_traced_form_runs_eagerly_with_a_warning():
+    """The alternating oracle solver runs on numpy only: the trace fails, and the env says so once
+    and steps eagerly, with the eager numbers."""
+    import gymnasium as gym
+
+    if DEVICE != "cpu":
+        pytest.skip("the alternating solver reads numpy arrays: CPU torch only")
+
+    def make(mode):
+        return gym.make_vec(
+            "MimoRadarSelect-v1",
+            num_envs=3,
+            vectorization_mode="vector_entry_point",
+            device=DEVICE,
+            device_mode=mode,
+            oracle_solver="alternating",
+        )
+
+    eager, graph = make("eager"), make("graph")
+    eager.reset(seed=2)
+    graph.reset(seed=2)
+    with pytest.warns(RuntimeWarning, match="device_mode='graph': the step could not be traced"):
+        for _ in range(3):
+            action = eager.sample_action()
+            ours, theirs = eager.step(action), graph.step(action)
+            assert all(relative_difference(ours[4][k], theirs[4][k]) == 0.0 for k in ours[4])
+    assert graph.engine._forms._function is False
