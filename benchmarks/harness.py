@@ -891,61 +891,76 @@ def run_many(
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
             prepare_output(out, config)
-        payloads = [config.to_json() for config in configs]
         todo, estimated = _queue(configs, folders, max_tasks)
         started = time.perf_counter()
-        left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
+        saving = _Saving(configs, folders, todo, on_complete)
         if max_tasks is None:
-            _say_resumed(configs, folders, left)
-        steps_of = [
-            {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
-        ]  # trial-steps of each run's tasks
+            _say_resumed(configs, folders, saving.left)
         threads = _threads_for(configs, todo, workers, backend, threads)
-        bar = _progress_bar(configs, todo, steps_of, progress, threads)
-        saved = []
-        complete = [False] * len(configs)
-
-        def run_done(number: int) -> None:
-            if not _tasks_to_run(folders[number], configs[number], tqdm.write):
-                complete[number] = True
-                if on_complete is not None:
-                    on_complete(number)
-
-        def finished(position: int, result: dict[str, NDArray]) -> None:
-            number, policy, shard = todo[position]
-            config = configs[number]
-            write_shard(
-                shard_path(folders[number], policy, shard),
-                result,
-                config.shard_trials(policy, shard),
-                config_hash(payloads[number], policy),
-            )
-            saved.append(position)
-            bar.update(steps_of[number][policy, shard])
-            bar.set_postfix_str(policy if len(configs) == 1 else f"{config.scenario['name']}: {policy}")
-            left[number] -= 1
-            if left[number] == 0:
-                run_done(number)
-
+        saving.bar = _progress_bar(configs, todo, saving.steps_of, progress, threads)
         on_device = () if device is None else (str(device), device_mode)
-        tasks = [(payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
+        tasks = [(saving.payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
         try:
-            for number in range(len(configs)):
-                if left[number] == 0:
-                    run_done(number)
-            # the tail's tasks take up freed cores only with their threaded kernels compiled: a
-            # kernel compiled in mid-task would cost more than the cores give
-            share_tail = workers > 1 and not any(uncached(run_kernels(c, workers)) for c in configs)
-            _dispatch(tasks, finished, workers, backend, address, threads, share_tail)
+            saving.runs_already_done()
+            _dispatch(tasks, saving.finished, workers, backend, address, threads, configs)
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
-                f"interrupted: {len(saved)} of {len(todo)} tasks finished and saved in "
+                f"interrupted: {len(saving.saved)} of {len(todo)} tasks finished and saved in "
                 f"{', '.join(str(f) for f in folders)}; run the same command again to resume"
             ) from None
         finally:
-            bar.close()
-        return complete
+            saving.bar.close()
+        return saving.complete
+
+
+class _Saving:
+    """A run's finished tasks: each one's shard written at once, the progress bar moved, and
+    ``on_complete(i)`` called as soon as run ``i`` has all its shards."""
+
+    def __init__(
+        self,
+        configs: Sequence[RunConfig],
+        folders: Sequence[Path],
+        todo: list[tuple[int, str, int]],
+        on_complete: Callable[[int], None] | None,
+    ) -> None:
+        self.configs, self.folders, self.todo, self.on_complete = configs, folders, todo, on_complete
+        self.payloads = [config.to_json() for config in configs]
+        self.left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
+        self.steps_of = [  # the trial-steps of each run's tasks
+            {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
+        ]
+        self.saved: list[int] = []
+        self.complete = [False] * len(configs)
+        self.bar: Any = None
+
+    def runs_already_done(self) -> None:
+        for number, left in enumerate(self.left):
+            if left == 0:
+                self.run_done(number)
+
+    def run_done(self, number: int) -> None:
+        if not _tasks_to_run(self.folders[number], self.configs[number], tqdm.write):
+            self.complete[number] = True
+            if self.on_complete is not None:
+                self.on_complete(number)
+
+    def finished(self, position: int, result: dict[str, NDArray]) -> None:
+        number, policy, shard = self.todo[position]
+        config = self.configs[number]
+        write_shard(
+            shard_path(self.folders[number], policy, shard),
+            result,
+            config.shard_trials(policy, shard),
+            config_hash(self.payloads[number], policy),
+        )
+        self.saved.append(position)
+        self.bar.update(self.steps_of[number][policy, shard])
+        self.bar.set_postfix_str(policy if len(self.configs) == 1 else f"{config.scenario['name']}: {policy}")
+        self.left[number] -= 1
+        if self.left[number] == 0:
+            self.run_done(number)
 
 
 def _say_resumed(configs: Sequence[RunConfig], folders: Sequence[Path], left: Sequence[int]) -> None:
@@ -963,18 +978,20 @@ def _dispatch(
     backend: str,
     address: str | None,
     threads: int | None,
-    share_tail: bool = False,
+    configs: Sequence[RunConfig] = (),
 ) -> None:
     """Runs ``tasks`` on the backend: Ray (tasks of ``threads`` CPUs), this process (one
     worker, on ``threads`` numba threads, None: numba's own count), or ``workers // threads``
     local worker processes of ``threads`` threads each, the last tasks taking up the cores of
-    those that ended where ``share_tail`` (their kernels over threads are compiled already)."""
+    those that ended where the kernels over threads of the runs ``configs`` are compiled already
+    (one compiled in mid-task would cost more than the cores give)."""
     if backend == "ray":
         backends.run_ray(run_task, tasks, finished, address, threads or 1)
     elif workers == 1:
         with compiled.with_threads(threads):
             backends.run_inline(run_task, tasks, finished)
     else:
+        share_tail = not any(uncached(run_kernels(config, workers)) for config in configs)
         backends.run_processes(
             run_task, tasks, finished, workers // (threads or 1), threads or 1, share_tail=share_tail
         )

@@ -349,7 +349,42 @@ def _free(device: Any) -> None:
         torch.cuda.empty_cache()
 
 
-def main(argv: list[str] | None = None) -> None:
+def equality_rows(
+    device: str, modes: tuple[str, ...], trials: int, steps: int | None, form_steps: int
+) -> list[dict[str, Any]]:
+    """The equality part: every version and fusion eagerly over ``steps`` (None: whole episodes),
+    and each traced form of ``modes`` (traced or compiled once per engine) on v1 under both
+    fusions over ``form_steps``; a row per run, printed as it ends."""
+    fusions = ("average", "centralized")
+    runs = [(version, fusion, "eager", steps) for version in ("v1", "v0") for fusion in fusions]
+    runs += [("v1", fusion, mode, form_steps) for mode in modes if mode != "eager" for fusion in fusions]
+    rows = []
+    for version, fusion, mode, length in runs:
+        start = time.perf_counter()
+        worst = episode_differences(version, fusion, trials, device, length, mode=mode)
+        largest = max(worst, key=lambda k: worst[k])
+        rows.append(
+            {
+                "version": version,
+                "fusion": fusion,
+                "mode": mode,
+                "trials": trials,
+                "steps": length or load_scenario(VERSIONS[version].default_scenario).horizon,
+                "largest": worst[largest],
+                "largest_entry": largest,
+                "differences": worst,
+                "seconds": time.perf_counter() - start,
+            }
+        )
+        print(
+            f"equality {version} {fusion} {mode}: largest relative difference "
+            f"{worst[largest]:.2e} ({largest})",
+            flush=True,
+        )
+    return rows
+
+
+def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cuda", help="the torch device (default %(default)s)")
     parser.add_argument(
@@ -383,7 +418,11 @@ def main(argv: list[str] | None = None) -> None:
         help="only compare a study's folders run on numpy and on a device; print the JSON of "
         "study_differences",
     )
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = _parser().parse_args(argv)
     if args.compare_studies:
         print(json.dumps(study_differences(*args.compare_studies), indent=1, default=str))
         return
@@ -408,38 +447,9 @@ def main(argv: list[str] | None = None) -> None:
     for mode in modes:
         check_device_mode(mode, device)
     if not args.skip_equality:
-        # every version and fusion eagerly; the traced forms (each traced or compiled once per
-        # engine) on v1 under both fusions, over --form-equality-steps steps
-        runs = [
-            (v, f, "eager", args.equality_steps) for v in ("v1", "v0") for f in ("average", "centralized")
-        ]
-        runs += [
-            ("v1", f, m, args.form_equality_steps)
-            for m in modes
-            if m != "eager"
-            for f in ("average", "centralized")
-        ]
-        for version, fusion, mode, steps in runs:
-            start = time.perf_counter()
-            worst = episode_differences(version, fusion, args.equality_trials, device, steps, mode=mode)
-            largest = max(worst, key=lambda k: worst[k])
-            entry = {
-                "version": version,
-                "fusion": fusion,
-                "mode": mode,
-                "trials": args.equality_trials,
-                "steps": steps or load_scenario(VERSIONS[version].default_scenario).horizon,
-                "largest": worst[largest],
-                "largest_entry": largest,
-                "differences": worst,
-                "seconds": time.perf_counter() - start,
-            }
-            result["equality"].append(entry)
-            print(
-                f"equality {version} {fusion} {mode}: largest relative difference "
-                f"{worst[largest]:.2e} ({largest})",
-                flush=True,
-            )
+        result["equality"] = equality_rows(
+            device, modes, args.equality_trials, args.equality_steps, args.form_equality_steps
+        )
     keys = _keys(max(sizes))
     backends = [("numpy + numba, 1 core", None, "eager", sizes)]
     backends.append((f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes))
