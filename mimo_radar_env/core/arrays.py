@@ -107,13 +107,10 @@ def defer(passed: Any) -> None:
     _DEFERRED.append(passed.all())
 
 
-def all_passed(flags: list[Any]) -> Any:
-    """The device boolean that every check of ``flags`` passed (Python True when there were none)."""
-    if not flags:
-        return True
-    import torch
-
-    return torch.stack(flags).all()
+def all_passed(flags: list[Any], xp: Any) -> Any:
+    """The 0-d boolean, in namespace ``xp``, that every check of ``flags`` passed (True when
+    there were none)."""
+    return xp.all(xp.stack(flags)) if flags else xp.ones((), dtype=bool)
 
 
 class _TorchLinalg:

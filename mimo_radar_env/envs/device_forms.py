@@ -62,9 +62,7 @@ class TracedStep:
             engine.simulation.forget()  # nothing kept from before may enter the trace as a constant
             with deferred_checks() as flags:
                 outputs = engine.advance(actions)
-            passed = all_passed(flags)
-            if passed is True:
-                passed = xp.ones((), dtype=bool)
+            passed = all_passed(flags, xp)
             return [getattr(owner, name) for owner, name in slots], passed, outputs
 
         return step
