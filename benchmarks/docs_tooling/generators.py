@@ -582,6 +582,7 @@ TIMINGS = {
     "v1 readings on section 1's layout, claims": "claims/v1-reconstructed-layout.timing.json",
     "tracking study": "tracking/timing.json",
     "RL study": "rl/timing.json",
+    "RL study, torch-ppo on CPU torch": "rl-device/timing.json",
     "planning study": "planning/timing.json",
     "mechanisms study": "mechanisms/timing.json",
     "layout search, 2 layouts scored at 500 trials": "layout-search/timing.json",
@@ -883,32 +884,42 @@ for _page in ("clients.md", "ppo.md"):
     generator(f"recipe-costs-{_page.removesuffix('.md')}")(lambda docs, page=_page: _recipe_costs(docs, page))
 
 
-@generator("rl-tables")
-def rl_tables(docs: Path) -> str:
-    """The RL study's tables (``mimo-radar-bench rl``'s rl.md), from its committed rl.json."""
+#: The RL studies' committed results, each in its results folder of the same name: the SB3
+#: learners' (``rl``) and torch-ppo's (``rl-device``).
+RL_STUDIES = ("rl", "rl-device")
+
+
+def rl_tables(docs: Path, folder: str = "rl") -> str:
+    """An RL study's tables (``mimo-radar-bench rl``'s rl.md), from its committed rl.json."""
     from ..studies.rl import rl_markdown
 
-    text = rl_markdown(read_json(docs, "rl/rl.json"))
-    body = text.split("\n", 2)[2].lstrip("\n")  # the page has its own heading
-    return body.rstrip("\n")
+    text = rl_markdown(read_json(docs, f"{folder}/rl.json"))
+    body = text.split("\n", 2)[2].lstrip("\n")  # the page has its own headings, a level up
+    return body.replace("\n## ", "\n### ").rstrip("\n")
 
 
 #: The verdicts of a learner-minus-X ARMSE interval, by their keys in the values ``rl``.
 AGAINST = {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse", verdicts.CONSISTENT: "same"}
 
 
-@values("rl")
-def rl_values(docs: Path) -> dict[str, str]:
-    """What the RL study shows, from rl.json and timing.json: ``wall``, ``cores``, ``training``,
-    ``evaluation``, ``worker`` (the trainings' worker time); against X of the study's
-    comparisons, ``X.pairs`` learner and scenario pairs and, per verdict (``better``, ``worse``,
-    ``same``: no difference shown), ``X.VERDICT`` how many and ``X.VERDICT.which``; the learning
-    curves: ``flat-change`` (%), ``curves``, ``flat`` and ``flat.which``, ``moving.which``."""
+def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
+    """What an RL study shows, from its rl.json and timing.json: ``wall``, ``cores``,
+    ``training``, ``evaluation``, ``worker`` (the trainings' worker time), ``trials``, ``seeds``
+    (where every learner has the same) and, where rl.json records them, ``training.device``,
+    ``training.key`` (the hyperparameter entry), ``training.n-envs``, ``training.timesteps``
+    and ``training.steps-per-trial``.
+
+    Against X of the study's comparisons: ``X.pairs`` (learner, scenario and fusion triples)
+    and, per verdict (``better``, ``worse``, ``same``: no difference shown), ``X.VERDICT`` how
+    many and ``X.VERDICT.which``. The learning curves: ``flat-change`` (%), ``curves``,
+    ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets``,
+    ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past the study's,
+    ``sweep.T.minus-study`` (better, worse, same) and ``sweep.T.difference`` (m)."""
     from ..harness import duration
     from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
-    judged = read_json(docs, "rl/rl.json")
-    timing = read_json(docs, "rl/timing.json")
+    judged = read_json(docs, f"{folder}/rl.json")
+    timing = read_json(docs, f"{folder}/timing.json")
     parts = timing["parts_s"]
     table = {
         "wall": duration(timing["wall_s"]),
@@ -917,27 +928,67 @@ def rl_values(docs: Path) -> dict[str, str]:
         "evaluation": duration(parts["evaluation"]),
         "worker": duration(judged["training_worker_s"]),
     }
+
+    table["trials"] = _one({e["trials"] for e in judged["scenarios"]}, "trials")
+    counts = {r["seeds"] for e in judged["scenarios"] for r in e["learners"].values()}
+    if len(counts) == 1:
+        table["seeds"] = str(counts.pop())
+    if "training" in judged:  # how the learners trained (recorded since the device study)
+        record = judged["training"]
+        table |= {
+            "training.device": str(record["device"]),
+            "training.key": str(record["hyperparams_key"]),
+            "training.n-envs": f"{record['n_envs']:,}",
+            "training.timesteps": f"{record['trained_timesteps']:,}",
+            "training.steps-per-trial": f"{record['trained_timesteps'] // record['n_envs']:,}",
+        }
+
+    def where(entry: dict[str, Any]) -> str:
+        return f"Scenario {entry['scenario']}, {entry['fusion']}"
+
     for other in MINUS_ORDER:
         which: dict[str, list[str]] = {key: [] for key in AGAINST.values()}
         for entry in judged["scenarios"]:
             for key, row in entry["learners"].items():
                 verdict = verdicts.verdict(row["minus"][other]["ci"], -1)
-                which[AGAINST[verdict]].append(f"`{key}` in Scenario {entry['scenario']}")
+                which[AGAINST[verdict]].append(f"`{key}` in {where(entry)}")
         table[f"{other}.pairs"] = str(sum(map(len, which.values())))
-        for verdict, where in which.items():
-            table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(where)), _listed(where)
-    curves = [(n, k, c) for n, group in judged["curves"].items() for k, c in group.items()]
-    flat = [f"`{k}` (Scenario {n})" for n, k, c in curves if c["flat"]]
+        for verdict, listed in which.items():
+            table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(listed)), _listed(listed)
+    curves = [(where(e), k, c) for e in judged["scenarios"] for k, c in e["curves"].items()]
     table |= {
         "flat-change": f"{100 * FLAT_CHANGE:.0f}",
         "curves": str(len(curves)),
-        "flat": str(len(flat)),
-        "flat.which": _listed(flat),
+        "flat": str(sum(bool(c["flat"]) for _, _, c in curves)),
+        "flat.which": _listed([f"`{k}` ({w})" for w, k, c in curves if c["flat"]]),
         "moving.which": _listed(
-            [f"`{k}` (Scenario {n}, {100 * c['change']:+.1f} %)" for n, k, c in curves if c["flat"] is False]
+            [f"`{k}` ({w}, {100 * c['change']:+.1f} %)" for w, k, c in curves if c["flat"] is False]
         ),
     }
+    if "sweep" in judged:
+        rows = judged["sweep"]["budgets"]
+        table["sweep.budgets"] = _listed([f"{row['timesteps']:,}" for row in rows])
+        table["sweep.flat.which"] = _listed([f"{row['timesteps']:,}" for row in rows if row["curve"]["flat"]])
+        table["sweep.moving.which"] = _listed(
+            [
+                f"{r['timesteps']:,} ({100 * r['curve']['change']:+.1f} %)"
+                for r in rows
+                if r["curve"]["flat"] is False
+            ]
+        )
+        for row in rows[1:]:
+            verdict = verdicts.verdict(row["minus_study"]["ci"], -1)
+            table[f"sweep.{row['timesteps']}.minus-study"] = AGAINST[verdict]
+            difference = row["minus_study"]
+            table[f"sweep.{row['timesteps']}.difference"] = format_estimate(
+                difference["value"], difference["ci"], "{:.3f}"
+            )
     return table
+
+
+for _folder in RL_STUDIES:
+    generator(f"{_folder}-tables")(lambda docs, folder=_folder: rl_tables(docs, folder))
+    values(_folder)(lambda docs, folder=_folder: rl_values(docs, folder))
 
 
 @values("coverage")
@@ -1654,11 +1705,11 @@ def planning_values(docs: Path) -> dict[str, str]:
             for p, d in run["minus_best_tracking"].items()
             if not p.startswith("plan-tracking:") and verdicts.verdict(d["ci"], -1) == verdicts.HOLDS
         ]
-        if rl is not None and run["fusion"] == "average":
+        if rl is not None:
             winners += [
                 f"`{key} (RL study)`"
                 for entry in rl["scenarios"]
-                if entry["scenario"] == run["scenario"]
+                if (entry["scenario"], entry["fusion"]) == (run["scenario"], run["fusion"])
                 for key, row in entry["learners"].items()
                 if verdicts.verdict(row["minus"]["best-tracking"]["ci"], -1) == verdicts.HOLDS
             ]

@@ -240,21 +240,15 @@ def against_learners(
     mean over its seeds, on the trials both ran; None where the RL study has no run of this
     scenario and fusion."""
     from .. import harness
-    from .rl import TRAININGS, learner_policies
+    from .rl import DEVICE_TRAININGS, TRAININGS, learner_policies
 
-    folder = rl_out / str(finished.run.scenario)
+    folder = rl_out / f"{finished.run.scenario}-{finished.config.env_options['fusion']}"
     config_file = folder / harness.CONFIG_FILE
     if not config_file.is_file():
         return None
-    other = json.loads(config_file.read_text())
-    if other["env_options"].get("fusion") != finished.config.env_options.get("fusion"):
-        return None
-    policies = dict.fromkeys(other["policies"])
-    references = {
-        f"{algo}-{reward}": learner_policies(policies, algo, reward)
-        for algo, reward, _ in TRAININGS
-        if learner_policies(policies, algo, reward)
-    }
+    policies = dict.fromkeys(json.loads(config_file.read_text())["policies"])
+    tags = [f"{algo}-{reward}" for algo, reward, _ in (*TRAININGS, *DEVICE_TRAININGS)]
+    references = {tag: learner_policies(policies, tag) for tag in tags if learner_policies(policies, tag)}
     result = cross_run_differences(finished, folder, references, seed, ours=per_trial)
     result["seeds"] = {name: len(p) for name, p in references.items()}
     return result

@@ -32,6 +32,7 @@ import argparse
 import csv
 import dataclasses
 import json
+import re
 from collections.abc import Hashable
 from pathlib import Path
 from typing import Any
@@ -45,6 +46,7 @@ from ..report import format_estimate, paired_difference
 from ..settings import Settings, add_scenarios_argument, integer, local_workers, paper_numbers
 from ..study import Finished, Run, Study
 from ..uncertainty import across_seeds
+from .tracking import FUSIONS, chosen_fusions
 
 #: (learner, reward, seeds option) of the study's trainings.
 TRAININGS = (
@@ -77,20 +79,46 @@ DEFAULT_TRIALS = 100
 #: the last two fifths of training.
 FLAT_CHANGE = 0.02
 RESULTS_FILE = "rl.json"
+#: The key of the budget sweep's run among the study's.
+SWEEP = "sweep"
 
 
-def training_folder(out: str | Path, scenario: str, algo: str, reward: str) -> Path:
-    return Path(out) / "train" / scenario / f"{algo}-{reward}"
+def training_folder(
+    out: str | Path, scenario: str, fusion: str, algo: str, reward: str, timesteps: int | None = None
+) -> Path:
+    """``OUT/train/<scenario>-<fusion>/<algo>-<reward>``; a budget sweep's trainings add
+    ``-<timesteps>``."""
+    name = f"{algo}-{reward}" if timesteps is None else f"{algo}-{reward}-{timesteps}"
+    return Path(out) / "train" / f"{scenario}-{fusion}" / name
 
 
-def learned_policy(out: str | Path, scenario: str, algo: str, reward: str, seed: int) -> str:
-    """The harness policy of one trained seed: ``ALGO:PATH/model.zip`` (torch-ppo's ``model.pt``)."""
+def learned_policy(folder: Path, algo: str, seed: int) -> str:
+    """The harness policy of one trained seed in a training ``folder``: ``ALGO:PATH/model.zip``
+    (torch-ppo's ``model.pt``)."""
     from agents.ppo import MODEL_FILE, TORCH_PPO, WEIGHTS_FILE
 
     from ..training import seed_folder
 
     file = WEIGHTS_FILE if algo == TORCH_PPO else MODEL_FILE
-    return f"{algo}:{seed_folder(training_folder(out, scenario, algo, reward), seed) / file}"
+    return f"{algo}:{seed_folder(folder, seed) / file}"
+
+
+@dataclasses.dataclass(frozen=True)
+class Training:
+    """One group of trainings: a learner, its reward and budget, in one scenario and fusion,
+    ``seeds`` seeds, into ``folder``."""
+
+    number: int
+    scenario: str
+    fusion: str
+    algo: str
+    reward: str
+    seeds: int
+    timesteps: int
+    folder: Path
+
+    def policies(self) -> list[str]:
+        return [learned_policy(self.folder, self.algo, seed) for seed in range(self.seeds)]
 
 
 class RLStudy(Study):
@@ -111,11 +139,31 @@ class RLStudy(Study):
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
         add_scenarios_argument(parser)
         parser.add_argument(
+            "--fusions",
+            default=None,
+            help=f"fusions to train and evaluate under, each into its own folders (default: --fusion's; "
+            f"with --device {','.join(FUSIONS)})",
+        )
+        parser.add_argument(
             "--timesteps",
             type=integer(1, high=10**10),
             default=None,
             help=f"environment steps per training (default {DEFAULT_TIMESTEPS:,}; with --device "
             f"{DEVICE_TIMESTEPS:,}, two episodes of each of the device entry's 4,096 trials)",
+        )
+        parser.add_argument(
+            "--sweep",
+            default=None,
+            metavar="BUDGETS",
+            help="also train the information-reward learner at these budgets (comma-separated "
+            "timesteps, e.g. 5000000,20000000), in the first scenario and fusion, and compare them with "
+            "its --timesteps seeds on the same trials (OUT/sweep-<scenario>-<fusion>)",
+        )
+        parser.add_argument(
+            "--hyperparams-key",
+            default=None,
+            help=f"the entry of the learners' hyperparameter files (default: the flat env id; with "
+            f"--device, {DEVICE_HYPERPARAMS_KEY!r})",
         )
         parser.add_argument(
             "--ppo-seeds",
@@ -158,26 +206,99 @@ class RLStudy(Study):
             return given
         return DEVICE_PPO_SEEDS if self.on_device else PPO_SEEDS
 
-    def trainings(self) -> list[tuple[str, str, str, int]]:
-        """``(scenario, learner, reward, seeds)`` of every training group."""
+    def fusions(self) -> list[str]:
+        """``--fusions``; by default the settings' fusion, or with ``--device`` every fusion."""
+        if self.args.fusions is not None:
+            return chosen_fusions(self, self.args.fusions)
+        return list(FUSIONS) if self.on_device else [self.settings.options.fusion]
+
+    def groups(self) -> list[tuple[int, str, str]]:
+        """``(number, scenario, fusion)`` of every scenario and fusion the study runs."""
         version = env_version(self.settings.env_version)
         return [
-            (version.paper_scenario(number), algo, reward, self.seeds(seeds))
+            (number, version.paper_scenario(number), fusion)
             for number in paper_numbers(self.args.scenarios)
-            for algo, reward, seeds in self.learners()
+            for fusion in self.fusions()
+        ]
+
+    def sweep(self) -> list[int]:
+        """``--sweep``'s budgets, checked (each other than ``--timesteps``, each once)."""
+        if self.args.sweep is None:
+            return []
+        try:
+            budgets = [int(b) for b in self.args.sweep.split(",")]
+        except ValueError:
+            budgets = []
+        if not budgets or any(b < 1 for b in budgets) or len(set(budgets)) != len(budgets):
+            raise BenchError(f"--sweep must list positive timesteps, each once, got {self.args.sweep!r}")
+        if self.timesteps in budgets:
+            raise BenchError(f"--sweep lists --timesteps ({self.timesteps}): its seeds are the study's own")
+        return budgets
+
+    def sweep_learner(self) -> tuple[str, str, str]:
+        """The learner a budget sweep trains: the study's information-reward one."""
+        return next(entry for entry in self.learners() if entry[1] == "information")
+
+    def trainings(self) -> list[Training]:
+        """Every training group: the study's learners in every scenario and fusion."""
+        return [
+            Training(
+                number,
+                scenario,
+                fusion,
+                algo,
+                reward,
+                self.seeds(option),
+                self.timesteps,
+                training_folder(self.settings.out, scenario, fusion, algo, reward),
+            )
+            for number, scenario, fusion in self.groups()
+            for algo, reward, option in self.learners()
+        ]
+
+    def sweep_trainings(self) -> list[Training]:
+        """The budget sweep's training groups: the information-reward learner at each budget of
+        ``--sweep``, in the first scenario and fusion."""
+        number, scenario, fusion = self.groups()[0]
+        algo, reward, option = self.sweep_learner()
+        return [
+            Training(
+                number,
+                scenario,
+                fusion,
+                algo,
+                reward,
+                self.seeds(option),
+                budget,
+                training_folder(self.settings.out, scenario, fusion, algo, reward, budget),
+            )
+            for budget in self.sweep()
         ]
 
     def runs(self) -> list[Run]:
+        """One evaluation per scenario and fusion, ``OUT/<scenario>-<fusion>``; with ``--sweep``,
+        one more in its scenario and fusion, ``OUT/sweep-<scenario>-<fusion>``: best-tracking and
+        the swept learner at ``--timesteps`` and at each budget, on the same trials."""
+        out = Path(self.settings.out)
+        trainings = self.trainings()
         runs = []
-        for number in paper_numbers(self.args.scenarios):
-            scenario = env_version(self.settings.env_version).paper_scenario(number)
+        for number, scenario, fusion in self.groups():
             learned = [
-                learned_policy(self.settings.out, scenario, algo, reward, seed)
-                for name, algo, reward, seeds in self.trainings()
-                if name == scenario
-                for seed in range(seeds)
+                p for t in trainings if (t.scenario, t.fusion) == (scenario, fusion) for p in t.policies()
             ]
-            runs.append(Run(number, scenario, (*COMPARED, *learned), Path(self.settings.out) / scenario))
+            options = dataclasses.replace(self.settings.options, fusion=fusion)
+            folder = out / f"{scenario}-{fusion}"
+            runs.append(Run((number, fusion), scenario, (*COMPARED, *learned), folder, options))
+        swept = self.sweep_trainings()
+        if swept:
+            first = next(t for t in trainings if (t.algo, t.reward) == self.sweep_learner()[:2])
+            learned = [p for t in (first, *swept) for p in t.policies()]
+            options = dataclasses.replace(self.settings.options, fusion=first.fusion)
+            folder = out / f"sweep-{first.scenario}-{first.fusion}"
+            policies = ("best-tracking", *learned)
+            # the paper study's parameters of the policies it runs (MG-CRB-CL's are not among them)
+            params = {p: v for p, v in self.settings.agent_params.items() if p in policies}
+            runs.append(Run(SWEEP, first.scenario, policies, folder, options, params))
         return runs
 
     def train(self) -> None:
@@ -186,14 +307,13 @@ class RLStudy(Study):
         from ..training import train_jobs, training_job
 
         tasks = []
-        key = DEVICE_HYPERPARAMS_KEY if self.on_device else None
-        for scenario, algo, reward, seeds in self.trainings():
-            options = dataclasses.replace(self.settings.options, reward=reward)
-            job = training_job(load_scenario(scenario), self.timesteps, algo, options, hyperparams_key=key)
+        key = self.args.hyperparams_key or (DEVICE_HYPERPARAMS_KEY if self.on_device else None)
+        for t in (*self.trainings(), *self.sweep_trainings()):
+            options = dataclasses.replace(self.settings.options, reward=t.reward, fusion=t.fusion)
+            job = training_job(load_scenario(t.scenario), t.timesteps, t.algo, options, hyperparams_key=key)
             if self.args.n_envs is not None:
                 job["n_envs"] = self.args.n_envs
-            folder = training_folder(self.settings.out, scenario, algo, reward)
-            tasks += [(job, folder, seed) for seed in range(seeds)]
+            tasks += [(job, t.folder, seed) for seed in range(t.seeds)]
         try:
             train_jobs(
                 tasks, self.settings.workers, progress=self.settings.progress, device=self.settings.device
@@ -210,13 +330,26 @@ class RLStudy(Study):
         from ..training import META_FILE, estimate_training_seconds, seed_folder
 
         seconds = 0.0
-        for scenario, algo, reward, seeds in self.trainings():
-            folder = training_folder(self.settings.out, scenario, algo, reward)
-            for seed in range(seeds):
-                meta = seed_folder(folder, seed) / META_FILE
+        for t in (*self.trainings(), *self.sweep_trainings()):
+            for seed in range(t.seeds):
+                meta = seed_folder(t.folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
-                    seconds += estimate_training_seconds(algo, self.timesteps, self.settings.device)
+                    seconds += estimate_training_seconds(t.algo, t.timesteps, self.settings.device)
         return seconds if self.on_device else seconds / self.settings.workers
+
+    def training_record(self) -> dict[str, Any]:
+        """How the study's learners trained, from its first training's ``ppo.json``: where
+        (``device``, None for numpy), the hyperparameter entry, parallel trials and timesteps."""
+        from ..training import META_FILE, seed_folder
+
+        meta = json.loads((seed_folder(self.trainings()[0].folder, 0) / META_FILE).read_text())
+        return {
+            "device": meta.get("device"),
+            "hyperparams_key": meta["job"].get("hyperparams_key"),
+            "n_envs": meta["n_envs"],
+            "timesteps": meta["timesteps"],
+            "trained_timesteps": meta["trained_timesteps"],
+        }
 
     def evaluation_settings(self) -> Settings:
         """The evaluation's settings: with ``--device``, numpy in local worker processes (every
@@ -263,24 +396,30 @@ class RLStudy(Study):
         return 0
 
     def judge(self, finished: dict[Hashable, Finished]) -> dict[str, Any]:
-        return judge_learners(
-            {number: f.summary for number, f in finished.items()},
-            [(algo, reward) for algo, reward, _ in self.learners()],
-        )
+        learners = [(algo, reward) for algo, reward, _ in self.learners()]
+        judged = judge_learners({k: f.summary for k, f in finished.items() if k != SWEEP}, learners)
+        if SWEEP in finished:
+            judged["sweep"] = judge_sweep(finished[SWEEP], self.timesteps, self.sweep_trainings())
+        return judged
 
     def report(self, finished: dict[Hashable, Finished], judged: dict[str, Any]) -> str:
         out = Path(self.settings.out)
-        curves = {}
-        for number, f in finished.items():
-            scenario = f.run.scenario
-            curves[number] = {
-                f"{algo}-{reward}": read_curves(training_folder(out, str(scenario), algo, reward))
-                for algo, reward, _ in self.learners()
+        figures = {}
+        for entry in judged["scenarios"]:
+            group = [
+                t for t in self.trainings() if (t.number, t.fusion) == (entry["scenario"], entry["fusion"])
+            ]
+            curves = {f"{t.algo}-{t.reward}": read_curves(t.folder) for t in group}
+            entry["curves"] = {key: flattened(curve) for key, curve in curves.items()}
+            figures[f"paper-{entry['scenario']}-{entry['fusion']}"] = curves
+        if "sweep" in judged:
+            study = next(t for t in self.trainings() if (t.algo, t.reward) == self.sweep_learner()[:2])
+            folders = {study.timesteps: study.folder} | {
+                t.timesteps: t.folder for t in self.sweep_trainings()
             }
-        judged["curves"] = {
-            str(number): {key: flattened(curve) for key, curve in group.items()}
-            for number, group in curves.items()
-        }
+            for row in judged["sweep"]["budgets"]:
+                row["curve"] = flattened(read_curves(folders[row["timesteps"]]))
+        judged["training"] = self.training_record()
         judged["training_worker_s"] = training_seconds(out)
         (out / RESULTS_FILE).write_text(json.dumps(judged, indent=1, default=float) + "\n")
         text = rl_markdown(judged)
@@ -288,25 +427,28 @@ class RLStudy(Study):
         if self.settings.figures:
             from ..plots import plot_learning_curves
 
-            for number, group in curves.items():
-                plot_learning_curves(group, out / f"curves_paper-{number}.png", f"paper-{number}")
+            for name, curves in figures.items():
+                plot_learning_curves(curves, out / f"curves_{name}.png", name)
         return text
 
 
-def learner_policies(rows: dict[str, Any], algo: str, reward: str) -> list[str]:
-    return sorted(p for p in rows if p.startswith(f"{algo}:") and f"/{algo}-{reward}/" in p)
+def learner_policies(rows: dict[str, Any], tag: str) -> list[str]:
+    """The policies of ``rows`` trained into folders named ``tag`` (``ALGO-REWARD``, a sweep's
+    ``ALGO-REWARD-TIMESTEPS``)."""
+    return sorted(p for p in rows if f"/{tag}/" in p)
 
 
 def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[str, str]]) -> dict[str, Any]:
-    """Across-seed statistics of every learner in every scenario (``{number: summary.json}``),
-    their paired ARMSE differences against :data:`COMPARED`, and the IQM over scenarios of
-    their ARMSE as a ratio to best-tracking's."""
+    """Across-seed statistics of every learner in every scenario and fusion (``{(number,
+    fusion): summary.json}``), their paired ARMSE differences against :data:`COMPARED`, and per
+    fusion the IQM over scenarios of their ARMSE as a ratio to best-tracking's."""
     scenarios = []
-    ratios: dict[str, list[np.ndarray]] = {}
-    for number, summary in summaries.items():
+    ratios: dict[str, dict[str, list[np.ndarray]]] = {}
+    for (number, fusion), summary in summaries.items():
         rows = summary["policies"]
         entry: dict[str, Any] = {
             "scenario": number,
+            "fusion": fusion,
             "trials": summary["trials"],
             "compared": {
                 p: {m: {"value": rows[p][m], "ci": rows[p]["ci"][m]} for m in ("armse", "final_regret")}
@@ -315,7 +457,7 @@ def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[st
             "learners": {},
         }
         for algo, reward in learners:
-            policies = learner_policies(rows, algo, reward)
+            policies = learner_policies(rows, f"{algo}-{reward}")
             if not policies:
                 continue
             armse = np.array([rows[p]["armse"] for p in policies])
@@ -326,24 +468,69 @@ def judge_learners(summaries: dict[Any, dict[str, Any]], learners: list[tuple[st
                 "armse_per_seed": armse.tolist(),
                 "armse": {s: across_seeds([armse], s) for s in ("mean", "iqm")},
                 "final_regret": {s: across_seeds([regret], s) for s in ("mean", "iqm")},
-                "minus": {
-                    other: across_seeds(
-                        [
-                            np.array(
-                                [paired_difference(summary, p, other, "armse")["estimate"] for p in policies]
-                            )
-                        ],
-                        "mean",
-                    )
-                    for other in COMPARED
-                },
+                "minus": {other: _minus(summary, policies, other) for other in COMPARED},
             }
-            ratios.setdefault(key, []).append(armse / rows["best-tracking"]["armse"])
+            ratios.setdefault(fusion, {}).setdefault(key, []).append(armse / rows["best-tracking"]["armse"])
         scenarios.append(entry)
     return {
         "scenarios": scenarios,
-        "over_scenarios": {key: across_seeds(groups, "iqm") for key, groups in ratios.items()},
+        "over_scenarios": {
+            fusion: {key: across_seeds(groups, "iqm") for key, groups in by_learner.items()}
+            for fusion, by_learner in ratios.items()
+        },
     }
+
+
+def _minus(summary: dict[str, Any], policies: list[str], other: str) -> dict[str, Any]:
+    """The mean over seeds of each seed's ARMSE minus ``other``'s, paired on the same trials,
+    with its interval over seeds."""
+    differences = [paired_difference(summary, p, other, "armse")["estimate"] for p in policies]
+    return across_seeds([np.array(differences)], "mean")
+
+
+def judge_sweep(finished: Finished, timesteps: int, swept: list[Training]) -> dict[str, Any]:
+    """The budget sweep's run: per budget (``timesteps``, the study's own, first), the learner's
+    ARMSE across seeds, its paired difference from best-tracking and, seed by seed, from the
+    same seed trained for ``timesteps`` (each seed starts from the same weights and trials)."""
+    rows = finished.summary["policies"]
+    first = swept[0]
+    tag = f"{first.algo}-{first.reward}"
+    by_seed = {
+        budget: _per_seed(rows, name)
+        for budget, name in [(timesteps, tag), *((t.timesteps, f"{tag}-{t.timesteps}") for t in swept)]
+    }
+    budgets = []
+    for budget, seeds in by_seed.items():
+        policies = list(seeds.values())
+        armse = np.array([rows[p]["armse"] for p in policies])
+        row: dict[str, Any] = {
+            "timesteps": budget,
+            "seeds": len(policies),
+            "armse": {s: across_seeds([armse], s) for s in ("mean", "iqm")},
+            "minus_best_tracking": _minus(finished.summary, policies, "best-tracking"),
+        }
+        if budget != timesteps:
+            common = sorted(set(seeds) & set(by_seed[timesteps]))
+            differences = [rows[seeds[s]]["armse"] - rows[by_seed[timesteps][s]]["armse"] for s in common]
+            row["minus_study"] = across_seeds([np.array(differences)], "mean")
+        budgets.append(row)
+    return {
+        "scenario": first.number,
+        "fusion": first.fusion,
+        "learner": tag,
+        "trials": finished.summary["trials"],
+        "budgets": budgets,
+    }
+
+
+def _per_seed(rows: dict[str, Any], tag: str) -> dict[int, str]:
+    """``{seed: policy}`` of the trained seeds in training folders named ``tag``."""
+    found = {}
+    for policy in learner_policies(rows, tag):
+        match = re.search(r"/seed-(\d+)/", policy)
+        if match:
+            found[int(match.group(1))] = policy
+    return dict(sorted(found.items()))
 
 
 def training_seconds(out: Path) -> float:
@@ -382,10 +569,6 @@ def flattened(curves: list[dict[str, np.ndarray]]) -> dict[str, Any]:
 
 def rl_markdown(judged: dict[str, Any]) -> str:
     """The study's tables."""
-
-    def seeds_cell(stat: dict[str, Any], fmt: str) -> str:
-        return format_estimate(stat["value"], stat["ci"], fmt)
-
     lines = [
         "# The RL study",
         "",
@@ -396,7 +579,7 @@ def rl_markdown(judged: dict[str, Any]) -> str:
     for entry in judged["scenarios"]:
         lines += [
             "",
-            f"## paper-{entry['scenario']} ({entry['trials']} trials)",
+            f"## paper-{entry['scenario']}, {entry['fusion']} fusion ({entry['trials']} trials)",
             "",
             "| policy | seeds | ARMSE (m), mean | ARMSE (m), IQM | final regret, mean | "
             + " | ".join(f"- {other}" for other in MINUS_ORDER)
@@ -404,15 +587,15 @@ def rl_markdown(judged: dict[str, Any]) -> str:
             "|---|---|---|---|---|---|---|---|",
         ]
         for p, row in entry["compared"].items():
-            armse = seeds_cell(row["armse"], "{:.3f}")
-            regret = seeds_cell(row["final_regret"], "{:.0f}")
+            armse = _cell(row["armse"], "{:.3f}")
+            regret = _cell(row["final_regret"], "{:.0f}")
             lines.append(f"| `{p}` | - | {armse} | - | {regret} | - | - | - |")
         for key, row in entry["learners"].items():
             cells = [
-                seeds_cell(row["armse"]["mean"], "{:.3f}"),
-                seeds_cell(row["armse"]["iqm"], "{:.3f}"),
-                seeds_cell(row["final_regret"]["mean"], "{:.0f}"),
-                *(seeds_cell(row["minus"][other], "{:.3f}") for other in MINUS_ORDER),
+                _cell(row["armse"]["mean"], "{:.3f}"),
+                _cell(row["armse"]["iqm"], "{:.3f}"),
+                _cell(row["final_regret"]["mean"], "{:.0f}"),
+                *(_cell(row["minus"][other], "{:.3f}") for other in MINUS_ORDER),
             ]
             lines.append(f"| `{key}` | {row['seeds']} | " + " | ".join(cells) + " |")
     lines += [
@@ -420,24 +603,66 @@ def rl_markdown(judged: dict[str, Any]) -> str:
         "`- X`: the learner's ARMSE minus X's, paired on the same trials, averaged over seeds (interval over "
         "seeds); an interval below 0 means the learner tracks better than X.",
         "",
-        "## Over the three scenarios",
+        "## Over the scenarios",
         "",
-        "| learner | IQM of ARMSE / best-tracking's ARMSE |",
-        "|---|---|",
+        "| fusion | learner | IQM of ARMSE / best-tracking's ARMSE |",
+        "|---|---|---|",
     ]
-    for key, stat in judged["over_scenarios"].items():
-        lines.append(f"| `{key}` | {seeds_cell(stat, '{:.3f}')} |")
+    for fusion, by_learner in judged["over_scenarios"].items():
+        lines += [f"| {fusion} | `{key}` | {_cell(stat, '{:.3f}')} |" for key, stat in by_learner.items()]
     lines += ["", "Stratified bootstrap: each scenario's seeds resampled within it.", ""]
-    if "curves" in judged:
+    curves = [(entry, key, c) for entry in judged["scenarios"] for key, c in entry.get("curves", {}).items()]
+    if curves:
         lines += [
             "## Learning curves",
             "",
-            "| scenario | learner | change of the mean ARMSE, last two fifths | flat |",
+            "| scenario | fusion | learner | change of the mean ARMSE, last two fifths | flat |",
+            "|---|---|---|---|---|",
         ]
-        lines.append("|---|---|---|---|")
-        for number, group in judged["curves"].items():
-            for key, curve in group.items():
-                change = "-" if curve["change"] is None else f"{100 * curve['change']:+.1f} %"
-                flat = "-" if curve["flat"] is None else ("yes" if curve["flat"] else "no")
-                lines.append(f"| paper-{number} | `{key}` | {change} | {flat} |")
+        lines += [
+            f"| paper-{entry['scenario']} | {entry['fusion']} | `{key}` | {_change(c)} | {_flat(c)} |"
+            for entry, key, c in curves
+        ]
+        lines.append("")
+    if "sweep" in judged:
+        lines += _sweep_markdown(judged["sweep"])
     return "\n".join(lines) + "\n"
+
+
+def _sweep_markdown(sweep: dict[str, Any]) -> list[str]:
+    study = sweep["budgets"][0]["timesteps"]
+    lines = [
+        f"## Budget sweep: `{sweep['learner']}`, paper-{sweep['scenario']}, {sweep['fusion']} fusion "
+        f"({sweep['trials']} trials)",
+        "",
+        f"| timesteps | seeds | ARMSE (m), mean | ARMSE (m), IQM | - best-tracking | - at {study:,} | "
+        "change of the mean ARMSE, last two fifths | flat |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for row in sweep["budgets"]:
+        against = _cell(row["minus_study"], "{:.3f}") if "minus_study" in row else "-"
+        curve = row.get("curve", {"change": None, "flat": None})
+        lines.append(
+            f"| {row['timesteps']:,} | {row['seeds']} | {_cell(row['armse']['mean'], '{:.3f}')} | "
+            f"{_cell(row['armse']['iqm'], '{:.3f}')} | {_cell(row['minus_best_tracking'], '{:.3f}')} | "
+            f"{against} | {_change(curve)} | {_flat(curve)} |"
+        )
+    lines += [
+        "",
+        f"`- at {study:,}`: each seed's ARMSE minus the same seed's trained for {study:,} steps, on the "
+        "same trials, averaged over seeds (interval over seeds).",
+        "",
+    ]
+    return lines
+
+
+def _cell(stat: dict[str, Any], fmt: str) -> str:
+    return format_estimate(stat["value"], stat["ci"], fmt)
+
+
+def _change(curve: dict[str, Any]) -> str:
+    return "-" if curve["change"] is None else f"{100 * curve['change']:+.1f} %"
+
+
+def _flat(curve: dict[str, Any]) -> str:
+    return "-" if curve["flat"] is None else ("yes" if curve["flat"] else "no")

@@ -91,16 +91,23 @@ def add_fusion_run_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def chosen_fusions(study: Study, text: str) -> list[str]:
+    """``--fusions``' list (``"average,centralized"``), checked; with ``--fusion`` given too,
+    refused."""
+    if hasattr(study.args, "fusion"):
+        raise BenchError(f"the {study.name} study runs each of --fusions; --fusion does not apply")
+    fusions = [f.strip() for f in text.split(",") if f.strip()]
+    if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
+        raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {text!r}")
+    return fusions
+
+
 def fusion_runs(study: Study, policies: tuple[str, ...]) -> list[Run]:
     """The runs of a study over paper scenarios (``--scenarios``) and fusions (``--fusions``):
     ``policies`` and, with ``--ppo PATTERN``, a trained PPO in each, into
     ``OUT/<scenario>-<fusion>``."""
     args, settings = study.args, study.settings
-    if hasattr(args, "fusion"):
-        raise BenchError(f"the {study.name} study runs each of --fusions; --fusion does not apply")
-    fusions = [f.strip() for f in args.fusions.split(",") if f.strip()]
-    if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
-        raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {args.fusions!r}")
+    fusions = chosen_fusions(study, args.fusions)
     version = env_version(settings.env_version)
     runs = []
     for number in paper_numbers(args.scenarios):

@@ -2,6 +2,7 @@
 and a reduced run of the whole study (slow)."""
 
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -30,8 +31,12 @@ def test_learners_are_summarised_across_their_seeds_against_the_compared_policie
     learned = {f"ppo:out/train/paper-1-v1/ppo-information/seed-{s}/model.zip": a for s, a in seeds.items()}
     other = {"ppo:out/train/paper-1-v1/ppo-sinr/seed-0/model.zip": 9.0}
     base = {"mg-crb-cl": 4.5, "best-tracking": 2.0, "tracking-ucb": 2.5}
-    summaries = {1: _summary({**base, **learned, **other}), 2: _summary({**base, **learned})}
+    summaries = {
+        (1, "average"): _summary({**base, **learned, **other}),
+        (2, "average"): _summary({**base, **learned}),
+    }
     judged = judge_learners(summaries, [("ppo", "information"), ("ppo", "sinr")])
+    assert [(e["scenario"], e["fusion"]) for e in judged["scenarios"]] == [(1, "average"), (2, "average")]
     first = judged["scenarios"][0]["learners"]["ppo-information"]
     assert first["seeds"] == 3 and first["armse"]["mean"]["value"] == pytest.approx(4.0)
     assert first["armse"]["iqm"]["value"] == pytest.approx(4.0)  # the middle of 3, 4, 5 (trimmed)
@@ -42,7 +47,7 @@ def test_learners_are_summarised_across_their_seeds_against_the_compared_policie
     assert judged["scenarios"][0]["learners"]["ppo-sinr"]["seeds"] == 1
     assert "ppo-sinr" not in judged["scenarios"][1]["learners"]
     # over scenarios: the IQM of ARMSE / best-tracking's, seeds of each scenario pooled
-    ratio = judged["over_scenarios"]["ppo-information"]
+    ratio = judged["over_scenarios"]["average"]["ppo-information"]
     assert ratio["value"] == pytest.approx(2.0) and ratio["runs"] == 6
     assert set(judged["scenarios"][0]["compared"]) == set(COMPARED)
     text = rl_markdown(judged)
@@ -79,10 +84,10 @@ def test_a_reduced_rl_study_trains_evaluates_and_reports(tmp_path):
     assert all(row["seeds"] == 2 for row in learners.values())
     assert judged["training_worker_s"] > 0
     assert (out / "rl.md").read_text().startswith("# The RL study")
-    assert (out / "curves_paper-1.png").stat().st_size > 0
+    assert (out / "curves_paper-1-average.png").stat().st_size > 0
     for key in learners:
-        assert len(list((out / "train" / "paper-1-v1" / key).glob("seed-*/model.zip"))) == 2
-        assert len(list((out / "train" / "paper-1-v1" / key).glob("seed-*/curve.csv"))) == 2
+        assert len(list((out / "train" / "paper-1-v1-average" / key).glob("seed-*/model.zip"))) == 2
+        assert len(list((out / "train" / "paper-1-v1-average" / key).glob("seed-*/curve.csv"))) == 2
     # started again: every training and the run are kept, the report is the same
     first = (out / "rl.md").read_text()
     assert main(argv) == 0
@@ -121,19 +126,13 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     }
     base = {"mg-crb-cl": 4.0, "best-tracking": 2.0, "tracking-ucb": 1.1}
     judged = judge_learners(
-        {1: _summary({**base, **learned, **worse})},
+        {(1, "average"): _summary({**base, **learned, **worse})},
         [("ppo", "information"), ("recurrent-ppo", "information")],
     )
     steps = np.arange(1.0, 51.0)
-    judged["curves"] = {
-        "1": {
-            "ppo-information": flattened(
-                [{"timesteps": steps, "return": steps, "armse": 2.0 + np.exp(-steps)}]
-            ),
-            "recurrent-ppo-information": flattened(
-                [{"timesteps": steps, "return": steps, "armse": 10 / steps}]
-            ),
-        }
+    judged["scenarios"][0]["curves"] = {
+        "ppo-information": flattened([{"timesteps": steps, "return": steps, "armse": 2.0 + np.exp(-steps)}]),
+        "recurrent-ppo-information": flattened([{"timesteps": steps, "return": steps, "armse": 10 / steps}]),
     }
     judged["training_worker_s"] = 13000.0
     folder = tmp_path / "results" / "rl"
@@ -151,20 +150,23 @@ def test_the_docs_say_only_what_the_rl_tables_show(tmp_path):
     assert table["worker"] == "3.6 h"
     assert (table["best-tracking.better"], table["best-tracking.better.which"]) == (
         "1",
-        "`ppo-information` in Scenario 1",
+        "`ppo-information` in Scenario 1, average",
     )
-    assert table["best-tracking.worse.which"] == "`recurrent-ppo-information` in Scenario 1"
+    assert table["best-tracking.worse.which"] == "`recurrent-ppo-information` in Scenario 1, average"
     assert (table["best-tracking.same"], table["best-tracking.pairs"]) == ("0", "2")
     # against tracking-ucb (1.1): ppo's seeds 1.0, 1.2, 1.1 straddle it
-    assert table["tracking-ucb.same.which"] == "`ppo-information` in Scenario 1"
+    assert table["tracking-ucb.same.which"] == "`ppo-information` in Scenario 1, average"
     assert (table["flat"], table["curves"], table["flat.which"]) == (
         "1",
         "2",
-        "`ppo-information` (Scenario 1)",
+        "`ppo-information` (Scenario 1, average)",
     )
-    assert table["moving.which"].startswith("`recurrent-ppo-information` (Scenario 1, -")
+    assert table["moving.which"].startswith("`recurrent-ppo-information` (Scenario 1, average, -")
     tables = rl_tables(tmp_path)
-    assert tables.startswith("Learned policies across their training seeds") and "## paper-1" in tables
+    assert (
+        tables.startswith("Learned policies across their training seeds")
+        and "## paper-1, average fusion" in tables
+    )
 
 
 def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
@@ -182,27 +184,114 @@ def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
     study = RLStudy(args)
     before = study.estimate_training_seconds()  # 10 PPO and 3 MaskablePPO at 3000/s, 3 RecurrentPPO at 1280/s
     assert before == pytest.approx(13 * 1.0 + 3 * 3000 / 1280)
-    finished = seed_folder(training_folder(tmp_path, "paper-1-v1", "ppo", "sinr"), 0)
+    finished = seed_folder(training_folder(tmp_path, "paper-1-v1", "average", "ppo", "sinr"), 0)
     finished.mkdir(parents=True)
     (finished / "ppo.json").write_text(json.dumps({"job": {}, "train_wall_s": 1.0}))
     assert study.estimate_training_seconds() == pytest.approx(before - 1.0)
 
 
-def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_evaluates_on_numpy(tmp_path):
+def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_fusions_with_a_budget_sweep(
+    tmp_path,
+):
     """``rl --device cpu`` (CPU torch here; a GPU in .ci/device-check): torch-ppo under both
-    rewards with the device entry, each seed trained in this process; the evaluation runs the
+    rewards and both fusions with the device entry, each seed trained in this process, and
+    with ``--sweep`` the information learner again at another budget; the evaluation runs the
     trained models beside the compared policies on numpy."""
     pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
     from benchmarks.cli import main
 
     out = tmp_path / "rl"
-    argv = "rl --scenarios 1 --device cpu --n-envs 4 --timesteps 128 --ppo-seeds 2 --trials 2 --steps 5"
-    argv = [*argv.split(), "--quiet", "--no-figures", "--out", str(out)]
+    argv = "rl --scenarios 1 --device cpu --n-envs 4 --timesteps 128 --sweep 256 --ppo-seeds 2 --trials 2"
+    argv = [*argv.split(), "--steps", "5", "--quiet", "--no-figures", "--out", str(out)]
     assert main(argv) == 0
     judged = json.loads((out / "rl.json").read_text())
-    learners = judged["scenarios"][0]["learners"]
-    assert set(learners) == {"torch-ppo-sinr", "torch-ppo-information"}
-    assert all(row["seeds"] == 2 for row in learners.values())
-    meta = json.loads((out / "train/paper-1-v1/torch-ppo-information/seed-1/ppo.json").read_text())
+    assert [(e["scenario"], e["fusion"]) for e in judged["scenarios"]] == [(1, "average"), (1, "centralized")]
+    for entry in judged["scenarios"]:
+        assert set(entry["learners"]) == {"torch-ppo-sinr", "torch-ppo-information"}
+        assert all(row["seeds"] == 2 for row in entry["learners"].values())
+    meta = json.loads(
+        (out / "train/paper-1-v1-centralized/torch-ppo-information/seed-1/ppo.json").read_text()
+    )
     assert (meta["device"], meta["n_envs"], meta["config"]["n_steps"]) == ("cpu", 4, 32)  # the device entry
-    assert meta["env_options"]["reward"] == "information" and meta["trained_timesteps"] == 128
+    assert meta["env_options"]["reward"] == "information" and meta["env_options"]["fusion"] == "centralized"
+    assert meta["trained_timesteps"] == 128
+    # the sweep: the same learner at 256 steps, seed by seed against its 128-step seeds, same trials
+    swept = json.loads(
+        (out / "train/paper-1-v1-average/torch-ppo-information-256/seed-0/ppo.json").read_text()
+    )
+    assert swept["trained_timesteps"] == 256 and swept["env_options"]["fusion"] == "average"
+    sweep = judged["sweep"]
+    assert (sweep["learner"], sweep["scenario"], sweep["fusion"]) == ("torch-ppo-information", 1, "average")
+    assert [row["timesteps"] for row in sweep["budgets"]] == [128, 256]
+    rows = json.loads((out / "sweep-paper-1-v1-average/summary.json").read_text())["policies"]
+    armse = {
+        budget: [rows[p]["armse"] for p in sorted(rows) if f"/torch-ppo-information{tag}/" in p]
+        for budget, tag in ((128, ""), (256, "-256"))
+    }
+    assert sweep["budgets"][1]["minus_study"]["value"] == pytest.approx(
+        np.mean(armse[256]) - np.mean(armse[128])
+    )
+    # the study's own seeds score the same on the sweep's run as on the study's
+    study_rows = json.loads((out / "paper-1-v1-average/summary.json").read_text())["policies"]
+    assert sweep["budgets"][0]["armse"]["mean"]["value"] == pytest.approx(
+        judged["scenarios"][0]["learners"]["torch-ppo-information"]["armse"]["mean"]["value"]
+    )
+    assert all(study_rows[p]["armse"] == rows[p]["armse"] for p in rows if p in study_rows)
+    assert "## Budget sweep: `torch-ppo-information`, paper-1, average fusion" in (out / "rl.md").read_text()
+    # the planning study finds the learners of the same scenario and fusion, and no other
+    planning = tmp_path / "planning"
+    argv = "planning --scenarios 1 --fusions centralized --trials 2 --steps 5 --workers 1 --quiet"
+    argv += " --no-figures"
+    assert main([*argv.split(), "--rl", str(out), "--out", str(planning)]) == 0
+    (run,) = json.loads((planning / "planning.json").read_text())
+    assert run["learners"]["seeds"] == {"torch-ppo-sinr": 2, "torch-ppo-information": 2}
+
+
+def test_the_budget_sweep_pairs_each_seed_with_the_same_seed_at_the_study_budget():
+    from benchmarks.studies.rl import Training, judge_sweep
+    from benchmarks.study import Finished, Run
+
+    def policy(tag, seed):
+        return f"torch-ppo:o/train/paper-1-v1-average/{tag}/seed-{seed}/model.pt"
+
+    study = {0: 3.0, 1: 5.0, 2: 4.0, 10: 6.0}  # seed 10 sorts between 1 and 2 as text
+    longer = {0: 2.5, 1: 4.0, 2: 4.1, 10: 5.0}
+    scores = {"best-tracking": 2.0}
+    scores |= {policy("torch-ppo-information", s): a for s, a in study.items()}
+    scores |= {policy("torch-ppo-information-1000", s): a for s, a in longer.items()}
+    summary = _summary(scores)
+    swept = [Training(1, "paper-1-v1", "average", "torch-ppo", "information", 4, 1000, Path("unused"))]
+    run = Run("sweep", "paper-1-v1", tuple(scores), Path("unused"))
+    judged = judge_sweep(Finished(run, None, summary), 100, swept)
+    first, second = judged["budgets"]
+    assert (first["timesteps"], second["timesteps"], second["seeds"]) == (100, 1000, 4)
+    assert "minus_study" not in first
+    differences = [longer[s] - study[s] for s in study]  # -0.5, -1.0, 0.1, -1.0
+    assert second["minus_study"]["value"] == pytest.approx(np.mean(differences))
+    low, high = second["minus_study"]["ci"]
+    assert min(differences) <= low < np.mean(differences) < high <= max(differences)
+    assert second["minus_best_tracking"]["value"] == pytest.approx(np.mean(list(longer.values())) - 2.0)
+    assert second["armse"]["iqm"]["value"] == pytest.approx(np.mean([4.0, 4.1]))  # 25 % trimmed each side
+
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--sweep", "0"], "--sweep must list positive timesteps, each once"),
+        (["--sweep", "5,5"], "--sweep must list positive timesteps, each once"),
+        (["--sweep", "lots"], "--sweep must list positive timesteps, each once"),
+        (["--timesteps", "500", "--sweep", "500"], "--sweep lists --timesteps (500)"),
+        (["--fusions", "average,mean"], "fusions must be among ['average', 'centralized']"),
+        (["--fusions", "average", "--fusion", "average"], "--fusion does not apply"),
+    ],
+)
+def test_the_rl_study_refuses_a_bad_sweep_or_fusions_in_one_line(tmp_path, capsys, argv, message):
+    from benchmarks.cli import main
+
+    out = tmp_path / "rl"
+    with pytest.raises(SystemExit) as exit_info:
+        main(["rl", *argv, "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and message in err
+    assert not out.exists()
