@@ -479,6 +479,7 @@ def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None
         hyperparams=job["hyperparams"], hyperparams_key=job["hyperparams_key"], action=job["action"],
         progress=False, options=options, overwrite=True, algo=job["algo"], record={"job": job},
         device=device, n_envs=job.get("n_envs"),
+        say=lambda message: None,  # the time of the whole group was said (or refused) before it
     )  # fmt: skip
 
 

@@ -900,6 +900,12 @@ def rl_tables(docs: Path, folder: str = "rl") -> str:
 
 #: The verdicts of a learner-minus-X ARMSE interval, by their keys in the values ``rl``.
 AGAINST = {verdicts.HOLDS: "better", verdicts.CONTRADICTED: "worse", verdicts.CONSISTENT: "same"}
+#: A longer training's ARMSE against the same seeds' at the study's budget, in words.
+LONGER = {
+    verdicts.HOLDS: "lower",
+    verdicts.CONTRADICTED: "higher",
+    verdicts.CONSISTENT: "not shown to differ",
+}
 
 
 def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
@@ -912,9 +918,10 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     Against X of the study's comparisons: ``X.pairs`` (learner, scenario and fusion triples)
     and, per verdict (``better``, ``worse``, ``same``: no difference shown), ``X.VERDICT`` how
     many and ``X.VERDICT.which``. The learning curves: ``flat-change`` (%), ``curves``,
-    ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets``,
+    ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets`` (past the study's own),
     ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past the study's,
-    ``sweep.T.minus-study`` (better, worse, same) and ``sweep.T.difference`` (m)."""
+    ``sweep.T.minus-study`` (lower, higher, not shown to differ), ``sweep.T.difference`` (m)
+    and ``sweep.T.steps-per-trial``."""
     from ..harness import duration
     from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
@@ -937,7 +944,7 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
         record = judged["training"]
         table |= {
             "training.device": str(record["device"]),
-            "training.key": str(record["hyperparams_key"]),
+            "training.key": f"`{record['hyperparams_key']}`",
             "training.n-envs": f"{record['n_envs']:,}",
             "training.timesteps": f"{record['trained_timesteps']:,}",
             "training.steps-per-trial": f"{record['trained_timesteps'] // record['n_envs']:,}",
@@ -967,7 +974,7 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     }
     if "sweep" in judged:
         rows = judged["sweep"]["budgets"]
-        table["sweep.budgets"] = _listed([f"{row['timesteps']:,}" for row in rows])
+        table["sweep.budgets"] = _listed([f"{row['timesteps']:,}" for row in rows[1:]])
         table["sweep.flat.which"] = _listed([f"{row['timesteps']:,}" for row in rows if row["curve"]["flat"]])
         table["sweep.moving.which"] = _listed(
             [
@@ -978,7 +985,10 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
         )
         for row in rows[1:]:
             verdict = verdicts.verdict(row["minus_study"]["ci"], -1)
-            table[f"sweep.{row['timesteps']}.minus-study"] = AGAINST[verdict]
+            table[f"sweep.{row['timesteps']}.minus-study"] = LONGER[verdict]
+            if "training" in judged:
+                per_trial = row["timesteps"] // judged["training"]["n_envs"]
+                table[f"sweep.{row['timesteps']}.steps-per-trial"] = f"{per_trial:,}"
             difference = row["minus_study"]
             table[f"sweep.{row['timesteps']}.difference"] = format_estimate(
                 difference["value"], difference["ci"], "{:.3f}"
