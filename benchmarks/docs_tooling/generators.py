@@ -918,10 +918,10 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     Against X of the study's comparisons: ``X.pairs`` (learner, scenario and fusion triples)
     and, per verdict (``better``, ``worse``, ``same``: no difference shown), ``X.VERDICT`` how
     many and ``X.VERDICT.which``. The learning curves: ``flat-change`` (%), ``curves``,
-    ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets`` (past the study's own),
-    ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past the study's,
-    ``sweep.T.minus-study`` (lower, higher, not shown to differ), ``sweep.T.difference`` (m)
-    and ``sweep.T.steps-per-trial``."""
+    ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets`` (those
+    past the study's own), ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past
+    the study's, ``sweep.T.minus-study`` (lower, higher, not shown to differ),
+    ``sweep.T.difference`` (m) and ``sweep.T.steps-per-trial``."""
     from ..harness import duration
     from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 

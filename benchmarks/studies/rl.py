@@ -241,39 +241,23 @@ class RLStudy(Study):
 
     def trainings(self) -> list[Training]:
         """Every training group: the study's learners in every scenario and fusion."""
-        return [
-            Training(
-                number,
-                scenario,
-                fusion,
-                algo,
-                reward,
-                self.seeds(option),
-                self.timesteps,
-                training_folder(self.settings.out, scenario, fusion, algo, reward),
-            )
-            for number, scenario, fusion in self.groups()
-            for algo, reward, option in self.learners()
-        ]
+        return [self.training(group, learner) for group in self.groups() for learner in self.learners()]
 
     def sweep_trainings(self) -> list[Training]:
         """The budget sweep's training groups: the information-reward learner at each budget of
         ``--sweep``, in the first scenario and fusion."""
-        number, scenario, fusion = self.groups()[0]
-        algo, reward, option = self.sweep_learner()
-        return [
-            Training(
-                number,
-                scenario,
-                fusion,
-                algo,
-                reward,
-                self.seeds(option),
-                budget,
-                training_folder(self.settings.out, scenario, fusion, algo, reward, budget),
-            )
-            for budget in self.sweep()
-        ]
+        return [self.training(self.groups()[0], self.sweep_learner(), budget) for budget in self.sweep()]
+
+    def training(
+        self, group: tuple[int, str, str], learner: tuple[str, str, str], budget: int | None = None
+    ) -> Training:
+        """The training group of a ``(number, scenario, fusion)`` and a learner, at the study's
+        ``--timesteps`` or at a sweep's ``budget``."""
+        number, scenario, fusion = group
+        algo, reward, option = learner
+        folder = training_folder(self.settings.out, scenario, fusion, algo, reward, budget)
+        timesteps = self.timesteps if budget is None else budget
+        return Training(number, scenario, fusion, algo, reward, self.seeds(option), timesteps, folder)
 
     def runs(self) -> list[Run]:
         """One evaluation per scenario and fusion, ``OUT/<scenario>-<fusion>``; with ``--sweep``,
