@@ -157,7 +157,7 @@ class RLStudy(Study):
             metavar="BUDGETS",
             help="also train the information-reward learner at these budgets (comma-separated "
             "timesteps, e.g. 5000000,20000000), in the first scenario and fusion, and compare them with "
-            "its --timesteps seeds on the same trials (OUT/sweep-<scenario>-<fusion>)",
+            "its --timesteps seeds on the same trials (OUT/sweep-<scenario>-<fusion>-<budget>)",
         )
         parser.add_argument(
             "--hyperparams-key",
@@ -261,8 +261,8 @@ class RLStudy(Study):
 
     def runs(self) -> list[Run]:
         """One evaluation per scenario and fusion, ``OUT/<scenario>-<fusion>``; with ``--sweep``,
-        one more in its scenario and fusion, ``OUT/sweep-<scenario>-<fusion>``: best-tracking and
-        the swept learner at ``--timesteps`` and at each budget, on the same trials."""
+        one more per budget in its scenario and fusion, ``OUT/sweep-<scenario>-<fusion>-<budget>``:
+        best-tracking and the swept learner at ``--timesteps`` and at that budget."""
         out = Path(self.settings.out)
         trainings = self.trainings()
         runs = []
@@ -273,16 +273,16 @@ class RLStudy(Study):
             options = dataclasses.replace(self.settings.options, fusion=fusion)
             folder = out / f"{scenario}-{fusion}"
             runs.append(Run((number, fusion), scenario, (*COMPARED, *learned), folder, options))
-        swept = self.sweep_trainings()
-        if swept:
-            first = next(t for t in trainings if (t.algo, t.reward) == self.sweep_learner()[:2])
-            learned = [p for t in (first, *swept) for p in t.policies()]
-            options = dataclasses.replace(self.settings.options, fusion=first.fusion)
-            folder = out / f"sweep-{first.scenario}-{first.fusion}"
-            policies = ("best-tracking", *learned)
+        study = next(t for t in trainings if (t.algo, t.reward) == self.sweep_learner()[:2])
+        for swept in self.sweep_trainings():
+            # best-tracking and the study's seeds beside each budget's: a budget added later is a
+            # run of its own, and every budget is paired with the study's seeds on the same trials
+            policies = ("best-tracking", *study.policies(), *swept.policies())
             # the paper study's parameters of the policies it runs (MG-CRB-CL's are not among them)
             params = {p: v for p, v in self.settings.agent_params.items() if p in policies}
-            runs.append(Run(SWEEP, first.scenario, policies, folder, options, params))
+            options = dataclasses.replace(self.settings.options, fusion=swept.fusion)
+            folder = out / f"sweep-{swept.scenario}-{swept.fusion}-{swept.timesteps}"
+            runs.append(Run((SWEEP, swept.timesteps), swept.scenario, policies, folder, options, params))
         return runs
 
     def train(self) -> None:
@@ -381,9 +381,10 @@ class RLStudy(Study):
 
     def judge(self, finished: dict[Hashable, Finished]) -> dict[str, Any]:
         learners = [(algo, reward) for algo, reward, _ in self.learners()]
-        judged = judge_learners({k: f.summary for k, f in finished.items() if k != SWEEP}, learners)
-        if SWEEP in finished:
-            judged["sweep"] = judge_sweep(finished[SWEEP], self.timesteps, self.sweep_trainings())
+        swept = {k[1]: f for k, f in finished.items() if k[0] == SWEEP}
+        judged = judge_learners({k: f.summary for k, f in finished.items() if k[0] != SWEEP}, learners)
+        if swept:
+            judged["sweep"] = judge_sweep(swept, self.timesteps, self.sweep_trainings())
         return judged
 
     def report(self, finished: dict[Hashable, Finished], judged: dict[str, Any]) -> str:
@@ -472,38 +473,46 @@ def _minus(summary: dict[str, Any], policies: list[str], other: str) -> dict[str
     return across_seeds([np.array(differences)], "mean")
 
 
-def judge_sweep(finished: Finished, timesteps: int, swept: list[Training]) -> dict[str, Any]:
-    """The budget sweep's run: per budget (``timesteps``, the study's own, first), the learner's
-    ARMSE across seeds, its paired difference from best-tracking and, seed by seed, from the
-    same seed trained for ``timesteps`` (each seed starts from the same weights and trials)."""
-    rows = finished.summary["policies"]
+def judge_sweep(finished: dict[int, Finished], timesteps: int, swept: list[Training]) -> dict[str, Any]:
+    """The budget sweep's runs (``{budget: run}``, each with the study's seeds beside the
+    budget's): per budget (``timesteps``, the study's own, first), the learner's ARMSE across
+    seeds, its paired difference from best-tracking and, seed by seed, from the same seed trained
+    for ``timesteps`` (the longer training continues the shorter: same weights, same episodes)."""
     first = swept[0]
     tag = f"{first.algo}-{first.reward}"
-    by_seed = {
-        budget: _per_seed(rows, name)
-        for budget, name in [(timesteps, tag), *((t.timesteps, f"{tag}-{t.timesteps}") for t in swept)]
-    }
-    budgets = []
-    for budget, seeds in by_seed.items():
-        policies = list(seeds.values())
-        armse = np.array([rows[p]["armse"] for p in policies])
-        row: dict[str, Any] = {
-            "timesteps": budget,
-            "seeds": len(policies),
-            "armse": {s: across_seeds([armse], s) for s in ("mean", "iqm")},
-            "minus_best_tracking": _minus(finished.summary, policies, "best-tracking"),
-        }
-        if budget != timesteps:
-            common = sorted(set(seeds) & set(by_seed[timesteps]))
-            differences = [rows[seeds[s]]["armse"] - rows[by_seed[timesteps][s]]["armse"] for s in common]
-            row["minus_study"] = across_seeds([np.array(differences)], "mean")
+    summaries = [finished[t.timesteps].summary for t in swept]
+    budgets = [_budget_row(summaries[0], tag, timesteps)]
+    for t, summary in zip(swept, summaries, strict=True):
+        row = _budget_row(summary, f"{tag}-{t.timesteps}", t.timesteps)
+        longer, study = (
+            _per_seed(summary["policies"], f"{tag}-{t.timesteps}"),
+            _per_seed(summary["policies"], tag),
+        )
+        differences = [
+            summary["policies"][longer[s]]["armse"] - summary["policies"][study[s]]["armse"]
+            for s in sorted(set(longer) & set(study))
+        ]
+        row["minus_study"] = across_seeds([np.array(differences)], "mean")
         budgets.append(row)
     return {
         "scenario": first.number,
         "fusion": first.fusion,
         "learner": tag,
-        "trials": finished.summary["trials"],
+        "trials": summaries[0]["trials"],
         "budgets": budgets,
+    }
+
+
+def _budget_row(summary: dict[str, Any], tag: str, timesteps: int) -> dict[str, Any]:
+    """The seeds trained into folders named ``tag``: their ARMSE across seeds and against
+    best-tracking."""
+    policies = list(_per_seed(summary["policies"], tag).values())
+    armse = np.array([summary["policies"][p]["armse"] for p in policies])
+    return {
+        "timesteps": timesteps,
+        "seeds": len(policies),
+        "armse": {s: across_seeds([armse], s) for s in ("mean", "iqm")},
+        "minus_best_tracking": _minus(summary, policies, "best-tracking"),
     }
 
 

@@ -229,7 +229,7 @@ def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_fusions_w
     sweep = judged["sweep"]
     assert (sweep["learner"], sweep["scenario"], sweep["fusion"]) == ("torch-ppo-information", 1, "average")
     assert [row["timesteps"] for row in sweep["budgets"]] == [128, 256]
-    rows = json.loads((out / "sweep-paper-1-v1-average/summary.json").read_text())["policies"]
+    rows = json.loads((out / "sweep-paper-1-v1-average-256/summary.json").read_text())["policies"]
     armse = {
         budget: [rows[p]["armse"] for p in sorted(rows) if f"/torch-ppo-information{tag}/" in p]
         for budget, tag in ((128, ""), (256, "-256"))
@@ -262,19 +262,27 @@ def test_the_budget_sweep_pairs_each_seed_with_the_same_seed_at_the_study_budget
 
     study = {0: 3.0, 1: 5.0, 2: 4.0, 10: 6.0}  # seed 10 sorts between 1 and 2 as text
     longer = {0: 2.5, 1: 4.0, 2: 4.1, 10: 5.0}
-    scores = {"best-tracking": 2.0}
-    scores |= {policy("torch-ppo-information", s): a for s, a in study.items()}
-    scores |= {policy("torch-ppo-information-1000", s): a for s, a in longer.items()}
-    summary = _summary(scores)
-    swept = [Training(1, "paper-1-v1", "average", "torch-ppo", "information", 4, 1000, Path("unused"))]
-    run = Run("sweep", "paper-1-v1", tuple(scores), Path("unused"))
-    judged = judge_sweep(Finished(run, None, summary), 100, swept)
-    first, second = judged["budgets"]
-    assert (first["timesteps"], second["timesteps"], second["seeds"]) == (100, 1000, 4)
+    longest = {0: 2.0, 1: 4.5, 2: 3.0}  # a seed missing: only the seeds both have are paired
+    finished, swept = {}, []
+    for budget, scores in ((1000, longer), (5000, longest)):
+        rows = {"best-tracking": 2.0}
+        rows |= {policy("torch-ppo-information", s): a for s, a in study.items()}
+        rows |= {policy(f"torch-ppo-information-{budget}", s): a for s, a in scores.items()}
+        run = Run(("sweep", budget), "paper-1-v1", tuple(rows), Path("unused"))
+        finished[budget] = Finished(run, None, _summary(rows))
+        swept.append(
+            Training(1, "paper-1-v1", "average", "torch-ppo", "information", 4, budget, Path("unused"))
+        )
+    judged = judge_sweep(finished, 100, swept)
+    first, second, third = judged["budgets"]
+    assert [row["timesteps"] for row in judged["budgets"]] == [100, 1000, 5000]
+    assert (first["seeds"], second["seeds"], third["seeds"]) == (4, 4, 3)
     assert "minus_study" not in first
+    assert first["armse"]["mean"]["value"] == pytest.approx(np.mean(list(study.values())))
     differences = [longer[s] - study[s] for s in study]  # -0.5, -1.0, 0.1, -1.0
     assert second["minus_study"]["value"] == pytest.approx(np.mean(differences))
     low, high = second["minus_study"]["ci"]
     assert min(differences) <= low < np.mean(differences) < high <= max(differences)
+    assert third["minus_study"]["value"] == pytest.approx(np.mean([2.0 - 3.0, 4.5 - 5.0, 3.0 - 4.0]))
     assert second["minus_best_tracking"]["value"] == pytest.approx(np.mean(list(longer.values())) - 2.0)
     assert second["armse"]["iqm"]["value"] == pytest.approx(np.mean([4.0, 4.1]))  # 25 % trimmed each side
