@@ -1,16 +1,18 @@
 """The RL study: learned policies from several training seeds, beside the bandits and oracles.
 
-``mimo-radar-bench rl --out DIR`` trains, on each v1 paper scenario (one pool of worker
-processes, resumably: a finished seed is kept):
+``mimo-radar-bench rl --out DIR`` trains, on each v1 paper scenario and under ``--fusion`` or
+each of ``--fusions`` (one pool of worker processes, resumably: a finished seed is kept):
 
 * PPO under both rewards (eq17's SINR sum, ``sinr``, and the tracker's information gain,
   ``information``), :data:`PPO_SEEDS` seeds each;
 * MaskablePPO and RecurrentPPO (sb3-contrib) under the information reward,
   :data:`CONTRIB_SEEDS` seeds each;
 
-into ``DIR/train/<scenario>/<learner>-<reward>/seed-S``, each through the native vector env.
-Then it runs every trained seed beside MG-CRB-CL, best-tracking and tracking-ucb on the same
-trials (one harness run per scenario, ``DIR/<scenario>``, resumable) and reports, in
+into ``DIR/train/<scenario>-<fusion>/<learner>-<reward>/seed-S``, each through the native
+vector env; with ``--device``, the project's own torch-ppo under both rewards and, by default,
+both fusions, :data:`DEVICE_PPO_SEEDS` seeds each. Then it runs every trained seed beside
+MG-CRB-CL, best-tracking and tracking-ucb on the same trials (one harness run per scenario and
+fusion, ``DIR/<scenario>-<fusion>``, resumable) and reports, in
 ``DIR/rl.md`` and ``DIR/rl.json``:
 
 * each learner's ARMSE and final SINR regret across its seeds: the mean and the interquartile
@@ -18,12 +20,14 @@ trials (one harness run per scenario, ``DIR/<scenario>``, resumable) and reports
   rliable's statistics), beside the bandits' with their intervals over trials;
 * each learner against best-tracking, tracking-ucb and MG-CRB-CL: the ARMSE difference paired on
   the same trials, averaged over seeds, with its interval over seeds;
-* over the three scenarios, the IQM of each learner's ARMSE as a ratio to best-tracking's
+* per fusion, over the scenarios, the IQM of each learner's ARMSE as a ratio to best-tracking's
   (stratified bootstrap: seeds resampled within each scenario);
-* the learning curves (``DIR/curves_<scenario>.png``: return and ARMSE of the training
+* the learning curves (``DIR/curves_<scenario>-<fusion>.png``: return and ARMSE of the training
   episodes against timesteps, the mean over seeds and the seeds' range) and whether each has
   flattened: the relative change of the mean ARMSE between the last two fifths of training,
-  within :data:`FLAT_CHANGE`.
+  within :data:`FLAT_CHANGE`;
+* with ``--sweep``, the information-reward learner at each further budget against its own seeds
+  at ``--timesteps`` (:func:`judge_sweep`).
 """
 
 from __future__ import annotations
@@ -129,10 +133,11 @@ class RLStudy(Study):
     description = (
         "Train PPO (both rewards), MaskablePPO and RecurrentPPO (information reward) on the v1 paper "
         "scenarios over several seeds (OUT/train, resumable), run every seed beside MG-CRB-CL, "
-        "best-tracking and tracking-ucb on the same trials (OUT/<scenario>), and report across-seed "
-        "statistics and learning curves (OUT/rl.md, OUT/rl.json, OUT/curves_<scenario>.png). With "
-        "--device, the learner is the project's own torch-ppo (both rewards, 10 seeds by default), "
-        "trained on that device one seed after another; the evaluation runs on numpy with --workers."
+        "best-tracking and tracking-ucb on the same trials (OUT/<scenario>-<fusion>), and report across-seed "
+        "statistics and learning curves (OUT/rl.md, OUT/rl.json, OUT/curves_<scenario>-<fusion>.png). "
+        "With --device, the learner is the project's own torch-ppo (both rewards and both fusions, 10 "
+        "seeds by default), trained on that device one seed after another; the evaluation runs on numpy "
+        "with --workers. --sweep trains the information learner at further budgets."
     )
 
     @classmethod
