@@ -921,7 +921,8 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets`` (those
     past the study's own), ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past
     the study's, ``sweep.T.minus-study`` (lower, higher, not shown to differ),
-    ``sweep.T.difference`` (m) and ``sweep.T.steps-per-trial``."""
+    ``sweep.T.difference`` (m), ``sweep.T.steps-per-trial``, and against best-tracking
+    ``sweep.T.best-tracking`` (better, worse, same) with its ``.difference`` (m)."""
     from ..harness import duration
     from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
@@ -989,9 +990,13 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
             if "training" in judged:
                 per_trial = row["timesteps"] // judged["training"]["n_envs"]
                 table[f"sweep.{row['timesteps']}.steps-per-trial"] = f"{per_trial:,}"
-            difference = row["minus_study"]
+            difference, against = row["minus_study"], row["minus_best_tracking"]
             table[f"sweep.{row['timesteps']}.difference"] = format_estimate(
                 difference["value"], difference["ci"], "{:.3f}"
+            )
+            table[f"sweep.{row['timesteps']}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
+            table[f"sweep.{row['timesteps']}.best-tracking.difference"] = format_estimate(
+                against["value"], against["ci"], "{:.3f}"
             )
     return table
 
