@@ -990,14 +990,10 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
             if "training" in judged:
                 per_trial = row["timesteps"] // judged["training"]["n_envs"]
                 table[f"sweep.{row['timesteps']}.steps-per-trial"] = f"{per_trial:,}"
-            difference, against = row["minus_study"], row["minus_best_tracking"]
-            table[f"sweep.{row['timesteps']}.difference"] = format_estimate(
-                difference["value"], difference["ci"], "{:.3f}"
-            )
-            table[f"sweep.{row['timesteps']}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
-            table[f"sweep.{row['timesteps']}.best-tracking.difference"] = format_estimate(
-                against["value"], against["ci"], "{:.3f}"
-            )
+            budget, against = row["timesteps"], row["minus_best_tracking"]
+            table[f"sweep.{budget}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
+            for key, stat in (("difference", row["minus_study"]), ("best-tracking.difference", against)):
+                table[f"sweep.{budget}.{key}"] = format_estimate(stat["value"], stat["ci"], "{:.3f}")
     return table
 
 

@@ -253,6 +253,11 @@ class RLStudy(Study):
         ``--sweep``, in the first scenario and fusion."""
         return [self.training(self.groups()[0], self.sweep_learner(), budget) for budget in self.sweep()]
 
+    def sweep_baseline(self) -> Training:
+        """The training group every sweep budget is compared with: the swept learner at
+        ``--timesteps`` in the first scenario and fusion."""
+        return self.training(self.groups()[0], self.sweep_learner())
+
     def training(
         self, group: tuple[int, str, str], learner: tuple[str, str, str], budget: int | None = None
     ) -> Training:
@@ -278,7 +283,7 @@ class RLStudy(Study):
             options = dataclasses.replace(self.settings.options, fusion=fusion)
             folder = out / f"{scenario}-{fusion}"
             runs.append(Run((number, fusion), scenario, (*COMPARED, *learned), folder, options))
-        study = next(t for t in trainings if (t.algo, t.reward) == self.sweep_learner()[:2])
+        study = self.sweep_baseline()
         for swept in self.sweep_trainings():
             # best-tracking and the study's seeds beside each budget's: a budget added later is a
             # run of its own, and every budget is paired with the study's seeds on the same trials
@@ -403,10 +408,7 @@ class RLStudy(Study):
             entry["curves"] = {key: flattened(curve) for key, curve in curves.items()}
             figures[f"paper-{entry['scenario']}-{entry['fusion']}"] = curves
         if "sweep" in judged:
-            study = next(t for t in self.trainings() if (t.algo, t.reward) == self.sweep_learner()[:2])
-            folders = {study.timesteps: study.folder} | {
-                t.timesteps: t.folder for t in self.sweep_trainings()
-            }
+            folders = {t.timesteps: t.folder for t in (self.sweep_baseline(), *self.sweep_trainings())}
             for row in judged["sweep"]["budgets"]:
                 row["curve"] = flattened(read_curves(folders[row["timesteps"]]))
         judged["training"] = self.training_record()
