@@ -1241,24 +1241,76 @@ def _rate(rate: float) -> str:
     return f"{rate / 1e6:.2f} M" if rate >= 1e6 else f"{rate / 1e3:,.0f} k"
 
 
-@generator("device-equality")
-def device_equality(docs: Path) -> str:
-    """``python -m benchmarks.speed.device``'s equality: the largest normwise relative difference of
-    the torch engine on the device from the numpy engine over whole episodes, per version, fusion
-    and form of the step (runs before the forms existed were eager), and the entry it was found
-    in."""
-    record = read_json(docs, DEVICE_FILE)
+#: The float32 run's equality rows (``--precisions float32 --skip-speed``), on CPU torch.
+FLOAT32_FILE = "perf/float32.json"
+#: The entries the float32 table gives beside the largest, by column.
+FLOAT32_ENTRIES = {
+    "truth": "info.true_state",
+    "tracks": "obs.track",
+    "SINR reward": "reward",
+    "position bound": "info.position_bound",
+}
+
+
+def _oracle_agreement(share: float) -> str:
+    return "identical" if share == 0 else f"differ in {100 * share:.2g} % of trial-steps"
+
+
+def _equality_table(record: dict[str, Any], entries: dict[str, str]) -> str:
+    """The equality rows of a ``benchmarks.speed.device`` run: per version, fusion, form and
+    precision (rows before either existed were eager float64), the largest normwise relative
+    difference from numpy and the entry it was found in, the ``entries`` columns, and whether the
+    oracle's actions agreed."""
+    extra = "".join(f" {label} |" for label in entries)
     lines = [
-        "| env | fusion | form | trials | steps | largest relative difference | in | oracle's actions |",
-        "|---|---|---|---|---|---|---|---|",
+        f"| env | fusion | form | precision | trials | steps | largest relative difference | in |{extra}"
+        " oracle's actions |",
+        "|---|---|---|---|---|---|---|---|" + "---|" * len(entries) + "---|",
     ]
     for e in record["equality"]:
-        agree = "identical" if e["differences"]["oracle_action"] == 0 else "differ"
+        columns = "".join(f" {e['differences'][key]:.1e} |" for key in entries.values())
         lines.append(
-            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e.get('mode', 'eager')} | {e['trials']} | "
-            f"{e['steps']} | {e['largest']:.1e} | `{e['largest_entry']}` | {agree} |"
+            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e.get('mode', 'eager')} | "
+            f"{e.get('precision', 'float64')} | {e['trials']} | {e['steps']} | {e['largest']:.1e} | "
+            f"`{e['largest_entry']}` |{columns} {_oracle_agreement(e['differences']['oracle_action'])} |"
         )
     return "\n".join(lines)
+
+
+@generator("device-equality")
+def device_equality(docs: Path) -> str:
+    """``python -m benchmarks.speed.device``'s equality on the device: the torch engine against the
+    numpy engine over whole episodes (:func:`_equality_table`)."""
+    return _equality_table(read_json(docs, DEVICE_FILE), {})
+
+
+@generator("float32-equality")
+def float32_equality(docs: Path) -> str:
+    """The float32 engine against the numpy engine over whole episodes (:func:`_equality_table`),
+    with the truth, the tracks, the reward and the bound apart."""
+    return _equality_table(read_json(docs, FLOAT32_FILE), FLOAT32_ENTRIES)
+
+
+@value_source("float32")
+def float32_value(docs: Path, key: str) -> str:
+    """A figure of the float32 run (results/perf/float32.json): ``machine``, ``device``,
+    ``trials``, or ``largest.ENTRY`` the largest difference of an entry (``obs.track``...) over its
+    rows, ``largest`` over every entry."""
+    record = read_json(docs, FLOAT32_FILE)
+    rows = record["equality"]
+    if key in ("machine", "device"):
+        return str(record[key])
+    if key == "trials":
+        return f"{rows[0]['trials']:,}"
+    if key == "largest":
+        return f"{max(r['largest'] for r in rows):.1e}"
+    entry = key.removeprefix("largest.")
+    if key.startswith("largest.") and all(entry in r["differences"] for r in rows):
+        return f"{max(r['differences'][entry] for r in rows):.1e}"
+    raise BenchError(
+        f"unknown float32 figure {key!r}: machine, device, trials, largest, largest.ENTRY "
+        f"(an entry of {FLOAT32_FILE}'s differences)"
+    )
 
 
 @generator("device-speed")
@@ -1287,8 +1339,8 @@ def device_speed(docs: Path) -> str:
 @value_source("device")
 def device_value(docs: Path, key: str) -> str:
     """A figure of ``python -m benchmarks.speed.device`` (results/perf/device.json):
-    ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS), ``ratio.BACKEND.BACKEND.
-    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference``, ``device`` (its
+    ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS, float64), ``ratio.BACKEND.BACKEND.
+    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference`` (float64's), ``device`` (its
     name), ``device-id``, ``tolerance``, ``scenario``, ``machine``, and
     ``checks.FIELD`` a field of results/perf/device-checks.json."""
     if key in ("device-id", "tolerance", "scenario", "machine"):  # the run's own fields
@@ -1308,7 +1360,8 @@ def device_value(docs: Path, key: str) -> str:
         return f"{checks[field]:,}" if isinstance(checks[field], int) else str(checks[field])
     record = read_json(docs, DEVICE_FILE)
     if key == "largest-difference":
-        return f"{max(e['largest'] for e in record['equality']):.1e}"
+        double = [e["largest"] for e in record["equality"] if e.get("precision", "float64") == "float64"]
+        return f"{max(double):.1e}"
     if key == "device":
         return record["device_name"]
     kind, *parts = key.split(".")
@@ -1320,6 +1373,7 @@ def device_value(docs: Path, key: str) -> str:
                 prefix
                 and r["backend"].startswith(prefix)
                 and r.get("mode", "eager") == mode
+                and r.get("precision", "float64") == "float64"
                 and r["fusion"] == fusion
                 and r["trials"] == int(trials)
             ):

@@ -8,15 +8,16 @@ Two parts, in one run:
   ``-v0``, both fusions, played on the numpy engine and on the torch engine with the same keys
   and actions (oracle actions on odd steps, random valid ones on even steps, and one trial
   that probes nothing every fifth step); the largest relative difference of every observation,
-  reward and ``info`` entry (truth, tracks, bounds) over the episode;
+  reward and ``info`` entry (truth, tracks, bounds) over the episode, for each torch precision
+  of ``--precisions`` (float32 is not the same numbers: its rows measure how far it is);
 * **speed** (:func:`measure`): trial-steps per second of the whole v1 step (simulation,
   IMM-UKF tracker, position bound, the oracle's search, observation and ``info``) for each
   fusion and each trial count B, on numpy + numba pinned to one core, on torch on the CPU and
   on torch on ``--device`` in each form of ``--modes`` (eager, one CUDA graph per step,
-  ``torch.compile``: :mod:`mimo_radar_env.envs.device_forms`), with the device's peak memory
-  and the first step's seconds (tracing, capture, compilation) per row. A row stops growing B
-  once a step takes longer than ``--max-step-seconds`` or the device runs out of memory. The
-  equality part also plays each traced form against numpy.
+  ``torch.compile``: :mod:`mimo_radar_env.envs.device_forms`) and each precision, with the
+  device's peak memory and the first step's seconds (tracing, capture, compilation) per row. A
+  row stops growing B once a step takes longer than ``--max-step-seconds`` or the device runs
+  out of memory. The equality part also plays each traced form against numpy.
 
 docs/performance.md's "The engine on a device" tables are generated from its JSON.
 """
@@ -37,7 +38,7 @@ from typing import Any
 import numpy as np
 
 from mimo_radar_env import VERSIONS, load_scenario
-from mimo_radar_env.core.arrays import namespace
+from mimo_radar_env.core.arrays import PRECISIONS, check_precision, namespace
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs.device_forms import check_device_mode
@@ -64,12 +65,20 @@ def _keys(trials: int, seed: int = 0) -> np.ndarray:
 
 
 def _engine(
-    version: str, fusion: str, trials: int, device: Any, scenario: str | None = None, mode: str = "eager"
+    version: str,
+    fusion: str,
+    trials: int,
+    device: Any,
+    scenario: str | None = None,
+    mode: str = "eager",
+    precision: str = "float64",
 ) -> RadarEngine:
     env_version = VERSIONS[version]
     options = env_version.options(fusion=fusion)
     name = scenario or env_version.default_scenario
-    return RadarEngine(options, load_scenario(name), batch_size=trials, device=device, device_mode=mode)
+    return RadarEngine(
+        options, load_scenario(name), trials, device=device, device_mode=mode, precision=precision
+    )
 
 
 def _numpy(a: Any) -> np.ndarray:
@@ -103,14 +112,16 @@ def episode_differences(
     steps: int | None = None,
     seed: int = 0,
     mode: str = "eager",
+    precision: str = "float64",
 ) -> dict[str, float]:
     """The largest relative difference of each observation, the reward and each ``info`` entry
     between the numpy engine and the torch engine on ``device`` over ``steps`` steps (default:
-    the whole episode) of ``version``'s default scenario. Both get the same keys and actions;
-    the oracle's actions must also agree exactly (key ``"oracle_action"``: 0 or 1). ``mode`` is
-    the torch step's form."""
+    the whole episode) of ``version``'s default scenario. Both get the same keys and actions
+    (the numpy engine's oracle's, on odd steps); key ``"oracle_action"`` is the share of
+    trial-steps whose oracle actions differ (0: identical). ``mode`` is the torch step's form,
+    ``precision`` its floats."""
     reference = _engine(version, fusion, trials, None)
-    other = _engine(version, fusion, trials, device, mode=mode)
+    other = _engine(version, fusion, trials, device, mode=mode, precision=precision)
     keys = _keys(trials, seed)
     worst: dict[str, float] = {}
 
@@ -124,12 +135,11 @@ def episode_differences(
     record("obs.", *_pair(reference.reset_from_keys(keys)[0], other.reset_from_keys(keys)[0]))
     sc = reference.scenario
     rng = np.random.default_rng(seed)
-    worst["oracle_action"] = 0.0
-    for t in range(steps or sc.horizon):
+    differing = 0
+    length = steps or sc.horizon
+    for t in range(length):
         oracle = reference.oracle_action()
-        worst["oracle_action"] = max(
-            worst["oracle_action"], float(not np.array_equal(oracle, _numpy(other.oracle_action())))
-        )
+        differing += int((oracle != _numpy(other.oracle_action())).any(axis=1).sum())
         if t % 2:
             action = oracle
         else:
@@ -142,6 +152,7 @@ def episode_differences(
         record("obs.", obs_a, obs_b)
         record("info.", info_a, info_b)
         worst["reward"] = max(worst.get("reward", 0.0), relative_difference(reward_a, reward_b))
+    worst["oracle_action"] = differing / (length * trials)
     return worst
 
 
@@ -305,6 +316,7 @@ def speed_rows(
     max_step_seconds: float,
     target_seconds: float,
     mode: str = "eager",
+    precision: str = "float64",
 ) -> Iterator[dict[str, Any]]:
     """The speed rows of one backend: every fusion, B growing until a step would take longer than
     ``max_step_seconds`` (judged from the last row, linearly) or the device runs out of memory
@@ -316,7 +328,7 @@ def speed_rows(
                 yield {"backend": backend, "fusion": fusion, "trials": trials, "skipped": "too slow"}
                 break
             try:
-                engine = _engine("v1", fusion, trials, device, SCENARIO, mode)  # traced once
+                engine = _engine("v1", fusion, trials, device, SCENARIO, mode, precision)  # traced once
                 probe = measure(fusion, trials, device, keys, 1, mode=mode, engine=engine)
                 steps = int(np.clip(target_seconds / probe["seconds_per_step"], 2, 50))
                 row = measure(fusion, trials, device, keys, steps, mode=mode, engine=engine)
@@ -334,7 +346,7 @@ def speed_rows(
                 f"trial-steps/s ({row['seconds_per_step'] * 1e3:.2f} ms per step)",
                 flush=True,
             )
-            yield {"backend": backend, "mode": mode, **row}
+            yield {"backend": backend, "mode": mode, "precision": precision, **row}
             engine = None  # its arrays (and graph) freed before the next size
             _free(device)
 
@@ -350,24 +362,41 @@ def _free(device: Any) -> None:
 
 
 def equality_rows(
-    device: str, modes: tuple[str, ...], trials: int, steps: int | None, form_steps: int
+    device: str,
+    modes: tuple[str, ...],
+    trials: int,
+    steps: int | None,
+    form_steps: int,
+    precisions: tuple[str, ...] = ("float64",),
 ) -> list[dict[str, Any]]:
-    """The equality part: every version and fusion eagerly over ``steps`` (None: whole episodes),
-    and each traced form of ``modes`` (traced or compiled once per engine) on v1 under both
-    fusions over ``form_steps``; a row per run, printed as it ends."""
+    """The equality part: every version and fusion eagerly over ``steps`` (None: whole episodes)
+    in each precision, and each traced form of ``modes`` (traced or compiled once per engine) on
+    v1 under both fusions over ``form_steps`` in the first; a row per run, printed as it ends.
+    A row's largest difference is over the numbers, the oracle's actions apart."""
     fusions = ("average", "centralized")
-    runs = [(version, fusion, "eager", steps) for version in ("v1", "v0") for fusion in fusions]
-    runs += [("v1", fusion, mode, form_steps) for mode in modes if mode != "eager" for fusion in fusions]
+    runs = [
+        (version, fusion, "eager", steps, precision)
+        for precision in precisions
+        for version in ("v1", "v0")
+        for fusion in fusions
+    ]
+    runs += [
+        ("v1", fusion, mode, form_steps, precisions[0])
+        for mode in modes
+        if mode != "eager"
+        for fusion in fusions
+    ]
     rows = []
-    for version, fusion, mode, length in runs:
+    for version, fusion, mode, length, precision in runs:
         start = time.perf_counter()
-        worst = episode_differences(version, fusion, trials, device, length, mode=mode)
-        largest = max(worst, key=lambda k: worst[k])
+        worst = episode_differences(version, fusion, trials, device, length, mode=mode, precision=precision)
+        largest = max((k for k in worst if k != "oracle_action"), key=lambda k: worst[k])
         rows.append(
             {
                 "version": version,
                 "fusion": fusion,
                 "mode": mode,
+                "precision": precision,
                 "trials": trials,
                 "steps": length or load_scenario(VERSIONS[version].default_scenario).horizon,
                 "largest": worst[largest],
@@ -377,8 +406,9 @@ def equality_rows(
             }
         )
         print(
-            f"equality {version} {fusion} {mode}: largest relative difference "
-            f"{worst[largest]:.2e} ({largest})",
+            f"equality {version} {fusion} {mode} {precision}: largest relative difference "
+            f"{worst[largest]:.2e} ({largest}); oracle's actions differ in "
+            f"{100 * worst['oracle_action']:.2f} % of trial-steps",
             flush=True,
         )
     return rows
@@ -395,6 +425,13 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument("--max-step-seconds", type=float, default=2.0)
     parser.add_argument("--target-seconds", type=float, default=2.0, help="timed seconds per row")
     parser.add_argument("--skip-equality", action="store_true")
+    parser.add_argument("--skip-speed", action="store_true")
+    parser.add_argument(
+        "--precisions",
+        default=",".join(PRECISIONS),
+        help="the torch engine's precisions, comma-separated (default %(default)s); the equality "
+        "part plays each against numpy, the speed part times each on --device",
+    )
     parser.add_argument(
         "--modes",
         default="eager,graph,compiled",
@@ -431,7 +468,6 @@ def main(argv: list[str] | None = None) -> None:
     from mimo_radar_env.core.arrays import device_namespace
 
     device = str(device_namespace(args.device).device)
-    sizes = tuple(int(s) for s in args.sizes.split(","))
     result: dict[str, Any] = {
         "scenario": SCENARIO,
         "device": device,
@@ -444,31 +480,47 @@ def main(argv: list[str] | None = None) -> None:
         "speed": [],
     }
     modes = tuple(args.modes.split(","))
+    precisions = tuple(args.precisions.split(","))
     for mode in modes:
         check_device_mode(mode, device)
+    for precision in precisions:
+        check_precision(precision, device)
     if not args.skip_equality:
         result["equality"] = equality_rows(
-            device, modes, args.equality_trials, args.equality_steps, args.form_equality_steps
+            device, modes, args.equality_trials, args.equality_steps, args.form_equality_steps, precisions
         )
-    keys = _keys(max(sizes))
-    backends = [("numpy + numba, 1 core", None, "eager", sizes)]
-    backends.append((f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes))
-    if device != "cpu":
-        compiled_sizes = tuple(int(b) for b in args.compiled_sizes.split(","))
-        for mode in modes:
-            backends.append(
-                (f"torch {device} {mode}", device, mode, compiled_sizes if mode == "compiled" else sizes)
-            )
-    for backend, where, mode, row_sizes in backends:
-        context = one_core() if where is None else contextlib.nullcontext()
-        with context:
-            result["speed"].extend(
-                speed_rows(backend, where, row_sizes, keys, args.max_step_seconds, args.target_seconds, mode)
-            )
+    if not args.skip_speed:
+        result["speed"] = list(_speed(args, device, modes, precisions))
     if args.json:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(result, indent=1) + "\n")
         print(f"wrote {args.json}")
+
+
+def _speed(
+    args: argparse.Namespace, device: str, modes: tuple[str, ...], precisions: tuple[str, ...]
+) -> Iterator[dict[str, Any]]:
+    """The speed rows: numpy + numba on one core, torch on the CPU, and each form of the step on
+    ``device`` in each precision (float64's label as before; another's names it)."""
+    import torch
+
+    sizes = tuple(int(s) for s in args.sizes.split(","))
+    keys = _keys(max(sizes))
+    backends = [("numpy + numba, 1 core", None, "eager", sizes, "float64")]
+    backends.append((f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes, "float64"))
+    if device != "cpu":
+        compiled_sizes = tuple(int(b) for b in args.compiled_sizes.split(","))
+        for precision in precisions:
+            label = "" if precision == "float64" else f" {precision}"
+            for mode in modes:
+                row_sizes = compiled_sizes if mode == "compiled" else sizes
+                backends.append((f"torch {device} {mode}{label}", device, mode, row_sizes, precision))
+    for backend, where, mode, row_sizes, precision in backends:
+        context = one_core() if where is None else contextlib.nullcontext()
+        with context:
+            yield from speed_rows(
+                backend, where, row_sizes, keys, args.max_step_seconds, args.target_seconds, mode, precision
+            )
 
 
 if __name__ == "__main__":

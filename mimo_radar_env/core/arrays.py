@@ -10,6 +10,9 @@ when a tensor is met or a device is asked for, so ``device=None`` needs no torch
 The counter-based hash works on 64-bit words: numpy's ``uint64``, and on torch (which has no
 shifts on ``uint64``) the same bits in ``int64`` with masked logical shifts (:meth:`shift_right`);
 products and sums wrap alike in both, so every draw is bit for bit the same on any device.
+
+torch may also compute in ``float32`` (:func:`float_precision`): an option for speed on a device,
+not the same numbers (docs/performance.md gives its measured error); numpy is always ``float64``.
 """
 
 from __future__ import annotations
@@ -30,6 +33,7 @@ class NumpyNamespace:
 
     is_torch = False
     device = None
+    precision = "float64"
 
     def __getattr__(self, name: str) -> Any:
         return getattr(np, name)
@@ -107,6 +111,40 @@ def defer(passed: Any) -> None:
     _DEFERRED.append(passed.all())
 
 
+#: The float precisions of the torch engine; the first is the default and numpy's only one.
+PRECISIONS = ("float64", "float32")
+
+#: The precision of the torch floats made in the current :func:`float_precision` block.
+_PRECISION = "float64"
+
+
+@contextlib.contextmanager
+def float_precision(precision: str) -> Iterator[None]:
+    """Inside the block, torch floats made by a :class:`TorchNamespace` without a dtype, or as
+    ``np.float64``, or from numpy floats, are ``precision``'s (:data:`PRECISIONS`); the torch
+    dtype itself (``xp.float64``) stays a double, as the random draws need. numpy is left as it
+    is."""
+    global _PRECISION
+    check_precision(precision, "cpu")
+    previous, _PRECISION = _PRECISION, precision
+    try:
+        yield
+    finally:
+        _PRECISION = previous
+
+
+def check_precision(precision: Any, device: Any) -> None:
+    """Refuses, in one line, a precision not in :data:`PRECISIONS`, or ``float32`` on numpy
+    (``device=None``)."""
+    if precision not in PRECISIONS:
+        raise ValueError(f"precision must be one of {', '.join(map(repr, PRECISIONS))}, got {precision!r}")
+    if precision != "float64" and device is None:
+        raise ValueError(
+            f"precision={precision!r} runs on torch: give device='cpu' or 'cuda' (device=None, "
+            "numpy, is float64 only)"
+        )
+
+
 def all_passed(flags: list[Any], xp: Any) -> Any:
     """The 0-d boolean, in namespace ``xp``, that every check of ``flags`` passed (True when
     there were none)."""
@@ -145,7 +183,8 @@ class _TorchLinalg:
 class TorchNamespace:
     """torch on one device, in the numpy spellings the engine uses.
 
-    Arrays it creates are ``float64`` unless told otherwise, on its :attr:`device`.
+    Arrays it creates are on its :attr:`device`, and floats unless told otherwise; its floats
+    are ``float64``, or ``float32`` inside a :func:`float_precision` block.
     """
 
     is_torch = True
@@ -187,13 +226,22 @@ class TorchNamespace:
     def __repr__(self) -> str:
         return f"TorchNamespace({str(self.device)!r})"
 
+    @property
+    def precision(self) -> str:
+        """The precision of the floats it makes now (:func:`float_precision`)."""
+        return _PRECISION
+
     # ------------------------------------------------------------ creation
+    def _float(self) -> Any:
+        return self.torch.float32 if _PRECISION == "float32" else self.torch.float64
+
     def _dtype(self, dtype: Any) -> Any:
-        return (
-            TORCH_DTYPES[np.dtype(dtype)](self.torch)
-            if dtype is not None and not isinstance(dtype, self.torch.dtype)
-            else (dtype or self.torch.float64)
-        )
+        if dtype is None:
+            return self._float()
+        if isinstance(dtype, self.torch.dtype):
+            return dtype
+        dtype = np.dtype(dtype)
+        return self._float() if dtype == np.float64 else TORCH_DTYPES[dtype](self.torch)
 
     def asarray(self, a: Any, dtype: Any = None) -> Any:
         torch = self.torch
@@ -201,7 +249,10 @@ class TorchNamespace:
             a = a.view(np.int64)
         if isinstance(a, np.ndarray) and not a.flags.writeable:
             a = a.copy()
-        return torch.as_tensor(a, dtype=self._dtype(dtype) if dtype is not None else None, device=self.device)
+        tensor = torch.as_tensor(a, dtype=None if dtype is None else self._dtype(dtype), device=self.device)
+        if dtype is None and tensor.dtype == torch.float64 and _PRECISION == "float32":
+            return tensor.to(torch.float32)
+        return tensor
 
     def zeros(self, shape: Any, dtype: Any = None) -> Any:
         return self.torch.zeros(shape, dtype=self._dtype(dtype), device=self.device)

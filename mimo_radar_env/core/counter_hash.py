@@ -102,6 +102,7 @@ def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDAr
 
 
 def to_unit(bits: NDArray[np.uint64]) -> NDArray[np.float64]:
-    """The top 53 bits as a uniform double in [0, 1)."""
+    """The top 53 bits as a uniform double in [0, 1) (a double in any precision, :mod:`.arrays`:
+    ``xp.float64`` is the dtype itself)."""
     xp = namespace(bits)
-    return xp.astype(xp.shift_right(bits, 11), np.float64) * TWO_POW_M53
+    return xp.astype(xp.shift_right(bits, 11), xp.float64) * TWO_POW_M53

@@ -72,21 +72,26 @@ class TrialStreams:
         base = stream_base(key, stream, step).reshape((-1,) + (1,) * (index.ndim - 1))
         return element_bits(base, index)
 
+    def _rounded(self, draws: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Draws computed in float64, rounded to the engine's precision where it is float32
+        (:func:`~.arrays.float_precision`): the same draws to that rounding, tails included."""
+        return draws if self.xp.precision == "float64" else self.xp.astype(draws, np.float32)
+
     def uniform(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """U[0, 1) draws, one per element of ``index`` (shape (B, ...))."""
-        return to_unit(self._bits(stream, step, index))
+        return self._rounded(to_unit(self._bits(stream, step, index)))
 
     def exponential(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Exponential(1) draws."""
-        return -self.xp.log1p(-self.uniform(stream, step, index))
+        return self._rounded(-self.xp.log1p(-to_unit(self._bits(stream, step, index))))
 
     def normal(self, stream: Stream, step: int, index: NDArray[np.integer]) -> NDArray[np.float64]:
         """Standard normal draws (Box-Muller on two hashed uniforms per element)."""
         xp = self.xp
         doubled = 2 * xp.astype(index, np.int64)
-        u1 = self.uniform(stream, step, doubled)
-        u2 = self.uniform(stream, step, doubled + 1)
-        return xp.sqrt(-2.0 * xp.log1p(-u1)) * xp.cos(2.0 * np.pi * u2)
+        u1 = to_unit(self._bits(stream, step, doubled))
+        u2 = to_unit(self._bits(stream, step, doubled + 1))
+        return self._rounded(xp.sqrt(-2.0 * xp.log1p(-u1)) * xp.cos(2.0 * np.pi * u2))
 
 
 def full_index(

@@ -8,14 +8,15 @@ the B = 1 case and squeezes that axis; there is no second implementation.
 
 from __future__ import annotations
 
+import functools
 import warnings
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Callable, Sequence
+from typing import Any, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.arrays import device_namespace, namespace
+from ..core.arrays import check_precision, device_namespace, float_precision, namespace
 from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel
 from ..core.motion import transition_matrix
@@ -57,6 +58,20 @@ def check_actions(actions: Any, expected_shape: tuple[int, ...]) -> NDArray[np.i
     return xp.astype(arr, np.int8)
 
 
+Method = TypeVar("Method", bound=Callable[..., Any])
+
+
+def _in_precision(method: Method) -> Method:
+    """Runs an engine method with its floats in the engine's precision (:func:`float_precision`)."""
+
+    @functools.wraps(method)
+    def run(self: RadarEngine, *args: Any, **kwargs: Any) -> Any:
+        with float_precision(self.precision):
+            return method(self, *args, **kwargs)
+
+    return run  # type: ignore[return-value]
+
+
 def true_indices(mask: NDArray[np.bool_], count: int) -> NDArray[np.int64]:
     """Indices of the first ``count`` True entries of each row, ascending."""
     xp = namespace(mask)
@@ -76,6 +91,9 @@ class RadarEngine:
     device_mode : str
         The torch step's form (:mod:`.device_forms`): ``"eager"`` (default), ``"graph"`` or
         ``"compiled"``.
+    precision : str
+        ``"float64"`` (default) or, on torch only, ``"float32"``: faster on a device, not the
+        same numbers (docs/performance.md gives the measured difference).
     """
 
     def __init__(
@@ -85,8 +103,17 @@ class RadarEngine:
         batch_size: int,
         device: Any = None,
         device_mode: str = "eager",
+        precision: str = "float64",
     ) -> None:
         check_device_mode(device_mode, device)
+        check_precision(precision, device)
+        self.precision = precision
+        with float_precision(precision):
+            self._build(options, scenario, batch_size, device, device_mode)
+
+    def _build(
+        self, options: EnvOptions, scenario: Scenario, batch_size: int, device: Any, device_mode: str
+    ) -> None:
         self.xp = xp = device_namespace(device)
         self.device = xp.device
         self.options = options
@@ -129,6 +156,7 @@ class RadarEngine:
         """Start an episode in every trial; trial i draws its keys from ``generators[i]``."""
         return self.reset_from_keys(np.stack([keys_from_generator(g) for g in generators]))
 
+    @_in_precision
     def reset_from_keys(self, keys: NDArray[np.uint64]) -> tuple[dict[str, NDArray], dict[str, NDArray]]:
         """Start an episode in every trial from its two keys (B, 2) (:func:`keys_from_generator`'s;
         a benchmark of many trials draws them once and starts from them again)."""
@@ -148,6 +176,7 @@ class RadarEngine:
         info = self._truth_info()
         return obs, info
 
+    @_in_precision
     def step(self, actions: Any) -> tuple[dict[str, NDArray], NDArray, NDArray, NDArray, dict[str, NDArray]]:
         """Apply actions (B, M + N); returns obs, reward, terminated, truncated, info."""
         if self.step_index >= self.horizon:
@@ -261,6 +290,7 @@ class RadarEngine:
             stacklevel=4,
         )
 
+    @_in_precision
     def oracle_action(self) -> NDArray[np.int8]:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
         upcoming = self.simulation.upcoming_state()[..., [0, 2]]
@@ -270,6 +300,7 @@ class RadarEngine:
         )
         return masks_to_actions(tx, rx)
 
+    @_in_precision
     def tracking_oracle_action(self, criterion: str = "trace") -> NDArray[np.int8]:
         """The super arm of the coming step that minimises the predicted posterior position
         error (:mod:`~mimo_radar_env.tracking.selection`, for the env's fusion), from the

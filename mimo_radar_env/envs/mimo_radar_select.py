@@ -18,7 +18,7 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from ..core.arrays import device_namespace
+from ..core.arrays import check_precision, device_namespace, float_precision
 from ..core.superarm import random_super_arms
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
@@ -429,7 +429,9 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
     caller resets. ``spec.max_episode_steps`` is the horizon. ``device="cuda"``
     (or ``"cpu"``, ``"cuda:1"``) runs it on torch there, every array a tensor;
     ``device_mode="graph"`` replays each step as one CUDA graph and ``"compiled"`` runs it
-    through ``torch.compile`` (:mod:`~mimo_radar_env.envs.device_forms`; default ``"eager"``).
+    through ``torch.compile`` (:mod:`~mimo_radar_env.envs.device_forms`; default ``"eager"``);
+    ``precision="float32"`` computes there in float32 (faster on a device, not the same numbers:
+    docs/performance.md gives the measured difference; default ``"float64"``).
     ``reset(seed=s)`` seeds trial ``i`` with ``s + i``, exactly like a single env
     reset with ``seed=s + i``; ``seed`` may also be a list of per-trial seeds.
     :meth:`oracle_action` returns the optimal super arms of the coming step,
@@ -453,6 +455,7 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
         device: Any = None,
         autoreset_mode: str | AutoresetMode = AutoresetMode.NEXT_STEP,
         device_mode: str = "eager",
+        precision: str = "float64",
         **kwargs: Any,
     ) -> None:
         if isinstance(num_envs, bool) or not isinstance(num_envs, int | np.integer) or num_envs < 1:
@@ -460,10 +463,16 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
         if render_mode is not None:
             raise ValueError("the vector env does not render; render a single MimoRadarSelect-v0 env")
         xp = device_namespace(device)  # a bad device is refused before the scenario is built
+        check_precision(precision, device)
         self.options, self.scenario = _resolve(kwargs)
         self.num_envs = num_envs
         self.engine = RadarEngine(
-            self.options, self.scenario, batch_size=num_envs, device=device, device_mode=device_mode
+            self.options,
+            self.scenario,
+            batch_size=num_envs,
+            device=device,
+            device_mode=device_mode,
+            precision=precision,
         )
         #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned
         self.device = xp.device
@@ -512,7 +521,9 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
             obs, info = self.reset()
             xp = self.engine.xp
             zeros = xp.zeros(self.num_envs, dtype=bool)
-            return obs, xp.zeros(self.num_envs), zeros, xp.copy(zeros), info
+            with float_precision(self.engine.precision):
+                reward = xp.zeros(self.num_envs)
+            return obs, reward, zeros, xp.copy(zeros), info
         obs, reward, terminated, truncated, info = self.engine.step(actions)
         self._needs_reset = bool(self.engine.step_index >= self.engine.horizon)
         return obs, reward, terminated, truncated, info

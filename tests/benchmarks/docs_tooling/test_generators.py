@@ -92,3 +92,52 @@ def test_the_reading_moves_are_each_column_against_the_one_it_modifies(tmp_path)
     assert (table["layout.moves"], table["layout.holds"]) == ("S1 (holds to contradicted)", "1")
     assert table["centralized.moves"] == "no claim"
     assert (table["always"], table["always.count"]) == ("S2", "1")
+
+
+def test_the_float32_table_and_figures_come_from_its_rows_and_float64s_figures_ignore_them(tmp_path):
+    """The float32 run's rows give its table and its largest differences (entry by entry, over
+    every row); the device figures of float64 skip float32 rows that a device run adds."""
+    from benchmarks.docs_tooling import generators
+
+    def row(version, precision, largest, track):
+        differences = {
+            "obs.track": track,
+            "info.true_state": 1e-6,
+            "reward": 2e-5,
+            "info.position_bound": 3e-6,
+            "obs.mode_prob": largest,
+            "oracle_action": 0.25,
+        }
+        return {
+            "version": version,
+            "fusion": "average",
+            "mode": "eager",
+            "precision": precision,
+            "trials": 64,
+            "steps": 1000,
+            "largest": largest,
+            "largest_entry": "obs.mode_prob",
+            "differences": differences,
+        }
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    float32 = {
+        "machine": "2 cores",
+        "device": "cpu",
+        "equality": [row("v1", "float32", 3e-3, 4e-5), row("v0", "float32", 2e-2, 9e-5)],
+    }
+    (perf / "float32.json").write_text(json.dumps(float32))
+    table = generators.float32_equality(tmp_path).splitlines()
+    assert table[0].count("|") == table[1].count("|") == table[2].count("|") == 14
+    assert table[3].startswith("| MimoRadarSelect-v0 | average | eager | float32 | 64 | 1000 | 2.0e-02 |")
+    assert "| 9.0e-05 | 2.0e-05 | 3.0e-06 | differ in 25 % of trial-steps |" in table[3]
+    assert generators.float32_value(tmp_path, "largest.obs.track") == "9.0e-05"
+    assert generators.float32_value(tmp_path, "largest") == "2.0e-02"
+    assert generators.float32_value(tmp_path, "trials") == "64"
+    with pytest.raises(generators.BenchError, match="unknown float32 figure 'largest.obs.nothing'"):
+        generators.float32_value(tmp_path, "largest.obs.nothing")
+    device = {"equality": [row("v1", "float32", 3e-3, 4e-5), {**row("v1", "float64", 1e-11, 1e-12)}]}
+    device["equality"][1].pop("precision")  # a run from before the precisions: float64
+    (perf / "device.json").write_text(json.dumps(device))
+    assert generators.device_value(tmp_path, "largest-difference") == "1.0e-11"

@@ -22,18 +22,21 @@ from mimo_radar_env.tracking import unscented  # noqa: E402
 DEVICE = os.environ.get("MIMO_RADAR_TEST_DEVICE", "cpu")
 
 
-def _engine(version, fusion, trials, mode):
+def _engine(version, fusion, trials, mode, precision="float64"):
     env_version = VERSIONS[version]
     options = env_version.options(fusion=fusion)
     scenario = load_scenario(env_version.default_scenario)
-    return RadarEngine(options, scenario, batch_size=trials, device=DEVICE, device_mode=mode)
+    return RadarEngine(
+        options, scenario, batch_size=trials, device=DEVICE, device_mode=mode, precision=precision
+    )
 
 
-def _play(version, fusion, mode, trials=3, steps=25, reset_at=None):
+def _play(version, fusion, mode, trials=3, steps=25, reset_at=None, precision="float64"):
     """The largest relative difference of every output between the eager engine and one in
     ``mode`` over ``steps`` steps (random valid actions, the first trial probing nothing every
     fifth step, the oracle's action read between steps), and the traced engine."""
-    eager, other = _engine(version, fusion, trials, "eager"), _engine(version, fusion, trials, mode)
+    eager = _engine(version, fusion, trials, "eager", precision)
+    other = _engine(version, fusion, trials, mode, precision)
     keys = _keys(trials)
     eager.reset_from_keys(keys)
     other.reset_from_keys(keys)
@@ -64,6 +67,12 @@ def test_the_graph_form_gives_the_eager_numbers_bit_for_bit(version, fusion):
     worst, engine = _play(version, fusion, "graph", reset_at=17)
     assert worst == 0.0
     assert engine._forms.eager_steps == 0  # every step ran traced
+
+
+def test_the_graph_form_in_float32_gives_the_eager_float32_numbers_bit_for_bit():
+    worst, engine = _play("v1", "centralized", "graph", steps=12, precision="float32")
+    assert worst == 0.0 and engine._forms.eager_steps == 0
+    assert engine.simulation.state.dtype == torch.float32
 
 
 def test_a_failed_deferred_check_redoes_the_step_eagerly_with_the_same_numbers(monkeypatch):
