@@ -41,11 +41,11 @@ _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 def load_hyperparams(
     path: str | Path | None = None,
-    key: str = VERSIONS[DEFAULT_VERSION].flat_env_id,
+    key: str | None = None,
     algo: str = "ppo",
 ) -> dict[str, Any]:
-    """The rl-zoo3 entry ``key`` of a YAML file (default: the shipped file of learner ``algo``,
-    ``hyperparams/ppo.yml`` for PPO).
+    """The rl-zoo3 entry ``key`` (default: the default version's Flat env id) of a YAML file
+    (default: the shipped file of learner ``algo``, ``hyperparams/ppo.yml`` for PPO).
 
     ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads
     them (without eval); ``normalize: true`` means observations and rewards, as in rl-zoo3.
@@ -53,6 +53,7 @@ def load_hyperparams(
     import yaml
 
     spec = learner(algo)
+    key = key or VERSIONS[DEFAULT_VERSION].flat_env_id
     if path is None:
         text = (resources.files(__package__) / spec.hyperparams).read_text()
         path = spec.hyperparams
@@ -214,27 +215,39 @@ def _parse_dict_call(text: str, name: str) -> dict[str, Any]:
 
 
 #: Training timesteps per second of one worker process, on the developers' machine (paper
-#: scenario 1, the shipped hyperparameters): the scale of a training's time estimate; torch-ppo's
-#: on one H200 with the device entry (docs/performance.md) and on CPU torch.
+#: scenario 1, the shipped hyperparameters): the scale of a training's time estimate.
 TRAINING_STEPS_PER_S = {"ppo": 3000.0, "maskable-ppo": 3000.0, "recurrent-ppo": 1280.0}
-TORCH_PPO_STEPS_PER_S = {"cuda": 200_000.0, "cpu": 1_000.0}
+#: torch-ppo's seconds per step of its B parallel trials (a rollout step and its share of the
+#: update), ``fixed + per_trial * B``: fitted to the training benchmark
+#: (``benchmarks.speed.training_rate``) on CPU torch on the developers' two cores (B = 8, 64, 512:
+#: 800 to 7,700 env steps per second) and on one H200 (B = 8 to 16,384: 440 to 713,000).
+TORCH_PPO_STEP_SECONDS = {"cpu": (9e-3, 1.1e-4), "cuda": (1.7e-2, 3.4e-7)}
 
 
-def estimate_training_seconds(algo: str, timesteps: int, device: str | None = None) -> float:
-    """One training's wall time, roughly: ``timesteps`` at :data:`TRAINING_STEPS_PER_S` (torch-ppo:
-    :data:`TORCH_PPO_STEPS_PER_S` on ``device``, CPU torch unless a CUDA device)."""
+def estimate_training_seconds(algo: str, timesteps: int, device: str | None = None, n_envs: int = 8) -> float:
+    """One training's wall time, roughly: ``timesteps`` at :data:`TRAINING_STEPS_PER_S`; torch-ppo's
+    from :data:`TORCH_PPO_STEP_SECONDS` on ``device`` (CPU torch unless a CUDA device) with
+    ``n_envs`` parallel trials, which set its speed."""
     if algo == TORCH_PPO:
-        return timesteps / TORCH_PPO_STEPS_PER_S["cuda" if str(device).startswith("cuda") else "cpu"]
+        fixed, per_trial = TORCH_PPO_STEP_SECONDS["cuda" if str(device).startswith("cuda") else "cpu"]
+        return timesteps / n_envs * (fixed + per_trial * n_envs)
     return timesteps / TRAINING_STEPS_PER_S[algo]
 
 
 def _check_training_time(
-    algo: str, timesteps: int, seeds: int, workers: int, device: str | None, max_hours: float | None, say
+    algo: str,
+    timesteps: int,
+    seeds: int,
+    workers: int,
+    device: str | None,
+    max_hours: float | None,
+    say,
+    n_envs: int,
 ) -> None:
     """Says the trainings' estimated time when it is a minute or more; refuses them beyond
     ``max_hours`` (seeds ``workers`` at a time; on a device one after another)."""
     at_once = 1 if device is not None else min(workers, seeds)
-    seconds = estimate_training_seconds(algo, timesteps, device) * -(-seeds // at_once)
+    seconds = estimate_training_seconds(algo, timesteps, device, n_envs) * -(-seeds // at_once)
     what = f"{seeds} training(s) of {timesteps:,} `timesteps` of {algo}"
     if max_hours is not None and seconds > 3600 * max_hours:
         raise HarnessError(
@@ -295,7 +308,7 @@ def train_ppo(
     config = _torch_config(params, n_envs, action, sc) if algo == TORCH_PPO else None
     n_envs = int(n_envs or params.get("n_envs", 8))
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
-    _check_training_time(algo, timesteps, seeds, workers, device, max_hours, say)
+    _check_training_time(algo, timesteps, seeds, workers, device, max_hours, say, n_envs)
     out = Path(out)
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
     if n_envs != params.get("n_envs", 8):

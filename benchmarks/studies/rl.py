@@ -321,14 +321,16 @@ class RLStudy(Study):
         """The wall time of the trainings still to do (a resumed study keeps its finished
         seeds), roughly: :func:`benchmarks.training.estimate_training_seconds` each, ``--workers``
         at once."""
-        from ..training import META_FILE, estimate_training_seconds, seed_folder
+        from ..training import META_FILE, estimate_training_seconds, load_hyperparams, seed_folder
 
         seconds = 0.0
+        key = self.args.hyperparams_key or (DEVICE_HYPERPARAMS_KEY if self.on_device else None)
         for t in (*self.trainings(), *self.sweep_trainings()):
+            n_envs = self.args.n_envs or load_hyperparams(None, key, t.algo).get("n_envs", 8)
             for seed in range(t.seeds):
                 meta = seed_folder(t.folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
-                    seconds += estimate_training_seconds(t.algo, t.timesteps, self.settings.device)
+                    seconds += estimate_training_seconds(t.algo, t.timesteps, self.settings.device, n_envs)
         return seconds if self.on_device else seconds / self.settings.workers
 
     def training_record(self) -> dict[str, Any]:
