@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from types import ModuleType
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -10,6 +11,7 @@ from numpy.typing import NDArray
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import masks_to_actions, top_mask
+from mimo_radar_env.envs.device_forms import GraphReplay
 
 from ..parameters import check_integer, check_parameter
 from .base import SuperArmSolver
@@ -83,6 +85,11 @@ class BPSOSolver(SuperArmSolver):
     a best, so the remaining iterations could not change the result. How much that saves
     depends on the rule: on i.i.d. exponential indices ``"set"`` reaches the optimum in about
     99 % of trials and ``"xor"`` in about half (docs/performance.md).
+
+    On torch the numpy kernel runs on the index's device; on CUDA its iterations (tens of
+    thousands of small kernels a selection) are captured once per batch shape as one CUDA graph
+    and replayed (:class:`~mimo_radar_env.envs.device_forms.GraphReplay`): the same kernels, the
+    same numbers.
     """
 
     name = "bpso"
@@ -124,6 +131,7 @@ class BPSOSolver(SuperArmSolver):
             raise ValueError(f"rule must be one of {list(BPSO_RULES)}, got {rule!r}")
         self.rule = rule
         self.use_numba = use_numba
+        self._replayed = GraphReplay(self._iterations, "BPSO's iterations")
 
     @property
     def threaded(self) -> bool:  # type: ignore[override]
@@ -188,10 +196,19 @@ class BPSOSolver(SuperArmSolver):
             raise ValueError(f"random streams for {random.batch_size} trials, index for {batch}")
         positions, keys = self.initial_swarm(random, num_tx, num_rx)
         xp = random.xp
-        kernel = (
-            _bpso_kernels().numba_kernel()
-            if (self.use_numba and _bpso_kernels().HAVE_NUMBA and not xp.is_torch)
-            else _bpso_kernels().run_numpy
-        )
-        best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
+        if xp.is_torch:
+            best = self._replayed(index, positions, keys)
+        else:
+            kernel = (
+                _bpso_kernels().numba_kernel()
+                if self.use_numba and _bpso_kernels().HAVE_NUMBA
+                else _bpso_kernels().run_numpy
+            )
+            best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
         return xp.astype(best[:, :num_tx], bool), xp.astype(best[:, num_tx:], bool)
+
+    def _iterations(self, index: Any, positions: Any, keys: Any) -> Any:
+        """Every iteration of the swarm on torch tensors: the numpy kernel, a function of them."""
+        return _bpso_kernels().run_numpy(
+            index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments()
+        )

@@ -1390,6 +1390,44 @@ def device_value(docs: Path, key: str) -> str:
     )
 
 
+LAUNCHES_FILE = "perf/launches.json"
+
+
+@generator("device-launches")
+def device_launches(docs: Path) -> str:
+    """``python -m benchmarks.speed.launches``: torch operations per step of each policy's act
+    (those in a replayed graph apart, and the dispatches left on CUDA), its update and the env's
+    eager step, per fusion."""
+    record = read_json(docs, LAUNCHES_FILE)
+    lines = [
+        "| policy | fusion | operations per act | of them replayed as one graph on CUDA | dispatches per "
+        "act on CUDA (a graph's replay one) | operations per update | operations per env step (eager) |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in record["rows"]:
+        lines.append(
+            f"| {r['policy']} | {r['fusion']} | {r['act']:,.0f} | {r['act_replayed']:,.0f} | "
+            f"{r['act_dispatches_on_cuda']:,.0f} | {r['update']:,.0f} | {r['env_step']:,.0f} |"
+        )
+    return "\n".join(lines)
+
+
+@value_source("launches")
+def launches_value(docs: Path, key: str) -> str:
+    """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
+    ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), or ``trials``."""
+    record = read_json(docs, LAUNCHES_FILE)
+    if key == "trials":
+        return f"{record['rows'][0]['trials']:,}"
+    field, _, rest = key.partition(".")
+    policy, _, fusion = rest.rpartition(".")
+    counts = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
+    for r in record["rows"]:
+        if (r["policy"], r["fusion"]) == (policy, fusion) and field in counts:
+            return f"{r[field]:,.0f}"
+    raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: FIELD.POLICY.FUSION, FIELD one of {counts}, or trials")
+
+
 # ------------------------------------------------------------------ PPO training throughput
 TRAINING_FILE = "perf/training.json"
 TRAININGS_FILE = "perf/torch-ppo-trainings.json"

@@ -13,6 +13,9 @@ The step is the eager code itself, traced: no second copy of the model. The host
 boolean per step, whether every deferred check passed; where one failed, the step is undone and
 run again eagerly with its checks, so every form gives the eager numbers (to round-off, which a
 compiler may reorder).
+
+:class:`GraphReplay` does the same for a pure function of tensors with nothing to check (BPSO's
+iterations): on CUDA, one graph per shape of its arguments, replayed.
 """
 
 from __future__ import annotations
@@ -202,6 +205,51 @@ def cuda_graph(body: Any, warm_up: Any) -> Any:
     """``body`` (a function of no arguments that reads and writes static buffers) as a replayable
     graph: a CUDA graph (the tests put a stand-in with the same contract here)."""
     return _CUDAGraph(body, warm_up)
+
+
+class GraphReplay:
+    """``function``, a pure function of tensors that asks the host nothing, run on CUDA as one
+    CUDA graph per signature of its arguments (shapes, dtypes, device): the first call captures
+    it (after a warm-up run, as torch asks); each call copies the arguments into the graph's input
+    buffers, replays it and clones its outputs out. The same kernels in the same order, so the
+    same numbers as calling it. Elsewhere it is called as it is, as it is where a capture fails
+    (said once, in a warning naming ``what``)."""
+
+    #: The device type whose calls are captured (the tests play a CPU as if it were one).
+    capture_on = "cuda"
+
+    def __init__(self, function: Any, what: str) -> None:
+        self.function, self.what = function, what
+        self._graphs: dict[tuple[Any, ...], Any] = {}
+
+    def __call__(self, *args: Any) -> Any:
+        if args[0].device.type != self.capture_on:
+            return self.function(*args)
+        key = tuple((tuple(a.shape), a.dtype, a.device) for a in args)
+        if key not in self._graphs:
+            self._graphs[key] = self._capture(args)
+        entry = self._graphs[key]
+        if entry is False:
+            return self.function(*args)
+        inputs, graph = entry
+        for static, value in zip(inputs, args, strict=True):
+            static.copy_(value)
+        import torch
+
+        return torch.utils._pytree.tree_map(lambda a: a.clone(), graph.replay())
+
+    def _capture(self, args: tuple[Any, ...]) -> Any:
+        inputs = [a.clone() for a in args]
+        try:
+            return inputs, cuda_graph(lambda: self.function(*inputs), lambda: self.function(*inputs))
+        except RuntimeError as error:
+            warnings.warn(
+                f"{self.what} could not be captured as a CUDA graph ({error}); it runs eagerly, with "
+                "the same numbers",
+                RuntimeWarning,
+                stacklevel=4,
+            )
+            return False
 
 
 def make_forms(engine: RadarEngine, device_mode: str) -> TracedStep | None:

@@ -16,6 +16,8 @@ import agents  # noqa: E402
 from mimo_radar_env.core.arrays import device_namespace  # noqa: E402
 from mimo_radar_env.core.counter_hash import Stream  # noqa: E402
 from mimo_radar_env.core.streams import TrialRandom  # noqa: E402
+from mimo_radar_env.envs import device_forms  # noqa: E402
+from tests.helpers import StandInGraph  # noqa: E402
 
 #: policy, its parameters, steps: the paper's policies (MG-CRB-CL with BPSO, as in the paper, and
 #: with the exact solver), the baselines, the oracles and tracking-ucb.
@@ -98,3 +100,69 @@ def test_an_agent_on_a_device_names_what_is_not_finite_after_one_read_of_all():
     bad["track"][1, 0, 2] = float("inf")
     with pytest.raises(ValueError, match="ucb1: the 'track' it was given is not finite"):
         agent.update(bad, reward)
+
+
+def _bpso_selections(solver, batch_sizes, seed=0):
+    """BPSO's selections on torch for indices of each batch size in turn (one TrialRandom each)."""
+    rng = np.random.default_rng(seed)
+    selections = []
+    for batch in batch_sizes:
+        index = torch.as_tensor(rng.exponential(size=(batch, 4, 6)), device=DEVICE)
+        random = TrialRandom.for_batch(seed, batch, device_namespace(DEVICE))
+        tx, rx = solver.solve(index, random)
+        selections.append(torch.cat([tx, rx], dim=1).cpu().numpy())
+    return selections
+
+
+def test_bpso_replayed_as_a_graph_selects_what_it_selects_eagerly(monkeypatch):
+    """On CUDA, BPSO's iterations are captured once per batch shape and replayed: played on the
+    CPU with a stand-in graph of a CUDA graph's contract (inputs copied into fixed buffers, the
+    outputs rewritten in place), the selections are the eager ones, call after call."""
+    from agents.solvers import BPSOSolver
+
+    sizes = [7, 7, 3, 7]
+    eager = _bpso_selections(BPSOSolver(2, 3, iterations=30), sizes)
+    captured = []
+    monkeypatch.setattr(
+        device_forms, "cuda_graph", lambda body, warm_up: captured.append(body) or StandInGraph(body, warm_up)
+    )
+    monkeypatch.setattr(device_forms.GraphReplay, "capture_on", torch.device(DEVICE).type)
+    replayed = _bpso_selections(BPSOSolver(2, 3, iterations=30), sizes)
+    assert len(captured) == 2  # one graph per batch shape
+    for ours, theirs in zip(replayed, eager, strict=True):
+        np.testing.assert_array_equal(ours, theirs)
+
+
+def test_bpsos_iterations_ask_the_host_nothing(monkeypatch):
+    """What a CUDA graph needs: no bool(), item() or the like of a tensor inside the iterations."""
+    from agents.solvers import BPSOSolver
+
+    solver = BPSOSolver(2, 3, iterations=5)
+    index = torch.as_tensor(np.random.default_rng(1).exponential(size=(4, 4, 6)), device=DEVICE)
+    positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, 4, device_namespace(DEVICE)), 4, 6)
+    reads = []
+    for name in ("__bool__", "item", "__int__", "__float__", "tolist", "numpy"):
+        original = getattr(torch.Tensor, name)
+
+        def spy(self, *args, _name=name, _original=original, **kwargs):
+            reads.append(_name)
+            return _original(self, *args, **kwargs)
+
+        monkeypatch.setattr(torch.Tensor, name, spy)
+    solver._iterations(index, positions, keys)
+    monkeypatch.undo()
+    assert reads == []
+
+
+def test_bpso_that_cannot_be_captured_runs_eagerly_with_a_warning(monkeypatch):
+    from agents.solvers import BPSOSolver
+
+    def refuse(body, warm_up):
+        raise RuntimeError("operation not permitted when stream is capturing")
+
+    eager = _bpso_selections(BPSOSolver(2, 3, iterations=10), [5])
+    monkeypatch.setattr(device_forms, "cuda_graph", refuse)
+    monkeypatch.setattr(device_forms.GraphReplay, "capture_on", torch.device(DEVICE).type)
+    with pytest.warns(RuntimeWarning, match="BPSO's iterations could not be captured as a CUDA graph"):
+        replayed = _bpso_selections(BPSOSolver(2, 3, iterations=10), [5, 5])
+    np.testing.assert_array_equal(replayed[0], eager[0])

@@ -18,6 +18,7 @@ from mimo_radar_env.core.superarm import random_super_arms  # noqa: E402
 from mimo_radar_env.envs import device_forms  # noqa: E402
 from mimo_radar_env.envs.engine import RadarEngine  # noqa: E402
 from mimo_radar_env.tracking import unscented  # noqa: E402
+from tests.helpers import StandInGraph  # noqa: E402
 
 DEVICE = os.environ.get("MIMO_RADAR_TEST_DEVICE", "cpu")
 
@@ -113,26 +114,8 @@ def test_the_traced_step_reads_no_device_value(monkeypatch):
     assert len(flags) >= 4  # the prior's factors, both guards of the update, the bound's
 
 
-class _StandInGraph:
-    """What a CUDA graph does, on the CPU: capturing runs nothing; each replay runs the body
-    and leaves its outputs in the same tensors as the first replay (a graph's fixed buffers)."""
-
-    def __init__(self, body, warm_up):
-        warm_up()
-        self.body = body
-        self.outputs = None
-
-    def replay(self):
-        fresh = self.body()
-        if self.outputs is None:
-            self.outputs = fresh
-        else:
-            torch.utils._pytree.tree_map(lambda old, new: old.copy_(new), self.outputs, fresh)
-        return self.outputs
-
-
 def test_the_cuda_graph_path_keeps_the_engines_arrays_in_its_buffers(monkeypatch):
-    monkeypatch.setattr(device_forms, "cuda_graph", _StandInGraph)
+    monkeypatch.setattr(device_forms, "cuda_graph", StandInGraph)
     monkeypatch.setattr(device_forms.TracedStep, "__init__", _as_if_on_cuda)
     worst, engine = _play("v1", "average", "graph", steps=30, reset_at=12)
     assert worst == 0.0

@@ -1,0 +1,123 @@
+"""Torch operations per step: each policy's act and the env's step, counted on CPU torch.
+
+Run: ``python -m benchmarks.speed.launches [--trials 500] [--json FILE]``.
+
+On a GPU most operations launch a kernel (views and other operations on a tensor's shape launch
+none), and at the paper's 500 trials a launch costs more than its arithmetic, so these counts say
+where eager torch code is launch-bound there. They are counts of the code's calls, the same on any
+device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees every operation.
+Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO's iterations)
+are counted apart: on CUDA they replay as one graph. docs/performance.md's table is generated
+from the JSON.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import json
+import warnings
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+POLICIES = ("mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "random", "best", "best-tracking", "tracking-ucb")
+SCENARIO = "paper-1-v1"
+
+
+@contextlib.contextmanager
+def counting() -> Iterator[dict[str, int]]:
+    """Counts the torch operations run in the block: ``"total"``, and ``"replayed"`` those inside
+    a :class:`GraphReplay` call."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    from mimo_radar_env.envs.device_forms import GraphReplay
+
+    counts = {"total": 0, "replayed": 0}
+    inside = [False]
+
+    class Count(TorchDispatchMode):
+        def __torch_dispatch__(self, func: Any, types: Any, args: Any = (), kwargs: Any = None) -> Any:
+            counts["total"] += 1
+            counts["replayed"] += inside[0]
+            return func(*args, **(kwargs or {}))
+
+    call = GraphReplay.__call__
+
+    def replayed(self: GraphReplay, *args: Any) -> Any:
+        inside[0] = True
+        try:
+            return call(self, *args)
+        finally:
+            inside[0] = False
+
+    GraphReplay.__call__ = replayed  # type: ignore[method-assign]
+    try:
+        with Count():
+            yield counts
+    finally:
+        GraphReplay.__call__ = call  # type: ignore[method-assign]
+
+
+def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") -> dict[str, Any]:
+    """The operations of ``policy``'s act, its update and the env's step, per step, averaged over
+    ``steps`` steps after two (the first acts from the reset's observation)."""
+    import agents
+
+    agent = agents.make_agent(policy, SCENARIO, seed=0)
+    env = agents.make_env(agent, trials, {"fusion": fusion}, device="cpu")
+    episode = agents.Rollout(agent, env, seed=0)
+    for _ in range(2):
+        episode.step()
+    totals = {"act": 0, "act_replayed": 0, "update": 0, "env_step": 0}
+    for _ in range(steps):
+        with counting() as act:
+            action = agent.act(episode.obs)
+        with counting() as step:
+            obs, reward, *_ = env.step(action)
+        with counting() as update:
+            agent.update(obs, reward)
+        episode.obs = obs
+        totals["act"] += act["total"]
+        totals["act_replayed"] += act["replayed"]
+        totals["update"] += update["total"]
+        totals["env_step"] += step["total"]
+    row: dict[str, Any] = {"policy": policy, "fusion": fusion, "trials": trials, "steps": steps}
+    row |= {key: value / steps for key, value in totals.items()}
+    # on CUDA a replayed graph is one dispatch (its replay) in place of its operations
+    row["act_dispatches_on_cuda"] = row["act"] - row["act_replayed"] + (row["act_replayed"] > 0)
+    return row
+
+
+def main(argv: list[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--trials", type=int, default=500)
+    parser.add_argument("--steps", type=int, default=3, help="steps counted per policy")
+    parser.add_argument("--policies", default=",".join(POLICIES))
+    parser.add_argument("--json", type=Path, default=None)
+    args = parser.parse_args(argv)
+    import torch
+
+    rows = []
+    for fusion in ("average", "centralized"):
+        for policy in args.policies.split(","):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", UserWarning)  # a random policy's invalid-action notes
+                row = policy_row(policy, args.trials, args.steps, fusion)
+            rows.append(row)
+            print(
+                f"{fusion:12s} {policy:16s} act {row['act']:9,.0f} ops ({row['act_replayed']:,.0f} in a "
+                f"replayed graph), update {row['update']:5,.0f}, env step {row['env_step']:6,.0f}",
+                flush=True,
+            )
+    result = {"scenario": SCENARIO, "torch": torch.__version__, "numpy": np.__version__, "rows": rows}
+    if args.json:
+        args.json.parent.mkdir(parents=True, exist_ok=True)
+        args.json.write_text(json.dumps(result, indent=1) + "\n")
+        print(f"wrote {args.json}")
+
+
+if __name__ == "__main__":
+    main()

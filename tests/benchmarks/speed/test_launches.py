@@ -1,0 +1,43 @@
+"""The operation counts: every torch operation of a block counted, those inside a GraphReplay
+apart, and a policy's counts against the same calls counted on their own."""
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch")
+
+from benchmarks.speed import launches  # noqa: E402
+from mimo_radar_env.core.arrays import device_namespace  # noqa: E402
+from mimo_radar_env.core.streams import TrialRandom  # noqa: E402
+from mimo_radar_env.envs.device_forms import GraphReplay  # noqa: E402
+
+
+def test_counting_sees_every_operation_and_those_of_a_replayed_function_apart():
+    a, b = torch.ones(3), torch.arange(3.0)
+    twice = GraphReplay(lambda x: x * 2.0, "doubling")
+    with launches.counting() as counts:
+        c = a + b  # one operation
+        d = twice(c)  # one, inside the replay
+        (d - a).sum()  # two
+    assert counts == {"total": 4, "replayed": 1}
+    with launches.counting() as counts:
+        pass
+    assert counts == {"total": 0, "replayed": 0}
+
+
+def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone():
+    """The operations a row puts in the replayed graph are those of BPSO's iterations called on
+    their own with the same shapes; on CUDA they become one dispatch."""
+    row = launches.policy_row("mg-crb-cl", 6, 1)
+    from agents.solvers import BPSOSolver
+
+    solver = BPSOSolver(2, 3)
+    index = torch.as_tensor(np.random.default_rng(0).exponential(size=(6, 4, 6)))
+    positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, 6, device_namespace("cpu")), 4, 6)
+    with launches.counting() as counts:
+        solver._iterations(index, positions, keys)
+    assert row["act_replayed"] == counts["total"] > 1000
+    assert row["act_dispatches_on_cuda"] == row["act"] - row["act_replayed"] + 1
+    plain = launches.policy_row("ucb1", 6, 1)
+    assert plain["act_replayed"] == 0 and plain["act_dispatches_on_cuda"] == plain["act"] > 0
+    assert plain["env_step"] == row["env_step"] > 1000  # the same env, whatever acts on it
