@@ -295,6 +295,10 @@ class TorchNamespace:
     # ------------------------------------------------------------ arithmetic
     def where(self, condition: Any, a: Any, b: Any) -> Any:
         torch = self.torch
+        if isinstance(a, torch.Tensor) != isinstance(b, torch.Tensor) and isinstance(
+            b if isinstance(a, torch.Tensor) else a, bool | int | float
+        ):  # the scalar goes to the kernel as an argument: no tensor copied from the host (graphs)
+            return torch.where(condition, a, b)
         if not isinstance(a, torch.Tensor):
             a = torch.as_tensor(a, dtype=b.dtype if isinstance(b, torch.Tensor) else None, device=self.device)
         if not isinstance(b, torch.Tensor):
