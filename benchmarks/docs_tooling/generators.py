@@ -1244,11 +1244,13 @@ def _rate(rate: float) -> str:
 #: The float32 run's equality rows (``--precisions float32 --skip-speed``), on CPU torch.
 FLOAT32_FILE = "perf/float32.json"
 #: The entries the float32 table gives beside the largest, by column.
-FLOAT32_ENTRIES = {
-    "truth": "info.true_state",
-    "tracks": "obs.track",
-    "SINR reward": "reward",
-    "position bound": "info.position_bound",
+FLOAT32_ENTRIES = {"truth": "info.true_state", "tracks": "obs.track", "SINR reward": "reward"}
+#: The columns of an equality table that say how a row ran: (header, the row's cell).
+RUN_COLUMNS: dict[str, Callable[[dict[str, Any]], Any]] = {
+    "form": lambda e: e.get("mode", "eager"),
+    "precision": lambda e: e.get("precision", "float64"),
+    "trials": lambda e: e["trials"],
+    "steps": lambda e: e["steps"],
 }
 
 
@@ -1256,24 +1258,19 @@ def _oracle_agreement(share: float) -> str:
     return "identical" if share == 0 else f"differ in {100 * share:.2g} % of trial-steps"
 
 
-def _equality_table(record: dict[str, Any], entries: dict[str, str]) -> str:
-    """The equality rows of a ``benchmarks.speed.device`` run: per version, fusion, form and
-    precision (rows before either existed were eager float64), the largest normwise relative
-    difference from numpy and the entry it was found in, the ``entries`` columns, and whether the
-    oracle's actions agreed."""
-    extra = "".join(f" {label} |" for label in entries)
-    lines = [
-        f"| env | fusion | form | precision | trials | steps | largest relative difference | in |{extra}"
-        " oracle's actions |",
-        "|---|---|---|---|---|---|---|---|" + "---|" * len(entries) + "---|",
-    ]
+def _equality_table(record: dict[str, Any], run: tuple[str, ...], entries: dict[str, str]) -> str:
+    """The equality rows of a ``benchmarks.speed.device`` run: per version and fusion, the
+    ``run`` columns of :data:`RUN_COLUMNS` (rows from before forms or precisions were recorded
+    are eager float64), the largest normwise relative difference from numpy and the entry it was
+    found in, the ``entries`` columns, and whether the oracle's actions agreed."""
+    headers = ["env", "fusion", *run, "largest relative difference", "in", *entries, "oracle's actions"]
+    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
     for e in record["equality"]:
-        columns = "".join(f" {e['differences'][key]:.1e} |" for key in entries.values())
-        lines.append(
-            f"| MimoRadarSelect-{e['version']} | {e['fusion']} | {e.get('mode', 'eager')} | "
-            f"{e.get('precision', 'float64')} | {e['trials']} | {e['steps']} | {e['largest']:.1e} | "
-            f"`{e['largest_entry']}` |{columns} {_oracle_agreement(e['differences']['oracle_action'])} |"
-        )
+        cells = [f"MimoRadarSelect-{e['version']}", e["fusion"], *(RUN_COLUMNS[c](e) for c in run)]
+        cells += [f"{e['largest']:.1e}", f"`{e['largest_entry']}`"]
+        cells += [f"{e['differences'][key]:.1e}" for key in entries.values()]
+        cells.append(_oracle_agreement(e["differences"]["oracle_action"]))
+        lines.append("| " + " | ".join(map(str, cells)) + " |")
     return "\n".join(lines)
 
 
@@ -1281,27 +1278,27 @@ def _equality_table(record: dict[str, Any], entries: dict[str, str]) -> str:
 def device_equality(docs: Path) -> str:
     """``python -m benchmarks.speed.device``'s equality on the device: the torch engine against the
     numpy engine over whole episodes (:func:`_equality_table`)."""
-    return _equality_table(read_json(docs, DEVICE_FILE), {})
+    return _equality_table(read_json(docs, DEVICE_FILE), tuple(RUN_COLUMNS), {})
 
 
 @generator("float32-equality")
 def float32_equality(docs: Path) -> str:
-    """The float32 engine against the numpy engine over whole episodes (:func:`_equality_table`),
-    with the truth, the tracks, the reward and the bound apart."""
-    return _equality_table(read_json(docs, FLOAT32_FILE), FLOAT32_ENTRIES)
+    """The float32 engine against the numpy engine over whole episodes (:func:`_equality_table`;
+    its trials and steps are said under it), with the truth, the tracks and the reward apart."""
+    return _equality_table(read_json(docs, FLOAT32_FILE), (), FLOAT32_ENTRIES)
 
 
 @value_source("float32")
 def float32_value(docs: Path, key: str) -> str:
     """A figure of the float32 run (results/perf/float32.json): ``machine``, ``device``,
-    ``trials``, or ``largest.ENTRY`` the largest difference of an entry (``obs.track``...) over its
-    rows, ``largest`` over every entry."""
+    ``trials``, ``steps``, or ``largest.ENTRY`` the largest difference of an entry
+    (``obs.track``...) over its rows, ``largest`` over every entry."""
     record = read_json(docs, FLOAT32_FILE)
     rows = record["equality"]
     if key in ("machine", "device"):
         return str(record[key])
-    if key == "trials":
-        return f"{rows[0]['trials']:,}"
+    if key in ("trials", "steps"):
+        return f"{rows[0][key]:,}"
     if key == "largest":
         return f"{max(r['largest'] for r in rows):.1e}"
     entry = key.removeprefix("largest.")

@@ -129,12 +129,19 @@ def test_the_float32_table_and_figures_come_from_its_rows_and_float64s_figures_i
     }
     (perf / "float32.json").write_text(json.dumps(float32))
     table = generators.float32_equality(tmp_path).splitlines()
-    assert table[0].count("|") == table[1].count("|") == table[2].count("|") == 14
-    assert table[3].startswith("| MimoRadarSelect-v0 | average | eager | float32 | 64 | 1000 | 2.0e-02 |")
-    assert "| 9.0e-05 | 2.0e-05 | 3.0e-06 | differ in 25 % of trial-steps |" in table[3]
+    assert table[0].count("|") == table[1].count("|") == table[2].count("|") == 9
+    assert table[3] == (
+        "| MimoRadarSelect-v0 | average | 2.0e-02 | `obs.mode_prob` | 1.0e-06 | 9.0e-05 | 2.0e-05 | "
+        "differ in 25 % of trial-steps |"
+    )
+    device_table = generators._equality_table(float32, tuple(generators.RUN_COLUMNS), {}).splitlines()
+    assert device_table[2].startswith(
+        "| MimoRadarSelect-v1 | average | eager | float32 | 64 | 1000 | 3.0e-03 |"
+    )
     assert generators.float32_value(tmp_path, "largest.obs.track") == "9.0e-05"
     assert generators.float32_value(tmp_path, "largest") == "2.0e-02"
     assert generators.float32_value(tmp_path, "trials") == "64"
+    assert generators.float32_value(tmp_path, "steps") == "1,000"
     with pytest.raises(generators.BenchError, match="unknown float32 figure 'largest.obs.nothing'"):
         generators.float32_value(tmp_path, "largest.obs.nothing")
     device = {"equality": [row("v1", "float32", 3e-3, 4e-5), {**row("v1", "float64", 1e-11, 1e-12)}]}
