@@ -133,14 +133,26 @@ def test_bpso_replayed_as_a_graph_selects_what_it_selects_eagerly(monkeypatch):
         np.testing.assert_array_equal(ours, theirs)
 
 
-def test_bpsos_iterations_ask_the_host_nothing(monkeypatch):
-    """What a CUDA graph needs: no bool(), item() or the like of a tensor inside the iterations."""
+def test_bpsos_iterations_ask_the_host_nothing_and_copy_nothing_from_it(monkeypatch):
+    """What a CUDA graph's capture needs: inside the iterations, no bool(), item() or the like of
+    a tensor, and no tensor made from host data (a scalar goes to its kernel as an argument),
+    once a first call has made the hash's constant words."""
     from agents.solvers import BPSOSolver
 
     solver = BPSOSolver(2, 3, iterations=5)
     index = torch.as_tensor(np.random.default_rng(1).exponential(size=(4, 4, 6)), device=DEVICE)
     positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, 4, device_namespace(DEVICE)), 4, 6)
+    solver._iterations(index, positions, keys)  # the warm-up a capture runs first
     reads = []
+    for name in ("as_tensor", "tensor"):
+        original = getattr(torch, name)
+
+        def made(data, *args, _name=name, _original=original, **kwargs):
+            if not isinstance(data, torch.Tensor):
+                reads.append(f"torch.{_name}({data!r})")
+            return _original(data, *args, **kwargs)
+
+        monkeypatch.setattr(torch, name, made)
     for name in ("__bool__", "item", "__int__", "__float__", "tolist", "numpy"):
         original = getattr(torch.Tensor, name)
 
