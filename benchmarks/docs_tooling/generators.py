@@ -8,7 +8,7 @@ from __future__ import annotations
 import json
 import re
 import shlex
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -110,6 +110,13 @@ def read_json(docs: Path, relative: str) -> Any:
         return json.loads(path.read_text())
     except (OSError, json.JSONDecodeError) as exc:
         raise BenchError(f"the docs read {path}, which is missing or not JSON ({exc})") from None
+
+
+def markdown_table(head: Sequence[str], rows: Iterable[Sequence[Any]]) -> str:
+    """A Markdown table: the header, its rule, and a line per row of cells (each ``str``-ed)."""
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines += ["| " + " | ".join(map(str, row)) + " |" for row in rows]
+    return "\n".join(lines)
 
 
 def _scorecards(docs: Path, files: dict[str, str]) -> dict[str, list]:
@@ -318,7 +325,7 @@ def v1_table(
     head = ["policy", *(f"ARMSE, {label} (m)" for label in labels)]
     head += ["paper ARMSE (m)", *(f"ours / paper, {label}" for label in labels)]
     head += ["ASR (%)", "paper ASR (%)", "final regret", "mean SINR (dB)"]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    rows_a = []
     for policy, row in average["policies"].items():
         paper = paper_armse(key, policy)
         rows = [summaries[f]["policies"][policy] for f in fusions]
@@ -330,11 +337,10 @@ def v1_table(
             f"{paper_asr:.2f}" if paper_asr is not None else "—",
         ]
         cells += [format_cell(row, "final_regret", "{:.1f}"), format_cell(row, "mean_sinr_db", "{:.2f}")]
-        lines.append("| " + " | ".join(cells) + " |")
-    lines.append("")
-    head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in labels)]
-    head += ["Δ ASR (pp)", "Δ final regret", "Δ mean SINR (dB)"]
-    lines += ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+        rows_a.append(cells)
+    pair_head = ["A - B", *(f"Δ ARMSE, {label} (m)" for label in labels)]
+    pair_head += ["Δ ASR (pp)", "Δ final regret", "Δ mean SINR (dB)"]
+    rows_b = []
     for pair in PAIRS:
         a = average["paired_differences"][pair]
         cells = [
@@ -343,8 +349,8 @@ def v1_table(
         ]
         cells += [format_judged(a["asr"], "{:.2f}", 100), format_judged(a["final_regret"], "{:.1f}")]
         cells += [format_judged(a["mean_sinr_db"], "{:.2f}")]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        rows_b.append(cells)
+    return markdown_table(head, rows_a) + "\n\n" + markdown_table(pair_head, rows_b)
 
 
 def v1_targets_table(docs: Path) -> str:
@@ -354,7 +360,7 @@ def v1_targets_table(docs: Path) -> str:
     for k in (1, 2):
         head += [f"T{k}, {label} (m)" for label in FUSION_LABELS.values()]
         head += [f"T{k} paper (m)", f"T{k} ours / paper, {FUSION_LABELS['centralized']}"]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    lines = []
     for policy in summaries["average"]["policies"]:
         rows = {f: s["policies"][policy] for f, s in summaries.items()}
         paper = PAPER_ARMSE["paper-3"].get(policy)
@@ -366,8 +372,8 @@ def v1_targets_table(docs: Path) -> str:
                 f"{ref:.4f}" if ref is not None else "—",
                 _ratio(rows["centralized"], "armse_per_target", ref, k),
             ]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines)
+        lines.append(cells)
+    return markdown_table(head, lines)
 
 
 for _number in (1, 2, 3):
@@ -746,18 +752,14 @@ def floor_values(docs: Path) -> dict[str, str]:
 @generator("scaling")
 def scaling_table(docs: Path) -> str:
     """``python -m benchmarks.speed.scaling --json``'s rows."""
-    rows = read_json(docs, "perf/scaling.json")
-    lines = [
-        "| M x N | Ms, Ns | K | B | solver | ms/step | us/trial-step | peak MiB |",
-        "|---|---|---|---|---|---|---|---|",
+    head = ["M x N", "Ms, Ns", "K", "B", "solver", "ms/step", "us/trial-step", "peak MiB"]
+    rows = [
+        [f"{r['M']} x {r['N']}", f"{r['Ms']}, {r['Ns']}", r["K"], r["B"], r["solver"]]
+        + [f"{r['ms_per_step']:.1f}", f"{r['us_per_trial_step']:.1f}", f"{r['peak_mib']:.1f}"]
+        for group in read_json(docs, "perf/scaling.json").values()
+        for r in group
     ]
-    for group in rows.values():
-        for r in group:
-            lines.append(
-                f"| {r['M']} x {r['N']} | {r['Ms']}, {r['Ns']} | {r['K']} | {r['B']} | {r['solver']} | "
-                f"{r['ms_per_step']:.1f} | {r['us_per_trial_step']:.1f} | {r['peak_mib']:.1f} |"
-            )
-    return "\n".join(lines)
+    return markdown_table(head, rows)
 
 
 @values("growth")
@@ -1263,15 +1265,14 @@ def _equality_table(record: dict[str, Any], run: tuple[str, ...], entries: dict[
     ``run`` columns of :data:`RUN_COLUMNS` (rows from before forms or precisions were recorded
     are eager float64), the largest normwise relative difference from numpy and the entry it was
     found in, the ``entries`` columns, and whether the oracle's actions agreed."""
-    headers = ["env", "fusion", *run, "largest relative difference", "in", *entries, "oracle's actions"]
-    lines = ["| " + " | ".join(headers) + " |", "|" + "---|" * len(headers)]
+    head = ["env", "fusion", *run, "largest relative difference", "in", *entries, "oracle's actions"]
+    rows = []
     for e in record["equality"]:
         cells = [f"MimoRadarSelect-{e['version']}", e["fusion"], *(RUN_COLUMNS[c](e) for c in run)]
         cells += [f"{e['largest']:.1e}", f"`{e['largest_entry']}`"]
         cells += [f"{e['differences'][key]:.1e}" for key in entries.values()]
-        cells.append(_oracle_agreement(e["differences"]["oracle_action"]))
-        lines.append("| " + " | ".join(map(str, cells)) + " |")
-    return "\n".join(lines)
+        rows.append([*cells, _oracle_agreement(e["differences"]["oracle_action"])])
+    return markdown_table(head, rows)
 
 
 @generator("device-equality")
@@ -1395,18 +1396,21 @@ def device_launches(docs: Path) -> str:
     """``python -m benchmarks.speed.launches``: torch operations per step of each policy's act
     (those in a replayed graph apart, and the dispatches left on CUDA), its update and the env's
     eager step, per fusion."""
-    record = read_json(docs, LAUNCHES_FILE)
-    lines = [
-        "| policy | fusion | operations per act | of them replayed as one graph on CUDA | dispatches per "
-        "act on CUDA (a graph's replay one) | operations per update | operations per env step (eager) |",
-        "|---|---|---|---|---|---|---|",
+    head = [
+        "policy",
+        "fusion",
+        "operations per act",
+        "of them replayed as one graph on CUDA",
+        "dispatches per act on CUDA (a graph's replay one)",
+        "operations per update",
+        "operations per env step (eager)",
     ]
-    for r in record["rows"]:
-        lines.append(
-            f"| {r['policy']} | {r['fusion']} | {r['act']:,.0f} | {r['act_replayed']:,.0f} | "
-            f"{r['act_dispatches_on_cuda']:,.0f} | {r['update']:,.0f} | {r['env_step']:,.0f} |"
-        )
-    return "\n".join(lines)
+    counts = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
+    rows = [
+        [r["policy"], r["fusion"], *(f"{r[c]:,.0f}" for c in counts)]
+        for r in read_json(docs, LAUNCHES_FILE)["rows"]
+    ]
+    return markdown_table(head, rows)
 
 
 @value_source("launches")
@@ -1610,11 +1614,9 @@ def threads_table(docs: Path) -> str:
     """``python -m benchmarks.speed.threads``'s runs: one task on all the cores, on one thread
     and on the threads the harness chose, with the speed-up it predicted."""
     record = read_json(docs, "perf/threads.json")
-    lines = [
-        "| fusion | threads chosen | the task, one thread (s) | the task, chosen (s) | speed-up of the task "
-        "| predicted | the run, one thread (s) | the run, chosen (s) | same numbers |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
+    head = ["fusion", "threads chosen", "the task, one thread (s)", "the task, chosen (s)"]
+    head += ["speed-up of the task", "predicted", "the run, one thread (s)", "the run, chosen (s)"]
+    runs = []
     for row in record["fusions"]:
         one, chosen = row["runs"]["one thread"], row["runs"]["chosen"]
         cells = [
@@ -1628,18 +1630,15 @@ def threads_table(docs: Path) -> str:
             f"{chosen['wall_s']:.1f}",
             "yes" if row["same_numbers"] else "NO",
         ]
-        lines.append("| " + " | ".join(cells) + " |")
-    lines += [
-        "",
-        "| fusion | cores | shards | tasks | threads chosen | predicted (s) | one thread each (s) |",
-        "|---|---|---|---|---|---|---|",
+        runs.append(cells)
+    plans = [
+        [p["fusion"], p["workers"], p["shards"], p["tasks"], p["threads"], f"{p['seconds']:.1f}"]
+        + [f"{p['one_thread_seconds']:.1f}"]
+        for p in record["plans"]
     ]
-    for plan in record["plans"]:
-        lines.append(
-            f"| {plan['fusion']} | {plan['workers']} | {plan['shards']} | {plan['tasks']} | "
-            f"{plan['threads']} | {plan['seconds']:.1f} | {plan['one_thread_seconds']:.1f} |"
-        )
-    return "\n".join(lines)
+    plan_head = ["fusion", "cores", "shards", "tasks", "threads chosen", "predicted (s)"]
+    plan_head.append("one thread each (s)")
+    return markdown_table([*head, "same numbers"], runs) + "\n\n" + markdown_table(plan_head, plans)
 
 
 @value_source("threads")
