@@ -130,7 +130,7 @@ class TracedStep:
             f"device_mode={self.mode!r}: the step could not be {what} ({type(error).__name__}: "
             f"{str(error).splitlines()[0] if str(error) else ''}); it runs eagerly, with the same numbers",
             RuntimeWarning,
-            stacklevel=5,
+            stacklevel=6,
         )
 
     def _put(self, state: list[Any]) -> None:
@@ -160,7 +160,7 @@ class TracedStep:
                     f"the step could not be captured as a CUDA graph ({error}); it runs as the traced "
                     "function instead, with the same numbers",
                     RuntimeWarning,
-                    stacklevel=4,
+                    stacklevel=7,
                 )
                 return self._function(actions, *state)
         self._actions.copy_(actions)
@@ -247,7 +247,7 @@ class GraphReplay:
                 f"{self.what} could not be captured as a CUDA graph ({error}); it runs eagerly, with "
                 "the same numbers",
                 RuntimeWarning,
-                stacklevel=4,
+                stacklevel=6,
             )
             return False
 

@@ -287,7 +287,7 @@ class RadarEngine:
             "or make the env with invalid_action='raise' to stop at the first invalid action "
             "(this warning is given once per env)",
             UserWarning,
-            stacklevel=4,
+            stacklevel=5,
         )
 
     @_in_precision

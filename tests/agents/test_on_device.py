@@ -178,3 +178,8 @@ def test_bpso_that_cannot_be_captured_runs_eagerly_with_a_warning(monkeypatch):
     with pytest.warns(RuntimeWarning, match="BPSO's iterations could not be captured as a CUDA graph"):
         replayed = _bpso_selections(BPSOSolver(2, 3, iterations=10), [5, 5])
     np.testing.assert_array_equal(replayed[0], eager[0])
+    agent = agents.make_agent("mg-crb-cl", "paper-1-v1", seed=0)
+    episode = agents.Rollout(agent, agents.make_env(agent, 3, device=DEVICE), seed=0)
+    with pytest.warns(RuntimeWarning, match="could not be captured") as said:
+        agent.act(episode.obs)
+    assert said[0].filename == __file__  # said where the agent acted

@@ -182,9 +182,10 @@ def test_a_step_with_no_traced_form_runs_eagerly_with_a_warning():
     eager, graph = make("eager"), make("graph")
     eager.reset(seed=2)
     graph.reset(seed=2)
-    with pytest.warns(RuntimeWarning, match="device_mode='graph': the step could not be traced"):
+    with pytest.warns(RuntimeWarning, match="device_mode='graph': the step could not be traced") as said:
         for _ in range(3):
             action = eager.sample_action()
             ours, theirs = eager.step(action), graph.step(action)
             assert all(relative_difference(ours[4][k], theirs[4][k]) == 0.0 for k in ours[4])
     assert graph.engine._forms._function is False
+    assert [w.filename for w in said if "could not be traced" in str(w.message)] == [__file__]  # the caller

@@ -80,6 +80,18 @@ def test_an_episode_of_mostly_invalid_actions_warns_once_naming_the_flat_id():
             assert "MimoRadarSelectFlat-v1" in messages[0] and "invalid_action='raise'" in messages[0]
 
 
+def test_the_invalid_actions_warning_names_the_line_that_stepped_the_vector_env():
+    """The warning points at the caller's step, through the engine's precision wrapper."""
+    env = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="vector_entry_point", horizon=3)
+    env.reset(seed=0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        for _ in range(3):
+            env.step(np.zeros((2, env.single_action_space.n), dtype=np.int8))
+    (warning,) = [w for w in caught if "probed nothing" in str(w.message)]
+    assert warning.filename == __file__
+
+
 def test_an_episode_of_mostly_valid_actions_does_not_warn():
     env = gym.make("MimoRadarSelect-v1", horizon=4)
     nothing = np.zeros(env.action_space.shape, dtype=np.int8)
