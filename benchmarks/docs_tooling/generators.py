@@ -1656,50 +1656,82 @@ def threads_value(docs: Path, key: str) -> str:
     raise BenchError(f"unknown threads figure {key!r}: workers, run, said")
 
 
-@generator("ray-backend")
-def ray_backend(docs: Path) -> str:
-    """``python -m benchmarks.speed.ray_cluster``'s runs: each backend's wall times, and Ray's
-    minus the local backend's paired by repeat, with a 95 % t interval."""
+def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, difference: str) -> str:
+    """Alternating runs of a study (``benchmarks.speed.ray_cluster.alternate``): each variant's
+    (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval
+    (the row named ``difference``), what the interval shows, and whether every run wrote the same
+    numbers."""
     from scipy import stats
 
-    record = read_json(docs, "perf/ray.json")
     walls: dict[str, list[float]] = {}
     for run in record["runs"]:
-        walls.setdefault(run["backend"], []).append(run["wall_s"])
-    lines = ["| backend | wall of each run (s) | mean (s) |", "|---|---|---|"]
-    for backend, values in walls.items():
-        lines.append(f"| {backend} | {', '.join(f'{v:.1f}' for v in values)} | {np.mean(values):.1f} |")
-    differences = np.subtract(walls["ray"], walls["local"])
+        walls.setdefault(run[key], []).append(run["wall_s"])
+    rows = [
+        [name, ", ".join(f"{v:.1f}" for v in values), f"{np.mean(values):.1f}"]
+        for name, values in walls.items()
+    ]
+    differences = np.subtract(walls[other], walls[base])
     low, high = stats.t.interval(0.95, len(differences) - 1, differences.mean(), stats.sem(differences))
-    lines.append(
-        f"| Ray minus local, paired by repeat | {', '.join(f'{d:+.1f}' for d in differences)} | "
-        f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}] |"
+    rows.append(
+        [
+            difference,
+            ", ".join(f"{d:+.1f}" for d in differences),
+            f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}]",
+        ]
     )
-    same = all(run["same_numbers"] for run in record["runs"])
     if low > 0:
-        reading = "Ray was slower than the local backend at these workers: the interval lies above 0."
+        reading = f"{other} took longer than {base}: the interval lies above 0."
     elif high < 0:
-        reading = "Ray was faster than the local backend at these workers: the interval lies below 0."
+        reading = f"{other} took less time than {base}: the interval lies below 0."
     else:
         reading = (
-            "The interval contains 0: at these repeats the two backends' wall times are not told apart, "
-            "so neither is shown faster."
+            f"The interval contains 0: at these repeats the wall times of {other} and {base} are not "
+            "told apart, so neither is shown faster."
         )
-    lines += ["", reading, f"Every run wrote the numbers of the first: {'yes' if same else 'NO'}."]
-    return "\n".join(lines)
+    same = all(run["same_numbers"] for run in record["runs"])
+    table = markdown_table([key, "wall of each run (s)", "mean (s)"], rows)
+    return "\n".join(
+        [table, "", reading, f"Every run wrote the numbers of the first: {'yes' if same else 'NO'}."]
+    )
+
+
+@generator("ray-backend")
+def ray_backend(docs: Path) -> str:
+    """``python -m benchmarks.speed.ray_cluster``'s runs: Ray's wall times against the local
+    backend's (:func:`_paired_runs`)."""
+    return _paired_runs(
+        read_json(docs, "perf/ray.json"), "backend", "ray", "local", "Ray minus local, paired by repeat"
+    )
+
+
+@generator("tail-sharing")
+def tail_sharing(docs: Path) -> str:
+    """``python -m benchmarks.speed.tail_sharing``'s runs: the study's wall times with the tail
+    shared and not (:func:`_paired_runs`)."""
+    record = read_json(docs, "perf/tail-sharing.json")
+    return _paired_runs(record, "tail", "shared", "not shared", "shared minus not shared, paired by repeat")
+
+
+@value_source("tail")
+def tail_value(docs: Path, key: str) -> str:
+    """A figure of the tail-sharing runs: ``study`` (its command, as code), ``workers``, ``repeats``."""
+    return _alternating_value(read_json(docs, "perf/tail-sharing.json"), key)
 
 
 @value_source("ray")
 def ray_value(docs: Path, key: str) -> str:
     """A figure of the Ray runs: ``study`` (its command, as code), ``workers``, ``repeats``."""
-    record = read_json(docs, "perf/ray.json")
+    return _alternating_value(read_json(docs, "perf/ray.json"), key)
+
+
+def _alternating_value(record: dict[str, Any], key: str) -> str:
     if key == "study":
         return f"`{' '.join(record['study'])}`"
     if key == "workers":
         return str(record["workers"])
     if key == "repeats":
         return str(max(run["repeat"] for run in record["runs"]) + 1)
-    raise BenchError(f"unknown Ray figure {key!r}: study, workers, repeats")
+    raise BenchError(f"unknown figure {key!r} of alternating runs: study, workers, repeats")
 
 
 # ------------------------------------------------------------------ the planning study

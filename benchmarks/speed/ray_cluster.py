@@ -54,21 +54,41 @@ def ray(*arguments: str, check: bool = True) -> None:
     subprocess.run(command, check=check, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
 
 
-def measure(study: tuple[str, ...], workers: int, repeats: int) -> dict[str, Any]:
-    ray("start", "--head", f"--num-cpus={workers}", "--include-dashboard=false")
+#: A variant of a study's command: the interpreter's arguments before the study's, and extra ones.
+Variant = tuple[tuple[str, ...], tuple[str, ...]]
+CLI: tuple[str, ...] = ("-m", "benchmarks")
+
+
+def alternate(
+    study: tuple[str, ...], workers: int, repeats: int, variants: dict[str, Variant], key: str
+) -> list[dict[str, Any]]:
+    """The study run ``repeats`` times in each of ``variants`` (a name: the interpreter's
+    arguments before the study's and the study's extra arguments), alternately, the order
+    reversed every other repeat (so that a drift of the machine's speed falls on both), every run
+    a fresh command into a fresh folder: per run, its variant (under ``key``), repeat, wall
+    seconds and whether it wrote the numbers of the first run."""
     runs: list[dict[str, Any]] = []
     reference: dict[str, np.ndarray] | None = None
+    with tempfile.TemporaryDirectory(prefix="alternate-") as scratch:
+        for repeat in range(repeats):
+            order = list(variants.items())
+            for name, (python, extra) in order if repeat % 2 == 0 else order[::-1]:
+                out = Path(scratch) / f"{name.replace(' ', '-')}-{repeat}"
+                wall = run_study((*study, *extra), workers, out, python)
+                arrays = shard_arrays(out)
+                reference = arrays if reference is None else reference
+                runs.append(
+                    {key: name, "repeat": repeat, "wall_s": wall, "same_numbers": same(reference, arrays)}
+                )
+                print(f"  {name:>10}, repeat {repeat}: {wall:.1f} s", flush=True)
+    return runs
+
+
+def measure(study: tuple[str, ...], workers: int, repeats: int) -> dict[str, Any]:
+    ray("start", "--head", f"--num-cpus={workers}", "--include-dashboard=false")
     try:
-        with tempfile.TemporaryDirectory(prefix="ray-cluster-") as scratch:
-            for repeat in range(repeats):
-                for backend, extra in BACKENDS.items():
-                    out = Path(scratch) / f"{backend}-{repeat}"
-                    wall = run_study((*study, *extra), workers, out)
-                    arrays = shard_arrays(out)
-                    reference = arrays if reference is None else reference
-                    runs.append({"backend": backend, "repeat": repeat, "wall_s": wall,
-                                 "same_numbers": same(reference, arrays)})  # fmt: skip
-                    print(f"  {backend:>5}, repeat {repeat}: {wall:.1f} s", flush=True)
+        variants = {backend: (CLI, extra) for backend, extra in BACKENDS.items()}
+        runs = alternate(study, workers, repeats, variants, "backend")
     finally:
         ray("stop", check=False)
     return {

@@ -61,9 +61,12 @@ class Task:
     finished: float  # seconds after the command started
 
 
-def run_study(study: tuple[str, ...], workers: int, out: Path) -> float:
-    """Wall seconds of the study's command with ``workers`` workers into ``out``."""
-    command = [sys.executable, "-m", "benchmarks", *study, "--quiet", "--no-figures"]
+def run_study(
+    study: tuple[str, ...], workers: int, out: Path, python: tuple[str, ...] = ("-m", "benchmarks")
+) -> float:
+    """Wall seconds of the study's command with ``workers`` workers into ``out`` (``python``: what
+    the interpreter runs, the study's arguments after it)."""
+    command = [sys.executable, *python, *study, "--quiet", "--no-figures"]
     start = time.time()
     subprocess.run([*command, "--workers", str(workers), "--out", str(out)], check=True,
                    stdout=subprocess.DEVNULL)  # fmt: skip

@@ -1,5 +1,6 @@
-"""The Ray-against-local benchmark (``benchmarks/speed/ray_cluster.py``): its runs alternate the
-backends, and a run whose numbers differ from the first one's is caught (no cluster started)."""
+"""The Ray-against-local benchmark (``benchmarks/speed/ray_cluster.py``) and the tail-sharing one,
+which alternates its runs alike: the runs alternate, a run whose numbers differ from the first
+one's is caught (no cluster started), and the tail's sharing is switched off for its command only."""
 
 import numpy as np
 
@@ -17,9 +18,10 @@ def _shard(folder, values, seconds):
 def test_the_backends_alternate_and_a_changed_number_is_caught(tmp_path, monkeypatch):
     commands, runs = [], []
 
-    def study(arguments, workers, out):
+    def study(arguments, workers, out, python):
+        assert python == ("-m", "benchmarks")
         runs.append(("ray" if "ray" in arguments else "local", workers))
-        changed = len(runs) == 4  # the second repeat's Ray run writes another number
+        changed = len(runs) == 4  # the last run (the second repeat's local one) writes another number
         _shard(out, [1.0, np.nan, 3.0 + changed], seconds=len(runs))
         return 10.0 + len(runs)
 
@@ -27,7 +29,31 @@ def test_the_backends_alternate_and_a_changed_number_is_caught(tmp_path, monkeyp
     monkeypatch.setattr(ray_cluster, "ray", lambda *arguments, check=True: commands.append(arguments[0]))
     result = ray_cluster.measure(("claims",), 2, repeats=2)
     assert commands == ["start", "stop"]
-    assert runs == [("local", 2), ("ray", 2), ("local", 2), ("ray", 2)]
+    # the order reversed every other repeat
+    assert runs == [("local", 2), ("ray", 2), ("ray", 2), ("local", 2)]
     assert [r["wall_s"] for r in result["runs"]] == [11.0, 12.0, 13.0, 14.0]
     # NaN equals NaN; the compute time and its checksum differ in every run and are left out
     assert [r["same_numbers"] for r in result["runs"]] == [True, True, True, False]
+
+
+def test_the_tail_benchmarks_other_command_runs_the_cli_with_the_tails_sharing_switched_off(monkeypatch):
+    from benchmarks import backends, cli
+    from benchmarks.speed import tail_sharing
+
+    seen = []
+
+    def main(argv):
+        seen.append(argv)
+        budget = [0, 0]
+        backends.share_idle_cores(budget, [1], 2, 1)  # one task left of two: it would get both cores
+        return budget[1]
+
+    monkeypatch.setattr(cli, "main", main)
+    assert tail_sharing.without_sharing(["claims", "--workers", "2"]) == 0  # not raised
+    assert seen == [["claims", "--workers", "2"]]
+    budget = [0, 0]
+    backends.share_idle_cores(budget, [1], 2, 1)  # as shipped again afterwards
+    assert budget == [0, 2]
+    python, extra = tail_sharing.VARIANTS["not shared"]
+    assert python[0] == "-c" and "without_sharing(sys.argv[1:])" in python[1] and extra == ()
+    assert tail_sharing.VARIANTS["shared"] == (("-m", "benchmarks"), ())
