@@ -16,12 +16,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA, numba, twins
-from mimo_radar_env.core.counter_hash import (
-    Stream,
-    element_bits,
-    stream_base,
-    to_unit,
-)
+from mimo_radar_env.core.counter_hash import Stream, element_bits, stream_bases, to_unit
 
 if HAVE_NUMBA:  # pragma: no branch
     from mimo_radar_env.core._counter_hash_kernels import element_bits_nb, stream_base_nb, to_unit_nb
@@ -86,11 +81,14 @@ def run_numpy(
     hash_element = (xp.arange(population, dtype=np.int64)[:, None] * lanes + bit // 4)[None]  # (1, P, L)
     lane_shift = xp.words(16 * (bit % 4)) if not xp.is_torch else 16 * (bit % 4)
     steps = max(iterations - 1, 1)
+    streams = (Stream.BPSO_R1, Stream.BPSO_R2, Stream.BPSO_FLIP)
+    # (B, q_max) each: column q is iteration q's stream_base
+    r1_bases, r2_bases, flip_bases = (stream_bases(keys, stream, iterations) for stream in streams)
     for q in range(iterations):
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        r1 = to_unit(element_bits(stream_base(keys, Stream.BPSO_R1, q)[:, None], particle))
-        r2 = to_unit(element_bits(stream_base(keys, Stream.BPSO_R2, q)[:, None], particle))
-        u = _flip_uniform_np(stream_base(keys, Stream.BPSO_FLIP, q)[:, None, None], hash_element, lane_shift)
+        r1 = to_unit(element_bits(r1_bases[:, q, None], particle))
+        r2 = to_unit(element_bits(r2_bases[:, q, None], particle))
+        u = _flip_uniform_np(flip_bases[:, q, None, None], hash_element, lane_shift)
         velocities = (
             inertia * velocities
             + (c1 * r1)[..., None] * (personal_best - positions)
@@ -122,10 +120,11 @@ def _fitness_np(
     rx = xp.astype(positions[..., num_tx:], np.float64)
     tx_ok = positions[..., :num_tx].sum(axis=-1) == tx_count
     valid = tx_ok & (positions[..., num_tx:].sum(axis=-1) == rx_count)
+    terms = tx[..., :, None] * rx[..., None, :] * index[:, None]  # (B, P, M, N): tx_m rx_n I_mn
     value = xp.zeros(positions.shape[:2])
     for m in range(num_tx):  # loops over stations (not trials or particles) fix the summation order
         for n in range(index.shape[2]):
-            value += tx[..., m] * rx[..., n] * index[:, None, m, n]
+            value += terms[..., m, n]
     return xp.where(valid, value, 0.0), valid
 
 

@@ -92,6 +92,21 @@ def stream_base(keys: NDArray[np.uint64], stream: int, step: Any) -> NDArray[np.
     return mix(xp.words(keys) ^ mix(count * xp.word(int(GOLDEN))))
 
 
+def stream_bases(keys: NDArray[np.uint64], stream: int, steps: int) -> NDArray[np.uint64]:
+    """:func:`stream_base` of steps ``0 .. steps - 1`` at once, (B, steps), the same bits: a loop
+    that draws once per step reads its column instead of hashing the keys again (on torch, with
+    nothing copied from the host)."""
+    if not 0 < steps <= 2**STEP_BITS:
+        raise ValueError(f"steps must be in [1, 2^{STEP_BITS}], got {steps}")
+    xp = namespace(keys)
+    first = (int(stream) << STEP_BITS) + 1  # counter(stream, 0)
+    if xp.is_torch:
+        salts = mix((xp.arange(steps, dtype=np.int64) + xp.word(first)) * xp.word(int(GOLDEN)))
+    else:
+        salts = mix((np.arange(steps, dtype=np.uint64) + np.uint64(first)) * GOLDEN)
+    return mix(xp.words(keys)[:, None] ^ salts[None, :])
+
+
 def element_bits(base: NDArray[np.uint64], element: NDArray[np.integer]) -> NDArray[np.uint64]:
     """64 hashed bits per element: ``mix(base + (element + 1) * GOLDEN)``."""
     xp = namespace(base)

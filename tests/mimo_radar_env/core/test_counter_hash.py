@@ -3,6 +3,8 @@
 import numpy as np
 import pytest
 
+from mimo_radar_env.core import counter_hash
+
 
 def test_the_numba_twins_of_the_hash_give_the_numpy_integers_and_uniforms():
     """core/_counter_hash_kernels.py against core/counter_hash.py, bit for bit, on 100,000 keys."""
@@ -39,3 +41,25 @@ def test_the_numba_twins_of_the_hash_give_the_numpy_integers_and_uniforms():
     )
     np.testing.assert_array_equal(bits[:2000], expected)
     np.testing.assert_array_equal(unit, numpy_hash.to_unit(bits))
+
+
+def test_stream_bases_are_each_steps_stream_base_on_numpy_and_torch():
+    """Every step's bases at once give, column by column, the bases of a call per step: numpy's
+    uint64 and torch's int64 words (bit for bit), including the step at the counter's top."""
+    keys = np.random.default_rng(5).integers(0, 2**64, size=7, dtype=np.uint64, endpoint=False)
+    keys[0] = 2**64 - 1
+    for stream in (counter_hash.Stream.BPSO_R1, counter_hash.Stream.BPSO_FLIP):
+        bases = counter_hash.stream_bases(keys, stream, 40)
+        expected = np.stack([counter_hash.stream_base(keys, stream, q) for q in range(40)], axis=1)
+        assert bases.dtype == np.uint64
+        np.testing.assert_array_equal(bases, expected)
+    torch = pytest.importorskip("torch")
+    from mimo_radar_env.core.arrays import device_namespace
+
+    words = device_namespace("cpu").words(keys)
+    on_torch = counter_hash.stream_bases(words, counter_hash.Stream.BPSO_R2, 40)
+    expected = counter_hash.stream_bases(keys, counter_hash.Stream.BPSO_R2, 40)
+    assert isinstance(on_torch, torch.Tensor)
+    np.testing.assert_array_equal(on_torch.numpy().view(np.uint64), expected)
+    with pytest.raises(ValueError, match="steps must be in"):
+        counter_hash.stream_bases(keys, counter_hash.Stream.BPSO_R1, 0)
