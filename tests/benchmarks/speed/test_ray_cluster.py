@@ -1,6 +1,6 @@
-"""The Ray-against-local benchmark (``benchmarks/speed/ray_cluster.py``) and the tail-sharing one,
-which alternates its runs alike: the runs alternate, a run whose numbers differ from the first
-one's is caught (no cluster started), and the tail's sharing is switched off for its command only."""
+"""The Ray-against-local benchmark (``benchmarks/speed/ray_cluster.py``): its runs alternate the
+backends, the order reversed every other repeat, and a run whose numbers differ from the first
+one's is caught (no cluster started)."""
 
 import numpy as np
 
@@ -34,26 +34,3 @@ def test_the_backends_alternate_and_a_changed_number_is_caught(tmp_path, monkeyp
     assert [r["wall_s"] for r in result["runs"]] == [11.0, 12.0, 13.0, 14.0]
     # NaN equals NaN; the compute time and its checksum differ in every run and are left out
     assert [r["same_numbers"] for r in result["runs"]] == [True, True, True, False]
-
-
-def test_the_tail_benchmarks_other_command_runs_the_cli_with_the_tails_sharing_switched_off(monkeypatch):
-    from benchmarks import backends, cli
-    from benchmarks.speed import tail_sharing
-
-    seen = []
-
-    def main(argv):
-        seen.append(argv)
-        budget = [0, 0]
-        backends.share_idle_cores(budget, [1], 2, 1)  # one task left of two: it would get both cores
-        return budget[1]
-
-    monkeypatch.setattr(cli, "main", main)
-    assert tail_sharing.without_sharing(["claims", "--workers", "2"]) == 0  # not raised
-    assert seen == [["claims", "--workers", "2"]]
-    budget = [0, 0]
-    backends.share_idle_cores(budget, [1], 2, 1)  # as shipped again afterwards
-    assert budget == [0, 2]
-    python, extra = tail_sharing.VARIANTS["not shared"]
-    assert python[0] == "-c" and "without_sharing(sys.argv[1:])" in python[1] and extra == ()
-    assert tail_sharing.VARIANTS["shared"] == (("-m", "benchmarks"), ())
