@@ -122,9 +122,9 @@ def _fitness_np(
     valid = tx_ok & (positions[..., num_tx:].sum(axis=-1) == rx_count)
     terms = tx[..., :, None] * rx[..., None, :] * index[:, None]  # (B, P, M, N): tx_m rx_n I_mn
     value = xp.zeros(positions.shape[:2])
-    for m in range(num_tx):  # loops over stations (not trials or particles) fix the summation order
-        for n in range(index.shape[2]):
-            value += terms[..., m, n]
+    # a loop over the channels (not trials or particles), m-major, fixes the summation order
+    for term in xp.moveaxis(terms.reshape(*terms.shape[:2], -1), -1, 0):
+        value += term
     return xp.where(valid, value, 0.0), valid
 
 
