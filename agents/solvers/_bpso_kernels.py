@@ -81,13 +81,12 @@ def run_numpy(
     hash_element = (xp.arange(population, dtype=np.int64)[:, None] * lanes + bit // 4)[None]  # (1, P, L)
     lane_shift = xp.words(16 * (bit % 4)) if not xp.is_torch else 16 * (bit % 4)
     steps = max(iterations - 1, 1)
-    streams = (Stream.BPSO_R1, Stream.BPSO_R2, Stream.BPSO_FLIP)
-    # (B, q_max) each: column q is iteration q's stream_base
-    r1_bases, r2_bases, flip_bases = (stream_bases(keys, stream, iterations) for stream in streams)
+    # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
+    r_bases = xp.stack([stream_bases(keys, s, iterations) for s in (Stream.BPSO_R1, Stream.BPSO_R2)])
+    flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
     for q in range(iterations):
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        r1 = to_unit(element_bits(r1_bases[:, q, None], particle))
-        r2 = to_unit(element_bits(r2_bases[:, q, None], particle))
+        r1, r2 = to_unit(element_bits(r_bases[:, :, q, None], particle))
         u = _flip_uniform_np(flip_bases[:, q, None, None], hash_element, lane_shift)
         velocities = (
             inertia * velocities
