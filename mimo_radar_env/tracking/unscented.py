@@ -83,36 +83,41 @@ def _certainly_conditioned(matrix: NDArray[np.float64], max_condition: float) ->
     ``trace^4 / det``, an upper bound of the condition number, is within it. Closed forms, no
     factorisation; False only says "look closer"."""
     xp = namespace(matrix)
-    a = matrix
-    minor2 = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    a = _entries(matrix)
+    minor2 = a[0][0] * a[1][1] - a[0][1] * a[1][0]
     cof = [
-        a[..., 1, 1] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 1],
-        a[..., 1, 0] * a[..., 2, 2] - a[..., 1, 2] * a[..., 2, 0],
-        a[..., 1, 0] * a[..., 2, 1] - a[..., 1, 1] * a[..., 2, 0],
+        a[1][1] * a[2][2] - a[1][2] * a[2][1],
+        a[1][0] * a[2][2] - a[1][2] * a[2][0],
+        a[1][0] * a[2][1] - a[1][1] * a[2][0],
     ]
-    minor3 = a[..., 0, 0] * cof[0] - a[..., 0, 1] * cof[1] + a[..., 0, 2] * cof[2]
+    minor3 = a[0][0] * cof[0] - a[0][1] * cof[1] + a[0][2] * cof[2]
     with xp.errstate(all="ignore"):
         det = _det4(a)
-        trace = xp.trace(a, axis1=-2, axis2=-1)
-        return (
-            (a[..., 0, 0] > 0) & (minor2 > 0) & (minor3 > 0) & (det > 0) & (trace**4 <= max_condition * det)
-        )
+        trace = xp.trace(matrix, axis1=-2, axis2=-1)
+        return (a[0][0] > 0) & (minor2 > 0) & (minor3 > 0) & (det > 0) & (trace**4 <= max_condition * det)
 
 
-def _det4(a: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Determinants of (..., 4, 4) matrices by the Laplace expansion in 2 x 2 minors."""
-    s0 = a[..., 0, 0] * a[..., 1, 1] - a[..., 1, 0] * a[..., 0, 1]
-    s1 = a[..., 0, 0] * a[..., 1, 2] - a[..., 1, 0] * a[..., 0, 2]
-    s2 = a[..., 0, 0] * a[..., 1, 3] - a[..., 1, 0] * a[..., 0, 3]
-    s3 = a[..., 0, 1] * a[..., 1, 2] - a[..., 1, 1] * a[..., 0, 2]
-    s4 = a[..., 0, 1] * a[..., 1, 3] - a[..., 1, 1] * a[..., 0, 3]
-    s5 = a[..., 0, 2] * a[..., 1, 3] - a[..., 1, 2] * a[..., 0, 3]
-    c5 = a[..., 2, 2] * a[..., 3, 3] - a[..., 3, 2] * a[..., 2, 3]
-    c4 = a[..., 2, 1] * a[..., 3, 3] - a[..., 3, 1] * a[..., 2, 3]
-    c3 = a[..., 2, 1] * a[..., 3, 2] - a[..., 3, 1] * a[..., 2, 2]
-    c2 = a[..., 2, 0] * a[..., 3, 3] - a[..., 3, 0] * a[..., 2, 3]
-    c1 = a[..., 2, 0] * a[..., 3, 2] - a[..., 3, 0] * a[..., 2, 2]
-    c0 = a[..., 2, 0] * a[..., 3, 1] - a[..., 3, 0] * a[..., 2, 1]
+def _entries(matrix: NDArray[np.float64]) -> list[list[NDArray[np.float64]]]:
+    """The entries of (..., n, n) matrices as views, ``a[i][j]`` being ``matrix[..., i, j]``, taken
+    in a few operations (on torch each index is an operation dispatched)."""
+    return [list(row) for row in namespace(matrix).moveaxis(matrix, (-2, -1), (0, 1))]
+
+
+def _det4(a: list[list[NDArray[np.float64]]]) -> NDArray[np.float64]:
+    """Determinants of (..., 4, 4) matrices from their entries ``a[i][j]`` (:func:`_entries`), by
+    the Laplace expansion in 2 x 2 minors."""
+    s0 = a[0][0] * a[1][1] - a[1][0] * a[0][1]
+    s1 = a[0][0] * a[1][2] - a[1][0] * a[0][2]
+    s2 = a[0][0] * a[1][3] - a[1][0] * a[0][3]
+    s3 = a[0][1] * a[1][2] - a[1][1] * a[0][2]
+    s4 = a[0][1] * a[1][3] - a[1][1] * a[0][3]
+    s5 = a[0][2] * a[1][3] - a[1][2] * a[0][3]
+    c5 = a[2][2] * a[3][3] - a[3][2] * a[2][3]
+    c4 = a[2][1] * a[3][3] - a[3][1] * a[2][3]
+    c3 = a[2][1] * a[3][2] - a[3][1] * a[2][2]
+    c2 = a[2][0] * a[3][3] - a[3][0] * a[2][3]
+    c1 = a[2][0] * a[3][2] - a[3][0] * a[2][2]
+    c0 = a[2][0] * a[3][1] - a[3][0] * a[2][1]
     return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
 
 
