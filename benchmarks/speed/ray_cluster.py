@@ -99,15 +99,21 @@ def measure(study: tuple[str, ...], workers: int, repeats: int) -> dict[str, Any
     }
 
 
-def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def alternating_arguments(doc: str, repeats: int, argv: list[str] | None) -> argparse.Namespace:
+    """The command line of a benchmark of alternating runs (:func:`alternate`): ``--workers``,
+    ``--repeats`` (default ``repeats``), ``--study`` and ``--json``."""
+    parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="workers (default: cores)")
-    parser.add_argument("--repeats", type=int, default=2, help="runs on each backend, alternating")
+    parser.add_argument("--repeats", type=int, default=repeats, help="runs of each variant, alternating")
     parser.add_argument(
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
     )
     parser.add_argument("--json", type=Path, default=None)
-    args = parser.parse_args(argv)
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> None:
+    args = alternating_arguments(__doc__, 2, argv)
     print(f"local against Ray: mimo-radar-bench {args.study}, {args.workers} workers")
     result = measure(tuple(args.study.split()), args.workers, args.repeats)
     for backend in BACKENDS:

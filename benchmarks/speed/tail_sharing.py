@@ -1,5 +1,7 @@
-"""The tail shared and not: a study's wall time when its last tasks take up the cores of the
-workers that ended (``benchmarks.backends.share_idle_cores``), against the same study without.
+"""The tail shared and not: a study's wall time with and without its last tasks on idle cores.
+
+When the last tasks take up the cores of the workers that ended
+(``benchmarks.backends.share_idle_cores``), against the same study without.
 
     python -m benchmarks.speed.tail_sharing --json docs/results/perf/tail-sharing.json
 
@@ -14,16 +16,12 @@ run wrote the numbers of the first, bit for bit.
 
 from __future__ import annotations
 
-import argparse
-import os
 import subprocess
 import sys
-from pathlib import Path
 
 from ..study import machine
 from . import write_json
-from .ray_cluster import CLI, Variant, alternate
-from .strong_scaling import STUDY
+from .ray_cluster import CLI, Variant, alternate, alternating_arguments
 
 
 def without_sharing(argv: list[str]) -> int:
@@ -47,14 +45,7 @@ VARIANTS: dict[str, Variant] = {"shared": (CLI, ()), "not shared": (("-c", NOT_S
 
 
 def main(argv: list[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="workers (default: cores)")
-    parser.add_argument("--repeats", type=int, default=6, help="runs of each variant, alternating")
-    parser.add_argument(
-        "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
-    )
-    parser.add_argument("--json", type=Path, default=None)
-    args = parser.parse_args(argv)
+    args = alternating_arguments(__doc__, 6, argv)
     subprocess.run([sys.executable, "-m", "benchmarks", "compile"], check=True, stdout=subprocess.DEVNULL)
     print(f"the tail shared and not: mimo-radar-bench {args.study}, {args.workers} workers")
     study = tuple(args.study.split())
