@@ -18,6 +18,7 @@ not the same numbers (docs/performance.md gives its measured error); numpy is al
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import functools
 import math
 from collections.abc import Iterator
@@ -114,8 +115,9 @@ def defer(passed: Any) -> None:
 #: The float precisions of the torch engine; the first is the default and numpy's only one.
 PRECISIONS = ("float64", "float32")
 
-#: The precision of the torch floats made in the current :func:`float_precision` block.
-_PRECISION = "float64"
+#: The precision of the torch floats made in the current :func:`float_precision` block (per
+#: thread: two engines of different precisions may step in two threads).
+_PRECISION: contextvars.ContextVar[str] = contextvars.ContextVar("precision", default="float64")
 
 
 @contextlib.contextmanager
@@ -124,13 +126,12 @@ def float_precision(precision: str) -> Iterator[None]:
     ``np.float64``, or from numpy floats, are ``precision``'s (:data:`PRECISIONS`); the torch
     dtype itself (``xp.float64``) stays a double, as the random draws need. numpy is left as it
     is."""
-    global _PRECISION
     check_precision(precision, "cpu")
-    previous, _PRECISION = _PRECISION, precision
+    token = _PRECISION.set(precision)
     try:
         yield
     finally:
-        _PRECISION = previous
+        _PRECISION.reset(token)
 
 
 def check_precision(precision: Any, device: Any) -> None:
@@ -229,11 +230,11 @@ class TorchNamespace:
     @property
     def precision(self) -> str:
         """The precision of the floats it makes now (:func:`float_precision`)."""
-        return _PRECISION
+        return _PRECISION.get()
 
     # ------------------------------------------------------------ creation
     def _float(self) -> Any:
-        return self.torch.float32 if _PRECISION == "float32" else self.torch.float64
+        return self.torch.float32 if _PRECISION.get() == "float32" else self.torch.float64
 
     def _dtype(self, dtype: Any) -> Any:
         if dtype is None:
@@ -250,7 +251,7 @@ class TorchNamespace:
         if isinstance(a, np.ndarray) and not a.flags.writeable:
             a = a.copy()
         tensor = torch.as_tensor(a, dtype=None if dtype is None else self._dtype(dtype), device=self.device)
-        if dtype is None and tensor.dtype == torch.float64 and _PRECISION == "float32":
+        if dtype is None and tensor.dtype == torch.float64 and _PRECISION.get() == "float32":
             return tensor.to(torch.float32)
         return tensor
 

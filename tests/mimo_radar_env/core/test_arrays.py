@@ -70,3 +70,30 @@ def test_device_none_needs_no_torch_and_a_device_without_torch_is_refused():
     )
     out = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, check=True).stdout
     assert "device='cpu' needs torch" in out
+
+
+def test_a_float_precision_block_holds_in_its_own_thread_only():
+    """Two engines of different precisions may step in two threads: a float32 block in one leaves
+    the other's floats float64."""
+    import threading
+
+    from mimo_radar_env.core.arrays import float_precision
+
+    xp = CPU
+    entered, looked = threading.Event(), threading.Event()
+    seen = {}
+
+    def other_thread():
+        entered.wait(10)
+        seen["other"] = xp.zeros(1).dtype
+        looked.set()
+
+    thread = threading.Thread(target=other_thread)
+    thread.start()
+    with float_precision("float32"):
+        entered.set()
+        assert looked.wait(10)
+        seen["own"] = xp.zeros(1).dtype
+    thread.join()
+    assert seen == {"other": torch.float64, "own": torch.float32}
+    assert xp.zeros(1).dtype == torch.float64  # the block's end restores it
