@@ -45,14 +45,15 @@ def load_hyperparams(
     algo: str = "ppo",
 ) -> dict[str, Any]:
     """The rl-zoo3 entry ``key`` (default: the default version's Flat env id) of a YAML file
-    (default: the shipped file of learner ``algo``, ``hyperparams/ppo.yml`` for PPO).
+    (default: the shipped file of learner ``algo``, ``hyperparams/ppo.yml`` for PPO and for
+    torch-ppo, which reads PPO's hyperparameters).
 
     ``policy_kwargs`` and a ``normalize`` given as ``"dict(...)"`` are parsed as rl-zoo3 reads
     them (without eval); ``normalize: true`` means observations and rewards, as in rl-zoo3.
     """
     import yaml
 
-    spec = learner(algo)
+    spec = learner("ppo" if algo == TORCH_PPO else algo)
     key = key or VERSIONS[DEFAULT_VERSION].flat_env_id
     if path is None:
         text = (resources.files(__package__) / spec.hyperparams).read_text()

@@ -196,6 +196,26 @@ def test_the_time_estimate_counts_only_the_trainings_still_to_do(tmp_path):
     assert study.estimate_training_seconds() == pytest.approx(before - 1.0)
 
 
+def test_on_a_device_the_time_estimate_reads_the_parallel_trials_of_the_device_entry(tmp_path):
+    """torch-ppo reads PPO's hyperparameters: with no --n-envs, the estimate takes the device
+    entry's parallel trials (4,096), or --hyperparams-key's entry's."""
+    import argparse
+
+    from benchmarks.studies.rl import RLStudy
+    from benchmarks.training import estimate_training_seconds
+
+    parser = argparse.ArgumentParser()
+    RLStudy.add_arguments(parser)
+    base = ["--scenarios", "1", "--timesteps", "40960", "--device", "cpu", "--out", str(tmp_path)]
+    for extra, n_envs in (([], 4096), (["--hyperparams-key", "device-small"], 512)):
+        args = parser.parse_args([*base, *extra])
+        args.command = "rl"
+        study = RLStudy(args)
+        trainings = len(study.trainings()) * 10  # 10 seeds each, one after another on the device
+        expected = trainings * estimate_training_seconds("torch-ppo", 40960, "cpu", n_envs)
+        assert study.estimate_training_seconds() == pytest.approx(expected)
+
+
 def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_fusions_with_a_budget_sweep(
     tmp_path,
 ):
