@@ -194,6 +194,12 @@ class RLStudy(Study):
     def on_device(self) -> bool:
         return self.settings.device is not None
 
+    @property
+    def hyperparams_key(self) -> str | None:
+        """The learners' hyperparameter entry: ``--hyperparams-key``, or the device entry with
+        ``--device``, or (None) each learner's default."""
+        return self.args.hyperparams_key or (DEVICE_HYPERPARAMS_KEY if self.on_device else None)
+
     def learners(self) -> tuple[tuple[str, str, str], ...]:
         """``(learner, reward, seeds option)`` of the study's trainings: the SB3 learners, or
         torch-ppo with ``--device``."""
@@ -301,7 +307,7 @@ class RLStudy(Study):
         from ..training import train_jobs, training_job
 
         tasks = []
-        key = self.args.hyperparams_key or (DEVICE_HYPERPARAMS_KEY if self.on_device else None)
+        key = self.hyperparams_key
         for t in (*self.trainings(), *self.sweep_trainings()):
             options = dataclasses.replace(self.settings.options, reward=t.reward, fusion=t.fusion)
             job = training_job(load_scenario(t.scenario), t.timesteps, t.algo, options, hyperparams_key=key)
@@ -324,13 +330,17 @@ class RLStudy(Study):
         from ..training import META_FILE, estimate_training_seconds, load_hyperparams, seed_folder
 
         seconds = 0.0
-        key = self.args.hyperparams_key or (DEVICE_HYPERPARAMS_KEY if self.on_device else None)
+        parallel: dict[str, int] = {}  # each learner's entry read once
         for t in (*self.trainings(), *self.sweep_trainings()):
-            n_envs = self.args.n_envs or load_hyperparams(None, key, t.algo).get("n_envs", 8)
+            if t.algo not in parallel:
+                entry = load_hyperparams(None, self.hyperparams_key, t.algo)
+                parallel[t.algo] = self.args.n_envs or entry.get("n_envs", 8)
             for seed in range(t.seeds):
                 meta = seed_folder(t.folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
-                    seconds += estimate_training_seconds(t.algo, t.timesteps, self.settings.device, n_envs)
+                    seconds += estimate_training_seconds(
+                        t.algo, t.timesteps, self.settings.device, parallel[t.algo]
+                    )
         return seconds if self.on_device else seconds / self.settings.workers
 
     def training_record(self) -> dict[str, Any]:
@@ -490,17 +500,13 @@ def judge_sweep(finished: dict[int, Finished], timesteps: int, swept: list[Train
     first = swept[0]
     tag = f"{first.algo}-{first.reward}"
     summaries = [finished[t.timesteps].summary for t in swept]
-    budgets = [_budget_row(summaries[0], tag, timesteps)]
+    budgets = [_budget_row(summaries[0], _per_seed(summaries[0]["policies"], tag), timesteps)]
     for t, summary in zip(swept, summaries, strict=True):
-        row = _budget_row(summary, f"{tag}-{t.timesteps}", t.timesteps)
-        longer, study = (
-            _per_seed(summary["policies"], f"{tag}-{t.timesteps}"),
-            _per_seed(summary["policies"], tag),
-        )
-        differences = [
-            summary["policies"][longer[s]]["armse"] - summary["policies"][study[s]]["armse"]
-            for s in sorted(set(longer) & set(study))
-        ]
+        rows = summary["policies"]
+        longer, study = _per_seed(rows, f"{tag}-{t.timesteps}"), _per_seed(rows, tag)
+        row = _budget_row(summary, longer, t.timesteps)
+        common = sorted(set(longer) & set(study))
+        differences = [rows[longer[s]]["armse"] - rows[study[s]]["armse"] for s in common]
         row["minus_study"] = across_seeds([np.array(differences)], "mean")
         budgets.append(row)
     return {
@@ -512,10 +518,10 @@ def judge_sweep(finished: dict[int, Finished], timesteps: int, swept: list[Train
     }
 
 
-def _budget_row(summary: dict[str, Any], tag: str, timesteps: int) -> dict[str, Any]:
-    """The seeds trained into folders named ``tag``: their ARMSE across seeds and against
-    best-tracking."""
-    policies = list(_per_seed(summary["policies"], tag).values())
+def _budget_row(summary: dict[str, Any], seeds: dict[int, str], timesteps: int) -> dict[str, Any]:
+    """A budget's trained seeds (``{seed: policy}``, :func:`_per_seed`): their ARMSE across seeds
+    and against best-tracking."""
+    policies = list(seeds.values())
     armse = np.array([summary["policies"][p]["armse"] for p in policies])
     return {
         "timesteps": timesteps,
