@@ -8,6 +8,7 @@ import sys
 
 from agents.ppo import LEARNER_NAMES, LEARNERS, TORCH_PPO
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS
+from mimo_radar_env.envs.device_forms import DEVICE_MODES
 
 from .cli import Command
 from .errors import BenchError
@@ -50,6 +51,13 @@ class TrainPPO(Command):
             default=None,
             help=f"train {TORCH_PPO} with the env, the network and the updates on this torch device "
             "('cuda', 'cuda:1', 'cpu'); the SB3 learners run on the numpy env (default: none)",
+        )
+        parser.add_argument(
+            "--device-mode",
+            choices=DEVICE_MODES,
+            default="eager",
+            help=f"the form of the env's step on --device ({TORCH_PPO}): 'eager' (default), 'graph' (one "
+            "CUDA graph per step) or 'compiled' (torch.compile); the same numbers",
         )
         parser.add_argument(
             "--n-envs",
@@ -129,6 +137,7 @@ class TrainPPO(Command):
                 workers=local_workers(args.workers),
                 device=args.device,
                 n_envs=args.n_envs,
+                device_mode=args.device_mode,
                 max_hours=args.max_hours,
                 say=lambda message: print(f"mimo-radar-bench: {message}", file=sys.stderr),
             )

@@ -132,7 +132,10 @@ class Collector:
     statistics, the rollout buffers and the episodes in progress. :meth:`collect` fills the
     buffers with ``n_steps`` steps of every trial, acting with the network."""
 
-    def __init__(self, scenario: Scenario, seed: int, config: PPOConfig, options: EnvOptions, device: str):
+    def __init__(
+        self, scenario: Scenario, seed: int, config: PPOConfig, options: EnvOptions, device: str,
+        device_mode: str = "eager",
+    ):  # fmt: skip
         import torch
 
         from agents.networks import RunningNormalization
@@ -140,7 +143,7 @@ class Collector:
 
         self.env = MimoRadarSelectFlatVectorEnv(
             num_envs=config.n_envs, action="discrete", scenario=scenario, device=device,
-            autoreset_mode="disabled", **options.to_dict(),
+            device_mode=device_mode, autoreset_mode="disabled", **options.to_dict(),
         )  # fmt: skip
         self.xp, self.config, self.seed, self.horizon = self.env.env.engine.xp, config, seed, scenario.horizon
         B, S, where = config.n_envs, config.n_steps, self.xp.device
@@ -237,18 +240,20 @@ def update(
 
 def train(
     scenario: Scenario, timesteps: int, out: Path, seed: int, config: PPOConfig, options: EnvOptions,
-    *, device: str = "cpu", log: Any = None,
+    *, device: str = "cpu", device_mode: str = "eager", log: Any = None,
 ) -> dict[str, Any]:  # fmt: skip
     """Train torch-ppo for at least ``timesteps`` env steps (whole rollouts of ``n_steps x
     n_envs``) and save ``model.pt``, ``vecnormalize.npz``, ``curve.csv`` and ``ppo.json`` in
-    ``out``. ``log`` (a :class:`~benchmarks.training_log.LearningCurve`) hears of every rollout."""
+    ``out``, the env's step in form ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`:
+    the same numbers). ``log`` (a :class:`~benchmarks.training_log.LearningCurve`) hears of
+    every rollout."""
     import torch
 
     from agents.networks import ActorCritic
 
     from .training_log import CURVE_FILE, LearningCurve
 
-    collector = Collector(scenario, seed, config, options, device)
+    collector = Collector(scenario, seed, config, options, device, device_mode)
     where, rollout = collector.xp.device, config.n_steps * config.n_envs
     torch.manual_seed(seed)
     network = ActorCritic(collector.size, collector.arms, config.net_arch).to(where)
@@ -273,12 +278,14 @@ def train(
     if collector.normalization is not None:
         collector.normalization.save(out / NORMALIZATION_FILE)
     log.write(out / CURVE_FILE, f"{TORCH_PPO} on {scenario.name}")
-    return _record(out, scenario, options, timesteps, updates * rollout, seed, config, str(where), wall)
+    return _record(
+        out, scenario, options, timesteps, updates * rollout, seed, config, str(where), device_mode, wall
+    )
 
 
 def _record(
     out: Path, scenario: Scenario, options: EnvOptions, timesteps: int, trained: int, seed: int,
-    config: PPOConfig, device: str, wall: float,
+    config: PPOConfig, device: str, device_mode: str, wall: float,
 ) -> dict[str, Any]:  # fmt: skip
     """``ppo.json``: what was trained, where, and how fast."""
     from .training_log import META_FILE
@@ -293,6 +300,7 @@ def _record(
         "n_envs": config.n_envs,
         "action": "discrete",
         "device": device,
+        "device_mode": device_mode,
         "config": {f.name: getattr(config, f.name) for f in fields(config)},
         "train_wall_s": wall,
         "steps_per_second": trained / wall,

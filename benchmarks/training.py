@@ -27,6 +27,7 @@ from agents.ppo import (
 )
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, Scenario, load_scenario
 from mimo_radar_env.core.arrays import device_namespace
+from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
@@ -280,6 +281,7 @@ def train_ppo(
     n_envs: int | None = None,
     max_hours: float | None = None,
     say=print,
+    device_mode: str = "eager",
 ) -> dict[str, Any]:
     """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO, or the project's own torch-ppo)
     on the native vectorised env and save the model (``model.zip``; torch-ppo's ``model.pt``), the
@@ -287,7 +289,8 @@ def train_ppo(
     seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``,
     ``workers`` at a time, resumably (a seed whose folder holds its finished training is kept);
     ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
-    (default ``"cpu"``; the SB3 learners take none), with PPO's hyperparameter entry;
+    (default ``"cpu"``; the SB3 learners take none), its env's step in form ``device_mode``
+    (:mod:`mimo_radar_env.envs.device_forms`; the same numbers), with PPO's hyperparameter entry;
     ``n_envs`` overrides the entry's number of parallel trials. The trainings' estimated time
     (:func:`estimate_training_seconds`) is said through ``say`` when it is a minute or more, and
     refused beyond ``max_hours``.
@@ -297,7 +300,7 @@ def train_ppo(
     already holds a model is refused unless ``overwrite``, which first removes every file of the
     old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
     (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
-    spec, device = _learner_and_device(algo, device)
+    spec, device = _learner_and_device(algo, device, device_mode)
     options = options or EnvOptions()
     sc = load_scenario(scenario)
     params = load_hyperparams(
@@ -321,7 +324,9 @@ def train_ppo(
                 from . import torch_ppo
 
                 log = LearningCurve(timesteps, progress, name=algo)
-                meta = torch_ppo.train(sc, timesteps, out, seed, config, options, device=device, log=log)
+                meta = torch_ppo.train(
+                    sc, timesteps, out, seed, config, options, device=device, device_mode=device_mode, log=log
+                )
             else:
                 meta = _train(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
@@ -331,7 +336,12 @@ def train_ppo(
         raise ValueError(f"a training on device {device!r} runs its seeds one after another: workers=1")
     with output_lock(out):
         done = train_jobs(
-            [(job, out, s) for s in range(seed, seed + seeds)], workers, overwrite, progress, device
+            [(job, out, s) for s in range(seed, seed + seeds)],
+            workers,
+            overwrite,
+            progress,
+            device,
+            device_mode,
         )
     return {
         "seeds": {s: done[out, s] for s in range(seed, seed + seeds)},
@@ -369,20 +379,25 @@ def _torch_config(params: dict[str, Any], n_envs: int | None, action: str, scena
     return PPOConfig.from_hyperparams(params, n_envs, normalize_kwargs(params))
 
 
-def _learner_and_device(algo: str, device: str | None) -> tuple[Learner, str | None]:
+def _learner_and_device(
+    algo: str, device: str | None, device_mode: str = "eager"
+) -> tuple[Learner, str | None]:
     """The learner whose hyperparameters ``algo`` reads (torch-ppo reads PPO's) and the device it
     trains on (torch-ppo: ``device`` or ``"cpu"``; the SB3 learners: none), its dependencies
-    checked first; ``ValueError`` for a device given to an SB3 learner or not there."""
+    checked first; ``ValueError`` for a device or a traced form of the step (``device_mode``)
+    given to an SB3 learner, or a device or form not there."""
     if algo == TORCH_PPO:
         require("torch", "rl", TORCH_PPO)
         device = "cpu" if device is None else device
         device_namespace(device)  # a bad device is refused before anything is written
+        check_device_mode(device_mode, device)
         return learner("ppo"), device
     spec = learner(algo)
     spec.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
-    if device is not None:
+    if device is not None or device_mode != "eager":
+        what = "no device" if device is not None else f"no device_mode ({device_mode!r})"
         raise ValueError(
-            f"{algo} (Stable-Baselines3) trains on the numpy env and takes no device; "
+            f"{algo} (Stable-Baselines3) trains on the numpy env and takes {what}; "
             f"the project's own PPO does: algo={TORCH_PPO!r} (--algo {TORCH_PPO})"
         )
     return spec, None
@@ -417,12 +432,13 @@ def train_jobs(
     overwrite: bool = False,
     progress: bool = True,
     device: str | None = None,
+    device_mode: str = "eager",
 ) -> dict[tuple[Path, int], dict[str, Any]]:
     """Every ``(job, out, seed)`` trained into ``seed_folder(out, seed)``, ``workers`` processes at
     once, resumably: a seed whose ``ppo.json`` records the same job is kept, one that records
     another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
     task's ``ppo.json`` by ``(out, seed)``. torch-ppo's jobs run on ``device``, in this
-    process."""
+    process, the step in form ``device_mode`` (an execution setting, not part of a job)."""
     done, todo = {}, []
     for job, out, seed in tasks:
         meta_file = seed_folder(out, seed) / META_FILE
@@ -439,7 +455,7 @@ def train_jobs(
     if done and progress:
         print(f"train-ppo: {len(done)} of {len(tasks)} trainings already done; training {len(todo)}")
     try:
-        _train_todo(todo, workers, progress, device, done, len(tasks))
+        _train_todo(todo, workers, progress, device, done, len(tasks), device_mode)
     except KeyboardInterrupt:
         import os
 
@@ -458,12 +474,13 @@ def _train_todo(
     device: str | None,
     done: dict[tuple[Path, int], dict[str, Any]],
     total: int,
+    device_mode: str = "eager",
 ) -> None:
     """Train ``todo`` into ``done``: on ``device`` one after another in this process, else in
     ``workers`` processes."""
     if todo and device is not None:
         for job, out, seed in todo:
-            done[out, seed] = _train_one_seed(job, str(out), seed, device)
+            done[out, seed] = _train_one_seed(job, str(out), seed, device, device_mode)
             if progress:
                 print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
     elif todo:
@@ -482,7 +499,9 @@ def _train_todo(
                     print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
 
 
-def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None = None) -> dict[str, Any]:
+def _train_one_seed(
+    job: dict[str, Any], out: str, seed: int, device: str | None = None, device_mode: str = "eager"
+) -> dict[str, Any]:
     import torch
 
     if device is None:
@@ -492,7 +511,7 @@ def _train_one_seed(job: dict[str, Any], out: str, seed: int, device: str | None
         Scenario.from_dict(job["scenario"]), job["timesteps"], seed_folder(out, seed), seed=seed,
         hyperparams=job["hyperparams"], hyperparams_key=job["hyperparams_key"], action=job["action"],
         progress=False, options=options, overwrite=True, algo=job["algo"], record={"job": job},
-        device=device, n_envs=job.get("n_envs"),
+        device=device, n_envs=job.get("n_envs"), device_mode=device_mode,
         say=lambda message: None,  # the time of the whole group was said (or refused) before it
     )  # fmt: skip
 

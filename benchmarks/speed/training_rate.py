@@ -21,6 +21,7 @@ from pathlib import Path
 from typing import Any
 
 from mimo_radar_env import EnvOptions, load_scenario
+from mimo_radar_env.envs.device_forms import DEVICE_MODES, check_device_mode
 
 from ..training import algorithm_kwargs, load_hyperparams, normalize_kwargs
 from ..training_log import LearningCurve
@@ -54,9 +55,15 @@ def _params(trials: int, n_steps: int) -> dict[str, Any]:
 
 
 def training_rate(
-    learner: str, trials: int, device: str | None, rollouts: int = 3, n_steps: int = 64
+    learner: str,
+    trials: int,
+    device: str | None,
+    rollouts: int = 3,
+    n_steps: int = 64,
+    device_mode: str = "eager",
 ) -> dict[str, Any]:
-    """One row: ``learner`` ``"sb3"`` (``device`` None) or ``"torch-ppo"`` on ``device``."""
+    """One row: ``learner`` ``"sb3"`` (``device`` None) or ``"torch-ppo"`` on ``device``, the
+    env's step in form ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`)."""
     import torch
 
     if rollouts < 2:
@@ -86,12 +93,16 @@ def training_rate(
             config = torch_ppo.PPOConfig.from_hyperparams(params, normalize=normalize_kwargs(params))
             with tempfile.TemporaryDirectory() as out:
                 scenario = load_scenario(SCENARIO)
-                torch_ppo.train(scenario, total, Path(out), 0, config, EnvOptions(), device=device, log=clock)
+                torch_ppo.train(
+                    scenario, total, Path(out), 0, config, EnvOptions(), device=device,
+                    device_mode=device_mode, log=clock,
+                )  # fmt: skip
     finally:
         torch.set_num_threads(threads)
     return {
         "learner": learner,
         "device": "numpy" if device is None else str(device),
+        "device_mode": device_mode,
         "trials": trials,
         "n_steps": n_steps,
         "batch_size": params["batch_size"],
@@ -102,17 +113,22 @@ def training_rate(
 
 
 def rows(
-    device: str | None, sizes: tuple[int, ...], cpu_sizes: tuple[int, ...], rollouts: int, n_steps: int
+    device: str | None,
+    sizes: tuple[int, ...],
+    cpu_sizes: tuple[int, ...],
+    rollouts: int,
+    n_steps: int,
+    device_modes: tuple[str, ...] = ("eager",),
 ) -> list[dict[str, Any]]:
     """Every backend's rows: SB3 on CPU and torch-ppo on CPU torch at ``cpu_sizes``, and with
-    ``device``, torch-ppo there at ``sizes``."""
-    backends = [("sb3", None, cpu_sizes), ("torch-ppo", "cpu", cpu_sizes)]
-    backends += [("torch-ppo", device, sizes)] if device else []
+    ``device``, torch-ppo there at ``sizes`` in each form of the step of ``device_modes``."""
+    backends = [("sb3", None, cpu_sizes, "eager"), ("torch-ppo", "cpu", cpu_sizes, "eager")]
+    backends += [("torch-ppo", device, sizes, mode) for mode in device_modes] if device else []
     out = []
-    for learner, where, trial_counts in backends:
+    for learner, where, trial_counts, mode in backends:
         for trials in trial_counts:
             try:
-                row = training_rate(learner, trials, where, rollouts, n_steps)
+                row = training_rate(learner, trials, where, rollouts, n_steps, mode)
             except ImportError as exc:  # a machine without stable-baselines3: that backend's rows say so
                 out.append({"learner": learner, "device": where or "numpy", "trials": trials,
                             "skipped": f"not installed ({exc.name})"})  # fmt: skip
@@ -120,7 +136,7 @@ def rows(
             out.append(row)
             rate = row["env_steps_per_s"]
             print(
-                f"  {learner:9s} {where or 'numpy':6s} B={trials:>6,d}: {rate:>10,.0f} env steps/s",
+                f"  {learner:9s} {where or 'numpy':6s} {mode:8s} B={trials:>6,d}: {rate:>10,.0f} env steps/s",
                 flush=True,
             )
     return out
@@ -130,18 +146,32 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default=None, help="a torch device for torch-ppo's last rows ('cuda')")
     parser.add_argument("--sizes", default=",".join(map(str, SIZES)), help="B values on the device")
-    parser.add_argument("--cpu-sizes", default="8,512", help="B values on the CPU (SB3, CPU torch)")
+    parser.add_argument(
+        "--cpu-sizes", default="8,512", help="B values on the CPU (SB3, CPU torch); '' for none"
+    )
+    parser.add_argument(
+        "--device-modes",
+        default="eager",
+        help="the forms of the env's step for torch-ppo's rows on --device, comma-separated "
+        f"({', '.join(DEVICE_MODES)}; default %(default)s)",
+    )
     parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
     parser.add_argument("--n-steps", type=int, default=64)
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     sizes = tuple(int(s) for s in args.sizes.split(","))
-    cpu_sizes = tuple(int(s) for s in args.cpu_sizes.split(","))
+    cpu_sizes = tuple(int(s) for s in args.cpu_sizes.split(",") if s)
+    modes = tuple(args.device_modes.split(","))
+    for mode in modes:
+        try:
+            check_device_mode(mode, args.device or "cpu")
+        except ValueError as exc:
+            parser.error(f"--device-modes: {exc}")
     print(f"PPO training, {SCENARIO}, env steps per second (rollouts of {args.n_steps} steps per trial)")
     result = {
         "scenario": SCENARIO,
         "machine": platform.processor() or platform.machine(),
-        "rows": rows(args.device, sizes, cpu_sizes, args.rollouts, args.n_steps),
+        "rows": rows(args.device, sizes, cpu_sizes, args.rollouts, args.n_steps, modes),
     }
     if args.device and args.device.startswith("cuda"):
         import torch

@@ -316,7 +316,11 @@ class RLStudy(Study):
             tasks += [(job, t.folder, seed) for seed in range(t.seeds)]
         try:
             train_jobs(
-                tasks, self.settings.workers, progress=self.settings.progress, device=self.settings.device
+                tasks,
+                self.settings.workers,
+                progress=self.settings.progress,
+                device=self.settings.device,
+                device_mode=self.settings.device_mode,
             )
         except RunInterrupted:
             raise
@@ -351,6 +355,7 @@ class RLStudy(Study):
         meta = json.loads((seed_folder(self.trainings()[0].folder, 0) / META_FILE).read_text())
         return {
             "device": meta.get("device"),
+            "device_mode": meta.get("device_mode", "eager"),
             "hyperparams_key": meta["job"].get("hyperparams_key"),
             "n_envs": meta["n_envs"],
             "timesteps": meta["timesteps"],

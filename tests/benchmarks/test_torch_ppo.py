@@ -94,6 +94,20 @@ def test_the_same_seed_trains_the_same_weights(trained, tmp_path):
     assert all(torch.equal(first[k], again[k]) for k in first)
 
 
+def test_the_step_replayed_as_a_graph_trains_the_same_weights(trained, tmp_path):
+    """``device_mode="graph"`` (the traced step; on the CPU the traced function runs) is an
+    execution setting: the same curve and weights as the eager step, recorded in ppo.json."""
+    folder, _ = trained
+    meta = train_ppo(
+        SHORT, 600, tmp_path, seed=2, algo="torch-ppo", n_envs=6, progress=False, device_mode="graph"
+    )
+    assert meta["device_mode"] == "graph"
+    first = torch.load(folder / "model.pt", weights_only=True)["weights"]
+    again = torch.load(tmp_path / "model.pt", weights_only=True)["weights"]
+    assert all(torch.equal(first[k], again[k]) for k in first)
+    assert (tmp_path / "curve.csv").read_text() == (folder / "curve.csv").read_text()
+
+
 def _play(agent, device=None, trials=3, steps=6):
     episode = agents.Rollout(agent, agents.make_env(agent, trials, device=device), seed=5)
     played = [np.asarray(step.action.cpu() if device else step.action) for step in episode.run(steps)]
@@ -125,6 +139,8 @@ def test_the_agent_refuses_a_model_of_another_layout(trained):
         ({"algo": "torch-ppo", "action": "scores"}, "Discrete"),
         ({"algo": "torch-ppo", "n_envs": 0}, "n_envs"),
         ({"algo": "torch-ppo", "device": "cpu", "seeds": 2, "workers": 2}, "one after another"),
+        ({"algo": "torch-ppo", "device_mode": "fused"}, "device_mode must be one of eager, graph"),
+        ({"algo": "ppo", "device_mode": "graph"}, r"takes no device_mode \('graph'\)"),
     ],
 )
 def test_bad_requests_are_refused_before_anything_is_written(tmp_path, kwargs, match):

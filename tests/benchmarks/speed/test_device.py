@@ -66,3 +66,26 @@ def test_the_device_benchmark_writes_its_rows(tmp_path):
     }
     for r in rows:
         assert r["trial_steps_per_s"] == pytest.approx(r["trials"] / r["seconds_per_step"])
+
+
+def test_the_device_benchmark_keeps_each_row_as_it_comes_and_runs_the_fusions_asked(tmp_path, monkeypatch):
+    path = tmp_path / "device.json"
+    seen = []
+    real = device_bench.measure
+
+    def measure_then_stop(*args, **kwargs):  # a run stopped by a time limit in its third row
+        seen.append(json.loads(path.read_text())["speed"] if path.exists() else None)
+        if len(seen) == 5:  # the probe and the timing of each row: rows 1 and 2 done
+            raise KeyboardInterrupt
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(device_bench, "measure", measure_then_stop)
+    arguments = ["--device", "cpu", "--sizes", "20,40", "--skip-equality", "--target-seconds", "0.02"]
+    with pytest.raises(KeyboardInterrupt):
+        device_bench.main([*arguments, "--fusions", "centralized", "--json", str(path)])
+    kept = json.loads(path.read_text())["speed"]
+    assert [(r["fusion"], r["trials"]) for r in kept] == [("centralized", 20), ("centralized", 40)]
+    assert seen[2] == kept[:1]  # the first row was on disk before the second was measured
+    with pytest.raises(SystemExit, match="unknown fusion 'eq22' in --fusions; allowed: average, centralized"):
+        device_bench.main([*arguments, "--fusions", "average,eq22", "--json", str(tmp_path / "no.json")])
+    assert not (tmp_path / "no.json").exists()

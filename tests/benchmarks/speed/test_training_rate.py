@@ -19,3 +19,24 @@ def test_the_training_rate_times_the_rollouts_after_the_first(learner):
     wall = time.perf_counter() - start
     assert row["timed_steps"] == 2 * 8 * 4 and row["batch_size"] == 8 * 4 // 8
     assert row["timed_steps"] / wall < row["env_steps_per_s"] < float("inf")
+
+
+def test_the_device_rows_come_in_each_form_of_the_step_asked(tmp_path, capsys):
+    import json
+
+    from benchmarks.speed import training_rate
+
+    path = tmp_path / "training.json"
+    arguments = ["--device", "cpu", "--sizes", "4", "--cpu-sizes", "", "--n-steps", "4", "--json", str(path)]
+    training_rate.main([*arguments, "--device-modes", "eager,graph"])
+    rows = json.loads(path.read_text())["rows"]
+    assert [(r["learner"], r["device"], r["device_mode"], r["trials"]) for r in rows] == [
+        ("torch-ppo", "cpu", "eager", 4),
+        ("torch-ppo", "cpu", "graph", 4),
+    ]
+    with pytest.raises(SystemExit):
+        training_rate.main([*arguments, "--device-modes", "eager,fused"])
+    assert (
+        "--device-modes: device_mode must be one of eager, graph, compiled; got 'fused'"
+        in capsys.readouterr().err
+    )
