@@ -39,6 +39,7 @@ import numpy as np
 
 from mimo_radar_env import VERSIONS, load_scenario
 from mimo_radar_env.core.arrays import PRECISIONS, check_precision, namespace
+from mimo_radar_env.core.compiled import with_threads
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs.device_forms import check_device_mode
@@ -231,16 +232,20 @@ def study_differences(reference: Path, other: Path) -> dict[str, Any]:
 
 @contextmanager
 def one_core() -> Iterator[None]:
-    """Pins the process to one core while the block runs (where the OS lets it)."""
-    if not hasattr(os, "sched_setaffinity"):
-        yield
-        return
-    cores = os.sched_getaffinity(0)
-    os.sched_setaffinity(0, {min(cores)})
-    try:
-        yield
-    finally:
-        os.sched_setaffinity(0, cores)
+    """Pins the process to one core while the block runs (where the OS lets it), the compiled
+    kernels on one thread. Their thread count is set before the pinning: a thread pool started
+    while pinned would keep every one of its threads on that core (numba's and torch's OpenMP
+    pool may be the same), and the rows after would run on it."""
+    with with_threads(1):
+        if not hasattr(os, "sched_setaffinity"):
+            yield
+            return
+        cores = os.sched_getaffinity(0)
+        os.sched_setaffinity(0, {min(cores)})
+        try:
+            yield
+        finally:
+            os.sched_setaffinity(0, cores)
 
 
 def _synchronizer(device: Any) -> Callable[[], None]:

@@ -80,6 +80,8 @@ class TracedStep:
             )
         finally:
             self._put(saved)
+        if self.cuda:
+            constants_to(traced, self.engine.xp.device)
         if self.mode == "compiled":
             import torch
 
@@ -250,6 +252,18 @@ class GraphReplay:
                 stacklevel=6,
             )
             return False
+
+
+def constants_to(traced: Any, device: Any) -> None:
+    """Move the tensor constants of a traced function (``torch.fx`` ``get_attr`` nodes) to
+    ``device``. A step's constants that came from the host (an index written as a Python list, a
+    numpy mask) are CPU tensors copied to the device each time they are used, which a CUDA graph
+    cannot capture; on the device, each use is a copy there."""
+    for node in traced.graph.nodes:
+        if node.op == "get_attr":
+            value = getattr(traced, node.target)
+            if hasattr(value, "device") and value.device != device:
+                setattr(traced, node.target, value.to(device))
 
 
 def make_forms(engine: RadarEngine, device_mode: str) -> TracedStep | None:

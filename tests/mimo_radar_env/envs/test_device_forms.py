@@ -189,3 +189,28 @@ def test_a_step_with_no_traced_form_runs_eagerly_with_a_warning():
             assert all(relative_difference(ours[4][k], theirs[4][k]) == 0.0 for k in ours[4])
     assert graph.engine._forms._function is False
     assert [w.filename for w in said if "could not be traced" in str(w.message)] == [__file__]  # the caller
+
+
+def test_a_traced_functions_host_constants_move_to_the_device():
+    """An index written as a Python list or a numpy array enters a trace as a CPU constant, which a
+    CUDA graph cannot copy to the GPU while capturing: constants_to moves every one (here to the
+    meta device, which a CPU-only machine has), and the function runs there."""
+    from torch.fx.experimental.proxy_tensor import make_fx
+
+    index = np.array([1, 3])
+
+    def function(x):
+        return x[:, [0, 2]].sum(-1) + x[:, index].prod(-1) * torch.tensor(2.0)
+
+    x = torch.arange(8.0).reshape(2, 4)
+    traced = make_fx(function, tracing_mode="fake", _allow_non_fake_inputs=True)(x)
+    constants = [getattr(traced, n.target) for n in traced.graph.nodes if n.op == "get_attr"]
+    assert len(constants) >= 2 and all(c.device.type == "cpu" for c in constants)
+    device_forms.constants_to(traced, torch.device("meta"))
+    assert all(
+        getattr(traced, n.target).device.type == "meta" for n in traced.graph.nodes if n.op == "get_attr"
+    )
+    assert traced(x.to("meta")).shape == (2,)
+    again = make_fx(function, tracing_mode="fake", _allow_non_fake_inputs=True)(x)
+    device_forms.constants_to(again, torch.device("cpu"))  # where they are already: the same function
+    torch.testing.assert_close(again(x), function(x), rtol=0, atol=0)
