@@ -1212,13 +1212,16 @@ def stage_values(docs: Path) -> dict[str, str]:
 DEVICE_FILE = "perf/device.json"
 DEVICE_CHECKS_FILE = "perf/device-checks.json"
 #: The speed rows' backends by a short key (value spans name them): the backend's label begins so.
-#: A backend of the device figures: the start of its rows' name, and the form of the step.
+#: A backend of the device figures: the start of its rows' name, the form of the step and the
+#: precision.
 DEVICE_BACKENDS = {
-    "numpy": ("numpy + numba", "eager"),
-    "torch-cpu": ("torch cpu", "eager"),
-    "device": ("torch cuda", "eager"),
-    "device-graph": ("torch cuda", "graph"),
-    "device-compiled": ("torch cuda", "compiled"),
+    "numpy": ("numpy + numba", "eager", "float64"),
+    "torch-cpu": ("torch cpu", "eager", "float64"),
+    "device": ("torch cuda", "eager", "float64"),
+    "device-graph": ("torch cuda", "graph", "float64"),
+    "device-compiled": ("torch cuda", "compiled", "float64"),
+    "device-float32": ("torch cuda", "eager", "float32"),
+    "device-graph-float32": ("torch cuda", "graph", "float32"),
 }
 
 
@@ -1337,7 +1340,7 @@ def device_speed(docs: Path) -> str:
 @value_source("device")
 def device_value(docs: Path, key: str) -> str:
     """A figure of ``python -m benchmarks.speed.device`` (results/perf/device.json):
-    ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS, float64), ``ratio.BACKEND.BACKEND.
+    ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS), ``ratio.BACKEND.BACKEND.
     FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference`` (float64's), ``device`` (its
     name), ``device-id``, ``tolerance``, ``scenario``, ``machine``, and
     ``checks.FIELD`` a field of results/perf/device-checks.json."""
@@ -1365,13 +1368,13 @@ def device_value(docs: Path, key: str) -> str:
     kind, *parts = key.split(".")
 
     def rate(backend: str, fusion: str, trials: str) -> float:
-        prefix, mode = DEVICE_BACKENDS.get(backend, ("", ""))
+        prefix, mode, precision = DEVICE_BACKENDS.get(backend, ("", "", ""))
         for r in record["speed"]:
             if (
                 prefix
                 and r["backend"].startswith(prefix)
                 and r.get("mode", "eager") == mode
-                and r.get("precision", "float64") == "float64"
+                and r.get("precision", "float64") == precision
                 and r["fusion"] == fusion
                 and r["trials"] == int(trials)
             ):

@@ -89,3 +89,26 @@ def test_the_device_benchmark_keeps_each_row_as_it_comes_and_runs_the_fusions_as
     with pytest.raises(SystemExit, match="unknown fusion 'eq22' in --fusions; allowed: average, centralized"):
         device_bench.main([*arguments, "--fusions", "average,eq22", "--json", str(tmp_path / "no.json")])
     assert not (tmp_path / "no.json").exists()
+
+
+@pytest.mark.parametrize(("device", "measured"), [(None, [500]), ("cuda:0", [500, 50_000, 1_000_000])])
+def test_rows_stop_growing_linearly_on_a_cpu_and_after_a_slow_step_on_a_gpu(monkeypatch, device, measured):
+    """A step of 20 ms at B = 500: on a CPU B = 50,000 would take 2 s (linear), so the rows stop;
+    on a GPU, launch-bound at small B, they go on until a step itself took longer than the limit."""
+    seconds = {500: 0.02, 50_000: 0.03, 1_000_000: 0.5}
+    monkeypatch.setattr(device_bench, "_engine", lambda *args: args[2])
+    monkeypatch.setattr(device_bench, "_free", lambda device: None)
+
+    def measure(fusion, trials, device, keys, steps, mode="eager", engine=None):
+        rate = trials / seconds[trials]
+        return {
+            "trials": trials,
+            "seconds_per_step": seconds[trials],
+            "trial_steps_per_s": rate,
+            "first_step_s": 0,
+        }
+
+    monkeypatch.setattr(device_bench, "measure", measure)
+    rows = list(device_bench.speed_rows("b", device, tuple(seconds), None, 1.9, 1.0, fusions=("average",)))
+    assert [r["trials"] for r in rows if "skipped" not in r] == measured
+    assert [r["skipped"] for r in rows if "skipped" in r] == (["too slow"] if device is None else [])
