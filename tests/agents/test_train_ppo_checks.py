@@ -81,7 +81,7 @@ def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, mo
 
     trained = []
 
-    def one_seed(job, out, seed, device=None):
+    def one_seed(job, out, seed, device=None, device_mode="eager"):
         if trained:
             raise KeyboardInterrupt
         trained.append(seed)
