@@ -48,6 +48,10 @@ def _flip_uniform_np(
     return (xp.astype(lane, np.float64) + 0.5) * (1.0 / 65536.0)
 
 
+#: The most memory the numpy kernel's draws of a block of iterations take (r1, r2 and the flips).
+DRAW_BLOCK_BYTES = 128 * 2**20
+
+
 def run_numpy(
     index: NDArray[np.float64],
     tx_count: int,
@@ -84,10 +88,17 @@ def run_numpy(
     # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
     r_bases = xp.stack([stream_bases(keys, s, iterations) for s in (Stream.BPSO_R1, Stream.BPSO_R2)])
     flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
+    # the draws depend on no state: hashed for a block of iterations at once (a few operations a
+    # block instead of a few dozen an iteration), blocks sized to DRAW_BLOCK_BYTES
+    block = int(np.clip(DRAW_BLOCK_BYTES // (8 * batch * population * (2 + length)), 1, iterations))
     for q in range(iterations):
+        if q % block == 0:
+            drawn = slice(q, min(q + block, iterations))
+            r_block = to_unit(element_bits(r_bases[:, :, drawn, None], particle))  # (2, B, Q, P)
+            u_block = _flip_uniform_np(flip_bases[:, drawn, None, None], hash_element, lane_shift)
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        r1, r2 = to_unit(element_bits(r_bases[:, :, q, None], particle))
-        u = _flip_uniform_np(flip_bases[:, q, None, None], hash_element, lane_shift)
+        r1, r2 = r_block[:, :, q % block]
+        u = u_block[:, q % block]  # (B, P, L)
         velocities = (
             inertia * velocities
             + (c1 * r1)[..., None] * (personal_best - positions)

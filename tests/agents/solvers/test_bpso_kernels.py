@@ -19,6 +19,20 @@ def test_bpso_numba_and_numpy_kernels_give_the_same_numbers():
     np.testing.assert_array_equal(fast[1], slow[1])
 
 
+@pytest.mark.parametrize("block", [1, 7, 30])
+def test_bpso_numpy_kernel_draws_the_same_numbers_in_any_block_of_iterations(monkeypatch, block):
+    """The numpy kernel hashes a block of iterations' draws at once: a block of one iteration, one
+    that does not divide the iterations, and all of them select the same super arms."""
+    index = np.random.default_rng(4).exponential(size=(9, 4, 6))
+    solver = BPSOSolver(2, 3, iterations=30, use_numba=False)
+    whole = solver.solve(index, streams(index, 3))
+    population, stations = solver.population, 4 + 6
+    monkeypatch.setattr(_bpso_kernels, "DRAW_BLOCK_BYTES", 8 * 9 * population * (2 + stations) * block)
+    blocks = solver.solve(index, streams(index, 3))
+    np.testing.assert_array_equal(blocks[0], whole[0])
+    np.testing.assert_array_equal(blocks[1], whole[1])
+
+
 def test_bpso_serial_kernel_is_taken_with_one_thread_and_gives_the_same_numbers():
     if not _bpso_kernels.HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy kernel exists")
