@@ -9,6 +9,7 @@ without it the numpy kernel runs.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -72,7 +73,8 @@ def run_numpy(
     num_tx = index.shape[1]
     positions = xp.copy(positions)
     velocities = xp.zeros(positions.shape)
-    fitness, valid = _fitness_np(index, positions, num_tx, tx_count, rx_count)
+    fitness_of = _fitness_function(index, length, num_tx, tx_count, rx_count)
+    fitness, valid = fitness_of(positions)
     personal_best = xp.copy(positions)
     personal_fit = xp.where(valid, fitness, -np.inf)
     rows = xp.arange(batch)
@@ -110,7 +112,7 @@ def run_numpy(
             positions = xp.astype(draw, np.int8)
         else:  # eq21 as written: the bit flips with probability sigmoid(V)
             positions = xp.astype(xp.where(draw, 1 - positions, positions), np.int8)
-        fitness, valid = _fitness_np(index, positions, num_tx, tx_count, rx_count)
+        fitness, valid = fitness_of(positions)
         improved = valid & (fitness > personal_fit)
         personal_best = xp.where(improved[..., None], positions, personal_best)
         personal_fit = xp.where(improved, fitness, personal_fit)
@@ -121,17 +123,46 @@ def run_numpy(
     return global_best
 
 
+def _fitness_function(
+    index: NDArray[np.float64], length: int, num_tx: int, tx_count: int, rx_count: int
+) -> Callable[[NDArray[np.int8]], tuple[NDArray[np.float64], NDArray[np.bool_]]]:
+    """eq19 of a swarm's positions (B, P, L) and whether each is valid: looked up in a table of
+    every bit pattern's value per trial (:func:`_fitness_np` of each pattern, so the same numbers)
+    where it fits FITNESS_TABLE_BYTES, a few operations an iteration instead of one a channel;
+    else summed directly."""
+    xp = namespace(index)
+    batch, channels = index.shape[0], index.shape[1] * index.shape[2]
+    if 8 * batch * channels << length > FITNESS_TABLE_BYTES:
+        return lambda positions: _fitness_np(index, positions, num_tx, tx_count, rx_count)
+    bit = xp.arange(length, dtype=np.int64)
+    patterns = xp.astype((xp.arange(1 << length, dtype=np.int64)[:, None] >> bit) & 1, np.int8)  # (C, L)
+    table, valid_pattern = _fitness_np(index, patterns[None], num_tx, tx_count, rx_count)  # (B, C), (1, C)
+    weights = 1 << bit  # bit j of a pattern is station j
+
+    def lookup(positions: NDArray[np.int8]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        code = (xp.astype(positions, np.int64) * weights).sum(axis=-1)  # (B, P)
+        return xp.take_along_axis(table, code, axis=1), valid_pattern[0][code]
+
+    return lookup
+
+
+#: The most memory eq19's table of every bit pattern may take to build (one term a channel,
+#: pattern and trial); a larger batch sums each particle's channels directly.
+FITNESS_TABLE_BYTES = 256 * 2**20
+
+
 def _fitness_np(
     index: NDArray[np.float64], positions: NDArray[np.int8], num_tx: int, tx_count: int, rx_count: int
 ) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-    """eq19: index sum over the selected channels (summed TX-major, as the numba kernel), 0 if invalid."""
+    """eq19: index sum over the selected channels (summed TX-major, as the numba kernel), 0 if
+    invalid; ``positions`` (B, P, L), or (1, P, L) for the same patterns in every trial."""
     xp = namespace(index)
     tx = xp.astype(positions[..., :num_tx], np.float64)
     rx = xp.astype(positions[..., num_tx:], np.float64)
     tx_ok = positions[..., :num_tx].sum(axis=-1) == tx_count
     valid = tx_ok & (positions[..., num_tx:].sum(axis=-1) == rx_count)
     terms = tx[..., :, None] * rx[..., None, :] * index[:, None]  # (B, P, M, N): tx_m rx_n I_mn
-    value = xp.zeros(positions.shape[:2])
+    value = xp.zeros(terms.shape[:2])
     # a loop over the channels (not trials or particles), m-major, fixes the summation order
     for term in xp.moveaxis(terms.reshape(*terms.shape[:2], -1), -1, 0):
         value += term

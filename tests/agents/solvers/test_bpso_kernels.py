@@ -33,6 +33,26 @@ def test_bpso_numpy_kernel_draws_the_same_numbers_in_any_block_of_iterations(mon
     np.testing.assert_array_equal(blocks[1], whole[1])
 
 
+def test_bpso_numpy_kernels_fitness_table_gives_the_direct_sums_bit_for_bit(monkeypatch):
+    """eq19 looked up in the table of every bit pattern is each particle's direct sum, to the bit,
+    for valid and invalid particles alike; a batch whose table would not fit sums directly, and
+    the solver selects the same super arms either way."""
+    rng = np.random.default_rng(6)
+    index = rng.normal(size=(5, 4, 6)) * 10.0 ** rng.integers(-3, 4, size=(5, 4, 6))
+    positions = rng.integers(0, 2, size=(5, 40, 10)).astype(np.int8)
+    direct = _bpso_kernels._fitness_np(index, positions, 4, 2, 3)
+    lookup = _bpso_kernels._fitness_function(index, 10, 4, 2, 3)(positions)
+    assert direct[1].any() and not direct[1].all()
+    np.testing.assert_array_equal(lookup[1], direct[1])
+    assert lookup[0].tobytes() == direct[0].tobytes()
+    solver = BPSOSolver(2, 3, iterations=30, use_numba=False)
+    by_table = solver.solve(np.abs(index), streams(index, 5))
+    monkeypatch.setattr(_bpso_kernels, "FITNESS_TABLE_BYTES", 0)
+    by_sum = solver.solve(np.abs(index), streams(index, 5))
+    np.testing.assert_array_equal(by_table[0], by_sum[0])
+    np.testing.assert_array_equal(by_table[1], by_sum[1])
+
+
 def test_bpso_serial_kernel_is_taken_with_one_thread_and_gives_the_same_numbers():
     if not _bpso_kernels.HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy kernel exists")
