@@ -1281,8 +1281,13 @@ def _equality_table(record: dict[str, Any], run: tuple[str, ...], entries: dict[
 @generator("device-equality")
 def device_equality(docs: Path) -> str:
     """``python -m benchmarks.speed.device``'s equality on the device: the torch engine against the
-    numpy engine over whole episodes (:func:`_equality_table`)."""
-    return _equality_table(read_json(docs, DEVICE_FILE), tuple(RUN_COLUMNS), {})
+    numpy engine over episodes (:func:`_equality_table`), with the trials and the steps as columns
+    where they differ between rows (else said under the table: ``equality-trials`` and
+    ``equality-steps`` of :func:`device_value`)."""
+    record = read_json(docs, DEVICE_FILE)
+    varying = [c for c in RUN_COLUMNS if len({RUN_COLUMNS[c](e) for e in record["equality"]}) > 1]
+    run = tuple(c for c in RUN_COLUMNS if c in ("form", "precision") or c in varying)
+    return _equality_table(record, run, {})
 
 
 @generator("float32-equality")
@@ -1341,7 +1346,8 @@ def device_speed(docs: Path) -> str:
 def device_value(docs: Path, key: str) -> str:
     """A figure of ``python -m benchmarks.speed.device`` (results/perf/device.json):
     ``rate.BACKEND.FUSION.TRIALS`` (BACKEND one of DEVICE_BACKENDS), ``ratio.BACKEND.BACKEND.
-    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference`` (float64's), ``device`` (its
+    FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference`` (float64's),
+    ``equality-trials`` and ``equality-steps`` (the same in every equality row), ``device`` (its
     name), ``device-id``, ``tolerance``, ``scenario``, ``machine``, and
     ``checks.FIELD`` a field of results/perf/device-checks.json."""
     if key in ("device-id", "tolerance", "scenario", "machine"):  # the run's own fields
@@ -1360,6 +1366,11 @@ def device_value(docs: Path, key: str) -> str:
             raise BenchError(f"{DEVICE_CHECKS_FILE} has no {field!r}; it has: {', '.join(checks)}")
         return f"{checks[field]:,}" if isinstance(checks[field], int) else str(checks[field])
     record = read_json(docs, DEVICE_FILE)
+    if key in ("equality-trials", "equality-steps"):  # the same in every equality row
+        values = {e[key.split("-")[1]] for e in record["equality"]}
+        if len(values) != 1:
+            raise BenchError(f"{DEVICE_FILE}'s equality rows differ in {key}: {sorted(values)}")
+        return f"{values.pop():,}"
     if key == "largest-difference":
         double = [e["largest"] for e in record["equality"] if e.get("precision", "float64") == "float64"]
         return f"{max(double):.1e}"

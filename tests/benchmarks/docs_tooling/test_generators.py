@@ -148,3 +148,14 @@ def test_the_float32_table_and_figures_come_from_its_rows_and_float64s_figures_i
     device["equality"][1].pop("precision")  # a run from before the precisions: float64
     (perf / "device.json").write_text(json.dumps(device))
     assert generators.device_value(tmp_path, "largest-difference") == "1.0e-11"
+    # the device's table: trials and steps are columns only where rows differ in them, else values
+    assert generators.device_equality(tmp_path).splitlines()[0] == (
+        "| env | fusion | form | precision | largest relative difference | in | oracle's actions |"
+    )
+    assert generators.device_value(tmp_path, "equality-steps") == "1,000"
+    device["equality"][1]["steps"] = 50
+    (perf / "device.json").write_text(json.dumps(device))
+    assert "| steps |" in generators.device_equality(tmp_path).splitlines()[0]
+    assert generators.device_value(tmp_path, "equality-trials") == "64"
+    with pytest.raises(generators.BenchError, match=r"equality rows differ in equality-steps: \[50, 1000\]"):
+        generators.device_value(tmp_path, "equality-steps")
