@@ -133,6 +133,17 @@ def test_bpso_replayed_as_a_graph_selects_what_it_selects_eagerly(monkeypatch):
         np.testing.assert_array_equal(ours, theirs)
 
 
+def test_bpso_on_torch_selects_the_same_in_blocks_of_iterations_and_without_its_table(monkeypatch):
+    """On torch, BPSO hashes a block of iterations' draws at once (one block at the study's size)
+    and looks eq19 up in a table: blocks of 7 iterations, and the direct sums, select the same."""
+    from agents.solvers import BPSOSolver, _bpso_kernels
+
+    whole = _bpso_selections(BPSOSolver(2, 3, iterations=30), [7])
+    monkeypatch.setitem(_bpso_kernels.DRAW_BLOCK_BYTES, "torch", 8 * 7 * 50 * 12 * 7)  # 7 iterations
+    monkeypatch.setattr(_bpso_kernels, "FITNESS_TABLE_BYTES", 0)
+    np.testing.assert_array_equal(_bpso_selections(BPSOSolver(2, 3, iterations=30), [7])[0], whole[0])
+
+
 def test_bpsos_iterations_ask_the_host_nothing_and_copy_nothing_from_it(monkeypatch):
     """What a CUDA graph's capture needs: inside the iterations, no bool(), item() or the like of
     a tensor, and no tensor made from host data (a scalar goes to its kernel as an argument),

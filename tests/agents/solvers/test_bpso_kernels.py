@@ -27,7 +27,7 @@ def test_bpso_numpy_kernel_draws_the_same_numbers_in_any_block_of_iterations(mon
     solver = BPSOSolver(2, 3, iterations=30, use_numba=False)
     whole = solver.solve(index, streams(index, 3))
     population, stations = solver.population, 4 + 6
-    monkeypatch.setattr(_bpso_kernels, "DRAW_BLOCK_BYTES", 8 * 9 * population * (2 + stations) * block)
+    monkeypatch.setitem(_bpso_kernels.DRAW_BLOCK_BYTES, "numpy", 8 * 9 * population * (2 + stations) * block)
     blocks = solver.solve(index, streams(index, 3))
     np.testing.assert_array_equal(blocks[0], whole[0])
     np.testing.assert_array_equal(blocks[1], whole[1])
