@@ -45,6 +45,8 @@ from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.envs.engine import RadarEngine
 
+from . import write_json
+
 SCENARIO = "paper-1-v1"
 SIZES = (500, 5_000, 50_000, 500_000, 1_000_000)
 FUSIONS = ("average", "centralized")
@@ -501,11 +503,6 @@ def main(argv: list[str] | None = None) -> None:
     if unknown:
         raise SystemExit(f"device: unknown fusion {unknown[0]!r} in --fusions; allowed: {', '.join(FUSIONS)}")
 
-    def save() -> None:  # after every row: a run stopped at a time limit keeps what it measured
-        if args.json:
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps(result, indent=1) + "\n")
-
     parts = []
     if not args.skip_equality:
         parts.append(
@@ -527,9 +524,9 @@ def main(argv: list[str] | None = None) -> None:
     for part, rows in parts:
         for row in rows:
             result[part].append(row)
-            save()
+            write_json(args.json, result)  # after every row: a run stopped by a limit keeps its rows
+    write_json(args.json, result)
     if args.json:
-        save()
         print(f"wrote {args.json}")
 
 

@@ -15,13 +15,14 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from . import write_json
 
 POLICIES = ("mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "random", "best", "best-tracking", "tracking-ucb")
 SCENARIO = "paper-1-v1"
@@ -113,9 +114,8 @@ def main(argv: list[str] | None = None) -> None:
                 flush=True,
             )
     result = {"scenario": SCENARIO, "torch": torch.__version__, "numpy": np.__version__, "rows": rows}
+    write_json(args.json, result)
     if args.json:
-        args.json.parent.mkdir(parents=True, exist_ok=True)
-        args.json.write_text(json.dumps(result, indent=1) + "\n")
         print(f"wrote {args.json}")
 
 

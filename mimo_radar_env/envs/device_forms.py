@@ -122,7 +122,7 @@ class TracedStep:
             import torch
 
             torch.compiler.cudagraph_mark_step_begin()
-            return torch.utils._pytree.tree_map(lambda a: a.clone(), self._function(actions, *state))
+            return _cloned(self._function(actions, *state))
         return self._function(actions, *state)
 
     def _give_up(self, what: str, error: Exception) -> None:
@@ -146,7 +146,6 @@ class TracedStep:
         reads into a backup (for a step redone eagerly) and writes the new state back over it,
         so the engine's arrays are the static buffers between steps; its other outputs are
         copied out before the next replay overwrites them."""
-        import torch
 
         if self._graph is None:
             self._actions = actions.clone()
@@ -170,7 +169,7 @@ class TracedStep:
             if value is not static:  # after a reset or a step redone eagerly
                 static.copy_(value)
         passed, outputs = self._graph.replay()
-        return self._state, passed, torch.utils._pytree.tree_map(lambda a: a.clone(), outputs)
+        return self._state, passed, _cloned(outputs)
 
     def _graph_body(self) -> tuple[Any, Any]:
         for backup, static in zip(self._backup, self._state, strict=True):
@@ -236,9 +235,7 @@ class GraphReplay:
         inputs, graph = entry
         for static, value in zip(inputs, args, strict=True):
             static.copy_(value)
-        import torch
-
-        return torch.utils._pytree.tree_map(lambda a: a.clone(), graph.replay())
+        return _cloned(graph.replay())
 
     def _capture(self, args: tuple[Any, ...]) -> Any:
         inputs = [a.clone() for a in args]
@@ -252,6 +249,14 @@ class GraphReplay:
                 stacklevel=6,
             )
             return False
+
+
+def _cloned(outputs: Any) -> Any:
+    """Every tensor of ``outputs`` (nested) copied out of a graph's buffers, which its next replay
+    rewrites."""
+    import torch
+
+    return torch.utils._pytree.tree_map(lambda a: a.clone(), outputs)
 
 
 def constants_to(traced: Any, device: Any) -> None:
