@@ -1403,6 +1403,8 @@ def device_value(docs: Path, key: str) -> str:
 
 
 LAUNCHES_FILE = "perf/launches.json"
+#: The counts of a row of results/perf/launches.json, in its table's order.
+LAUNCH_COUNTS = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
 
 
 @generator("device-launches")
@@ -1419,9 +1421,8 @@ def device_launches(docs: Path) -> str:
         "operations per update",
         "operations per env step (eager)",
     ]
-    counts = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
     rows = [
-        [r["policy"], r["fusion"], *(f"{r[c]:,.0f}" for c in counts)]
+        [r["policy"], r["fusion"], *(f"{r[c]:,.0f}" for c in LAUNCH_COUNTS)]
         for r in read_json(docs, LAUNCHES_FILE)["rows"]
     ]
     return markdown_table(head, rows)
@@ -1436,11 +1437,12 @@ def launches_value(docs: Path, key: str) -> str:
         return f"{record['rows'][0]['trials']:,}"
     field, _, rest = key.partition(".")
     policy, _, fusion = rest.rpartition(".")
-    counts = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
     for r in record["rows"]:
-        if (r["policy"], r["fusion"]) == (policy, fusion) and field in counts:
+        if (r["policy"], r["fusion"]) == (policy, fusion) and field in LAUNCH_COUNTS:
             return f"{r[field]:,.0f}"
-    raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: FIELD.POLICY.FUSION, FIELD one of {counts}, or trials")
+    raise BenchError(
+        f"{LAUNCHES_FILE} has no {key!r}: FIELD.POLICY.FUSION, FIELD one of {LAUNCH_COUNTS}, or trials"
+    )
 
 
 # ------------------------------------------------------------------ PPO training throughput
