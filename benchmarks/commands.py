@@ -77,7 +77,8 @@ class TrainPPO(Command):
             "--workers",
             type=integer(1),
             default=1,
-            help="seeds trained at once, one process each (capped at the cores; default 1)",
+            help="seeds trained at once, one process each, sharing --device where one is given "
+            "(capped at the cores; default 1)",
         )
         parser.add_argument(
             "--hyperparams",

@@ -226,13 +226,21 @@ TRAINING_STEPS_PER_S = {"ppo": 3000.0, "maskable-ppo": 3000.0, "recurrent-ppo": 
 TORCH_PPO_STEP_SECONDS = {"cpu": (9e-3, 1.1e-4), "cuda": (1.7e-2, 3.4e-7)}
 
 
-def estimate_training_seconds(algo: str, timesteps: int, device: str | None = None, n_envs: int = 8) -> float:
-    """One training's wall time, roughly: ``timesteps`` at :data:`TRAINING_STEPS_PER_S`; torch-ppo's
-    from :data:`TORCH_PPO_STEP_SECONDS` on ``device`` (CPU torch unless a CUDA device) with
-    ``n_envs`` parallel trials, which set its speed."""
+def estimate_training_seconds(
+    algo: str, timesteps: int, device: str | None = None, n_envs: int = 8, at_once: int = 1
+) -> float:
+    """One training's wall time, roughly, with ``at_once`` such trainings running together (one
+    process each): ``timesteps`` at :data:`TRAINING_STEPS_PER_S`; torch-ppo's from
+    :data:`TORCH_PPO_STEP_SECONDS` on ``device`` (CPU torch unless a CUDA device) with ``n_envs``
+    parallel trials, which set its speed. On the CPU each training has its own core; on a CUDA
+    device the trainings share it: each process pays the fixed part (its launches) by itself, while
+    the per-trial part (the device's work) is paid for all of them (a bound for the
+    device's share, not a measurement)."""
     if algo == TORCH_PPO:
-        fixed, per_trial = TORCH_PPO_STEP_SECONDS["cuda" if str(device).startswith("cuda") else "cpu"]
-        return timesteps / n_envs * (fixed + per_trial * n_envs)
+        on_cuda = str(device).startswith("cuda")
+        fixed, per_trial = TORCH_PPO_STEP_SECONDS["cuda" if on_cuda else "cpu"]
+        sharing = max(1, at_once) if on_cuda else 1
+        return timesteps / n_envs * (fixed + per_trial * n_envs * sharing)
     return timesteps / TRAINING_STEPS_PER_S[algo]
 
 
@@ -247,9 +255,9 @@ def _check_training_time(
     n_envs: int,
 ) -> None:
     """Says the trainings' estimated time when it is a minute or more; refuses them beyond
-    ``max_hours`` (seeds ``workers`` at a time; on a device one after another)."""
-    at_once = 1 if device is not None else min(workers, seeds)
-    seconds = estimate_training_seconds(algo, timesteps, device, n_envs) * -(-seeds // at_once)
+    ``max_hours`` (seeds ``workers`` at a time, sharing a device where one is given)."""
+    at_once = min(workers, seeds)
+    seconds = estimate_training_seconds(algo, timesteps, device, n_envs, at_once) * -(-seeds // at_once)
     what = f"{seeds} training(s) of {timesteps:,} `timesteps` of {algo}"
     if max_hours is not None and seconds > 3600 * max_hours:
         raise HarnessError(
@@ -332,8 +340,6 @@ def train_ppo(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
                 )
             return _recorded(meta, record, out)
-    if device is not None and workers > 1:
-        raise ValueError(f"a training on device {device!r} runs its seeds one after another: workers=1")
     with output_lock(out):
         done = train_jobs(
             [(job, out, s) for s in range(seed, seed + seeds)],
@@ -437,8 +443,9 @@ def train_jobs(
     """Every ``(job, out, seed)`` trained into ``seed_folder(out, seed)``, ``workers`` processes at
     once, resumably: a seed whose ``ppo.json`` records the same job is kept, one that records
     another is refused unless ``overwrite``; an unfinished one is trained again. Returns each
-    task's ``ppo.json`` by ``(out, seed)``. torch-ppo's jobs run on ``device``, in this
-    process, the step in form ``device_mode`` (an execution setting, not part of a job)."""
+    task's ``ppo.json`` by ``(out, seed)``. torch-ppo's jobs run on ``device`` (with one worker in
+    this process; with more, their processes share the device), the step in form ``device_mode``
+    (an execution setting, not part of a job)."""
     done, todo = {}, []
     for job, out, seed in tasks:
         meta_file = seed_folder(out, seed) / META_FILE
@@ -476,9 +483,9 @@ def _train_todo(
     total: int,
     device_mode: str = "eager",
 ) -> None:
-    """Train ``todo`` into ``done``: on ``device`` one after another in this process, else in
-    ``workers`` processes."""
-    if todo and device is not None:
+    """Train ``todo`` into ``done``: in ``workers`` processes (on ``device``, sharing it), or with
+    one worker and a device, one after another in this process."""
+    if todo and device is not None and workers == 1:
         for job, out, seed in todo:
             done[out, seed] = _train_one_seed(job, str(out), seed, device, device_mode)
             if progress:
@@ -490,7 +497,8 @@ def _train_todo(
 
         with worker_pool(min(workers, len(todo))) as pool:
             futures = {
-                pool.submit(_train_one_seed, job, str(out), seed): (out, seed) for job, out, seed in todo
+                pool.submit(_train_one_seed, job, str(out), seed, device, device_mode, True): (out, seed)
+                for job, out, seed in todo
             }
             for future in concurrent.futures.as_completed(futures):
                 done[futures[future]] = future.result()
@@ -500,11 +508,16 @@ def _train_todo(
 
 
 def _train_one_seed(
-    job: dict[str, Any], out: str, seed: int, device: str | None = None, device_mode: str = "eager"
+    job: dict[str, Any],
+    out: str,
+    seed: int,
+    device: str | None = None,
+    device_mode: str = "eager",
+    in_worker: bool = False,
 ) -> dict[str, Any]:
     import torch
 
-    if device is None:
+    if in_worker:
         torch.set_num_threads(1)  # one compute thread per worker, as the harness's
     options = EnvOptions(**job["options"])
     return train_ppo(

@@ -136,8 +136,8 @@ class RLStudy(Study):
         "best-tracking and tracking-ucb on the same trials (OUT/<scenario>-<fusion>), and report across-seed "
         "statistics and learning curves (OUT/rl.md, OUT/rl.json, OUT/curves_<scenario>-<fusion>.png). "
         "With --device, the learner is the project's own torch-ppo (both rewards and both fusions, 10 "
-        "seeds by default), trained on that device one seed after another; the evaluation runs on numpy "
-        "with --workers. --sweep trains the information learner at further budgets."
+        "seeds by default), trained on that device, --device-workers at once; the evaluation runs on "
+        "numpy with --workers. --sweep trains the information learner at further budgets."
     )
 
     @classmethod
@@ -184,6 +184,13 @@ class RLStudy(Study):
             "with --device 4,096)",
         )
         parser.add_argument(
+            "--device-workers",
+            type=integer(1, high=64),
+            default=None,
+            help="with --device: trainings at once, each in a process of its own, sharing the device "
+            "(default 1: one after another in this process; --workers sets the evaluation's)",
+        )
+        parser.add_argument(
             "--contrib-seeds",
             type=integer(1, high=100),
             default=CONTRIB_SEEDS,
@@ -193,6 +200,21 @@ class RLStudy(Study):
     @property
     def on_device(self) -> bool:
         return self.settings.device is not None
+
+    def __init__(self, args: argparse.Namespace) -> None:
+        super().__init__(args)
+        if args.device_workers is not None and not self.on_device:
+            raise BenchError(
+                "--device-workers needs --device; without one, --workers sets the trainings at once"
+            )
+
+    @property
+    def training_workers(self) -> int:
+        """The trainings at once: ``--device-workers`` (default 1) with ``--device``, else
+        ``--workers``."""
+        if not self.on_device:
+            return self.settings.workers
+        return self.args.device_workers or 1
 
     @property
     def hyperparams_key(self) -> str | None:
@@ -302,7 +324,7 @@ class RLStudy(Study):
         return runs
 
     def train(self) -> None:
-        """Every training of the study, resumably, ``--workers`` at once."""
+        """Every training of the study, resumably, :attr:`training_workers` at once."""
         from ..harness import RunInterrupted
         from ..training import train_jobs, training_job
 
@@ -317,7 +339,7 @@ class RLStudy(Study):
         try:
             train_jobs(
                 tasks,
-                self.settings.workers,
+                self.training_workers,
                 progress=self.settings.progress,
                 device=self.settings.device,
                 device_mode=self.settings.device_mode,
@@ -329,8 +351,8 @@ class RLStudy(Study):
 
     def estimate_training_seconds(self) -> float:
         """The wall time of the trainings still to do (a resumed study keeps its finished
-        seeds), roughly: :func:`benchmarks.training.estimate_training_seconds` each, ``--workers``
-        at once."""
+        seeds), roughly: :func:`benchmarks.training.estimate_training_seconds` each,
+        :attr:`training_workers` at once."""
         from ..training import META_FILE, estimate_training_seconds, load_hyperparams, seed_folder
 
         seconds = 0.0
@@ -343,9 +365,9 @@ class RLStudy(Study):
                 meta = seed_folder(t.folder, seed) / META_FILE
                 if not (meta.is_file() and "job" in json.loads(meta.read_text())):
                     seconds += estimate_training_seconds(
-                        t.algo, t.timesteps, self.settings.device, parallel[t.algo]
+                        t.algo, t.timesteps, self.settings.device, parallel[t.algo], self.training_workers
                     )
-        return seconds if self.on_device else seconds / self.settings.workers
+        return seconds / self.training_workers
 
     def training_record(self) -> dict[str, Any]:
         """How the study's learners trained, from its first training's ``ppo.json``: where

@@ -81,7 +81,7 @@ def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, mo
 
     trained = []
 
-    def one_seed(job, out, seed, device=None, device_mode="eager"):
+    def one_seed(job, out, seed, device=None, device_mode="eager", in_worker=False):
         if trained:
             raise KeyboardInterrupt
         trained.append(seed)
@@ -108,6 +108,14 @@ def test_a_training_estimated_beyond_max_hours_is_refused_before_anything_is_wri
     assert estimate_training_seconds("recurrent-ppo", 1280) == pytest.approx(1.0)
     assert estimate_training_seconds("ppo", 3000) == pytest.approx(3000 / TRAINING_STEPS_PER_S["ppo"])
     assert estimate_training_seconds("ppo", 3000, "cpu", n_envs=512) == pytest.approx(1.0)  # B: torch-ppo's
+    # trainings at once: on the CPU each on its own core, as fast as alone; sharing a CUDA device,
+    # each slower than alone but k of them sooner than k one after another
+    alone = estimate_training_seconds("torch-ppo", 10**6, "cpu", 512)
+    assert estimate_training_seconds("torch-ppo", 10**6, "cpu", 512, at_once=4) == alone
+    for trials in (8, 4096):
+        alone = estimate_training_seconds("torch-ppo", 10**6, "cuda", trials)
+        shared = estimate_training_seconds("torch-ppo", 10**6, "cuda", trials, at_once=4)
+        assert alone < shared < 4 * alone
     # torch-ppo's speed grows with its parallel trials: within 15 % of the training benchmark's
     # rates, the H200's rows as committed and CPU torch's on the developers' two cores
     perf = json.loads((Path(__file__).parents[2] / "docs/results/perf/training.json").read_text())

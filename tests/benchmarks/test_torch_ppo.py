@@ -108,6 +108,29 @@ def test_the_step_replayed_as_a_graph_trains_the_same_weights(trained, tmp_path)
     assert (tmp_path / "curve.csv").read_text() == (folder / "curve.csv").read_text()
 
 
+def test_seeds_trained_in_processes_sharing_a_device_train_the_same_weights(tmp_path):
+    """With a device and several workers, each seed trains in a worker process of its own on
+    that device (here CPU torch, one thread a worker): seed 2 gives the weights and curve it
+    gives alone in this process on one thread (another thread count sums in another order)."""
+    folder, threads = tmp_path / "alone", torch.get_num_threads()
+    torch.set_num_threads(1)
+    try:
+        train_ppo(SHORT, 600, folder, seed=2, algo="torch-ppo", device="cpu", n_envs=6, progress=False)
+    finally:
+        torch.set_num_threads(threads)
+    result = train_ppo(
+        SHORT, 600, tmp_path / "shared", seed=2, seeds=2, workers=2, algo="torch-ppo", device="cpu",
+        n_envs=6, progress=False,
+    )  # fmt: skip
+    assert sorted(result["seeds"]) == [2, 3]
+    first = torch.load(folder / "model.pt", weights_only=True)["weights"]
+    again = torch.load(tmp_path / "shared/seed-2/model.pt", weights_only=True)["weights"]
+    assert all(torch.equal(first[k], again[k]) for k in first)
+    assert (tmp_path / "shared/seed-2/curve.csv").read_text() == (folder / "curve.csv").read_text()
+    other = torch.load(tmp_path / "shared/seed-3/model.pt", weights_only=True)["weights"]
+    assert not all(torch.equal(first[k], other[k]) for k in first)
+
+
 def _play(agent, device=None, trials=3, steps=6):
     episode = agents.Rollout(agent, agents.make_env(agent, trials, device=device), seed=5)
     played = [np.asarray(step.action.cpu() if device else step.action) for step in episode.run(steps)]
@@ -138,7 +161,6 @@ def test_the_agent_refuses_a_model_of_another_layout(trained):
         ({"algo": "torch-ppo", "device": "tpu"}, "device"),
         ({"algo": "torch-ppo", "action": "scores"}, "Discrete"),
         ({"algo": "torch-ppo", "n_envs": 0}, "n_envs"),
-        ({"algo": "torch-ppo", "device": "cpu", "seeds": 2, "workers": 2}, "one after another"),
         ({"algo": "torch-ppo", "device_mode": "fused"}, "device_mode must be one of eager, graph"),
         ({"algo": "ppo", "device_mode": "graph"}, r"takes no device_mode \('graph'\)"),
     ],

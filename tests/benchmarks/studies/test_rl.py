@@ -107,6 +107,8 @@ def test_a_reduced_rl_study_trains_evaluates_and_reports(tmp_path):
         (["--timesteps", "500", "--sweep", "500"], "--sweep lists --timesteps (500)"),
         (["--fusions", "average,mean"], "fusions must be among ['average', 'centralized']"),
         (["--fusions", "average", "--fusion", "average"], "--fusion does not apply"),
+        (["--device-workers", "2"], "--device-workers needs --device"),
+        (["--device", "cpu", "--device-workers", "0"], "--device-workers: must be an integer >= 1"),
     ],
 )
 def test_the_rl_study_refuses_bad_arguments_in_one_line(tmp_path, capsys, argv, message):
@@ -207,12 +209,17 @@ def test_on_a_device_the_time_estimate_reads_the_parallel_trials_of_the_device_e
     parser = argparse.ArgumentParser()
     RLStudy.add_arguments(parser)
     base = ["--scenarios", "1", "--timesteps", "40960", "--device", "cpu", "--out", str(tmp_path)]
-    for extra, n_envs in (([], 4096), (["--hyperparams-key", "device-small"], 512)):
+    cases = (
+        ([], 4096, 1),
+        (["--hyperparams-key", "device-small"], 512, 1),
+        (["--device-workers", "2"], 4096, 2),
+    )
+    for extra, n_envs, workers in cases:
         args = parser.parse_args([*base, *extra])
         args.command = "rl"
         study = RLStudy(args)
-        trainings = len(study.trainings()) * 10  # 10 seeds each, one after another on the device
-        expected = trainings * estimate_training_seconds("torch-ppo", 40960, "cpu", n_envs)
+        trainings = len(study.trainings()) * 10  # 10 seeds each, --device-workers at once
+        expected = trainings * estimate_training_seconds("torch-ppo", 40960, "cpu", n_envs) / workers
         assert study.estimate_training_seconds() == pytest.approx(expected)
 
 
