@@ -1226,10 +1226,10 @@ DEVICE_BACKENDS = {
 
 
 def _trials_grid(
-    rows: list[dict[str, Any]], keys: tuple[str, str], labels: tuple[str, str] | None = None
+    rows: list[dict[str, Any]], keys: tuple[str, ...], labels: tuple[str, str] | None = None
 ) -> tuple[list[int], list[str], dict[tuple[Any, ...], dict[int, dict[str, Any]]]]:
     """A table with a column per trial count B: the counts, its header lines, and the rows grouped
-    by ``keys`` (the first columns, headed ``labels``, default the keys) and then by B."""
+    by ``keys`` and then by B; two first columns, headed ``labels`` (default the keys, two)."""
     sizes = sorted({r["trials"] for r in rows})
     header = " | ".join(labels or keys)
     lines = [
@@ -1452,7 +1452,8 @@ TRAININGS_FILE = "perf/torch-ppo-trainings.json"
 
 def _training_rate(record: dict[str, Any], learner: str, device: str, trials: int) -> float:
     for r in record["rows"]:
-        if (r["learner"], r["device"], r["trials"]) == (learner, device, trials) and "env_steps_per_s" in r:
+        row = (r["learner"], r["device"], r["trials"], r.get("processes", 1))
+        if row == (learner, device, trials, 1) and "env_steps_per_s" in r:
             return r["env_steps_per_s"]
     raise BenchError(f"{TRAINING_FILE} has no measured row {learner}, {device}, B = {trials}")
 
@@ -1460,11 +1461,13 @@ def _training_rate(record: dict[str, Any], learner: str, device: str, trials: in
 @generator("ppo-training-rate")
 def ppo_training_rate(docs: Path) -> str:
     """``python -m benchmarks.speed.training_rate``'s rows: env steps per second of PPO training
-    end to end, per learner, where it runs and parallel trials B, with the device's peak memory."""
+    end to end, per learner, where it runs (and how many trainings at once share the device) and
+    parallel trials B, with the device's peak memory."""
     record = read_json(docs, TRAINING_FILE)
-    sizes, lines, groups = _trials_grid(record["rows"], ("learner", "device"), ("learner", "runs on"))
+    rows = [{"processes": 1, **r} for r in record["rows"]]
+    sizes, lines, groups = _trials_grid(rows, ("learner", "device", "processes"), ("learner", "runs on"))
     names = {"numpy": "CPU, numpy env, 1 thread", "cpu": "CPU torch, 1 thread"}
-    for (learner, device), rows in groups.items():
+    for (learner, device, processes), rows in groups.items():
         cells = []
         for b in sizes:
             r = rows.get(b)
@@ -1474,6 +1477,8 @@ def ppo_training_rate(docs: Path) -> str:
             memory = r.get("peak_device_memory_gib")
             cells.append(f"{r['env_steps_per_s']:,.0f}" + ("" if memory is None else f" ({memory:.1f} GiB)"))
         where = names.get(device, f"{record.get('device_name', device)} ({device})")
+        if processes > 1:
+            where += f", {processes} trainings at once (steps/s added up)"
         lines.append(
             f"| {'SB3 PPO' if learner == 'sb3' else learner} | {where} | " + " | ".join(cells) + " |"
         )

@@ -6,7 +6,8 @@ to B, rollouts of ``n_steps`` (default 64) steps per trial and ``batch_size = n_
 entry's eight minibatches per epoch at any B), 10 epochs. A row times its rollouts after the first
 (the first pays for warm-up: compilation, CUDA context), each rollout with its update: what a
 training spends per env step end to end. CPU rows run on one thread, as ``train-ppo``'s workers
-do, at the B values of ``--cpu-sizes`` (thousands of trials take minutes there).
+do, at the B values of ``--cpu-sizes`` (thousands of trials take minutes there). ``--processes``
+adds rows of several trainings at once sharing the device, one process each.
 
     python -m benchmarks.speed.training_rate --device cuda --json docs/results/perf/training.json
 """
@@ -112,6 +113,30 @@ def training_rate(
     }
 
 
+def shared_rate(
+    trials: int, device: str, processes: int, rollouts: int = 3, n_steps: int = 64, device_mode: str = "eager"
+) -> dict[str, Any]:
+    """One row of ``processes`` torch-ppo trainings at once on ``device``, each in a worker
+    process of its own (as ``train-ppo --workers`` with ``--device`` runs seeds): their env steps
+    per second added up (each timed over its own rollouts after the first, which the others'
+    overlap), with each one's."""
+    from ..backends import worker_pool
+
+    with worker_pool(processes) as pool:
+        futures = [
+            pool.submit(training_rate, "torch-ppo", trials, device, rollouts, n_steps, device_mode)
+            for _ in range(processes)
+        ]
+        each = [future.result() for future in futures]
+    return {
+        **each[0],
+        "processes": processes,
+        "env_steps_per_s": sum(row["env_steps_per_s"] for row in each),
+        "per_process_steps_per_s": [row["env_steps_per_s"] for row in each],
+        "peak_device_memory_gib": None,
+    }
+
+
 def rows(
     device: str | None,
     sizes: tuple[int, ...],
@@ -119,24 +144,32 @@ def rows(
     rollouts: int,
     n_steps: int,
     device_modes: tuple[str, ...] = ("eager",),
+    processes: tuple[int, ...] = (1,),
 ) -> list[dict[str, Any]]:
     """Every backend's rows: SB3 on CPU and torch-ppo on CPU torch at ``cpu_sizes``, and with
-    ``device``, torch-ppo there at ``sizes`` in each form of the step of ``device_modes``."""
-    backends = [("sb3", None, cpu_sizes, "eager"), ("torch-ppo", "cpu", cpu_sizes, "eager")]
-    backends += [("torch-ppo", device, sizes, mode) for mode in device_modes] if device else []
+    ``device``, torch-ppo there at ``sizes`` in each form of the step of ``device_modes``, for
+    each count of trainings at once of ``processes`` (:func:`shared_rate` beyond one)."""
+    backends = [("sb3", None, cpu_sizes, "eager", 1), ("torch-ppo", "cpu", cpu_sizes, "eager", 1)]
+    if device:
+        backends += [("torch-ppo", device, sizes, mode, k) for mode in device_modes for k in processes]
     out = []
-    for learner, where, trial_counts, mode in backends:
+    for learner, where, trial_counts, mode, k in backends:
         for trials in trial_counts:
             try:
-                row = training_rate(learner, trials, where, rollouts, n_steps, mode)
+                if k == 1:
+                    row = training_rate(learner, trials, where, rollouts, n_steps, mode)
+                else:
+                    row = shared_rate(trials, where, k, rollouts, n_steps, mode)
             except ImportError as exc:  # a machine without stable-baselines3: that backend's rows say so
                 out.append({"learner": learner, "device": where or "numpy", "trials": trials,
                             "skipped": f"not installed ({exc.name})"})  # fmt: skip
                 break
             out.append(row)
             rate = row["env_steps_per_s"]
+            at_once = f" x{k}" if k > 1 else ""
             print(
-                f"  {learner:9s} {where or 'numpy':6s} {mode:8s} B={trials:>6,d}: {rate:>10,.0f} env steps/s",
+                f"  {learner:9s} {where or 'numpy':6s} {mode:8s} B={trials:>6,d}{at_once}: "
+                f"{rate:>10,.0f} env steps/s",
                 flush=True,
             )
     return out
@@ -155,6 +188,12 @@ def main(argv: list[str] | None = None) -> None:
         help="the forms of the env's step for torch-ppo's rows on --device, comma-separated "
         f"({', '.join(DEVICE_MODES)}; default %(default)s)",
     )
+    parser.add_argument(
+        "--processes",
+        default="1",
+        help="trainings at once on --device, each in a process of its own, comma-separated "
+        "(default 1); each count beyond one is a row of their steps per second added up",
+    )
     parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
     parser.add_argument("--n-steps", type=int, default=64)
     parser.add_argument("--json", type=Path, default=None)
@@ -162,6 +201,12 @@ def main(argv: list[str] | None = None) -> None:
     sizes = tuple(int(s) for s in args.sizes.split(","))
     cpu_sizes = tuple(int(s) for s in args.cpu_sizes.split(",") if s)
     modes = tuple(args.device_modes.split(","))
+    try:
+        processes = tuple(int(k) for k in args.processes.split(","))
+    except ValueError:
+        processes = ()
+    if not processes or min(processes) < 1:
+        parser.error(f"--processes must list whole numbers >= 1, got {args.processes!r}")
     for mode in modes:
         try:
             check_device_mode(mode, args.device or "cpu")
@@ -171,7 +216,7 @@ def main(argv: list[str] | None = None) -> None:
     result = {
         "scenario": SCENARIO,
         "machine": platform.processor() or platform.machine(),
-        "rows": rows(args.device, sizes, cpu_sizes, args.rollouts, args.n_steps, modes),
+        "rows": rows(args.device, sizes, cpu_sizes, args.rollouts, args.n_steps, modes, processes),
     }
     if args.device and args.device.startswith("cuda"):
         import torch

@@ -159,3 +159,26 @@ def test_the_float32_table_and_figures_come_from_its_rows_and_float64s_figures_i
     assert generators.device_value(tmp_path, "equality-trials") == "64"
     with pytest.raises(generators.BenchError, match=r"equality rows differ in equality-steps: \[50, 1000\]"):
         generators.device_value(tmp_path, "equality-steps")
+
+
+def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_them(tmp_path):
+    """The training table gives rows of several trainings at once (``--processes``) a line of
+    their own, after the device's one-process line; ``rate`` figures read one-process rows only."""
+    from benchmarks.docs_tooling import generators
+
+    def row(trials, rate, processes=None):
+        extra = {} if processes is None else {"processes": processes}
+        return {"learner": "torch-ppo", "device": "cuda", "trials": trials, "n_steps": 64,
+                "env_steps_per_s": rate, "peak_device_memory_gib": None, **extra}  # fmt: skip
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    record = {"scenario": "paper-1-v1", "device_name": "GPU", "rows": [row(512, 1e4), row(512, 3e4, 4)]}
+    (perf / "training.json").write_text(json.dumps(record))
+    table = generators.ppo_training_rate(tmp_path).splitlines()
+    assert table[2:] == [
+        "| torch-ppo | GPU (cuda) | 10,000 |",
+        "| torch-ppo | GPU (cuda), 4 trainings at once (steps/s added up) | 30,000 |",
+    ]
+    assert all(line.count("|") == 4 for line in table)
+    assert generators.training_value(tmp_path, "rate.torch-ppo.cuda.512") == "10,000"

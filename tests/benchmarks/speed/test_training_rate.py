@@ -40,3 +40,22 @@ def test_the_device_rows_come_in_each_form_of_the_step_asked(tmp_path, capsys):
         "--device-modes: device_mode must be one of eager, graph, compiled; got 'fused'"
         in capsys.readouterr().err
     )
+
+
+def test_trainings_sharing_a_device_add_up_their_rates(tmp_path, capsys):
+    """--processes 2: two trainings at once, one worker process each, in a row whose rate is the
+    sum of theirs (each timed as a one-process row is); a count below one is refused."""
+    import json
+
+    from benchmarks.speed import training_rate
+
+    path = tmp_path / "training.json"
+    arguments = ["--device", "cpu", "--sizes", "4", "--cpu-sizes", "", "--n-steps", "4", "--json", str(path)]
+    training_rate.main([*arguments, "--processes", "1,2"])
+    one, two = json.loads(path.read_text())["rows"]
+    assert "processes" not in one and two["processes"] == 2
+    assert len(two["per_process_steps_per_s"]) == 2 and two["timed_steps"] == one["timed_steps"]
+    assert two["env_steps_per_s"] == pytest.approx(sum(two["per_process_steps_per_s"]))
+    with pytest.raises(SystemExit):
+        training_rate.main([*arguments, "--processes", "0"])
+    assert "--processes must list whole numbers >= 1, got '0'" in capsys.readouterr().err
