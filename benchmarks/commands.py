@@ -39,6 +39,36 @@ class TrainPPO(Command):
             help="environment steps to train for (default: n_timesteps of the hyperparameters)",
         )
         parser.add_argument("--out", required=True, help="output directory for the model")
+        cls.add_learner_arguments(parser)
+        parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
+        parser.add_argument(
+            "--seeds",
+            type=integer(1, high=100),
+            default=1,
+            help="train seeds --seed, --seed + 1, ... each into DIR/seed-S (default 1: DIR itself)",
+        )
+        parser.add_argument(
+            "--workers",
+            type=integer(1),
+            default=1,
+            help="seeds trained at once, one process each, sharing --device where one is given "
+            "(capped at the cores; default 1)",
+        )
+        parser.add_argument(
+            "--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard"
+        )
+        parser.add_argument(
+            "--overwrite",
+            action="store_true",
+            help="replace a model already in --out (its files are removed first)",
+        )
+        parser.add_argument("--quiet", action="store_true", help="no progress bar")
+        add_max_hours(parser)
+        add_env_options(parser)
+
+    @staticmethod
+    def add_learner_arguments(parser: argparse.ArgumentParser) -> None:
+        """The learner, where it trains, and its hyperparameters."""
         parser.add_argument(
             "--algo",
             choices=list(LEARNER_NAMES),
@@ -66,20 +96,6 @@ class TrainPPO(Command):
             help="parallel trials of the training env (default: n_envs of the hyperparameters, 8; "
             "thousands on a device)",
         )
-        parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
-        parser.add_argument(
-            "--seeds",
-            type=integer(1, high=100),
-            default=1,
-            help="train seeds --seed, --seed + 1, ... each into DIR/seed-S (default 1: DIR itself)",
-        )
-        parser.add_argument(
-            "--workers",
-            type=integer(1),
-            default=1,
-            help="seeds trained at once, one process each, sharing --device where one is given "
-            "(capped at the cores; default 1)",
-        )
         parser.add_argument(
             "--hyperparams",
             default=None,
@@ -98,17 +114,6 @@ class TrainPPO(Command):
             default="auto",
             help="one Discrete action per super arm, or per-station scores (default: auto)",
         )
-        parser.add_argument(
-            "--tensorboard", action="store_true", help="write TensorBoard logs in DIR/tensorboard"
-        )
-        parser.add_argument(
-            "--overwrite",
-            action="store_true",
-            help="replace a model already in --out (its files are removed first)",
-        )
-        parser.add_argument("--quiet", action="store_true", help="no progress bar")
-        add_max_hours(parser)
-        add_env_options(parser)
 
     def main(self) -> int:
         from .harness import HarnessError, RunInterrupted

@@ -294,9 +294,8 @@ def train_ppo(
     """Train learner ``algo`` (PPO, MaskablePPO or RecurrentPPO, or the project's own torch-ppo)
     on the native vectorised env and save the model (``model.zip``; torch-ppo's ``model.pt``), the
     normalisation statistics, the learning curve and ``ppo.json`` in ``out``; with ``seeds`` > 1,
-    seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``,
-    ``workers`` at a time, resumably (a seed whose folder holds its finished training is kept);
-    ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
+    seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``, ``workers`` at a time, resumably
+    (a finished seed is kept); ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
     (default ``"cpu"``; the SB3 learners take none), its env's step in form ``device_mode``
     (:mod:`mimo_radar_env.envs.device_forms`; the same numbers), with PPO's hyperparameter entry;
     ``n_envs`` overrides the entry's number of parallel trials. The trainings' estimated time
@@ -328,17 +327,12 @@ def train_ppo(
     if seeds == 1 and not seed_folders:
         with output_lock(out):
             _clear_model(out, overwrite)
-            if config is not None:
-                from . import torch_ppo
-
-                log = LearningCurve(timesteps, progress, name=algo)
-                meta = torch_ppo.train(
-                    sc, timesteps, out, seed, config, options, device=device, device_mode=device_mode, log=log
-                )
-            else:
+            if config is None:
                 meta = _train(
                     spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
                 )
+            else:
+                meta = _train_torch(sc, timesteps, out, seed, config, options, device, device_mode, progress)
             return _recorded(meta, record, out)
     with output_lock(out):
         done = train_jobs(
@@ -354,6 +348,26 @@ def train_ppo(
         "timesteps": timesteps,
         "algo": algo,
     }
+
+
+def _train_torch(
+    sc: Scenario,
+    timesteps: int,
+    out: Path,
+    seed: int,
+    config: Any,
+    options: EnvOptions,
+    device: str,
+    device_mode: str,
+    progress: bool,
+) -> dict[str, Any]:
+    """One torch-ppo training into ``out`` (:func:`benchmarks.torch_ppo.train`), its curve logged."""
+    from . import torch_ppo
+
+    log = LearningCurve(timesteps, progress, name=TORCH_PPO)
+    return torch_ppo.train(
+        sc, timesteps, out, seed, config, options, device=device, device_mode=device_mode, log=log
+    )
 
 
 def _recorded(meta: dict[str, Any], record: dict[str, Any] | None, out: Path) -> dict[str, Any]:

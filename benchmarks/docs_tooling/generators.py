@@ -926,7 +926,6 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     ``sweep.T.difference`` (m), ``sweep.T.steps-per-trial``, and against best-tracking
     ``sweep.T.best-tracking`` (better, worse, same) with its ``.difference`` (m)."""
     from ..harness import duration
-    from ..studies.rl import FLAT_CHANGE, MINUS_ORDER
 
     judged = read_json(docs, f"{folder}/rl.json")
     timing = read_json(docs, f"{folder}/timing.json")
@@ -953,20 +952,36 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
             "training.steps-per-trial": f"{record['trained_timesteps'] // record['n_envs']:,}",
         }
 
-    def where(entry: dict[str, Any]) -> str:
-        return f"Scenario {entry['scenario']}, {entry['fusion']}"
+    return table | _rl_comparisons(judged) | _rl_curves(judged) | _rl_sweep(judged)
 
+
+def _rl_where(entry: dict[str, Any]) -> str:
+    return f"Scenario {entry['scenario']}, {entry['fusion']}"
+
+
+def _rl_comparisons(judged: dict[str, Any]) -> dict[str, str]:
+    """:func:`rl_values`' ``X.pairs``, ``X.VERDICT`` and ``X.VERDICT.which``."""
+    from ..studies.rl import MINUS_ORDER
+
+    table = {}
     for other in MINUS_ORDER:
         which: dict[str, list[str]] = {key: [] for key in AGAINST.values()}
         for entry in judged["scenarios"]:
             for key, row in entry["learners"].items():
                 verdict = verdicts.verdict(row["minus"][other]["ci"], -1)
-                which[AGAINST[verdict]].append(f"`{key}` in {where(entry)}")
+                which[AGAINST[verdict]].append(f"`{key}` in {_rl_where(entry)}")
         table[f"{other}.pairs"] = str(sum(map(len, which.values())))
         for verdict, listed in which.items():
             table[f"{other}.{verdict}"], table[f"{other}.{verdict}.which"] = str(len(listed)), _listed(listed)
-    curves = [(where(e), k, c) for e in judged["scenarios"] for k, c in e["curves"].items()]
-    table |= {
+    return table
+
+
+def _rl_curves(judged: dict[str, Any]) -> dict[str, str]:
+    """:func:`rl_values`' figures of the learning curves."""
+    from ..studies.rl import FLAT_CHANGE
+
+    curves = [(_rl_where(e), k, c) for e in judged["scenarios"] for k, c in e["curves"].items()]
+    return {
         "flat-change": f"{100 * FLAT_CHANGE:.0f}",
         "curves": str(len(curves)),
         "flat": str(sum(bool(c["flat"]) for _, _, c in curves)),
@@ -975,27 +990,32 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
             [f"`{k}` ({w}, {100 * c['change']:+.1f} %)" for w, k, c in curves if c["flat"] is False]
         ),
     }
-    if "sweep" in judged:
-        rows = judged["sweep"]["budgets"]
-        table["sweep.budgets"] = _listed([f"{row['timesteps']:,}" for row in rows[1:]])
-        table["sweep.flat.which"] = _listed([f"{row['timesteps']:,}" for row in rows if row["curve"]["flat"]])
-        table["sweep.moving.which"] = _listed(
+
+
+def _rl_sweep(judged: dict[str, Any]) -> dict[str, str]:
+    """:func:`rl_values`' figures of a budget sweep (none without one)."""
+    if "sweep" not in judged:
+        return {}
+    rows = judged["sweep"]["budgets"]
+    table = {
+        "sweep.budgets": _listed([f"{row['timesteps']:,}" for row in rows[1:]]),
+        "sweep.flat.which": _listed([f"{row['timesteps']:,}" for row in rows if row["curve"]["flat"]]),
+        "sweep.moving.which": _listed(
             [
                 f"{r['timesteps']:,} ({100 * r['curve']['change']:+.1f} %)"
                 for r in rows
                 if r["curve"]["flat"] is False
             ]
-        )
-        for row in rows[1:]:
-            verdict = verdicts.verdict(row["minus_study"]["ci"], -1)
-            table[f"sweep.{row['timesteps']}.minus-study"] = LONGER[verdict]
-            if "training" in judged:
-                per_trial = row["timesteps"] // judged["training"]["n_envs"]
-                table[f"sweep.{row['timesteps']}.steps-per-trial"] = f"{per_trial:,}"
-            budget, against = row["timesteps"], row["minus_best_tracking"]
-            table[f"sweep.{budget}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
-            for key, stat in (("difference", row["minus_study"]), ("best-tracking.difference", against)):
-                table[f"sweep.{budget}.{key}"] = format_estimate(stat["value"], stat["ci"], "{:.3f}")
+        ),
+    }
+    for row in rows[1:]:
+        budget, against = row["timesteps"], row["minus_best_tracking"]
+        table[f"sweep.{budget}.minus-study"] = LONGER[verdicts.verdict(row["minus_study"]["ci"], -1)]
+        if "training" in judged:
+            table[f"sweep.{budget}.steps-per-trial"] = f"{budget // judged['training']['n_envs']:,}"
+        table[f"sweep.{budget}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
+        for key, stat in (("difference", row["minus_study"]), ("best-tracking.difference", against)):
+            table[f"sweep.{budget}.{key}"] = format_estimate(stat["value"], stat["ci"], "{:.3f}")
     return table
 
 
