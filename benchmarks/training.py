@@ -295,12 +295,12 @@ def train_ppo(
     on the native vectorised env and save the model (``model.zip``; torch-ppo's ``model.pt``), the
     normalisation statistics, the learning curve and ``ppo.json`` in ``out``; with ``seeds`` > 1,
     seeds ``seed``, ``seed + 1``, ... each into ``out/seed-S``, ``workers`` at a time, resumably
-    (a finished seed is kept); ``seed_folders`` uses that layout for a single seed too. torch-ppo trains on ``device``
-    (default ``"cpu"``; the SB3 learners take none), its env's step in form ``device_mode``
-    (:mod:`mimo_radar_env.envs.device_forms`; the same numbers), with PPO's hyperparameter entry;
-    ``n_envs`` overrides the entry's number of parallel trials. The trainings' estimated time
-    (:func:`estimate_training_seconds`) is said through ``say`` when it is a minute or more, and
-    refused beyond ``max_hours``.
+    (a finished seed is kept); ``seed_folders`` uses that layout for a single seed too. torch-ppo
+    trains on ``device`` (default ``"cpu"``; the SB3 learners take none), its env's step in form
+    ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`; the same numbers), with PPO's
+    hyperparameter entry; ``n_envs`` overrides the entry's number of parallel trials. The
+    trainings' estimated time (:func:`estimate_training_seconds`) is said through ``say`` when
+    it is a minute or more, and refused beyond ``max_hours``.
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
     (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that

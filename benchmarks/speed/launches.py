@@ -7,14 +7,16 @@ none), and at the paper's 500 trials a launch costs more than its arithmetic, so
 where eager torch code is launch-bound there. They are counts of the code's calls, the same on any
 device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees every operation.
 Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO's iterations)
-are counted apart: on CUDA they replay as one graph. docs/performance.md's table is generated
-from the JSON.
+are counted apart: on CUDA they replay as one graph. ``--compiled`` also counts the calls of the
+env's step as ``torch.compile`` (inductor) writes it on this machine's torch. docs/performance.md's
+table is generated from the JSON.
 """
 
 from __future__ import annotations
 
 import argparse
 import contextlib
+import re
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -92,11 +94,42 @@ def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") ->
     return row
 
 
+def code_calls(code: str) -> dict[str, int]:
+    """The calls of the ``call`` function of an inductor module's code: ``fused``, the loops it
+    generated (``cpp_fused_*`` on the CPU, ``triton_*`` on CUDA), and ``library``, the kernels of a
+    library it calls (``extern_kernels.bmm``, ``torch.ops.aten.linalg_cholesky_ex``...)."""
+    body = code[code.index("def call(") :].split("\n\n\n")[0]
+    fused = re.findall(r"^\s+(?:cpp_fused_\w+|triton_\w+\.run)\(", body, re.M)
+    library = re.findall(r"^\s+(?:\w+ = )?(?:extern_kernels\.\w+|torch\.ops\.\w+\.\w+\.\w+)\(", body, re.M)
+    return {"fused": len(fused), "library": len(library)}
+
+
+def compiled_row(trials: int, fusion: str) -> dict[str, Any]:
+    """The calls of the v1 env's step compiled (``device_mode="compiled"``, inductor's code on this
+    machine's torch: C++ loops on the CPU) per step, against its eager operations."""
+    import gymnasium as gym
+    from torch._inductor.utils import run_and_get_code
+
+    import mimo_radar_env  # noqa: F401 - registers the env
+
+    env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point",
+                       scenario=SCENARIO, fusion=fusion, device="cpu", device_mode="compiled")  # fmt: skip
+    env.reset(seed=0)
+    _, codes = run_and_get_code(env.step, env.oracle_action())
+    calls = [code_calls(code) for code in codes]
+    return {"fusion": fusion, "trials": trials, **{k: sum(c[k] for c in calls) for k in ("fused", "library")}}
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=3, help="steps counted per policy")
     parser.add_argument("--policies", default=",".join(POLICIES))
+    parser.add_argument(
+        "--compiled",
+        action="store_true",
+        help="also count the calls of the env's step compiled by torch.compile (minutes: it compiles)",
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     import torch
@@ -114,6 +147,13 @@ def main(argv: list[str] | None = None) -> None:
                 flush=True,
             )
     result = {"scenario": SCENARIO, "torch": torch.__version__, "numpy": np.__version__, "rows": rows}
+    if args.compiled:
+        result["compiled"] = [compiled_row(args.trials, fusion) for fusion in ("average", "centralized")]
+        for row in result["compiled"]:
+            print(
+                f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, "
+                f"{row['library']} library calls"
+            )
     write_json(args.json, result)
     if args.json:
         print(f"wrote {args.json}")

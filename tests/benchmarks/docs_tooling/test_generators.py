@@ -182,3 +182,23 @@ def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_th
     ]
     assert all(line.count("|") == 4 for line in table)
     assert generators.training_value(tmp_path, "rate.torch-ppo.cuda.512") == "10,000"
+
+
+def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
+    """``launches compiled.KIND.FUSION`` reads the compiled step's calls counted at the trials of
+    the operation rows; another count, kind or fusion is refused by name."""
+    from benchmarks.docs_tooling import generators
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    rows = [{"policy": "ucb1", "fusion": "average", "trials": 500, "env_step": 1456.0}]
+    compiled = [
+        {"fusion": "average", "trials": 64, "fused": 9, "library": 9},
+        {"fusion": "average", "trials": 500, "fused": 20, "library": 26},
+    ]
+    (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled": compiled}))
+    assert generators.launches_value(tmp_path, "compiled.fused.average") == "20"
+    assert generators.launches_value(tmp_path, "compiled.library.average") == "26"
+    for key in ("compiled.fused.centralized", "compiled.loops.average"):
+        with pytest.raises(generators.BenchError, match="compiled.fused.FUSION"):
+            generators.launches_value(tmp_path, key)

@@ -41,3 +41,14 @@ def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone():
     plain = launches.policy_row("ucb1", 6, 1)
     assert plain["act_replayed"] == 0 and plain["act_dispatches_on_cuda"] == plain["act"] > 0
     assert plain["env_step"] == row["env_step"] > 1000  # the same env, whatever acts on it
+
+
+def test_the_compiled_code_calls_are_its_generated_loops_and_its_library_kernels():
+    """A pointwise chain before a matrix product fuses into one generated loop, the product calls
+    a library kernel, and the pointwise chain and reduction after it are a second loop."""
+    from torch._inductor.utils import run_and_get_code
+
+    a, b = torch.randn(8, 8), torch.randn(8, 8)
+    compiled = torch.compile(lambda x, y: ((x.sin() * 2.0) @ y).exp().sum(), dynamic=False)
+    _, codes = run_and_get_code(compiled, a, b)
+    assert [launches.code_calls(code) for code in codes] == [{"fused": 2, "library": 1}]
