@@ -1452,18 +1452,15 @@ def device_launches(docs: Path) -> str:
 def launches_value(docs: Path, key: str) -> str:
     """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
     ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), ``trials``, or the
-    compiled step's calls, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``."""
+    calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``."""
     record = read_json(docs, LAUNCHES_FILE)
     if key == "trials":
         return f"{record['rows'][0]['trials']:,}"
     if key.startswith("compiled."):
         _, kind, fusion = key.split(".", 2)
         for r in record.get("compiled", []):
-            if (
-                r["fusion"] == fusion
-                and kind in ("fused", "library")
-                and r["trials"] == record["rows"][0]["trials"]
-            ):
+            at = (r["fusion"], r["trials"], r.get("device", "cpu"))
+            if at == (fusion, record["rows"][0]["trials"], "cpu") and kind in ("fused", "library"):
                 return f"{r[kind]:,}"
         raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: compiled.fused.FUSION or compiled.library.FUSION")
     field, _, rest = key.partition(".")

@@ -104,20 +104,21 @@ def code_calls(code: str) -> dict[str, int]:
     return {"fused": len(fused), "library": len(library)}
 
 
-def compiled_row(trials: int, fusion: str) -> dict[str, Any]:
-    """The calls of the v1 env's step compiled (``device_mode="compiled"``, inductor's code on this
-    machine's torch: C++ loops on the CPU) per step, against its eager operations."""
+def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any]:
+    """The calls of the v1 env's step compiled (``device_mode="compiled"``) on ``device``, as
+    inductor writes it there: C++ loops on the CPU, Triton kernels on CUDA."""
     import gymnasium as gym
     from torch._inductor.utils import run_and_get_code
 
     import mimo_radar_env  # noqa: F401 - registers the env
 
     env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point",
-                       scenario=SCENARIO, fusion=fusion, device="cpu", device_mode="compiled")  # fmt: skip
+                       scenario=SCENARIO, fusion=fusion, device=device, device_mode="compiled")  # fmt: skip
     env.reset(seed=0)
     _, codes = run_and_get_code(env.step, env.oracle_action())
     calls = [code_calls(code) for code in codes]
-    return {"fusion": fusion, "trials": trials, **{k: sum(c[k] for c in calls) for k in ("fused", "library")}}
+    counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
+    return {"fusion": fusion, "trials": trials, "device": device, **counts}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -130,6 +131,7 @@ def main(argv: list[str] | None = None) -> None:
         action="store_true",
         help="also count the calls of the env's step compiled by torch.compile (minutes: it compiles)",
     )
+    parser.add_argument("--compiled-device", default="cpu", help="where --compiled compiles (default cpu)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     import torch
@@ -148,7 +150,8 @@ def main(argv: list[str] | None = None) -> None:
             )
     result = {"scenario": SCENARIO, "torch": torch.__version__, "numpy": np.__version__, "rows": rows}
     if args.compiled:
-        result["compiled"] = [compiled_row(args.trials, fusion) for fusion in ("average", "centralized")]
+        fusions = ("average", "centralized")
+        result["compiled"] = [compiled_row(args.trials, f, args.compiled_device) for f in fusions]
         for row in result["compiled"]:
             print(
                 f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, "

@@ -185,8 +185,8 @@ def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_th
 
 
 def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
-    """``launches compiled.KIND.FUSION`` reads the compiled step's calls counted at the trials of
-    the operation rows; another count, kind or fusion is refused by name."""
+    """``launches compiled.KIND.FUSION`` reads the calls of the step compiled on the CPU at the
+    trials of the operation rows; another count, device, kind or fusion is refused by name."""
     from benchmarks.docs_tooling import generators
 
     perf = tmp_path / "results" / "perf"
@@ -195,6 +195,7 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     compiled = [
         {"fusion": "average", "trials": 64, "fused": 9, "library": 9},
         {"fusion": "average", "trials": 500, "fused": 20, "library": 26},
+        {"fusion": "centralized", "trials": 500, "fused": 90, "library": 30, "device": "cuda"},
     ]
     (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled": compiled}))
     assert generators.launches_value(tmp_path, "compiled.fused.average") == "20"
