@@ -43,6 +43,7 @@ def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone():
     assert plain["env_step"] == row["env_step"] > 1000  # the same env, whatever acts on it
 
 
+@pytest.mark.filterwarnings("ignore:`torch.jit.script_method` is deprecated:DeprecationWarning")
 def test_the_compiled_code_calls_are_its_generated_loops_and_its_library_kernels():
     """A pointwise chain before a matrix product fuses into one generated loop, the product calls
     a library kernel, and the pointwise chain and reduction after it are a second loop."""
