@@ -1506,7 +1506,7 @@ def ppo_training_rate(docs: Path) -> str:
             cells.append(f"{r['env_steps_per_s']:,.0f}" + ("" if memory is None else f" ({memory:.1f} GiB)"))
         where = names.get(device, f"{record.get('device_name', device)} ({device})")
         if processes > 1:
-            where += f", {processes} trainings at once (steps/s added up)"
+            where += f", {processes} trainings at once (their steps over their span)"
         lines.append(
             f"| {'SB3 PPO' if learner == 'sb3' else learner} | {where} | " + " | ".join(cells) + " |"
         )

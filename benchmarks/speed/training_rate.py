@@ -7,7 +7,8 @@ entry's eight minibatches per epoch at any B), 10 epochs. A row times its rollou
 (the first pays for warm-up: compilation, CUDA context), each rollout with its update: what a
 training spends per env step end to end. CPU rows run on one thread, as ``train-ppo``'s workers
 do, at the B values of ``--cpu-sizes`` (thousands of trials take minutes there). ``--processes``
-adds rows of several trainings at once sharing the device, one process each.
+adds rows of several trainings at once sharing the device, one process each: their timed
+steps over the span of all their timed windows.
 
     python -m benchmarks.speed.training_rate --device cuda --json docs/results/perf/training.json
 """
@@ -109,6 +110,9 @@ def training_rate(
         "batch_size": params["batch_size"],
         "timed_steps": clock.ends[-1][0] - clock.ends[0][0],
         "env_steps_per_s": clock.rate(),
+        # the timed window on the machine's monotonic clock (the same in every process)
+        "timed_from_s": clock.ends[0][1],
+        "timed_to_s": clock.ends[-1][1],
         "peak_device_memory_gib": torch.cuda.max_memory_allocated() / 2**30 if cuda else None,
     }
 
@@ -117,9 +121,10 @@ def shared_rate(
     trials: int, device: str, processes: int, rollouts: int = 3, n_steps: int = 64, device_mode: str = "eager"
 ) -> dict[str, Any]:
     """One row of ``processes`` torch-ppo trainings at once on ``device``, each in a worker
-    process of its own (as ``train-ppo --workers`` with ``--device`` runs seeds): their env steps
-    per second added up (each timed over its own rollouts after the first, which the others'
-    overlap), with each one's."""
+    process of its own (as ``train-ppo --workers`` with ``--device`` runs seeds): the env steps
+    they all timed over the span from the first one's timed start to the last one's end (a
+    process that starts late is not counted as running beside the others), with each one's own
+    rate."""
     from ..backends import worker_pool
 
     with worker_pool(processes) as pool:
@@ -131,8 +136,10 @@ def shared_rate(
     return {
         **each[0],
         "processes": processes,
-        "env_steps_per_s": sum(row["env_steps_per_s"] for row in each),
+        "env_steps_per_s": sum(row["timed_steps"] for row in each)
+        / (max(row["timed_to_s"] for row in each) - min(row["timed_from_s"] for row in each)),
         "per_process_steps_per_s": [row["env_steps_per_s"] for row in each],
+        "per_process_windows_s": [[row["timed_from_s"], row["timed_to_s"]] for row in each],
         "peak_device_memory_gib": None,
     }
 
@@ -192,7 +199,7 @@ def main(argv: list[str] | None = None) -> None:
         "--processes",
         default="1",
         help="trainings at once on --device, each in a process of its own, comma-separated "
-        "(default 1); each count beyond one is a row of their steps per second added up",
+        "(default 1); each count beyond one is a row of their steps over the span of their timed windows",
     )
     parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
     parser.add_argument("--n-steps", type=int, default=64)

@@ -178,7 +178,7 @@ def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_th
     table = generators.ppo_training_rate(tmp_path).splitlines()
     assert table[2:] == [
         "| torch-ppo | GPU (cuda) | 10,000 |",
-        "| torch-ppo | GPU (cuda), 4 trainings at once (steps/s added up) | 30,000 |",
+        "| torch-ppo | GPU (cuda), 4 trainings at once (their steps over their span) | 30,000 |",
     ]
     assert all(line.count("|") == 4 for line in table)
     assert generators.training_value(tmp_path, "rate.torch-ppo.cuda.512") == "10,000"
