@@ -234,8 +234,8 @@ def estimate_training_seconds(
     :data:`TORCH_PPO_STEP_SECONDS` on ``device`` (CPU torch unless a CUDA device) with ``n_envs``
     parallel trials, which set its speed. On the CPU each training has its own core; on a CUDA
     device the trainings share it: each process pays the fixed part (its launches) by itself, while
-    the per-trial part (the device's work) is paid for all of them (a bound for the
-    device's share, not a measurement)."""
+    the per-trial part (the device's work) is paid for all of them, one after another (an
+    assumption: ``benchmarks.speed.training_rate --processes`` measures trainings at once)."""
     if algo == TORCH_PPO:
         on_cuda = str(device).startswith("cuda")
         fixed, per_trial = TORCH_PPO_STEP_SECONDS["cuda" if on_cuda else "cpu"]

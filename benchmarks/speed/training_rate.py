@@ -133,8 +133,9 @@ def shared_rate(
             for _ in range(processes)
         ]
         each = [future.result() for future in futures]
+    first = {k: v for k, v in each[0].items() if k not in ("timed_from_s", "timed_to_s")}
     return {
-        **each[0],
+        **first,
         "processes": processes,
         "env_steps_per_s": sum(row["timed_steps"] for row in each)
         / (max(row["timed_to_s"] for row in each) - min(row["timed_from_s"] for row in each)),
