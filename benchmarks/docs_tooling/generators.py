@@ -1452,7 +1452,8 @@ def device_launches(docs: Path) -> str:
 def launches_value(docs: Path, key: str) -> str:
     """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
     ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), ``trials``, or the
-    calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``."""
+    calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``,
+    with the same env's eager operations, ``compiled.eager.FUSION``."""
     record = read_json(docs, LAUNCHES_FILE)
     if key == "trials":
         return f"{record['rows'][0]['trials']:,}"
@@ -1460,9 +1461,9 @@ def launches_value(docs: Path, key: str) -> str:
         _, kind, fusion = key.split(".", 2)
         for r in record.get("compiled", []):
             at = (r["fusion"], r["trials"], r.get("device", "cpu"))
-            if at == (fusion, record["rows"][0]["trials"], "cpu") and kind in ("fused", "library"):
+            if at == (fusion, record["rows"][0]["trials"], "cpu") and kind in ("fused", "library", "eager"):
                 return f"{r[kind]:,}"
-        raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: compiled.fused.FUSION or compiled.library.FUSION")
+        raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: compiled.(fused|library|eager).FUSION")
     field, _, rest = key.partition(".")
     policy, _, fusion = rest.rpartition(".")
     for r in record["rows"]:
@@ -1492,8 +1493,8 @@ def ppo_training_rate(docs: Path) -> str:
     end to end, per learner, where it runs (and how many trainings at once share the device) and
     parallel trials B, with the device's peak memory."""
     record = read_json(docs, TRAINING_FILE)
-    rows = [{"processes": 1, **r} for r in record["rows"]]
-    sizes, lines, groups = _trials_grid(rows, ("learner", "device", "processes"), ("learner", "runs on"))
+    measured = [{"processes": 1, **r} for r in record["rows"]]
+    sizes, lines, groups = _trials_grid(measured, ("learner", "device", "processes"), ("learner", "runs on"))
     names = {"numpy": "CPU, numpy env, 1 thread", "cpu": "CPU torch, 1 thread"}
     for (learner, device, processes), rows in groups.items():
         cells = []

@@ -106,19 +106,29 @@ def code_calls(code: str) -> dict[str, int]:
 
 def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any]:
     """The calls of the v1 env's step compiled (``device_mode="compiled"``) on ``device``, as
-    inductor writes it there: C++ loops on the CPU, Triton kernels on CUDA."""
+    inductor writes it there (C++ loops on the CPU, Triton kernels on CUDA), and the operations
+    of the same env's eager step (its third, counted as :func:`policy_row` counts)."""
     import gymnasium as gym
     from torch._inductor.utils import run_and_get_code
 
     import mimo_radar_env  # noqa: F401 - registers the env
 
-    env = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point",
-                       scenario=SCENARIO, fusion=fusion, device=device, device_mode="compiled")  # fmt: skip
-    env.reset(seed=0)
-    _, codes = run_and_get_code(env.step, env.oracle_action())
+    def env(mode: str) -> Any:
+        made = gym.make_vec("MimoRadarSelect-v1", num_envs=trials, vectorization_mode="vector_entry_point",
+                            scenario=SCENARIO, fusion=fusion, device=device, device_mode=mode)  # fmt: skip
+        made.reset(seed=0)
+        return made
+
+    eager = env("eager")
+    for _ in range(3):
+        action = eager.oracle_action()
+        with counting() as operations:
+            eager.step(action)
+    compiled = env("compiled")
+    _, codes = run_and_get_code(compiled.step, compiled.oracle_action())
     calls = [code_calls(code) for code in codes]
     counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
-    return {"fusion": fusion, "trials": trials, "device": device, **counts}
+    return {"fusion": fusion, "trials": trials, "device": device, **counts, "eager": operations["total"]}
 
 
 def main(argv: list[str] | None = None) -> None:

@@ -146,7 +146,6 @@ class TracedStep:
         reads into a backup (for a step redone eagerly) and writes the new state back over it,
         so the engine's arrays are the static buffers between steps; its other outputs are
         copied out before the next replay overwrites them."""
-
         if self._graph is None:
             self._actions = actions.clone()
             self._state = [value.clone() for value in state]

@@ -194,12 +194,13 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     rows = [{"policy": "ucb1", "fusion": "average", "trials": 500, "env_step": 1456.0}]
     compiled = [
         {"fusion": "average", "trials": 64, "fused": 9, "library": 9},
-        {"fusion": "average", "trials": 500, "fused": 20, "library": 26},
+        {"fusion": "average", "trials": 500, "fused": 20, "library": 26, "eager": 1330},
         {"fusion": "centralized", "trials": 500, "fused": 90, "library": 30, "device": "cuda"},
     ]
     (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled": compiled}))
     assert generators.launches_value(tmp_path, "compiled.fused.average") == "20"
     assert generators.launches_value(tmp_path, "compiled.library.average") == "26"
+    assert generators.launches_value(tmp_path, "compiled.eager.average") == "1,330"
     for key in ("compiled.fused.centralized", "compiled.loops.average"):
-        with pytest.raises(generators.BenchError, match="compiled.fused.FUSION"):
+        with pytest.raises(generators.BenchError, match=r"compiled.\(fused\|library\|eager\).FUSION"):
             generators.launches_value(tmp_path, key)
