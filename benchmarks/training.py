@@ -509,10 +509,13 @@ def _train_todo(
 
         from .backends import worker_pool
 
+        # the longest trainings first, so that the last ones to finish are short (results do not
+        # depend on the order: each training is its own seeded run)
+        longest_first = sorted(todo, key=lambda task: -task[0]["timesteps"])
         with worker_pool(min(workers, len(todo))) as pool:
             futures = {
                 pool.submit(_train_one_seed, job, str(out), seed, device, device_mode, True): (out, seed)
-                for job, out, seed in todo
+                for job, out, seed in longest_first
             }
             for future in concurrent.futures.as_completed(futures):
                 done[futures[future]] = future.result()
