@@ -588,7 +588,9 @@ TIMINGS = {
     "v1 readings on section 1's layout, claims": "claims/v1-reconstructed-layout.timing.json",
     "tracking study": "tracking/timing.json",
     "RL study": "rl/timing.json",
-    "RL study, torch-ppo on CPU torch": "rl-device/timing.json",
+    "RL study, torch-ppo on an H200 (the invocation that resumed it: its trainings ran before)": (
+        "rl-device/timing.json"
+    ),
     "planning study": "planning/timing.json",
     "mechanisms study": "mechanisms/timing.json",
     "layout search, 2 layouts scored at 500 trials": "layout-search/timing.json",
@@ -923,7 +925,8 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     ``flat``, ``flat.which`` and ``moving.which``. With a budget sweep: ``sweep.budgets`` (those
     past the study's own), ``sweep.flat.which``, ``sweep.moving.which`` and, per budget T past
     the study's, ``sweep.T.minus-study`` (lower, higher, not shown to differ),
-    ``sweep.T.difference`` (m), ``sweep.T.steps-per-trial``, and against best-tracking
+    ``sweep.T.difference`` (m), ``sweep.T.trained`` (T rounded up to whole rollouts, as trained),
+    ``sweep.T.steps-per-trial``, and against best-tracking
     ``sweep.T.best-tracking`` (better, worse, same) with its ``.difference`` (m)."""
     from ..harness import duration
 
@@ -1008,11 +1011,19 @@ def _rl_sweep(judged: dict[str, Any]) -> dict[str, str]:
             ]
         ),
     }
+    rollout = None
+    if "training" in judged:  # a training runs whole rollouts: its budget rounded up to one
+        from ..training import TORCH_PPO, load_hyperparams
+
+        record = judged["training"]
+        rollout = record["n_envs"] * load_hyperparams(None, record["hyperparams_key"], TORCH_PPO)["n_steps"]
     for row in rows[1:]:
         budget, against = row["timesteps"], row["minus_best_tracking"]
         table[f"sweep.{budget}.minus-study"] = LONGER[verdicts.verdict(row["minus_study"]["ci"], -1)]
-        if "training" in judged:
-            table[f"sweep.{budget}.steps-per-trial"] = f"{budget // judged['training']['n_envs']:,}"
+        if rollout is not None:
+            trained = -(-budget // rollout) * rollout
+            table[f"sweep.{budget}.trained"] = f"{trained:,}"
+            table[f"sweep.{budget}.steps-per-trial"] = f"{trained // judged['training']['n_envs']:,}"
         table[f"sweep.{budget}.best-tracking"] = AGAINST[verdicts.verdict(against["ci"], -1)]
         for key, stat in (("difference", row["minus_study"]), ("best-tracking.difference", against)):
             table[f"sweep.{budget}.{key}"] = format_estimate(stat["value"], stat["ci"], "{:.3f}")
@@ -1369,7 +1380,8 @@ def device_value(docs: Path, key: str) -> str:
     FUSION.TRIALS`` (the first's rate over the second's), ``largest-difference`` (float64's),
     ``equality-trials`` and ``equality-steps`` (the same in every equality row), ``device`` (its
     name), ``device-id``, ``tolerance``, ``scenario``, ``machine``, and
-    ``checks.FIELD`` a field of results/perf/device-checks.json."""
+    ``checks.FIELD`` a field of results/perf/device-checks.json (``checks.RECORD.FIELD`` one of
+    its records')."""
     if key in ("device-id", "tolerance", "scenario", "machine"):  # the run's own fields
         record = read_json(docs, DEVICE_FILE)
         field = {
@@ -1379,12 +1391,14 @@ def device_value(docs: Path, key: str) -> str:
             "machine": "machine",
         }[key]
         return f"{record[field]:.0e}" if key == "tolerance" else str(record[field])
-    if key.startswith("checks."):  # results/perf/device-checks.json: the claims study on both
-        checks = read_json(docs, DEVICE_CHECKS_FILE)
-        field = key.split(".", 1)[1]
-        if field not in checks:
-            raise BenchError(f"{DEVICE_CHECKS_FILE} has no {field!r}; it has: {', '.join(checks)}")
-        return f"{checks[field]:,}" if isinstance(checks[field], int) else str(checks[field])
+    if key.startswith("checks."):  # results/perf/device-checks.json: what device runs recorded
+        found: Any = read_json(docs, DEVICE_CHECKS_FILE)
+        for field in key.split(".")[1:]:
+            if not isinstance(found, dict) or field not in found:
+                have = ", ".join(found) if isinstance(found, dict) else "no fields"
+                raise BenchError(f"{DEVICE_CHECKS_FILE} has no {key[7:]!r} ({field!r}; there: {have})")
+            found = found[field]
+        return f"{found:,}" if isinstance(found, int) else str(found)
     record = read_json(docs, DEVICE_FILE)
     if key in ("equality-trials", "equality-steps"):  # the same in every equality row
         values = {e[key.split("-")[1]] for e in record["equality"]}
@@ -1553,9 +1567,15 @@ SCALING_FILES = {
     "2 cores": "perf/strong-scaling.json",
     "2 cores, at ef5e440": "perf/strong-scaling-ef5e440.json",  # before the report shared its terms
     "16 cores": "perf/strong-scaling-16-cores.json",
+    "16 cores, centralised, at a0aed49": "perf/strong-scaling-16-cores-centralized.json",
 }
 #: The value spans' names of the strong-scaling runs (``scaling MACHINE.KIND.W``).
-SCALING_MACHINES = {"2": "2 cores", "2-ef5e440": "2 cores, at ef5e440", "16": "16 cores"}
+SCALING_MACHINES = {
+    "2": "2 cores",
+    "2-ef5e440": "2 cores, at ef5e440",
+    "16": "16 cores",
+    "16-centralized": "16 cores, centralised, at a0aed49",
+}
 
 
 @generator("strong-scaling")
@@ -1569,13 +1589,15 @@ def strong_scaling(docs: Path) -> str:
     ]
     for machine, relative in SCALING_FILES.items():
         record = read_json(docs, relative)
+        alone = len(record["measured"]) == 1  # its efficiency is against itself: none shown
         for r in record["measured"]:
             parts = r["breakdown"]
             total = parts["worker_seconds"]
             share = {k: f"{100 * parts[k] / total:.0f} %" for k in parts}
             tasks = 100 * (parts["task_steps_s"] + parts["task_fixed_s"]) / total
             lines.append(
-                f"| {machine} | {r['workers']} | {r['wall_s']:.1f} | {r['efficiency']:.2f} | "
+                f"| {machine} | {r['workers']} | {r['wall_s']:.1f} | "
+                f"{'—' if alone else format(r['efficiency'], '.2f')} | "
                 f"{r['shard_trials']} | {r['us_per_trial_step_in_tasks']:.1f} | {tasks:.0f} % | "
                 f"{share['tail_idle_s']} | {share['outside_tasks_s']} |"
             )

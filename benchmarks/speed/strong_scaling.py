@@ -36,6 +36,7 @@ import subprocess
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -180,16 +181,27 @@ def predict(
 
 
 def measure(
-    study: tuple[str, ...], counts: list[int], predictions: list[int], model_from: int | None = None
+    study: tuple[str, ...],
+    counts: list[int],
+    predictions: list[int],
+    model_from: int | None = None,
+    measured_only: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     """The measured runs at ``counts`` workers and the model's predictions at ``predictions``, from
-    the run at ``model_from`` workers (default the most measured): its time outside the tasks."""
+    the run at ``model_from`` workers (default the most measured): its time outside the tasks.
+    ``measured_only`` is given the result without the model as soon as the runs are measured (the
+    model's probes take minutes: a run stopped then keeps its measurements)."""
     with tempfile.TemporaryDirectory(prefix="strong-scaling-") as scratch:
-        return _measure(study, counts, predictions, model_from, Path(scratch))
+        return _measure(study, counts, predictions, model_from, Path(scratch), measured_only)
 
 
 def _measure(
-    study: tuple[str, ...], counts: list[int], predictions: list[int], model_from: int | None, scratch: Path
+    study: tuple[str, ...],
+    counts: list[int],
+    predictions: list[int],
+    model_from: int | None,
+    scratch: Path,
+    measured_only: Callable[[dict[str, Any]], None] | None = None,
 ) -> dict[str, Any]:
     trials = int(study[study.index("--trials") + 1])
     measured, folders = [], {}
@@ -223,6 +235,14 @@ def _measure(
             "before_first_task_s": min(t.finished - t.seconds for t in tasks),
             "after_last_task_s": m["wall_s"] - max(t.finished for t in tasks),
         })  # fmt: skip
+    result = {
+        "study": ["mimo-radar-bench", *study],
+        "machine": machine(),
+        "measured": rows,
+        "fixed_per_task_s": fixed,
+    }
+    if measured_only is not None:
+        measured_only({**result, "model": []})
     source = next(m for m in measured if m["workers"] == (model_from or max(counts)))
     order = queue_order(folders[source["workers"]])
     by_task = {(t.run, t.policy, t.shard): t.seconds for t in source["tasks"]}
@@ -232,15 +252,7 @@ def _measure(
         for w in sorted({source["workers"], *predictions})
         for row in predict(folders[source["workers"]], w, trials, overhead, probes)
     ]
-    return {
-        "study": ["mimo-radar-bench", *study],
-        "machine": machine(),
-        "measured": rows,
-        "fixed_per_task_s": fixed,
-        "model_from_workers": source["workers"],
-        "outside_tasks_s": overhead,
-        "model": model,
-    }  # fmt: skip
+    return result | {"model_from_workers": source["workers"], "outside_tasks_s": overhead, "model": model}
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -266,7 +278,9 @@ def main(argv: list[str] | None = None) -> None:
     print(f"strong scaling of mimo-radar-bench {' '.join(study)}, {os.cpu_count()} cores")
     if args.model_from is not None and args.model_from not in counts:
         parser.error(f"--model-from must be one of the measured counts {counts}")
-    result = measure(study, counts, predictions, args.model_from)
+    result = measure(
+        study, counts, predictions, args.model_from, lambda partial: write_json(args.json, partial)
+    )
     for row in result["measured"]:
         wall, efficiency = row["wall_s"], row["efficiency"]
         print(f"  measured {row['workers']:>3} workers: {wall:7.1f} s, efficiency {efficiency:.2f}")

@@ -82,6 +82,8 @@ DEFAULT_TRIALS = 100
 #: A learning curve has flattened when its mean ARMSE changes by at most this fraction between
 #: the last two fifths of training.
 FLAT_CHANGE = 0.02
+#: The fewest points (rollouts in which an episode ended) a curve needs to be judged flat or not.
+MIN_CURVE_POINTS = 5
 RESULTS_FILE = "rl.json"
 #: The key of the budget sweep's run among the study's.
 SWEEP = "sweep"
@@ -458,9 +460,19 @@ class RLStudy(Study):
         if self.settings.figures:
             from ..plots import plot_learning_curves
 
-            for name, curves in figures.items():
+            for name, curves in drawable(figures).items():
                 plot_learning_curves(curves, out / f"curves_{name}.png", name)
         return text
+
+
+def drawable(figures: dict[str, dict[str, list[dict[str, np.ndarray]]]]) -> dict[str, Any]:
+    """The figures with a point to draw: a figure of curves in which no training episode ended
+    would have no line."""
+    return {
+        name: curves
+        for name, curves in figures.items()
+        if any(len(c["timesteps"]) for seeds in curves.values() for c in seeds)
+    }
 
 
 def learner_policies(rows: dict[str, Any], tag: str) -> list[str]:
@@ -589,11 +601,18 @@ def read_curves(folder: Path) -> list[dict[str, np.ndarray]]:
     return curves
 
 
+#: What a learning curve's points are, and why one of few is not judged.
+CURVE_POINTS = (
+    "A curve's points: the rollouts in which a training episode ended, the fewest over its seeds; "
+    f"with fewer than {MIN_CURVE_POINTS} its flatness is not judged (`-`)."
+)
+
+
 def flattened(curves: list[dict[str, np.ndarray]]) -> dict[str, Any]:
     """Whether the mean ARMSE over seeds has flattened: its relative change between the last two
     fifths of the rollouts (``None`` when the curves are too short to tell)."""
     length = min((len(c["armse"]) for c in curves), default=0)
-    if length < 5:
+    if length < MIN_CURVE_POINTS:
         return {"change": None, "flat": None, "rollouts": length}
     mean = np.nanmean([c["armse"][:length] for c in curves], axis=0)
     fifth = length // 5
@@ -651,14 +670,15 @@ def rl_markdown(judged: dict[str, Any]) -> str:
         lines += [
             "## Learning curves",
             "",
-            "| scenario | fusion | learner | change of the mean ARMSE, last two fifths | flat |",
-            "|---|---|---|---|---|",
+            "| scenario | fusion | learner | points | change of the mean ARMSE, last two fifths | flat |",
+            "|---|---|---|---|---|---|",
         ]
         lines += [
-            f"| paper-{entry['scenario']} | {entry['fusion']} | `{key}` | {_change(c)} | {_flat(c)} |"
+            f"| paper-{entry['scenario']} | {entry['fusion']} | `{key}` | {c['rollouts']} | {_change(c)} | "
+            f"{_flat(c)} |"
             for entry, key, c in curves
         ]
-        lines.append("")
+        lines += ["", CURVE_POINTS, ""]
     if "sweep" in judged:
         lines += _sweep_markdown(judged["sweep"])
     return "\n".join(lines) + "\n"
@@ -671,8 +691,8 @@ def _sweep_markdown(sweep: dict[str, Any]) -> list[str]:
         f"({sweep['trials']} trials)",
         "",
         f"| timesteps | seeds | ARMSE (m), mean | ARMSE (m), IQM | - best-tracking | - at {study:,} | "
-        "change of the mean ARMSE, last two fifths | flat |",
-        "|---|---|---|---|---|---|---|---|",
+        "curve points | change of the mean ARMSE, last two fifths | flat |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for row in sweep["budgets"]:
         against = _cell(row["minus_study"], "{:.3f}") if "minus_study" in row else "-"
@@ -680,12 +700,12 @@ def _sweep_markdown(sweep: dict[str, Any]) -> list[str]:
         lines.append(
             f"| {row['timesteps']:,} | {row['seeds']} | {_cell(row['armse']['mean'], '{:.3f}')} | "
             f"{_cell(row['armse']['iqm'], '{:.3f}')} | {_cell(row['minus_best_tracking'], '{:.3f}')} | "
-            f"{against} | {_change(curve)} | {_flat(curve)} |"
+            f"{against} | {curve.get('rollouts', '-')} | {_change(curve)} | {_flat(curve)} |"
         )
     lines += [
         "",
         f"`- at {study:,}`: each seed's ARMSE minus the same seed's trained for {study:,} steps, on the "
-        "same trials, averaged over seeds (interval over seeds).",
+        "same trials, averaged over seeds (interval over seeds). " + CURVE_POINTS,
         "",
     ]
     return lines

@@ -124,6 +124,11 @@ def test_a_training_estimated_beyond_max_hours_is_refused_before_anything_is_wri
     for device, trials, rate in [*measured, ("cpu", 8, 800), ("cpu", 64, 3_735), ("cpu", 512, 7_669)]:
         estimate = 1e6 / estimate_training_seconds("torch-ppo", 1_000_000, device, n_envs=trials)
         assert estimate == pytest.approx(rate, rel=0.15), (device, trials)
+    # eight trainings sharing an H200 (the RL study there): each one's rate within 15 % of theirs
+    shared = json.loads((Path(__file__).parents[2] / "docs/results/perf/device-checks.json").read_text())
+    study = shared["rl_study"]
+    each = 1e6 / estimate_training_seconds("torch-ppo", 10**6, "cuda", 4096, study["trainings_at_once"])
+    assert each == pytest.approx(study["rate_per_training"], rel=0.15)
     out = tmp_path / "model"
     argv = ["train-ppo", "--timesteps", "2147483647", "--out", str(out), "--quiet"]
     with pytest.raises(SystemExit) as exit_info:

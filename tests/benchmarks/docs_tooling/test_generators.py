@@ -161,6 +161,22 @@ def test_the_float32_table_and_figures_come_from_its_rows_and_float64s_figures_i
         generators.device_value(tmp_path, "equality-steps")
 
 
+def test_a_device_check_figure_is_read_from_its_record_by_path(tmp_path):
+    from benchmarks.docs_tooling import generators
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    checks = {"numpy_seconds": 14, "rl_study": {"trainings": 1300, "note": "read so", "span_s": 35.5}}
+    (perf / "device-checks.json").write_text(json.dumps(checks))
+    assert generators.device_value(tmp_path, "checks.numpy_seconds") == "14"
+    assert generators.device_value(tmp_path, "checks.rl_study.trainings") == "1,300"
+    assert generators.device_value(tmp_path, "checks.rl_study.span_s") == "35.5"
+    with pytest.raises(generators.BenchError, match=r"no 'rl_study.wall' \('wall'; there: trainings, note"):
+        generators.device_value(tmp_path, "checks.rl_study.wall")
+    with pytest.raises(generators.BenchError, match=r"no 'numpy_seconds.x' \('x'; there: no fields\)"):
+        generators.device_value(tmp_path, "checks.numpy_seconds.x")
+
+
 def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_them(tmp_path):
     """The training table gives rows of several trainings at once (``--processes``) a line of
     their own, after the device's one-process line; ``rate`` figures read one-process rows only."""

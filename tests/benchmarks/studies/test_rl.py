@@ -313,3 +313,56 @@ def test_the_budget_sweep_pairs_each_seed_with_the_same_seed_at_the_study_budget
     assert third["minus_study"]["value"] == pytest.approx(np.mean([2.0 - 3.0, 4.5 - 5.0, 3.0 - 4.0]))
     assert second["minus_best_tracking"]["value"] == pytest.approx(np.mean(list(longer.values())) - 2.0)
     assert second["armse"]["iqm"]["value"] == pytest.approx(np.mean([4.0, 4.1]))  # 25 % trimmed each side
+
+
+def test_a_figure_is_drawn_only_where_a_training_episode_ended_and_the_tables_count_the_points():
+    from benchmarks.studies.rl import CURVE_POINTS, drawable, rl_markdown
+
+    empty = {"timesteps": np.array([]), "return": np.array([]), "armse": np.array([])}
+    one = {"timesteps": np.array([4096.0]), "return": np.array([9.0]), "armse": np.array([2.0])}
+    figures = {"paper-1-average": {"a": [empty, empty]}, "paper-2-average": {"a": [empty], "b": [one]}}
+    assert list(drawable(figures)) == ["paper-2-average"]
+    judged = judge_learners(
+        {
+            (1, "average"): _summary(
+                {
+                    "mg-crb-cl": 3.0,
+                    "best-tracking": 1.0,
+                    "tracking-ucb": 1.5,
+                    "ppo:t/x/ppo-sinr/seed-0/m": 2.0,
+                }
+            )
+        },
+        [("ppo", "sinr")],
+    )
+    judged["scenarios"][0]["curves"] = {"ppo-sinr": flattened([one, one])}
+    text = rl_markdown(judged)
+    assert "| paper-1 | average | `ppo-sinr` | 1 | - | - |" in text and CURVE_POINTS in text
+
+
+def test_the_sweep_figures_count_the_steps_a_training_ran_whole_rollouts_of(tmp_path):
+    """A budget is trained in whole rollouts (n_envs x the entry's n_steps): the docs give the
+    steps trained, not the budget asked for."""
+    from benchmarks.docs_tooling.generators import _rl_sweep
+    from benchmarks.training import TORCH_PPO, load_hyperparams
+
+    n_steps = load_hyperparams(None, "device", TORCH_PPO)["n_steps"]
+    stat = {"value": -0.1, "ci": [-0.3, 0.2]}
+    row = {
+        "timesteps": 5_000_000,
+        "minus_study": stat,
+        "minus_best_tracking": {"value": 1.0, "ci": [0.8, 1.2]},
+    }
+    row["curve"] = {"change": None, "flat": None, "rollouts": 1}
+    first = {"timesteps": 600_000, "curve": {"change": None, "flat": None, "rollouts": 0}}
+    judged = {"sweep": {"budgets": [first, row]}, "training": {"n_envs": 4096, "hyperparams_key": "device"}}
+    table = _rl_sweep(judged)
+    rollout = 4096 * n_steps
+    trained = -(-5_000_000 // rollout) * rollout
+    assert trained >= 5_000_000 and trained - 5_000_000 < rollout
+    assert table["sweep.5000000.trained"] == f"{trained:,}"
+    assert table["sweep.5000000.steps-per-trial"] == f"{trained // 4096:,}"
+    assert (table["sweep.5000000.minus-study"], table["sweep.5000000.best-tracking"]) == (
+        "not shown to differ",
+        "worse",
+    )
