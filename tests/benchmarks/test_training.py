@@ -62,3 +62,31 @@ def test_sb3s_own_vecnormalize_load_reads_what_train_ppo_saves(small_model):
     model = PPO.load(small_model / "model.zip", device="cpu")
     actions, _ = model.predict(venv.reset(), deterministic=True)
     assert venv.action_space.contains(int(actions[0]))
+
+
+def test_trainings_in_worker_processes_are_submitted_longest_first(tmp_path, monkeypatch):
+    """With several workers the longest trainings start first (the last to finish are short);
+    each training is its own seeded run, so the order moves no number."""
+    import concurrent.futures
+    import contextlib
+
+    from benchmarks import backends, training
+
+    submitted = []
+
+    class InOrder(concurrent.futures.Executor):
+        def submit(self, fn, *args):
+            submitted.append((args[0]["timesteps"], args[2]))
+            future = concurrent.futures.Future()
+            future.set_result({"timesteps": args[0]["timesteps"]})
+            return future
+
+    monkeypatch.setattr(backends, "worker_pool", lambda workers: contextlib.nullcontext(InOrder()))
+    tasks = [
+        ({"timesteps": t}, tmp_path / f"t{t}", seed) for t, seed in ((600, 0), (5000, 1), (600, 2), (2000, 3))
+    ]
+    done = training.train_jobs(tasks, workers=2, progress=False, device="cpu")
+    assert submitted == [(5000, 1), (2000, 3), (600, 0), (600, 2)]
+    assert {key: meta["timesteps"] for key, meta in done.items()} == {
+        (tmp_path / f"t{t}", seed): t for t, seed in ((600, 0), (5000, 1), (600, 2), (2000, 3))
+    }
