@@ -260,7 +260,7 @@ def train(
     optimizer = torch.optim.Adam(network.parameters(), lr=config.learning_rate, eps=1e-5)
     shuffling = TrialRandom.for_batch(seed, 1, collector.xp)
     log = log or LearningCurve(timesteps)
-    updates, start = math.ceil(timesteps / rollout), time.perf_counter()
+    updates, start, began = math.ceil(timesteps / rollout), time.perf_counter(), time.time()
     log.start(updates * rollout)
     for done in range(1, updates + 1):
         last_value = collector.collect(network, log)
@@ -279,17 +279,20 @@ def train(
         collector.normalization.save(out / NORMALIZATION_FILE)
     log.write(out / CURVE_FILE, f"{TORCH_PPO} on {scenario.name}")
     return _record(
-        out, scenario, options, timesteps, updates * rollout, seed, config, str(where), device_mode, wall
-    )
+        out, scenario, options, timesteps, updates * rollout, seed, config, str(where), device_mode,
+        (began, wall),
+    )  # fmt: skip
 
 
 def _record(
     out: Path, scenario: Scenario, options: EnvOptions, timesteps: int, trained: int, seed: int,
-    config: PPOConfig, device: str, device_mode: str, wall: float,
+    config: PPOConfig, device: str, device_mode: str, timed: tuple[float, float],
 ) -> dict[str, Any]:  # fmt: skip
-    """``ppo.json``: what was trained, where, and how fast."""
+    """``ppo.json``: what was trained, where, and how fast (``timed``: the training's start on the
+    wall clock, Unix seconds, and its wall time)."""
     from .training_log import META_FILE
 
+    began, wall = timed
     meta = {
         "algo": TORCH_PPO,
         "scenario": scenario.to_dict(),
@@ -303,6 +306,8 @@ def _record(
         "device_mode": device_mode,
         "config": {f.name: getattr(config, f.name) for f in fields(config)},
         "train_wall_s": wall,
+        # when, on the wall clock: what a study's trainings spanned together (rl.json)
+        "trained_from_unix_s": began,
         "steps_per_second": trained / wall,
     }
     (out / META_FILE).write_text(json.dumps(meta, indent=2, default=str))

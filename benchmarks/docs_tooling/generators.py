@@ -914,7 +914,8 @@ LONGER = {
 
 def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     """What an RL study shows, from its rl.json and timing.json: ``wall``, ``cores``,
-    ``training``, ``evaluation``, ``worker`` (the trainings' worker time), ``trials``, ``seeds``
+    ``training``, ``evaluation``, ``worker`` (the trainings' worker time), ``training-busy`` (the
+    wall time in which a training ran, where rl.json records it), ``trials``, ``seeds``
     (where every learner has the same) and, where rl.json records them, ``training.device``,
     ``training.key`` (the hyperparameter entry), ``training.n-envs``, ``training.timesteps``
     and ``training.steps-per-trial``.
@@ -941,6 +942,8 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
         "worker": duration(judged["training_worker_s"]),
     }
 
+    if "training_busy_s" in judged:  # the trainings' wall time over every invocation
+        table["training-busy"] = duration(judged["training_busy_s"])
     table["trials"] = _one({e["trials"] for e in judged["scenarios"]}, "trials")
     counts = {r["seeds"] for e in judged["scenarios"] for r in e["learners"].values()}
     if len(counts) == 1:

@@ -36,6 +36,7 @@ import argparse
 import csv
 import dataclasses
 import json
+import math
 import re
 from collections.abc import Hashable
 from pathlib import Path
@@ -454,6 +455,9 @@ class RLStudy(Study):
                 row["curve"] = flattened(read_curves(folders[row["timesteps"]]))
         judged["training"] = self.training_record()
         judged["training_worker_s"] = training_seconds(out)
+        busy = training_busy_seconds(out)
+        if busy is not None:
+            judged["training_busy_s"] = busy
         (out / RESULTS_FILE).write_text(json.dumps(judged, indent=1, default=float) + "\n")
         text = rl_markdown(judged)
         (out / "rl.md").write_text(text)
@@ -587,6 +591,26 @@ def training_seconds(out: Path) -> float:
 
     metas = sorted(out.glob(f"train/*/*/seed-*/{META_FILE}"))
     return float(sum(json.loads(path.read_text())["train_wall_s"] for path in metas))
+
+
+def training_busy_seconds(out: Path) -> float | None:
+    """The wall time in which at least one of the study's trainings ran, over every invocation
+    (the union of their ``[trained_from_unix_s, + train_wall_s]`` intervals, so the gap between
+    an interrupted invocation and the one resuming it is not counted); None where a training
+    does not record when it ran (SB3's learners, torch-ppo before the record)."""
+    from ..training import META_FILE
+
+    spans = []
+    for path in sorted(out.glob(f"train/*/*/seed-*/{META_FILE}")):
+        meta = json.loads(path.read_text())
+        if "trained_from_unix_s" not in meta:
+            return None
+        spans.append((meta["trained_from_unix_s"], meta["trained_from_unix_s"] + meta["train_wall_s"]))
+    busy, reached = 0.0, -math.inf
+    for start, end in sorted(spans):
+        busy += max(0.0, end - max(start, reached))
+        reached = max(reached, end)
+    return busy if spans else None
 
 
 def read_curves(folder: Path) -> list[dict[str, np.ndarray]]:

@@ -80,6 +80,10 @@ def test_a_training_writes_the_model_its_statistics_curve_and_record(trained):
     n_steps = 256  # the shipped entry's: whole rollouts of n_steps x n_envs
     assert meta["trained_timesteps"] == 1 * n_steps * 6 and meta["device"] == "cpu"
     assert json.loads((folder / "ppo.json").read_text())["algo"] == "torch-ppo"
+    # when it trained, on the wall clock: ended before the record was written, after it began
+    written = (folder / "ppo.json").stat().st_mtime
+    assert meta["trained_from_unix_s"] + meta["train_wall_s"] <= written + 1e-3
+    assert meta["trained_from_unix_s"] > written - 3600
     rows = (folder / "curve.csv").read_text().splitlines()
     assert rows[0] == "timesteps,episodes,return,armse"
     # 256 steps of 20-step episodes end 12 episodes in each of the 6 trials
