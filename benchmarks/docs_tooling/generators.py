@@ -1016,10 +1016,10 @@ def _rl_sweep(judged: dict[str, Any]) -> dict[str, str]:
     }
     rollout = None
     if "training" in judged:  # a training runs whole rollouts: its budget rounded up to one
-        from ..training import TORCH_PPO, load_hyperparams
+        from ..training import load_hyperparams
 
-        record = judged["training"]
-        rollout = record["n_envs"] * load_hyperparams(None, record["hyperparams_key"], TORCH_PPO)["n_steps"]
+        record, algo = judged["training"], judged["sweep"]["learner"].rsplit("-", 1)[0]  # ALGO-REWARD
+        rollout = record["n_envs"] * load_hyperparams(None, record["hyperparams_key"], algo)["n_steps"]
     for row in rows[1:]:
         budget, against = row["timesteps"], row["minus_best_tracking"]
         table[f"sweep.{budget}.minus-study"] = LONGER[verdicts.verdict(row["minus_study"]["ci"], -1)]

@@ -355,7 +355,8 @@ def test_the_sweep_figures_count_the_steps_a_training_ran_whole_rollouts_of(tmp_
     }
     row["curve"] = {"change": None, "flat": None, "rollouts": 1}
     first = {"timesteps": 600_000, "curve": {"change": None, "flat": None, "rollouts": 0}}
-    judged = {"sweep": {"budgets": [first, row]}, "training": {"n_envs": 4096, "hyperparams_key": "device"}}
+    judged = {"sweep": {"budgets": [first, row], "learner": "torch-ppo-information"}}
+    judged["training"] = {"n_envs": 4096, "hyperparams_key": "device"}
     table = _rl_sweep(judged)
     rollout = 4096 * n_steps
     trained = -(-5_000_000 // rollout) * rollout
