@@ -454,10 +454,7 @@ class RLStudy(Study):
             for row in judged["sweep"]["budgets"]:
                 row["curve"] = flattened(read_curves(folders[row["timesteps"]]))
         judged["training"] = self.training_record()
-        judged["training_worker_s"] = training_seconds(out)
-        busy = training_busy_seconds(out)
-        if busy is not None:
-            judged["training_busy_s"] = busy
+        judged |= training_times(out)
         (out / RESULTS_FILE).write_text(json.dumps(judged, indent=1, default=float) + "\n")
         text = rl_markdown(judged)
         (out / "rl.md").write_text(text)
@@ -584,33 +581,24 @@ def _per_seed(rows: dict[str, Any], tag: str) -> dict[int, str]:
     return dict(sorted(found.items()))
 
 
-def training_seconds(out: Path) -> float:
-    """The trainings' compute: the sum of every seed's training wall time (``ppo.json``'s
-    ``train_wall_s``), whichever invocation of the study trained it."""
+def training_times(out: Path) -> dict[str, float]:
+    """The study's trainings' time, from every seed's ``ppo.json`` whichever invocation trained
+    it: ``training_worker_s``, the sum of their training wall times (``train_wall_s``), and
+    ``training_busy_s``, the wall time in which at least one of them ran (the union of their
+    ``[trained_from_unix_s, + train_wall_s]`` intervals, so the gap between an interrupted
+    invocation and the one resuming it is not counted), left out where a training does not record
+    when it ran (SB3's learners, torch-ppo before the record) or none is there."""
     from ..training import META_FILE
 
-    metas = sorted(out.glob(f"train/*/*/seed-*/{META_FILE}"))
-    return float(sum(json.loads(path.read_text())["train_wall_s"] for path in metas))
-
-
-def training_busy_seconds(out: Path) -> float | None:
-    """The wall time in which at least one of the study's trainings ran, over every invocation
-    (the union of their ``[trained_from_unix_s, + train_wall_s]`` intervals, so the gap between
-    an interrupted invocation and the one resuming it is not counted); None where a training
-    does not record when it ran (SB3's learners, torch-ppo before the record)."""
-    from ..training import META_FILE
-
-    spans = []
-    for path in sorted(out.glob(f"train/*/*/seed-*/{META_FILE}")):
-        meta = json.loads(path.read_text())
-        if "trained_from_unix_s" not in meta:
-            return None
-        spans.append((meta["trained_from_unix_s"], meta["trained_from_unix_s"] + meta["train_wall_s"]))
+    metas = [json.loads(path.read_text()) for path in sorted(out.glob(f"train/*/*/seed-*/{META_FILE}"))]
+    times = {"training_worker_s": float(sum(meta["train_wall_s"] for meta in metas))}
+    if not metas or any("trained_from_unix_s" not in meta for meta in metas):
+        return times
     busy, reached = 0.0, -math.inf
-    for start, end in sorted(spans):
-        busy += max(0.0, end - max(start, reached))
-        reached = max(reached, end)
-    return busy if spans else None
+    for start, wall in sorted((meta["trained_from_unix_s"], meta["train_wall_s"]) for meta in metas):
+        busy += max(0.0, start + wall - max(start, reached))
+        reached = max(reached, start + wall)
+    return times | {"training_busy_s": busy}
 
 
 def read_curves(folder: Path) -> list[dict[str, np.ndarray]]:

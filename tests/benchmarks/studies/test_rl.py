@@ -372,7 +372,7 @@ def test_the_sweep_figures_count_the_steps_a_training_ran_whole_rollouts_of(tmp_
 def test_the_trainings_busy_time_is_the_union_of_when_each_ran(tmp_path):
     """Overlapping trainings count once, the gap between invocations not at all; a training that
     does not record when it ran leaves the figure out."""
-    from benchmarks.studies.rl import training_busy_seconds
+    from benchmarks.studies.rl import training_times
 
     def trained(name, seed, start, wall):
         folder = tmp_path / "train" / "paper-1-v1-average" / name / f"seed-{seed}"
@@ -380,11 +380,13 @@ def test_the_trainings_busy_time_is_the_union_of_when_each_ran(tmp_path):
         meta = {"train_wall_s": wall} | ({} if start is None else {"trained_from_unix_s": start})
         (folder / "ppo.json").write_text(json.dumps(meta))
 
-    assert training_busy_seconds(tmp_path) is None  # no training
+    assert training_times(tmp_path) == {"training_worker_s": 0.0}  # no training
     trained("torch-ppo-sinr", 0, 1000.0, 10.0)
     trained("torch-ppo-sinr", 1, 1005.0, 7.0)  # inside [1000, 1012]: adds 2
     trained("torch-ppo-information", 0, 1003.0, 2.0)  # inside the first
     trained("torch-ppo-information", 1, 5000.0, 5.0)  # a later invocation: the gap not counted
-    assert training_busy_seconds(tmp_path) == pytest.approx(12.0 + 5.0)
+    assert training_times(tmp_path) == pytest.approx(
+        {"training_worker_s": 24.0, "training_busy_s": 12.0 + 5.0}
+    )
     trained("ppo-sinr", 0, None, 3.0)
-    assert training_busy_seconds(tmp_path) is None
+    assert training_times(tmp_path) == pytest.approx({"training_worker_s": 27.0})
