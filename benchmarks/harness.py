@@ -941,7 +941,10 @@ class _Saving:
                 self.run_done(number)
 
     def run_done(self, number: int) -> None:
-        if not _tasks_to_run(self.folders[number], self.configs[number], tqdm.write):
+        # every shard of the run is one checked when the run was queued or one written here (the
+        # folder is locked): complete unless ``max_tasks`` left some out
+        config, folder = self.configs[number], self.folders[number]
+        if all(shard_path(folder, p, s).exists() for p, s in config.tasks()):
             self.complete[number] = True
             if self.on_complete is not None:
                 self.on_complete(number)

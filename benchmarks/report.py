@@ -380,14 +380,16 @@ def write_outputs(
     out: str | Path,
     figures: bool = True,
     pairs: str = "reference",
+    metrics: dict[str, TrialMetrics] | None = None,
 ) -> dict[str, Any]:
     """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``,
-    from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None). table.md's
+    from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None) and their
+    :func:`trial_metrics` (computed from them when ``metrics`` is None). table.md's
     paired differences are the first policy's against each other (``pairs`` ``"reference"``) or
     every pair (``"all"``); summary.json holds every pair."""
     out = Path(out)
     per_trial = per_trial if per_trial is not None else load_per_trial(out, config)
-    metrics = trial_metrics(config, per_trial)
+    metrics = metrics if metrics is not None else trial_metrics(config, per_trial)
     summary = summarize(config, per_trial, metrics)
     (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False))
     rows = curves(config, metrics)

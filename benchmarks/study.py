@@ -56,11 +56,14 @@ class Run:
 
 @dataclass
 class Finished:
-    """A run whose outputs are written: its configuration, folder and summary.json."""
+    """A run whose outputs are written: its configuration, folder and summary.json, and where
+    the study keeps them (``execute(..., keep_metrics=True)``) the policies'
+    :class:`~benchmarks.metrics.TrialMetrics` its report was computed from."""
 
     run: Run
     config: harness.RunConfig
     summary: dict[str, Any] = field(repr=False)
+    metrics: dict[str, Any] | None = field(default=None, repr=False, compare=False)
 
     @property
     def folder(self) -> Path:
@@ -100,10 +103,12 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
     ]
 
 
-def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]:
+def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False) -> dict[Hashable, Finished]:
     """Configure every run, then run them all (resumably) on one set of workers
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
-    soon as its last task is saved, while the workers go on with the next run's tasks."""
+    soon as its last task is saved, while the workers go on with the next run's tasks.
+    ``keep_metrics`` keeps each run's per-trial metrics in memory (:attr:`Finished.metrics`), for
+    a judge that reads them all: it need not read the shards again."""
     configs = configure(runs, settings)
     from . import report
 
@@ -116,10 +121,11 @@ def execute(runs: Sequence[Run], settings: Settings) -> dict[Hashable, Finished]
     def write(number: int) -> None:
         run, config = runs[number], configs[number]
         per_trial = harness.load_per_trial(run.folder, config)
+        metrics = report.trial_metrics(config, per_trial)
         summary = report.write_outputs(
-            config, per_trial, run.folder, figures=settings.figures, pairs=settings.pairs
+            config, per_trial, run.folder, figures=settings.figures, pairs=settings.pairs, metrics=metrics
         )
-        written[number] = Finished(run, config, summary)
+        written[number] = Finished(run, config, summary, metrics if keep_metrics else None)
 
     harness.run_many(
         [(config, run.folder) for run, config in zip(runs, configs, strict=True)],
@@ -144,6 +150,8 @@ class Study(Command):
     paper_study: ClassVar[bool] = False
     #: The fewest trials the study accepts (2 where it judges paired intervals).
     min_trials: ClassVar[int] = 1
+    #: Whether :meth:`judge` reads the runs' per-trial metrics (:attr:`Finished.metrics`).
+    keeps_metrics: ClassVar[bool] = False
 
     def __init__(self, args: argparse.Namespace) -> None:
         super().__init__(args)
@@ -174,7 +182,7 @@ class Study(Command):
     def main(self) -> int:
         start = time.perf_counter()
         load_before = machine()
-        finished = execute(self.runs(), self.settings)
+        finished = execute(self.runs(), self.settings, keep_metrics=self.keeps_metrics)
         text = self.report(finished, self.judge(finished))
         write_timing(self.settings.out, self.name, time.perf_counter() - start, load_before)
         print(text)

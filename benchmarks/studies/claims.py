@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import argparse
 import json
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -420,8 +420,9 @@ def paper_runs(scenarios: Sequence[str | Scenario], out: Path) -> list[Run]:
 def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings) -> list[dict[str, Any]]:
     """Run the paper studies of ``scenarios`` into ``out`` (resumably), judge the claims and
     write ``out/claims.md`` and ``out/claims.json``; the judged claims."""
-    folders = [f.folder for f in execute(paper_runs(scenarios, out), settings).values()]
-    results = judge_studies(folders, settings.seed)
+    finished = execute(paper_runs(scenarios, out), settings, keep_metrics=True).values()
+    folders = [f.folder for f in finished]
+    results = judge_studies(folders, settings.seed, {f.folder: f.metrics for f in finished})
     write_scorecard(results, out, describe_studies(folders), scorecard_title(folders))
     return results
 
@@ -434,6 +435,7 @@ class ClaimsStudy(Study):
         "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."
     )
     paper_study = True
+    keeps_metrics = True
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
@@ -465,8 +467,13 @@ class ClaimsStudy(Study):
         return paper_runs(names, self.settings.out)
 
     def judge(self, finished: dict[Hashable, Finished]) -> tuple[list[Path], list[dict[str, Any]]]:
-        folders = [Path(r) for r in self.args.runs] or [f.folder for f in finished.values()]
-        return folders, judge_studies(folders, self.settings.seed)
+        if self.args.runs:
+            folders = [Path(r) for r in self.args.runs]
+            return folders, judge_studies(folders, self.settings.seed)
+        folders = [f.folder for f in finished.values()]
+        return folders, judge_studies(
+            folders, self.settings.seed, {f.folder: f.metrics for f in finished.values()}
+        )
 
     def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
         folders, results = judged
@@ -474,12 +481,17 @@ class ClaimsStudy(Study):
         return (self.settings.out / "claims.md").read_text()
 
 
-def judge_studies(folders: Sequence[str | Path], seed: int = 0) -> list[dict[str, Any]]:
-    """Every claim judged on finished paper studies (one folder per scenario)."""
+def judge_studies(
+    folders: Sequence[str | Path],
+    seed: int = 0,
+    loaded: Mapping[Path, dict[str, TrialMetrics] | None] | None = None,
+) -> list[dict[str, Any]]:
+    """Every claim judged on finished paper studies (one folder per scenario); ``loaded`` holds
+    the per-trial metrics of those already in memory, by folder (the others are read)."""
     studies = {}
     for folder in map(Path, folders):
         check_paper_run(folder)
-        name, policies = load_study(folder)
+        name, policies = load_study(folder, (loaded or {}).get(folder))
         if name not in PAPER_KEYS:
             raise BenchError(
                 f"{folder} ran scenario {name!r}, not a paper scenario "
@@ -588,13 +600,15 @@ def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str =
     (out / "claims.md").write_text(scorecard_markdown(results, title, about))
 
 
-def load_study(run_dir: str | Path) -> tuple[str, Policies]:
-    """The paper scenario (``paper-N`` of any version) and the policies of a finished run."""
+def load_study(run_dir: str | Path, metrics: dict[str, TrialMetrics] | None = None) -> tuple[str, Policies]:
+    """The paper scenario (``paper-N`` of any version) and the policies of a finished run (their
+    per-trial ``metrics`` read from its shards unless given)."""
     run_dir = Path(run_dir)
     from mimo_radar_env.envs.versions import paper_key
 
     config = RunConfig(**json.loads((run_dir / "config.json").read_text()))
-    metrics = trial_metrics(config, load_per_trial(run_dir, config))
+    if metrics is None:
+        metrics = trial_metrics(config, load_per_trial(run_dir, config))
     return paper_key(config.scenario["name"]), Policies(metrics, config.scenario_object)
 
 

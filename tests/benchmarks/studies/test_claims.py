@@ -1,5 +1,7 @@
 """The scorecard judges claims right on synthetic studies whose answers are known."""
 
+import json
+
 import numpy as np
 import pytest
 
@@ -75,6 +77,28 @@ def test_claims_subcommand_runs_and_writes_the_scorecard(tmp_path, capsys):
     assert (tmp_path / "claims.json").exists() and (tmp_path / "paper-1-v1" / "summary.json").exists()
     with pytest.raises(SystemExit):
         main(["claims", "--scenarios", "4", "--out", str(tmp_path / "x"), "--quiet"])
+
+
+def test_the_claims_command_judges_the_metrics_its_report_read(tmp_path, monkeypatch):
+    """The shards are read once, for the report; the judge's scorecard is the one judged from the
+    folder afresh."""
+    from benchmarks import harness
+
+    reads = []
+    load = harness.load_per_trial
+
+    def counted(out, config):
+        reads.append(out)
+        return load(out, config)
+
+    monkeypatch.setattr(harness, "load_per_trial", counted)
+    monkeypatch.setattr(claims, "load_per_trial", counted)
+    argv = ["claims", "--scenarios", "1", "--trials", "4", "--steps", "30", "--workers", "1"]
+    assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
+    assert reads == [tmp_path / "paper-1-v1"]
+    judged = json.loads((tmp_path / "claims.json").read_text())
+    assert judged == json.loads(json.dumps(claims.judge_studies([tmp_path / "paper-1-v1"])))
+    assert len(reads) == 2  # judged afresh: read from the folder
 
 
 def test_compare_claims_puts_scorecards_side_by_side(tmp_path, capsys):
