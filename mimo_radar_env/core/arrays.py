@@ -64,6 +64,11 @@ class NumpyNamespace:
         return a >> np.uint64(bits)
 
     @staticmethod
+    def constant(values: tuple) -> Any:
+        """Integers (a nested tuple, e.g. indices) as a read-only ``int64`` array, made once."""
+        return _numpy_constant(values)
+
+    @staticmethod
     def word_index(a: Any) -> Any:
         """Element indices as 64-bit words."""
         return np.asarray(a).astype(np.uint64)
@@ -197,6 +202,7 @@ class TorchNamespace:
         self.device = torch.device(device)
         self.linalg = _TorchLinalg(torch)
         self._words: dict[int, Any] = {}
+        self._constants: dict[tuple, Any] = {}
         self.pi, self.nan, self.inf = math.pi, math.nan, math.inf
         self.newaxis = None
         self.float64, self.int64, self.int8, self.bool_ = torch.float64, torch.int64, torch.int8, torch.bool
@@ -391,6 +397,16 @@ class TorchNamespace:
         value &= _MASK64
         return value - (1 << 64) if value >= 1 << 63 else value
 
+    def constant(self, values: tuple) -> Any:
+        """Integers (a nested tuple, e.g. indices) as an ``int64`` tensor on the device, made once:
+        nothing is copied from the host when a step indexes with it (graphs)."""
+        cached = self._constants.get(values)
+        if cached is None:
+            cached = self._constants[values] = self.torch.tensor(
+                values, dtype=self.torch.int64, device=self.device
+            )
+        return cached
+
     def word_array(self, value: int) -> Any:
         """A 64-bit word as a 0-d ``int64`` tensor on the device (made once per value)."""
         cached = self._words.get(value)
@@ -441,6 +457,13 @@ TORCH_DTYPES = {
     np.dtype(np.int8): lambda torch: torch.int8,
     np.dtype(np.bool_): lambda torch: torch.bool,
 }
+
+
+@functools.lru_cache(maxsize=64)
+def _numpy_constant(values: tuple) -> np.ndarray:
+    array = np.array(values, dtype=np.int64)
+    array.flags.writeable = False
+    return array
 
 
 @functools.lru_cache(maxsize=8)

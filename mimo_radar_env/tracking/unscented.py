@@ -83,42 +83,61 @@ def _certainly_conditioned(matrix: NDArray[np.float64], max_condition: float) ->
     ``trace^4 / det``, an upper bound of the condition number, is within it. Closed forms, no
     factorisation; False only says "look closer"."""
     xp = namespace(matrix)
-    a = _entries(matrix)
-    minor2 = a[0][0] * a[1][1] - a[0][1] * a[1][0]
-    cof = [
-        a[1][1] * a[2][2] - a[1][2] * a[2][1],
-        a[1][0] * a[2][2] - a[1][2] * a[2][0],
-        a[1][0] * a[2][1] - a[1][1] * a[2][0],
-    ]
-    minor3 = a[0][0] * cof[0] - a[0][1] * cof[1] + a[0][2] * cof[2]
+    entries = matrix.reshape(*matrix.shape[:-2], 16)
     with xp.errstate(all="ignore"):
-        det = _det4(a)
+        minors = _minors(entries)
+        cofactors = entries[..., 0:3] * minors[..., 12:15]  # a00 cof0, a01 cof1, a02 cof2
+        minor3 = cofactors[..., 0] - cofactors[..., 1] + cofactors[..., 2]
+        det = _det4(minors)
         trace = xp.trace(matrix, axis1=-2, axis2=-1)
-        return (a[0][0] > 0) & (minor2 > 0) & (minor3 > 0) & (det > 0) & (trace**4 <= max_condition * det)
+        return (
+            (entries[..., 0] > 0)
+            & (minors[..., 0] > 0)  # the leading 2 x 2 minor
+            & (minor3 > 0)
+            & (det > 0)
+            & (trace**4 <= max_condition * det)
+        )
 
 
-def _entries(matrix: NDArray[np.float64]) -> list[list[NDArray[np.float64]]]:
-    """The entries of (..., n, n) matrices as views, ``a[i][j]`` being ``matrix[..., i, j]``, taken
-    in a few operations (on torch each index is an operation dispatched)."""
-    return [list(row) for row in namespace(matrix).moveaxis(matrix, (-2, -1), (0, 1))]
+def _minor_entries(rows: tuple[int, int], pairs: tuple[tuple[int, int], ...]) -> list[list[int]]:
+    """The flat entries ``[A, B, C, D]`` of the 2 x 2 minors ``a[r][i] a[s][j] - a[s][i] a[r][j]``
+    of ``rows`` (r, s) and column ``pairs`` (i, j) of a 4 x 4 matrix."""
+    r, s = rows
+    return [[4 * first + column[k] for column in pairs] for first, k in ((r, 0), (s, 1), (s, 0), (r, 1))]
 
 
-def _det4(a: list[list[NDArray[np.float64]]]) -> NDArray[np.float64]:
-    """Determinants of (..., 4, 4) matrices from their entries ``a[i][j]`` (:func:`_entries`), by
-    the Laplace expansion in 2 x 2 minors."""
-    s0 = a[0][0] * a[1][1] - a[1][0] * a[0][1]
-    s1 = a[0][0] * a[1][2] - a[1][0] * a[0][2]
-    s2 = a[0][0] * a[1][3] - a[1][0] * a[0][3]
-    s3 = a[0][1] * a[1][2] - a[1][1] * a[0][2]
-    s4 = a[0][1] * a[1][3] - a[1][1] * a[0][3]
-    s5 = a[0][2] * a[1][3] - a[1][2] * a[0][3]
-    c5 = a[2][2] * a[3][3] - a[3][2] * a[2][3]
-    c4 = a[2][1] * a[3][3] - a[3][1] * a[2][3]
-    c3 = a[2][1] * a[3][2] - a[3][1] * a[2][2]
-    c2 = a[2][0] * a[3][3] - a[3][0] * a[2][3]
-    c1 = a[2][0] * a[3][2] - a[3][0] * a[2][2]
-    c0 = a[2][0] * a[3][1] - a[3][0] * a[2][1]
-    return s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
+_PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+#: The entries of the 15 minors :func:`_minors` forms: ``s0 .. s5`` of rows 0-1 and ``c5 .. c0``
+#: of rows 2-3 (the Laplace expansion's, :func:`_det4`), then the cofactors of ``a00``, ``a01``
+#: and ``a02`` in the leading 3 x 3 block (rows 1-2, columns (1, 2), (0, 2), (0, 1)).
+_MINOR_ENTRIES = tuple(
+    tuple(a + b + c)
+    for a, b, c in zip(
+        _minor_entries((0, 1), _PAIRS),
+        _minor_entries((2, 3), _PAIRS[::-1]),
+        _minor_entries((1, 2), ((1, 2), (0, 2), (0, 1))),
+        strict=True,
+    )
+)
+
+
+def _minors(entries: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The 15 2 x 2 minors of :data:`_MINOR_ENTRIES` of 4 x 4 matrices given by their 16 entries
+    (..., 16), in one gather: each ``A B - C D`` as the scalar expansion writes it, bit for bit."""
+    xp = namespace(entries)
+    gathered = entries[..., xp.constant(_MINOR_ENTRIES)]  # (..., 4, 15)
+    return gathered[..., 0, :] * gathered[..., 1, :] - gathered[..., 2, :] * gathered[..., 3, :]
+
+
+def _det4(minors: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Determinants of 4 x 4 matrices from their :func:`_minors`, by the Laplace expansion in
+    2 x 2 minors, ``s0 c5 - s1 c4 + s2 c3 + s3 c2 - s4 c1 + s5 c0`` summed left to right."""
+    terms = minors[..., 0:6] * minors[..., 6:12]
+    det = terms[..., 0] - terms[..., 1]
+    det = det + terms[..., 2]
+    det = det + terms[..., 3]
+    det = det - terms[..., 4]
+    return det + terms[..., 5]
 
 
 def repair_covariance(

@@ -73,3 +73,31 @@ def test_ukf_predict_and_update_equal_filterpy(turn_deg, num_channels):
         np.testing.assert_allclose(result.mean, ukf.x, rtol=RTOL)
         np.testing.assert_allclose(result.covariance, ukf.P, rtol=1e-7, atol=1e-9 * np.abs(P_pred).max())
         np.testing.assert_allclose(result.log_likelihood, ukf.log_likelihood, rtol=RTOL)
+
+
+def test_the_covariance_guards_closed_forms_are_the_scalar_expansion_bit_for_bit():
+    """The guard's determinant and conditioning test, formed in one gather of 2 x 2 minors, give
+    the scalar Laplace expansion's bits (the compiled kernels write it out entry by entry), on
+    numpy and on torch, and numpy's determinant to round-off."""
+    pytest.importorskip("numba")
+    from mimo_radar_env.tracking import _bound_kernels as scalar
+    from mimo_radar_env.tracking import unscented
+
+    rng = np.random.default_rng(1)
+    root = rng.normal(size=(400, 4, 4))
+    matrices = root @ np.swapaxes(root, -1, -2) + rng.random((400, 1, 1)) * np.eye(4)
+    matrices[::7] *= -1  # negative definite: refused
+    matrices[3] = np.diag([1.0, 1e-15, 1.0, 1.0])  # condition 1e15: refused
+    det = unscented._det4(unscented._minors(matrices.reshape(-1, 16)))
+    checked = unscented._certainly_conditioned(matrices, 1e12)
+    expected_det = np.array([scalar.determinant.py_func(m) for m in matrices])
+    expected = [
+        scalar.certainly_conditioned.py_func(m, d, 1e12) for m, d in zip(matrices, expected_det, strict=True)
+    ]
+    np.testing.assert_array_equal(det, expected_det)
+    assert checked.tolist() == expected and 0 < checked.sum() < len(matrices) - 50
+    np.testing.assert_allclose(det, np.linalg.det(matrices), rtol=1e-10)
+    torch = pytest.importorskip("torch")
+    on_torch = torch.as_tensor(matrices)
+    np.testing.assert_array_equal(unscented._det4(unscented._minors(on_torch.reshape(-1, 16))).numpy(), det)
+    assert unscented._certainly_conditioned(on_torch, 1e12).tolist() == expected
