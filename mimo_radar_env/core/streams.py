@@ -89,8 +89,9 @@ class TrialStreams:
         """Standard normal draws (Box-Muller on two hashed uniforms per element)."""
         xp = self.xp
         doubled = 2 * xp.astype(index, np.int64)
-        u1 = to_unit(self._bits(stream, step, doubled))
-        u2 = to_unit(self._bits(stream, step, doubled + 1))
+        # elements 2i and 2i + 1 of the stream hashed at once (the same bits as one by one)
+        units = to_unit(self._bits(stream, step, xp.stack([doubled, doubled + 1], axis=-1)))
+        u1, u2 = units[..., 0], units[..., 1]
         return self._rounded(xp.sqrt(-2.0 * xp.log1p(-u1)) * xp.cos(2.0 * np.pi * u2))
 
 
