@@ -429,13 +429,13 @@ def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings
 
 class ClaimsStudy(Study):
     name = "claims"
+    keeps_metrics = True  # judge() reads the runs' per-trial metrics
     min_trials = 2
     description = (
         "Evaluate the paper's claims (docs/results-claims.md) on finished 'paper' runs, or run the paper "
         "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."
     )
     paper_study = True
-    keeps_metrics = True
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
