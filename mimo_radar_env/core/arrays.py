@@ -37,7 +37,9 @@ class NumpyNamespace:
     precision = "float64"
 
     def __getattr__(self, name: str) -> Any:
-        return getattr(np, name)
+        value = getattr(np, name)
+        setattr(self, name, value)  # looked up directly from then on: a step asks for hundreds
+        return value
 
     @staticmethod
     def copy(a: Any) -> Any:
@@ -504,6 +506,6 @@ def namespace(*arrays: Any) -> NumpyNamespace | TorchNamespace:
     """The namespace of the arrays: torch's (on the first tensor's device) if any is a torch
     tensor, numpy's otherwise."""
     for a in arrays:
-        if type(a).__module__.startswith("torch"):
+        if type(a) is not np.ndarray and type(a).__module__.startswith("torch"):
             return _torch_namespace(str(a.device))
     return NUMPY
