@@ -38,7 +38,9 @@ class NumpyNamespace:
 
     def __getattr__(self, name: str) -> Any:
         value = getattr(np, name)
-        setattr(self, name, value)  # looked up directly from then on: a step asks for hundreds
+        # found on the class from then on (a step asks for hundreds), never in an instance's
+        # state (a namespace pickles and copies as before)
+        setattr(NumpyNamespace, name, staticmethod(value))
         return value
 
     @staticmethod

@@ -19,6 +19,21 @@ def test_the_namespace_follows_the_arrays():
     assert namespace(np.zeros(2), torch.zeros(2)) is CPU
 
 
+def test_the_numpy_namespace_hands_out_numpys_own_objects_and_pickles():
+    """Its numpy names are numpy's objects (found on the class after the first lookup), and an
+    instance holds none of them: it pickles and copies (a module would not)."""
+    import copy
+    import pickle
+
+    for _ in range(2):  # looked up, then found on the class
+        assert NUMPY.linalg is np.linalg and NUMPY.einsum is np.einsum
+    assert NUMPY.sqrt is np.sqrt and NUMPY.pi == np.pi and vars(NUMPY) == {}
+    assert pickle.loads(pickle.dumps(NUMPY)).linalg is np.linalg and copy.deepcopy(NUMPY).sqrt is np.sqrt
+    with pytest.raises(AttributeError, match="no_such_function"):
+        _ = NUMPY.no_such_function
+    assert namespace(1.0, [2.0], np.float64(3.0)) is NUMPY
+
+
 def test_the_torch_namespace_computes_what_numpy_does():
     rng = np.random.default_rng(0)
     a, b = rng.normal(size=(3, 4, 5)), rng.normal(size=(3, 4, 5))
