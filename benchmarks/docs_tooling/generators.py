@@ -1601,8 +1601,8 @@ def strong_scaling(docs: Path) -> str:
             share = {k: f"{100 * parts[k] / total:.0f} %" for k in parts}
             tasks = 100 * (parts["task_steps_s"] + parts["task_fixed_s"]) / total
             lines.append(
-                f"| {machine} | {r['workers']} | {r['wall_s']:.1f} | "
-                f"{'—' if alone else format(r['efficiency'], '.2f')} | "
+                f"| {machine} | {r['workers']} | {_with_interval(r, 'wall_s', '.1f')} | "
+                f"{'—' if alone else _with_interval(r, 'efficiency', '.2f')} | "
                 f"{r['shard_trials']} | {r['us_per_trial_step_in_tasks']:.1f} | {tasks:.0f} % | "
                 f"{share['tail_idle_s']} | {share['outside_tasks_s']} |"
             )
@@ -1624,6 +1624,13 @@ def strong_scaling(docs: Path) -> str:
     return "\n".join(lines)
 
 
+def _with_interval(row: dict[str, Any], key: str, fmt: str) -> str:
+    """A measured row's mean and, where it was measured more than once, its 95 % t interval."""
+    interval = row.get(f"{key}_ci")
+    value = format(row[key], fmt)
+    return value if interval is None else f"{value} [{format(interval[0], fmt)}, {format(interval[1], fmt)}]"
+
+
 def _shard_sizes(row: dict[str, Any]) -> str:
     """A model row's shard sizes: one number where every policy's are the same."""
     sizes = row.get("shard_sizes") or {}
@@ -1642,8 +1649,9 @@ def scaling_value(docs: Path, key: str) -> str:
     and ``MACHINE.after.W`` (wall seconds before the first task and after the last),
     ``MACHINE.probe-ratio.W`` (the tasks probed on one core at W's shard size over those at the
     shard size of the count the model starts from), ``MACHINE.fixed.W`` (the seconds of all the
-    tasks' fixed parts: agent, env, first step) and ``MACHINE.tasks.W`` (how many tasks), MACHINE a
-    key of :data:`SCALING_MACHINES`;
+    tasks' fixed parts: agent, env, first step), ``MACHINE.tasks.W`` (how many tasks) and
+    ``MACHINE.runs.W`` (how many runs the figures are the means of), MACHINE a key of
+    :data:`SCALING_MACHINES`;
     ``study`` the study's command (as code)."""
     if key == "study":
         return f"`{' '.join(read_json(docs, SCALING_FILES['2 cores'])['study'])}`"
@@ -1676,6 +1684,8 @@ def scaling_value(docs: Path, key: str) -> str:
         return f"{r['breakdown']['task_fixed_s']:.2f}"
     if kind == "tasks":
         return str(r["tasks"])
+    if kind == "runs":
+        return str(len(r.get("wall_s_each", [r["wall_s"]])))
     if kind == "outside-per-worker":
         return f"{r['breakdown']['outside_tasks_s'] / w:.1f}"
     if kind in ("before", "after"):  # wall seconds before the first task, after the last
@@ -1738,7 +1748,7 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
     (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval
     (the row named ``difference``), what the interval shows, and whether every run wrote the same
     numbers."""
-    from scipy import stats
+    from ..speed import t_interval
 
     walls: dict[str, list[float]] = {}
     for run in record["runs"]:
@@ -1748,7 +1758,7 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
         for name, values in walls.items()
     ]
     differences = np.subtract(walls[other], walls[base])
-    low, high = stats.t.interval(0.95, len(differences) - 1, differences.mean(), stats.sem(differences))
+    low, high = t_interval(differences)
     rows.append(
         [
             difference,

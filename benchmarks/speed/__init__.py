@@ -3,6 +3,7 @@ measured in the same run. Not installed with the package (they need a source che
 ``python -m benchmarks.speed.tracker_speed``, ``mimo-radar-bench perf`` from a checkout."""
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -12,3 +13,17 @@ def write_json(path: Path | None, result: Any) -> None:
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(result, indent=2) + "\n")
+
+
+def t_interval(values: Sequence[float]) -> tuple[float, float]:
+    """The 95 % t interval of the mean of repeated timings (two or more; a spread of 0 gives the
+    value itself)."""
+    import numpy as np
+    from scipy import stats
+
+    values = np.asarray(values, dtype=float)
+    spread = stats.sem(values)
+    if spread == 0:
+        return float(values.mean()), float(values.mean())
+    low, high = stats.t.interval(0.95, len(values) - 1, values.mean(), spread)
+    return float(low), float(high)

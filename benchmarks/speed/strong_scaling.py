@@ -5,7 +5,10 @@ and a model of the measured parts that predicts other worker counts.
         --json docs/results/perf/strong-scaling.json
 
 Each measurement runs ``mimo-radar-bench claims ... --workers W`` as a user does (a fresh
-process, the default shards for W workers: sized by cost) into a fresh folder, and reads the shards it wrote:
+process, the default shards for W workers: sized by cost) into a fresh folder, and reads the shards it wrote
+(``--repeats N`` measures every count N times, the counts' order reversed every other repeat,
+and gives each figure as the mean of the repeats, the wall time and the efficiency with a 95 %
+t interval, the efficiency paired by repeat):
 each task's compute seconds (``wall_s``), its trials, and when its file was written. The
 ``W x wall`` worker-seconds of a run split into
 
@@ -45,7 +48,7 @@ import numpy as np
 
 from ..harness import makespan
 from ..study import machine
-from . import write_json
+from . import t_interval, write_json
 
 #: The study measured by default: the v1 claims study's scenario 1, whole episodes.
 STUDY = ("claims", "--scenarios", "1", "--trials", "500")
@@ -186,13 +189,15 @@ def measure(
     predictions: list[int],
     model_from: int | None = None,
     measured_only: Callable[[dict[str, Any]], None] | None = None,
+    repeats: int = 1,
 ) -> dict[str, Any]:
-    """The measured runs at ``counts`` workers and the model's predictions at ``predictions``, from
-    the run at ``model_from`` workers (default the most measured): its time outside the tasks.
-    ``measured_only`` is given the result without the model as soon as the runs are measured (the
-    model's probes take minutes: a run stopped then keeps its measurements)."""
+    """The measured runs at ``counts`` workers (``repeats`` times each, alternately) and the
+    model's predictions at ``predictions``, from the runs at ``model_from`` workers (default the
+    most measured): their time outside the tasks. ``measured_only`` is given the result without
+    the model as soon as the runs are measured (the model's probes take minutes: a run stopped
+    then keeps its measurements)."""
     with tempfile.TemporaryDirectory(prefix="strong-scaling-") as scratch:
-        return _measure(study, counts, predictions, model_from, Path(scratch), measured_only)
+        return _measure(study, counts, predictions, model_from, Path(scratch), measured_only, repeats)
 
 
 def _measure(
@@ -202,57 +207,85 @@ def _measure(
     model_from: int | None,
     scratch: Path,
     measured_only: Callable[[dict[str, Any]], None] | None = None,
+    repeats: int = 1,
 ) -> dict[str, Any]:
     trials = int(study[study.index("--trials") + 1])
-    measured, folders = [], {}
-    for workers in counts:
-        out = scratch / f"w{workers}"
-        started = time.time()
-        wall = run_study(study, workers, out)
-        tasks = read_tasks(out, started)
-        measured.append({"workers": workers, "wall_s": wall, "tasks": tasks})
-        folders[workers] = out
-        print(f"  {workers:>3} workers: {wall:7.1f} s, {len(tasks)} tasks", flush=True)
+    runs: dict[int, list[dict[str, Any]]] = {w: [] for w in counts}
+    folders = {}
+    for repeat in range(repeats):
+        for workers in counts if repeat % 2 == 0 else counts[::-1]:
+            out = scratch / f"w{workers}-{repeat}"
+            started = time.time()
+            wall = run_study(study, workers, out)
+            tasks = read_tasks(out, started)
+            runs[workers].append({"wall_s": wall, "tasks": tasks})
+            folders[workers] = out
+            print(f"  {workers:>3} workers: {wall:7.1f} s, {len(tasks)} tasks", flush=True)
     reference = folders[counts[0]]
     probe(reference, 1, steps=1)  # warm-up: the compiled kernels load in this process
     fixed = {p: s for run in probe(reference, 1, steps=1).values() for p, s in run.items()}
     probes: dict[tuple, dict[str, dict[str, float]]] = {}
-    base = measured[0]
-    rows = []
-    for m in measured:
-        tasks, workers = m["tasks"], m["workers"]
-        per_step = sum(t.seconds - fixed[t.policy] for t in tasks) / sum(t.trials * t.steps for t in tasks)
-        rows.append({
-            "workers": workers, "schedule": "by cost", "wall_s": m["wall_s"], "tasks": len(tasks),
-            "shard_trials": max(t.trials for t in tasks),
-            "speedup": base["wall_s"] / m["wall_s"] * base["workers"],
-            "efficiency": base["wall_s"] * base["workers"] / (m["wall_s"] * workers),
-            "us_per_trial_step_in_tasks": 1e6 * per_step,
-            "breakdown": breakdown(m["wall_s"], workers, tasks, fixed),
-            # wall seconds before the first task started and after the last one ended: the
-            # command's serial parts (imports, the run's checks and estimate, the workers' start;
-            # the report)
-            "before_first_task_s": min(t.finished - t.seconds for t in tasks),
-            "after_last_task_s": m["wall_s"] - max(t.finished for t in tasks),
-        })  # fmt: skip
+    base = counts[0]
+    rows = [
+        _row(workers, runs[workers], [base * r["wall_s"] for r in runs[base]], fixed) for workers in counts
+    ]
     result = {
         "study": ["mimo-radar-bench", *study],
         "machine": machine(),
+        "repeats": repeats,
         "measured": rows,
         "fixed_per_task_s": fixed,
     }
     if measured_only is not None:
         measured_only({**result, "model": []})
-    source = next(m for m in measured if m["workers"] == (model_from or max(counts)))
-    order = queue_order(folders[source["workers"]])
-    by_task = {(t.run, t.policy, t.shard): t.seconds for t in source["tasks"]}
-    overhead = source["wall_s"] - makespan([by_task[r, p, s] for r, p, s, _ in order], source["workers"])
+    source = model_from or max(counts)
+    order = queue_order(folders[source])
+    overheads = []
+    for run in runs[source]:
+        by_task = {(t.run, t.policy, t.shard): t.seconds for t in run["tasks"]}
+        overheads.append(run["wall_s"] - makespan([by_task[r, p, s] for r, p, s, _ in order], source))
+    overhead = float(np.mean(overheads))
     model = [
         row
-        for w in sorted({source["workers"], *predictions})
-        for row in predict(folders[source["workers"]], w, trials, overhead, probes)
+        for w in sorted({source, *predictions})
+        for row in predict(folders[source], w, trials, overhead, probes)
     ]
-    return result | {"model_from_workers": source["workers"], "outside_tasks_s": overhead, "model": model}
+    return result | {"model_from_workers": source, "outside_tasks_s": overhead, "model": model}
+
+
+def _row(
+    workers: int, runs: list[dict[str, Any]], base_seconds: list[float], fixed: dict[str, float]
+) -> dict[str, Any]:
+    """One worker count's measured row: each figure the mean over its runs, and with two runs or
+    more each run's wall time and 95 % t intervals of the mean wall time and of the efficiency
+    against the base count's runs (``base_seconds``: workers x wall), paired by repeat."""
+    walls = np.array([r["wall_s"] for r in runs])
+    efficiencies = np.array(base_seconds) / (workers * walls)
+    tasks = [t for r in runs for t in r["tasks"]]
+    per_step = sum(t.seconds - fixed[t.policy] for t in tasks) / sum(t.trials * t.steps for t in tasks)
+    parts = [breakdown(r["wall_s"], workers, r["tasks"], fixed) for r in runs]
+    before = [min(t.finished - t.seconds for t in r["tasks"]) for r in runs]
+    after = [r["wall_s"] - max(t.finished for t in r["tasks"]) for r in runs]
+    row = {
+        "workers": workers, "schedule": "by cost", "wall_s": float(walls.mean()),
+        "tasks": len(runs[0]["tasks"]), "shard_trials": max(t.trials for t in tasks),
+        "speedup": float(np.mean(np.array(base_seconds) / walls)),
+        "efficiency": float(efficiencies.mean()),
+        "us_per_trial_step_in_tasks": 1e6 * per_step,
+        "breakdown": {k: float(np.mean([p[k] for p in parts])) for k in parts[0]},
+        # wall seconds before the first task started and after the last one ended: the
+        # command's serial parts (imports, the run's checks and estimate, the workers' start;
+        # the report)
+        "before_first_task_s": float(np.mean(before)), "after_last_task_s": float(np.mean(after)),
+    }  # fmt: skip
+    if len(runs) > 1:
+        row |= {
+            "wall_s_each": walls.tolist(),
+            "wall_s_ci": list(t_interval(walls)),
+            "efficiency_ci": list(t_interval(efficiencies)),
+            "after_last_task_s_each": after,
+        }
+    return row
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -268,8 +301,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
     )
+    parser.add_argument(
+        "--repeats", type=int, default=1, help="runs of each worker count, alternately (default 1)"
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
+    if args.repeats < 1:
+        parser.error(f"--repeats must be 1 or more, got {args.repeats}")
     counts = [int(w) for w in args.workers.split(",")]
     predictions = [int(w) for w in args.predict.split(",") if w]
     study = tuple(args.study.split())
@@ -279,7 +317,12 @@ def main(argv: list[str] | None = None) -> None:
     if args.model_from is not None and args.model_from not in counts:
         parser.error(f"--model-from must be one of the measured counts {counts}")
     result = measure(
-        study, counts, predictions, args.model_from, lambda partial: write_json(args.json, partial)
+        study,
+        counts,
+        predictions,
+        args.model_from,
+        lambda partial: write_json(args.json, partial),
+        args.repeats,
     )
     for row in result["measured"]:
         wall, efficiency = row["wall_s"], row["efficiency"]

@@ -51,3 +51,23 @@ def test_a_tiny_study_is_measured_and_modelled(tmp_path):
     for row in four.values():
         assert row["makespan_s"] >= row["task_seconds"] / 4
         assert row["wall_s"] == pytest.approx(result["outside_tasks_s"] + row["makespan_s"])
+
+
+def test_repeated_runs_give_means_and_intervals_paired_by_repeat():
+    """Two runs of a count: each figure is the mean of the runs' own; the efficiency is each
+    repeat's against the base count's run of the same repeat, averaged, with its t interval."""
+
+    def run(wall, last):  # one task of 3 s ending at ``last``
+        return {"wall_s": wall, "tasks": [Task("r", "a", 0, 10, 5, 3.0, last)]}
+
+    base_seconds = [1 * 10.0, 1 * 12.0]  # the 1-worker runs of repeats 0 and 1
+    row = strong_scaling._row(2, [run(6.0, 5.5), run(8.0, 7.0)], base_seconds, {"a": 0.5})
+    assert row["wall_s"] == 7.0 and row["wall_s_each"] == [6.0, 8.0]
+    paired = [10.0 / (2 * 6.0), 12.0 / (2 * 8.0)]
+    assert row["efficiency"] == pytest.approx(sum(paired) / 2)
+    assert row["efficiency_ci"][0] < row["efficiency"] < row["efficiency_ci"][1]
+    assert row["wall_s_ci"][0] < 7.0 < row["wall_s_ci"][1]
+    assert row["after_last_task_s_each"] == [0.5, 1.0] and row["after_last_task_s"] == 0.75
+    assert row["before_first_task_s"] == pytest.approx((2.5 + 4.0) / 2)
+    once = strong_scaling._row(2, [run(6.0, 5.5)], base_seconds[:1], {"a": 0.5})
+    assert once["efficiency"] == 10.0 / 12.0 and "wall_s_ci" not in once  # one run: no interval
