@@ -1628,7 +1628,9 @@ def _with_interval(row: dict[str, Any], key: str, fmt: str) -> str:
     """A measured row's mean and, where it was measured more than once, its 95 % t interval."""
     interval = row.get(f"{key}_ci")
     value = format(row[key], fmt)
-    return value if interval is None else f"{value} [{format(interval[0], fmt)}, {format(interval[1], fmt)}]"
+    if interval is None or interval[0] == interval[1]:  # one run, or the base count's own efficiency
+        return value
+    return f"{value} [{format(interval[0], fmt)}, {format(interval[1], fmt)}]"
 
 
 def _shard_sizes(row: dict[str, Any]) -> str:
