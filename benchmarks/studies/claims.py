@@ -467,13 +467,9 @@ class ClaimsStudy(Study):
         return paper_runs(names, self.settings.out)
 
     def judge(self, finished: dict[Hashable, Finished]) -> tuple[list[Path], list[dict[str, Any]]]:
-        if self.args.runs:
-            folders = [Path(r) for r in self.args.runs]
-            return folders, judge_studies(folders, self.settings.seed)
-        folders = [f.folder for f in finished.values()]
-        return folders, judge_studies(
-            folders, self.settings.seed, {f.folder: f.metrics for f in finished.values()}
-        )
+        folders = [Path(r) for r in self.args.runs] or [f.folder for f in finished.values()]
+        loaded = {f.folder: f.metrics for f in finished.values()}  # none where folders were given
+        return folders, judge_studies(folders, self.settings.seed, loaded)
 
     def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
         folders, results = judged
