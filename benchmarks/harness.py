@@ -53,6 +53,7 @@ from mimo_radar_env.tracking.selection import compiled_kernels as selection_kern
 from . import backends, machine_rate
 from .errors import BenchError, HarnessError
 from .shards import (
+    DATA_FIELDS,
     TRIAL_FIELDS,
     TRUTH_FIELD,
     ShardRecorder,
@@ -782,15 +783,23 @@ def output_lock(out: Path) -> Iterator[None]:
         handle.close()  # releases the lock
 
 
-def _tasks_to_run(out: Path, config: RunConfig, warn: Callable[[str], None]) -> list[tuple[str, int]]:
-    """Tasks without a valid shard; damaged or foreign shards are named and set aside."""
+def _tasks_to_run(
+    out: Path,
+    config: RunConfig,
+    warn: Callable[[str], None],
+    keep: Callable[[str, int, dict], None] | None = None,
+) -> list[tuple[str, int]]:
+    """Tasks without a valid shard; damaged or foreign shards are named and set aside. Each valid
+    shard's data is handed to ``keep(policy, shard, data)``."""
     payload = config.to_json()
     todo = []
     for policy, shard in config.tasks():
         path = shard_path(out, policy, shard)
         if path.exists():
             try:
-                read_shard(path, config.shard_trials(policy, shard), config_hash(payload, policy))
+                data = read_shard(path, config.shard_trials(policy, shard), config_hash(payload, policy))
+                if keep is not None:
+                    keep(policy, shard, data)
                 continue
             except ValueError as exc:
                 moved = set_aside(path)
@@ -838,18 +847,20 @@ def run(
     the finished tasks are saved. ``workers``, ``threads``, ``device`` and ``device_mode`` as in
     :func:`run_many`.
     """
-    complete = run_many(
+    joined: list[dict[str, dict[str, NDArray]]] = []
+    run_many(
         [(config, out)],
         workers,
         backend,
         address,
         progress,
         max_tasks,
+        on_complete=lambda _, per_trial: joined.append(per_trial),
         device=device,
         threads=threads,
         device_mode=device_mode,
     )
-    return load_per_trial(Path(out), config) if complete[0] else None
+    return joined[0] if joined else None
 
 
 def run_many(
@@ -859,7 +870,7 @@ def run_many(
     address: str | None = None,
     progress: bool = True,
     max_tasks: int | None = None,
-    on_complete: Callable[[int], None] | None = None,
+    on_complete: Callable[[int, dict[str, dict[str, NDArray]]], None] | None = None,
     device: Any = None,
     threads: int | None = None,
     device_mode: str = "eager",
@@ -869,9 +880,11 @@ def run_many(
 
     Each run's tasks not yet in its folder are started the longest first
     (:func:`task_seconds`), run after run, without waiting for one run to end before the
-    next starts, so that no worker idles at a run's end. ``on_complete(i)`` is called in this
-    process as soon as run ``i`` has all its shards (at once for a run already complete), while
-    the workers go on with the next run's tasks: the place to write its outputs. ``max_tasks``
+    next starts, so that no worker idles at a run's end. ``on_complete(i, per_trial)`` is called
+    in this process as soon as run ``i`` has all its shards (at once for a run already complete),
+    with its shards joined (:func:`load_per_trial`), while the workers go on with the next run's
+    tasks: the place to write its outputs. The shards this call checked or wrote are joined from
+    memory (up to :func:`held_bytes` of them), not read again. ``max_tasks``
     and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
     process on torch on that device (``workers=1``, the local backend), the step in form
     ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`: ``"eager"``, ``"graph"``,
@@ -891,9 +904,10 @@ def run_many(
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
             prepare_output(out, config)
-        todo, estimated = _queue(configs, folders, max_tasks)
+        held = _Held(held_bytes() if on_complete is not None else 0)
+        todo, estimated = _queue(configs, folders, max_tasks, held)
         started = time.perf_counter()
-        saving = _Saving(configs, folders, todo, on_complete)
+        saving = _Saving(configs, folders, todo, on_complete, held)
         if max_tasks is None:
             _say_resumed(configs, folders, saving.left)
         threads = _threads_for(configs, todo, workers, backend, threads)
@@ -914,18 +928,55 @@ def run_many(
         return saving.complete
 
 
+#: At most this many bytes of shard data, and at most :data:`HELD_SHARE` of this machine's memory,
+#: are held between a shard's check or write and its run's ``on_complete`` (the others are read
+#: again from their files).
+HELD_BYTES = 1 << 30
+HELD_SHARE = 1 / 16
+
+
+def held_bytes() -> int:
+    """How many bytes of shard data :func:`run_many` holds for the runs' ``on_complete``."""
+    memory = machine_memory()
+    return HELD_BYTES if memory is None else min(HELD_BYTES, int(HELD_SHARE * memory))
+
+
+class _Held:
+    """The shard data a :func:`run_many` call has checked or written, by run, kept up to
+    ``budget`` bytes in all for the runs' ``on_complete``."""
+
+    def __init__(self, budget: int) -> None:
+        self.shards: dict[int, dict[tuple[str, int], dict[str, NDArray]]] = {}
+        self.nbytes, self.budget = 0, budget
+
+    def add(self, number: int, policy: str, shard: int, data: Mapping[str, Any]) -> None:
+        arrays = {key: np.asarray(data[key]) for key in DATA_FIELDS}
+        size = sum(a.nbytes for a in arrays.values())
+        if self.nbytes + size <= self.budget:
+            self.shards.setdefault(number, {})[policy, shard] = arrays
+            self.nbytes += size
+
+    def pop(self, number: int) -> dict[tuple[str, int], dict[str, NDArray]]:
+        shards = self.shards.pop(number, {})
+        self.nbytes -= sum(a.nbytes for data in shards.values() for a in data.values())
+        return shards
+
+
 class _Saving:
-    """A run's finished tasks: each one's shard written at once, the progress bar moved, and
-    ``on_complete(i)`` called as soon as run ``i`` has all its shards."""
+    """A run's finished tasks: each one's shard written at once (and held, :class:`_Held`), the
+    progress bar moved, and ``on_complete(i, per_trial)`` called as soon as run ``i`` has all its
+    shards."""
 
     def __init__(
         self,
         configs: Sequence[RunConfig],
         folders: Sequence[Path],
         todo: list[tuple[int, str, int]],
-        on_complete: Callable[[int], None] | None,
+        on_complete: Callable[[int, dict[str, dict[str, NDArray]]], None] | None,
+        held: _Held,
     ) -> None:
         self.configs, self.folders, self.todo, self.on_complete = configs, folders, todo, on_complete
+        self.held = held
         self.payloads = [config.to_json() for config in configs]
         self.left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
         self.steps_of = [  # the trial-steps of each run's tasks
@@ -946,8 +997,9 @@ class _Saving:
         config, folder = self.configs[number], self.folders[number]
         if all(shard_path(folder, p, s).exists() for p, s in config.tasks()):
             self.complete[number] = True
+            held = self.held.pop(number)
             if self.on_complete is not None:
-                self.on_complete(number)
+                self.on_complete(number, load_per_trial(folder, config, held))
 
     def finished(self, position: int, result: dict[str, NDArray]) -> None:
         number, policy, shard = self.todo[position]
@@ -958,6 +1010,7 @@ class _Saving:
             config.shard_trials(policy, shard),
             config_hash(self.payloads[number], policy),
         )
+        self.held.add(number, policy, shard, result)
         self.saved.append(position)
         self.bar.update(self.steps_of[number][policy, shard])
         self.bar.set_postfix_str(policy if len(self.configs) == 1 else f"{config.scenario['name']}: {policy}")
@@ -1128,15 +1181,15 @@ def _check_execution(
 
 
 def _queue(
-    configs: list[RunConfig], folders: list[Path], max_tasks: int | None
+    configs: list[RunConfig], folders: list[Path], max_tasks: int | None, held: _Held
 ) -> tuple[list[tuple[int, str, int]], float]:
     """The (run, policy, shard) tasks not yet saved, each run's longest first
     (:func:`longest_first`), run after run; the first ``max_tasks`` of them; and the sum of their
-    estimated seconds."""
+    estimated seconds. The shards already saved are checked, and ``held`` where it has room."""
     todo: list[tuple[int, str, int]] = []
     costs: dict[int, dict[tuple[str, int], float]] = {}
     for number, (config, out) in enumerate(zip(configs, folders, strict=True)):
-        tasks = _tasks_to_run(out, config, tqdm.write)
+        tasks = _tasks_to_run(out, config, tqdm.write, functools.partial(held.add, number))
         costs[number] = task_seconds(config) if tasks else {}
         todo += [(number, policy, shard) for policy, shard in longest_first(config, tasks, costs[number])]
     todo = todo if max_tasks is None else todo[:max_tasks]
@@ -1187,13 +1240,20 @@ def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, ND
         raise HarnessError(f"shard {path} is not valid ({exc}); run again to recompute it") from exc
 
 
-def load_per_trial(out: Path, config: RunConfig) -> dict[str, dict[str, NDArray]]:
+def load_per_trial(
+    out: Path, config: RunConfig, held: Mapping[tuple[str, int], Mapping[str, NDArray]] | None = None
+) -> dict[str, dict[str, NDArray]]:
     """Every policy's shard fields joined in trial order: the per-trial arrays concatenated
     (trials first), the selection counts and compute times summed over shards (in shard
-    order, so every backend gives the same numbers)."""
+    order, so every backend gives the same numbers). A shard in ``held`` (its data, checked or
+    written by the caller) is taken from there, the others read from ``out``."""
+    held = held or {}
     per_trial: dict[str, dict[str, NDArray]] = {}
     for policy in config.policies:
-        parts = [_read(Path(out), config, policy, shard) for shard in range(config.shards_of(policy))]
+        parts = [
+            held[policy, shard] if (policy, shard) in held else _read(Path(out), config, policy, shard)
+            for shard in range(config.shards_of(policy))
+        ]
         joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
         for key in ("selections", "wall_s", "tracker_repairs"):
             joined[key] = functools.reduce(np.add, (part[key] for part in parts))

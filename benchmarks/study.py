@@ -118,9 +118,8 @@ def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False)
 
     written: dict[int, Finished] = {}
 
-    def write(number: int) -> None:
+    def write(number: int, per_trial: dict[str, dict[str, Any]]) -> None:
         run, config = runs[number], configs[number]
-        per_trial = harness.load_per_trial(run.folder, config)
         metrics = report.trial_metrics(config, per_trial)
         summary = report.write_outputs(
             config, per_trial, run.folder, figures=settings.figures, pairs=settings.pairs, metrics=metrics

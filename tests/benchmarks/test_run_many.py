@@ -61,7 +61,7 @@ def test_runs_share_the_workers_and_each_is_written_when_its_tasks_are_done(tmp_
     ]
     folders = [tmp_path / "one", tmp_path / "two"]
 
-    def complete(number):
+    def complete(number, per_trial):
         assert harness._tasks_to_run(folders[number], configs[number], print) == []
         calls.append(("complete", number))
 
@@ -129,3 +129,43 @@ def test_a_run_far_slower_than_its_estimate_says_so_at_its_end(tmp_path, monkeyp
     assert ("more than 2 times their estimate" in err) == said
     if said:
         assert "allow for that in --max-hours" in err and len(err.strip().splitlines()) == 1
+
+
+@pytest.mark.parametrize("budget", [harness.HELD_BYTES, 0])
+def test_a_completed_run_is_joined_from_the_shards_it_wrote_or_checked(tmp_path, monkeypatch, budget):
+    """``on_complete`` gets the run's shards joined: those this call wrote or checked from memory
+    (none read back), the rest, beyond the held budget, from their files; the same arrays either
+    way, those :func:`load_per_trial` reads from the folder."""
+    monkeypatch.setattr(harness, "HELD_BYTES", budget)
+    reads = []
+    read = harness.read_shard
+    monkeypatch.setattr(harness, "read_shard", lambda path, *a: reads.append(path) or read(path, *a))
+    config = make_config("paper-1", ["fix1", "ucb1"], trials=3, steps=5, shard_size=2)
+    folder = tmp_path / "run"
+    joined = []
+
+    def start(**kwargs):
+        reads.clear()
+        run_many([(config, folder)], progress=False, on_complete=lambda n, t: joined.append(t), **kwargs)
+
+    start(max_tasks=3)  # three of four shards: incomplete, nothing joined
+    assert joined == [] and reads == []
+    first = sorted(folder.rglob("*.npz"))
+    start()  # the three checked, the fourth written
+    shards = sorted(folder.rglob("*.npz"))
+    assert len(first) == 3 and len(shards) == 4 and len(joined) == 1
+    assert sorted(reads) == (first if budget else sorted(first + shards))
+    start()  # all four checked
+    assert sorted(reads) == (shards if budget else sorted(shards + shards))
+    fresh = tmp_path / "fresh"
+    reads.clear()
+    run_many([(config, fresh)], progress=False, on_complete=lambda n, t: joined.append(t))
+    assert len(reads) == (0 if budget else 4)
+    on_file = load_per_trial(folder, config)
+    for per_trial in joined:
+        assert per_trial.keys() == on_file.keys()
+        for policy, fields in on_file.items():
+            assert per_trial[policy].keys() == fields.keys()
+            for key, value in fields.items():
+                if key != "wall_s":  # a compute time: each run's own
+                    np.testing.assert_array_equal(per_trial[policy][key], value, strict=True)

@@ -80,25 +80,25 @@ def test_claims_subcommand_runs_and_writes_the_scorecard(tmp_path, capsys):
 
 
 def test_the_claims_command_judges_the_metrics_its_report_read(tmp_path, monkeypatch):
-    """The shards are read once, for the report; the judge's scorecard is the one judged from the
-    folder afresh."""
+    """No shard is read back: the report joins the shards the run wrote, held in memory, and the
+    judge takes the report's metrics; its scorecard is the one judged from the folder afresh."""
     from benchmarks import harness
 
     reads = []
-    load = harness.load_per_trial
+    read = harness.read_shard
 
-    def counted(out, config):
-        reads.append(out)
-        return load(out, config)
+    def counted(path, *args):
+        reads.append(path)
+        return read(path, *args)
 
-    monkeypatch.setattr(harness, "load_per_trial", counted)
-    monkeypatch.setattr(claims, "load_per_trial", counted)
+    monkeypatch.setattr(harness, "read_shard", counted)
     argv = ["claims", "--scenarios", "1", "--trials", "4", "--steps", "30", "--workers", "1"]
     assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
-    assert reads == [tmp_path / "paper-1-v1"]
+    assert reads == []
     judged = json.loads((tmp_path / "claims.json").read_text())
     assert judged == json.loads(json.dumps(claims.judge_studies([tmp_path / "paper-1-v1"])))
-    assert len(reads) == 2  # judged afresh: read from the folder
+    shards = sorted((tmp_path / "paper-1-v1" / "shards").rglob("*.npz"))
+    assert len(shards) == 6 and sorted(reads) == shards  # judged afresh: each shard read from the folder
 
 
 def test_compare_claims_puts_scorecards_side_by_side(tmp_path, capsys):
