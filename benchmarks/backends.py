@@ -16,13 +16,32 @@ import multiprocessing
 import os
 import signal
 import socket
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
-_SPAWN = multiprocessing.get_context("spawn")
+
+class _WorkerProcess(multiprocessing.context.SpawnProcess):
+    """A spawned worker that exits at once when its pool tells it to stop: the interpreter's own
+    teardown of numpy, numba and the project (about 0.2 s a process) would only delay the pool's
+    end. A worker that fails exits as any process does."""
+
+    def run(self) -> None:
+        super().run()
+        for stream in (sys.stdout, sys.stderr):
+            if stream is not None:
+                stream.flush()
+        os._exit(0)
+
+
+class _WorkerContext(multiprocessing.context.SpawnContext):
+    Process = _WorkerProcess
+
+
+_SPAWN = _WorkerContext()
 #: ``(payload, policy, shard)``: the run's configuration (``RunConfig.to_json()``) and one task.
 Task = tuple[dict[str, Any], str, int]
 #: Called with a task's position in the list and its result.
@@ -110,12 +129,43 @@ def run_inline(runner: Runner, todo: list[Task], finished: Finished) -> None:
         finished(number, runner(*task))
 
 
+class WorkerPool(ProcessPoolExecutor):
+    """A process pool whose caller says when it has submitted its last task (:meth:`close`): the
+    workers then exit as soon as that task is done, while this process goes on (writing the
+    outputs of the last results) rather than after it."""
+
+    def __init__(self, *args: Any, **kwargs: Any) -> None:
+        super().__init__(*args, **kwargs)
+        # the workers and the thread that stops them, kept past shutdown(wait=False), which drops
+        # the pool's own references
+        self.workers: list[Any] = []
+        self.manager: Any = None
+
+    def close(self) -> None:
+        """No more tasks: those submitted run to their end, then the workers exit."""
+        self.workers = list((self._processes or {}).values())
+        self.manager = self._executor_manager_thread
+        self.shutdown(wait=False)
+
+    def terminate(self) -> None:
+        """Every worker killed at once, the queued tasks cancelled."""
+        for process in [*self.workers, *(self._processes or {}).values()]:
+            process.terminate()
+        self.shutdown(wait=False, cancel_futures=True)
+
+    def join(self) -> None:
+        """Wait for every worker to exit."""
+        self.shutdown()
+        if self.manager is not None:
+            self.manager.join()  # it joins the workers (a second join of one would race it)
+
+
 @contextlib.contextmanager
-def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[ProcessPoolExecutor]:
+def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[WorkerPool]:
     """Spawned worker processes (:func:`worker_init`: ``threads`` compute threads each, the shared
-    thread ``budget``, exiting when this process dies); on an error or an interrupt the running
-    ones are terminated at once, their results not wanted."""
-    pool = ProcessPoolExecutor(
+    thread ``budget``, exiting when this process dies), all exited when the block ends; on an
+    error or an interrupt the running ones are terminated at once, their results not wanted."""
+    pool = WorkerPool(
         max_workers=workers,
         mp_context=_SPAWN,  # no inherited threads or state
         initializer=worker_init,
@@ -124,11 +174,9 @@ def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[
     try:
         yield pool
     except BaseException:
-        for process in list(getattr(pool, "_processes", {}).values()):
-            process.terminate()  # do not wait for running tasks: their results are not wanted
-        pool.shutdown(wait=False, cancel_futures=True)
+        pool.terminate()  # do not wait for running tasks: their results are not wanted
         raise
-    pool.shutdown()
+    pool.join()
 
 
 def run_processes(
@@ -147,6 +195,7 @@ def run_processes(
         pending = {
             pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)
         }
+        pool.close()
         while pending:
             if share_tail:
                 share_idle_cores(budget, list(pending.values()), workers, threads)

@@ -125,6 +125,7 @@ def precompile(workers: int = 2) -> Iterator[tuple[str, float]]:
         # with two workers, one runs both env workloads in turn: the second loads the bound the
         # first compiled, rather than compiling it again beside it
         futures = {pool.submit(_run, name): name for name in names}
+        pool.close()
         for future in as_completed(futures):
             yield futures[future], future.result()
     left = uncached(all_kernels())

@@ -522,6 +522,7 @@ def _train_todo(
                 pool.submit(_train_one_seed, job, str(out), seed, device, device_mode, True): (out, seed)
                 for job, out, seed in longest_first
             }
+            pool.close()
             for future in concurrent.futures.as_completed(futures):
                 done[futures[future]] = future.result()
                 if progress:

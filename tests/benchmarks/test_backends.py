@@ -1,5 +1,8 @@
 """Every backend, worker count and thread count gives the numbers of one process."""
 
+import multiprocessing
+import os
+import sys
 import time
 
 import numpy as np
@@ -105,3 +108,37 @@ def test_the_last_task_running_takes_up_the_cores_the_others_left():
     results.clear()
     backends.run_processes(_threads_seen, tasks, results.__setitem__, workers=2, threads=1, share_tail=False)
     assert results == {0: {"threads": 1}, 1: {"threads": 1}, 2: {"threads": 1}}
+
+
+def _pid(_):
+    return {"pid": os.getpid()}
+
+
+def test_the_workers_exit_while_this_process_handles_the_last_result():
+    """Once every task is submitted the pool is closed: each worker exits when the queue is done,
+    without waiting for this process to finish with the results (the last run's outputs)."""
+    alive_at_last, seen = [], []
+
+    def finished(number, result):
+        seen.append(number)
+        if len(seen) == 4:
+            end = time.monotonic() + 20
+            while multiprocessing.active_children() and time.monotonic() < end:
+                time.sleep(0.05)
+            alive_at_last.extend(multiprocessing.active_children())
+
+    backends.run_processes(_pid, [(k,) for k in range(4)], finished, workers=2, share_tail=False)
+    assert alive_at_last == [] and multiprocessing.active_children() == []
+
+
+def _print_unflushed(text):
+    sys.stdout.write(text)  # no newline, no flush: the worker's exit must flush it
+    return {"pid": os.getpid()}
+
+
+def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd):
+    results = {}
+    backends.run_processes(_print_unflushed, [("one-",), ("two-",)], results.__setitem__, workers=2)
+    assert sorted(capfd.readouterr().out.split("-")[:2]) == ["one", "two"]
+    assert len(results) == 2 and multiprocessing.active_children() == []
+    assert backends._SPAWN.Process.run is not multiprocessing.context.SpawnProcess.run

@@ -75,6 +75,9 @@ def test_trainings_in_worker_processes_are_submitted_longest_first(tmp_path, mon
     submitted = []
 
     class InOrder(concurrent.futures.Executor):
+        def close(self):
+            pass
+
         def submit(self, fn, *args):
             submitted.append((args[0]["timesteps"], args[2]))
             future = concurrent.futures.Future()
