@@ -1568,6 +1568,8 @@ def training_value(docs: Path, key: str) -> str:
 # ------------------------------------------------------------------ strong scaling
 SCALING_FILES = {
     "2 cores": "perf/strong-scaling.json",
+    # before a run's end joined its shards from memory and its workers exited at once
+    "2 cores, at 496aa87": "perf/strong-scaling-496aa87.json",
     "2 cores, at 601a6e2": "perf/strong-scaling-601a6e2.json",  # before a run's end read its shards once
     "2 cores, at ef5e440": "perf/strong-scaling-ef5e440.json",  # before the report shared its terms
     "16 cores": "perf/strong-scaling-16-cores.json",
@@ -1576,6 +1578,7 @@ SCALING_FILES = {
 #: The value spans' names of the strong-scaling runs (``scaling MACHINE.KIND.W``).
 SCALING_MACHINES = {
     "2": "2 cores",
+    "2-496aa87": "2 cores, at 496aa87",
     "2-601a6e2": "2 cores, at 601a6e2",
     "2-ef5e440": "2 cores, at ef5e440",
     "16": "16 cores",
