@@ -112,7 +112,7 @@ class Agent(ABC):
     # -------------------------------------------------------- public API
     def reset(self, obs: Observation) -> None:
         """Start an episode from the reset observation (every channel probed once)."""
-        batch, batched = self._batch(obs)
+        batch, _ = self._batch(obs)
         if self.needs.tracking and ("track" not in batch or "track_pred" not in batch):
             raise ValueError(
                 f"{self.name} reads the tracker's estimates from the observation: "
@@ -135,7 +135,6 @@ class Agent(ABC):
                 "device declare needs = Needs(device=True))"
             )
         self.random.reset(self.batch_size, self.xp)
-        self._batched = batched
         self.t = 0
         self._reset(batch)
 

@@ -34,9 +34,6 @@ from mimo_radar_env.wrappers.flat import action_form
 from .harness import HarnessError, RunInterrupted, duration, output_lock
 from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
-#: The hyperparameter file shipped with the package for PPO (rl-zoo3 style); each learner's is
-#: ``Learner.hyperparams``.
-DEFAULT_HYPERPARAMS = LEARNERS["ppo"].hyperparams
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
 
 
