@@ -16,6 +16,7 @@ from mimo_radar_env.envs.versions import check_scenario_version
 
 from . import harness
 from .harness import PAPER_POLICIES
+from .settings import comma_list
 from .study import Finished, Run, Study
 
 
@@ -50,7 +51,7 @@ class RunStudy(_OneRun):
         )
 
     def runs(self) -> list[Run]:
-        policies = tuple(p.strip() for p in self.args.policies.split(",") if p.strip())
+        policies = tuple(comma_list("--policies", self.args.policies))
         return [Run("run", self.args.scenario, policies, self.settings.out)]
 
 

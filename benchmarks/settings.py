@@ -223,6 +223,15 @@ def add_scenarios_argument(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--scenarios", default="1,2,3", help="paper scenarios to run (default 1,2,3)")
 
 
+def comma_list(flag: str, text: str) -> list[str]:
+    """A comma-separated argument's entries, stripped; an empty entry (``a,,b``, a trailing
+    comma) is refused, not dropped."""
+    entries = [entry.strip() for entry in text.split(",")]
+    if not all(entries):
+        raise BenchError(f"{flag} has an empty entry in {text!r}: separate the names by single commas")
+    return entries
+
+
 def paper_numbers(text: str) -> list[int]:
     """``"1,3"`` -> ``[1, 3]``: paper scenarios."""
     try:

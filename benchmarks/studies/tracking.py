@@ -35,7 +35,7 @@ from .. import verdicts
 from ..errors import BenchError
 from ..harness import PAPER_POLICIES
 from ..report import format_estimate, paired_difference
-from ..settings import add_scenarios_argument, paper_numbers
+from ..settings import add_scenarios_argument, comma_list, paper_numbers
 from ..study import Finished, Run, Study
 
 #: The points of tracking-ucb's trade-off (sinr_weight) the study runs besides the default 0.
@@ -96,7 +96,7 @@ def chosen_fusions(study: Study, text: str) -> list[str]:
     refused."""
     if hasattr(study.args, "fusion"):
         raise BenchError(f"the {study.name} study runs each of --fusions; --fusion does not apply")
-    fusions = [f.strip() for f in text.split(",") if f.strip()]
+    fusions = comma_list("--fusions", text)
     if not fusions or not set(fusions) <= set(FUSIONS) or len(set(fusions)) != len(fusions):
         raise BenchError(f"fusions must be among {list(FUSIONS)}, each once, got {text!r}")
     return fusions

@@ -69,6 +69,25 @@ def test_models_and_missing_parameters(policies, message, tmp_path, capsys):
     assert not out.exists()
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,,best"],
+        ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,"],
+        ["tracking", "--scenarios", "1", "--fusions", "average,"],
+    ],
+)
+def test_an_empty_entry_of_a_comma_list_is_refused_not_dropped(argv, tmp_path, capsys):
+    out = tmp_path / "run"
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(out), "--quiet"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    flag = argv[-2]
+    assert len(err) == 1 and f"{flag} has an empty entry in {argv[-1]!r}" in err[0]
+    assert not out.exists()
+
+
 def test_an_unusable_out_is_one_line(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
