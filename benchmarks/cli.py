@@ -337,7 +337,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     imports, name = _leading(argv)
     _import_modules(imports)
     parser = build_parser([name] if name in COMMANDS else [])
-    args = parser.parse_args(argv)
+    args, unknown = parser.parse_known_args(argv)
+    if unknown:  # named with the command they were given to, whose --help lists its arguments
+        where = f"{PROG} {args.command}"
+        parser.exit(
+            2, f"{where}: error: unrecognized arguments: {' '.join(unknown)} (see '{where} --help')\n"
+        )
     return run(parser, args)
 
 

@@ -88,6 +88,16 @@ def test_an_empty_entry_of_a_comma_list_is_refused_not_dropped(argv, tmp_path, c
     assert not out.exists()
 
 
+def test_an_unknown_argument_names_its_command_and_the_commands_help(capsys):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["demo", "--policy", "xyz"])
+    assert exit_info.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        "mimo-radar-bench demo: error: unrecognized arguments: --policy xyz "
+        "(see 'mimo-radar-bench demo --help')"
+    ]
+
+
 def test_an_unusable_out_is_one_line(tmp_path, capsys):
     blocker = tmp_path / "file"
     blocker.write_text("not a folder")
