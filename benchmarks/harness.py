@@ -248,6 +248,8 @@ def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_
 def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Refuses no policy, a policy twice, an unknown one, and parameters of a policy not in the
     run or setting the agent's seed; the parameters."""
+    if isinstance(policies, str):
+        raise HarnessError(f"policies must be a list of policy names, got the string {policies!r}")
     if not policies:
         raise HarnessError("give at least one policy")
     if len(set(policies)) != len(policies):

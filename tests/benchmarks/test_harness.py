@@ -298,3 +298,8 @@ def test_each_policys_shard_size_is_checked_like_one_for_all():
         make_config(
             "paper-1-v1", ["ucb1", "fix1"], 7, 6, shard_size={"ucb1": 0, "fix1": 7}, say=lambda _: None
         )
+
+
+def test_policies_given_as_one_string_are_refused_not_read_letter_by_letter():
+    with pytest.raises(HarnessError, match=r"policies must be a list of policy names, got the string 'ucb1'"):
+        make_config("paper-1-v1", "ucb1", trials=2, say=lambda message: None)
