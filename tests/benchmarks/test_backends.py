@@ -61,6 +61,18 @@ def test_ray_backend_gives_the_numbers_of_the_local_path(tmp_path):
             np.testing.assert_array_equal(local[policy][key], remote[policy][key])
 
 
+def test_a_ray_runs_arrays_are_its_own_not_views_of_the_object_store(tmp_path):
+    """Results large enough for Ray's object store come back as read-only views of it, which its
+    shutdown releases: the run's joined arrays are copies, the same numbers as read from disk."""
+    pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
+    config = make_config("paper-1-v1", ["fix1"], trials=200, steps=100, shard_size=200, say=lambda m: None)
+    remote = run(config, tmp_path / "ray", backend="ray", workers=2, progress=False)
+    on_disk = load_per_trial(tmp_path / "ray", config)
+    for key, value in remote["fix1"].items():
+        assert value.flags.writeable, key
+        np.testing.assert_array_equal(value, on_disk["fix1"][key], strict=True)
+
+
 def test_ray_backend_runs_a_studys_runs_together_with_the_numbers_of_each_alone(tmp_path):
     pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
     configs = [
