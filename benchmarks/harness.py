@@ -953,13 +953,14 @@ class _Held:
 
     def add(self, number: int, policy: str, shard: int, data: Mapping[str, Any]) -> None:
         arrays = {key: np.asarray(data[key]) for key in DATA_FIELDS}
+        size = sum(a.nbytes for a in arrays.values())
+        if self.nbytes + size > self.budget:
+            return
         # a read-only array is a backend's buffer (Ray's object store, released at its shutdown,
         # before the caller is done with the run's arrays): held as a copy
-        arrays = {key: a if a.flags.writeable else a.copy() for key, a in arrays.items()}
-        size = sum(a.nbytes for a in arrays.values())
-        if self.nbytes + size <= self.budget:
-            self.shards.setdefault(number, {})[policy, shard] = arrays
-            self.nbytes += size
+        held = {key: a if a.flags.writeable else a.copy() for key, a in arrays.items()}
+        self.shards.setdefault(number, {})[policy, shard] = held
+        self.nbytes += size
 
     def pop(self, number: int) -> dict[tuple[str, int], dict[str, NDArray]]:
         shards = self.shards.pop(number, {})
