@@ -8,7 +8,8 @@ Each measurement runs ``mimo-radar-bench claims ... --workers W`` as a user does
 process, the default shards for W workers: sized by cost) into a fresh folder, and reads the shards it wrote
 (``--repeats N`` measures every count N times, the counts' order reversed every other repeat,
 and gives each figure as the mean of the repeats, the wall time and the efficiency with a 95 %
-t interval, the efficiency paired by repeat):
+t interval, the efficiency paired by repeat; its output ends with the last count's figures as one
+JSON line, for ``benchmarks.speed.across_commits --key``):
 each task's compute seconds (``wall_s``), its trials, and when its file was written. The
 ``W x wall`` worker-seconds of a run split into
 
@@ -330,6 +331,10 @@ def main(argv: list[str] | None = None) -> None:
     for row in result["model"]:
         print(f"  model    {row['workers']:>3} workers: {row['wall_s']:7.1f} s")
     write_json(args.json, result)
+    # the last count measured, as one JSON line (for benchmarks.speed.across_commits --key)
+    last = result["measured"][-1]
+    keys = ("workers", "wall_s", "before_first_task_s", "after_last_task_s", "efficiency")
+    print(json.dumps({key: last[key] for key in keys}))
 
 
 if __name__ == "__main__":

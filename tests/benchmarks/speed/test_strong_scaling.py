@@ -71,3 +71,18 @@ def test_repeated_runs_give_means_and_intervals_paired_by_repeat():
     assert row["before_first_task_s"] == pytest.approx((2.5 + 4.0) / 2)
     once = strong_scaling._row(2, [run(6.0, 5.5)], base_seconds[:1], {"a": 0.5})
     assert once["efficiency"] == 10.0 / 12.0 and "wall_s_ci" not in once  # one run: no interval
+
+
+def test_the_output_ends_with_the_last_counts_figures_as_one_json_line(monkeypatch, capsys):
+    """What ``benchmarks.speed.across_commits --key`` reads from the command's last line."""
+    import json
+
+    figures = ("workers", "wall_s", "before_first_task_s", "after_last_task_s", "efficiency")
+    rows = [
+        dict(zip(figures, values, strict=True)) | {"tasks": 6}
+        for values in [(1, 9.0, 0.5, 1.5, 1.0), (2, 5.0, 0.75, 1.25, 0.9)]
+    ]
+    monkeypatch.setattr(strong_scaling, "measure", lambda *args, **kwargs: {"measured": rows, "model": []})
+    strong_scaling.main(["--workers", "1,2", "--predict", ""])
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    assert json.loads(last) == {key: rows[1][key] for key in figures}
