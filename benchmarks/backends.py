@@ -185,17 +185,19 @@ def run_processes(
     finished: Finished,
     workers: int,
     threads: int = 1,
-    share_tail: bool = True,
+    share_tail: bool | Callable[[], bool] = True,
 ) -> None:
     """The tasks on ``workers`` local processes of ``threads`` compute threads each; at the tail,
-    with ``share_tail``, the tasks still running take up the cores of those that ended
-    (:func:`share_idle_cores`)."""
+    with ``share_tail`` (or where it returns true, asked once the tasks are submitted), the tasks
+    still running take up the cores of those that ended (:func:`share_idle_cores`)."""
     budget = _SPAWN.Array("i", max(1, len(todo)), lock=False)
     with worker_pool(workers, threads, budget) as pool:
         pending = {
             pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)
         }
         pool.close()
+        if callable(share_tail):
+            share_tail = share_tail()
         while pending:
             if share_tail:
                 share_idle_cores(budget, list(pending.values()), workers, threads)

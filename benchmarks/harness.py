@@ -913,12 +913,21 @@ def run_many(
         if max_tasks is None:
             _say_resumed(configs, folders, saving.left)
         threads = _threads_for(configs, todo, workers, backend, threads)
-        saving.bar = _progress_bar(configs, todo, saving.steps_of, progress, threads)
+        saving.bar = _progress_bar(configs, todo, saving.steps_of, progress)
         on_device = () if device is None else (str(device), device_mode)
         tasks = [(saving.payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
         try:
             saving.runs_already_done()
-            _dispatch(tasks, saving.finished, workers, backend, address, threads, configs)
+            _dispatch(
+                tasks,
+                saving.finished,
+                workers,
+                backend,
+                address,
+                threads,
+                configs,
+                starting=functools.partial(_say_compiling, saving.bar, configs, todo, threads),
+            )
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
             raise RunInterrupted(
@@ -1041,19 +1050,28 @@ def _dispatch(
     address: str | None,
     threads: int | None,
     configs: Sequence[RunConfig] = (),
+    starting: Callable[[], None] = lambda: None,
 ) -> None:
     """Runs ``tasks`` on the backend: Ray (tasks of ``threads`` CPUs), this process (one
     worker, on ``threads`` numba threads, None: numba's own count), or ``workers // threads``
     local worker processes of ``threads`` threads each, the last tasks taking up the cores of
     those that ended where the kernels over threads of the runs ``configs`` are compiled already
-    (one compiled in mid-task would cost more than the cores give)."""
+    (one compiled in mid-task would cost more than the cores give). ``starting()`` is called
+    as the tasks start: once they are submitted to the worker processes, which then start
+    without waiting for it (it may import numba here, as the tail's check does)."""
     if backend == "ray":
+        starting()
         backends.run_ray(run_task, tasks, finished, address, threads or 1)
     elif workers == 1:
+        starting()
         with compiled.with_threads(threads):
             backends.run_inline(run_task, tasks, finished)
     else:
-        share_tail = not any(uncached(run_kernels(config, workers)) for config in configs)
+
+        def share_tail() -> bool:
+            starting()
+            return not any(uncached(run_kernels(config, workers)) for config in configs)
+
         backends.run_processes(
             run_task, tasks, finished, workers // (threads or 1), threads or 1, share_tail=share_tail
         )
@@ -1218,10 +1236,8 @@ def _progress_bar(
     todo: list[tuple[int, str, int]],
     steps_of: list[dict[tuple[str, int], int]],
     progress: bool,
-    threads: int | None,
 ) -> tqdm:
-    """The runs' progress in trial-steps, from what is already saved; it says when the tasks
-    will compile numba kernels first."""
+    """The runs' progress in trial-steps, from what is already saved."""
     total = sum(sum(steps.values()) for steps in steps_of)
     bar = tqdm(
         total=total,
@@ -1231,9 +1247,15 @@ def _progress_bar(
         smoothing=0.1,
         desc=configs[0].scenario["name"] if len(configs) == 1 else f"{len(configs)} runs",
     )
+    return bar
+
+
+def _say_compiling(
+    bar: tqdm, configs: list[RunConfig], todo: list[tuple[int, str, int]], threads: int | None
+) -> None:
+    """Says on the progress bar when the tasks will compile numba kernels first."""
     if any(uncached(run_kernels(configs[n], threads)) for n in {n for n, _, _ in todo}):
         bar.set_postfix_str("compiling numba kernels (first run only; or once: mimo-radar-bench compile)")
-    return bar
 
 
 def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, NDArray]:

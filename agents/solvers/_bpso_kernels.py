@@ -19,6 +19,8 @@ from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA, numba, twins
 from mimo_radar_env.core.counter_hash import Stream, element_bits, stream_bases, to_unit
 
+from .bpso import TABLE_BITS
+
 if HAVE_NUMBA:  # pragma: no branch
     from mimo_radar_env.core._counter_hash_kernels import element_bits_nb, stream_base_nb, to_unit_nb
 
@@ -172,9 +174,6 @@ def _fitness_np(
     return xp.where(valid, value, 0.0), valid
 
 
-#: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
-#: trial); longer particles sum their selected channels directly.
-TABLE_BITS = 14
 #: Particles are padded to a multiple of this (the vector width of float64 on AVX-512), so that
 #: the inner loops have no scalar remainder; padded particles never enter a best.
 LANES = 8

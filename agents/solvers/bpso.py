@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mimo_radar_env.core.compiled import HAVE_NUMBA
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import masks_to_actions, top_mask
@@ -32,6 +33,10 @@ def _bpso_kernels() -> ModuleType:
     return _bpso_kernels
 
 
+#: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
+#: trial); longer particles sum their selected channels directly. Here, not in the kernels'
+#: module, so that the cost model asks it without importing numba.
+TABLE_BITS = 14
 #: Iterations the ``"set"`` rule takes to reach a tabulated optimum, roughly (its cost model).
 SET_RULE_ITERATIONS = 20
 
@@ -138,7 +143,7 @@ class BPSOSolver(SuperArmSolver):
     @property
     def threaded(self) -> bool:  # type: ignore[override]
         """The compiled kernel (numba installed and ``use_numba``) spreads the trials over threads."""
-        return self.use_numba and _bpso_kernels().HAVE_NUMBA
+        return self.use_numba and HAVE_NUMBA
 
     def memory_per_trial(self, num_tx: int, num_rx: int) -> int:
         """The swarm: positions, velocities, personal bests and draws of every particle."""
@@ -153,7 +158,7 @@ class BPSOSolver(SuperArmSolver):
         85 us for ``"xor"``, which runs them all about half the time)."""
         per_particle = num_tx + num_rx + self.tx_count * self.rx_count
         iterations = self.iterations
-        if self.rule == "set" and num_tx + num_rx <= _bpso_kernels().TABLE_BITS:
+        if self.rule == "set" and num_tx + num_rx <= TABLE_BITS:
             iterations = min(iterations, SET_RULE_ITERATIONS)
         return float(self.population * iterations * per_particle)
 
@@ -165,7 +170,7 @@ class BPSOSolver(SuperArmSolver):
         iteration streams (the kernels' ``positions`` and ``keys``). With numba, a compiled
         twin (``_bpso_bpso_kernels().initial_positions``) hashes the same draws."""
         xp = random.xp
-        if self.use_numba and _bpso_kernels().HAVE_NUMBA and not xp.is_torch:
+        if self.use_numba and HAVE_NUMBA and not xp.is_torch:
             tx_bases, rx_bases = random.bases(Stream.BPSO_INIT_TX), random.bases(Stream.BPSO_INIT_RX)
             positions = _bpso_kernels().initial_positions(
                 tx_bases, rx_bases, self.population, num_tx, num_rx, self.tx_count, self.rx_count
@@ -202,9 +207,7 @@ class BPSOSolver(SuperArmSolver):
             best = self._replayed(index, positions, keys)
         else:
             kernel = (
-                _bpso_kernels().numba_kernel()
-                if self.use_numba and _bpso_kernels().HAVE_NUMBA
-                else _bpso_kernels().run_numpy
+                _bpso_kernels().numba_kernel() if self.use_numba and HAVE_NUMBA else _bpso_kernels().run_numpy
             )
             best = kernel(index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments())
         return xp.astype(best[:, :num_tx], bool), xp.astype(best[:, num_tx:], bool)

@@ -118,8 +118,17 @@ def test_the_last_task_running_takes_up_the_cores_the_others_left():
     backends.run_processes(_threads_seen, tasks, results.__setitem__, workers=2, threads=1)
     assert results == {0: {"threads": 1}, 1: {"threads": 2}, 2: {"threads": 1}}
     results.clear()
-    backends.run_processes(_threads_seen, tasks, results.__setitem__, workers=2, threads=1, share_tail=False)
+    asked = []
+
+    def share_tail():  # asked once, the tasks submitted and the workers started
+        asked.append(len(multiprocessing.active_children()))
+        return False
+
+    backends.run_processes(
+        _threads_seen, tasks, results.__setitem__, workers=2, threads=1, share_tail=share_tail
+    )
     assert results == {0: {"threads": 1}, 1: {"threads": 1}, 2: {"threads": 1}}
+    assert asked == [2]
 
 
 def _pid(_):

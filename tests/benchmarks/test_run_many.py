@@ -169,3 +169,44 @@ def test_a_completed_run_is_joined_from_the_shards_it_wrote_or_checked(tmp_path,
             for key, value in fields.items():
                 if key != "wall_s":  # a compute time: each run's own
                     np.testing.assert_array_equal(per_trial[policy][key], value, strict=True)
+
+
+_PARENT = """
+import sys
+from benchmarks import backends, harness
+
+seen = []
+submit = backends.WorkerPool.submit
+
+def recording(self, *args, **kwargs):
+    seen.append("numba" in sys.modules)
+    return submit(self, *args, **kwargs)
+
+backends.WorkerPool.submit = recording
+config = harness.make_config("paper-1-v1", ["mg-crb-cl", "ucb1"], trials=2, steps=2, shard_size=1)
+assert harness.run_many([(config, sys.argv[1])], workers=2, progress=False) == [True]
+print(seen[0], "numba" in sys.modules)
+"""
+
+
+def test_the_workers_start_before_this_process_imports_numba(tmp_path):
+    """The run's configuration, costs and queue need no compiled kernel: this process imports
+    numba (for its checks of the kernels' caches) only once the tasks are on their way, so that
+    the workers' start does not wait for it."""
+    pytest.importorskip("numba")
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", _PARENT, str(tmp_path / "out")], capture_output=True, text=True, check=True
+    )
+    assert done.stdout.split() == ["False", "True"]
+
+
+@pytest.mark.parametrize("cached", [True, False])
+def test_a_run_that_will_compile_kernels_says_so_on_its_progress_bar(tmp_path, monkeypatch, capsys, cached):
+    pytest.importorskip("numba")
+    monkeypatch.setattr(harness, "uncached", lambda kernels: [] if cached else list(kernels))
+    config = make_config("paper-1", ["fix1"], trials=2, steps=3, shard_size=1, say=lambda m: None)
+    assert run_many([(config, tmp_path / "out")]) == [True]
+    assert ("compiling numba kernels (first run only" in capsys.readouterr().err) != cached

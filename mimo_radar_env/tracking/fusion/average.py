@@ -60,6 +60,10 @@ class AverageFusion(Fusion):
     def compiled_kernels(cls, threaded: bool = False) -> list:
         return [_KERNELS.get("_update_numba_threaded" if threaded else "_update_numba")] if HAVE_NUMBA else []
 
+    @classmethod
+    def compiled_update(cls, channels: int) -> bool:
+        return HAVE_NUMBA
+
     def update(self, prior, tx_positions, rx_positions, measurement, noise_variance):
         path = _KERNELS.for_batch("_update_numba", len(measurement)) if self.use_numba else _update_numpy
         return self.run_path(path, prior, tx_positions, rx_positions, measurement, noise_variance)
