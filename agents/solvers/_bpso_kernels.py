@@ -9,7 +9,8 @@ without it the numpy kernel runs.
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import functools
+import itertools
 from typing import Any
 
 import numpy as np
@@ -51,9 +52,11 @@ def _flip_uniform_np(
     return (xp.astype(lane, np.float64) + 0.5) * (1.0 / 65536.0)
 
 
-#: The most memory the draws of a block of iterations take (r1, r2 and the flips): on torch a
-#: block's draws are a few kernels, so the fewer blocks the fewer launches; on numpy, arrays that
-#: stay in the caches are the faster (measured: 128 MiB blocks slowed the 500-trial kernel).
+#: The most memory the draws of a block of iterations take (r1, r2 and the flips): on torch where
+#: every trial runs every iteration (a CUDA graph) a block's draws are a few kernels, so the fewer
+#: blocks the fewer launches; elsewhere, arrays that stay in the caches are the faster (measured:
+#: 128 MiB blocks slowed the 500-trial kernel), and draws made far ahead are wasted on the trials
+#: that stop at their optimum.
 DRAW_BLOCK_BYTES = {"torch": 128 * 2**20, "numpy": 4 * 2**20}
 
 
@@ -70,14 +73,22 @@ def run_numpy(
     inertia_end: float,
     velocity_clamp: float,
     set_rule: bool = False,
+    stop_at_optimum: bool = True,
 ) -> NDArray[np.int8]:
-    """All iterations, vectorised over trials and particles. Returns the global bests (B, L)."""
+    """The iterations, vectorised over trials and particles. Returns the global bests (B, L).
+
+    With ``stop_at_optimum`` and eq19's table (:class:`_Fitness`), a trial leaves the
+    swarm's arrays once its global best holds the largest value any valid super arm has, as the
+    compiled kernel stops it: a best is replaced only by a strictly larger fitness, so no later
+    iteration could change it, and each trial's draws are its own, so the others go on as they
+    would have. Without it every trial runs every iteration, with no shape that depends on the
+    data: what a CUDA graph captures."""
     xp = namespace(index)
     batch, population, length = positions.shape
     num_tx = index.shape[1]
     positions = xp.copy(positions)
     velocities = xp.zeros(positions.shape)
-    fitness_of = _fitness_function(index, length, num_tx, tx_count, rx_count)
+    fitness_of = _Fitness(index, length, num_tx, tx_count, rx_count)
     fitness, valid = fitness_of(positions)
     personal_best = xp.copy(positions)
     personal_fit = xp.where(valid, fitness, -np.inf)
@@ -96,16 +107,24 @@ def run_numpy(
     flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
     # the draws depend on no state: hashed for a block of iterations at once (a few operations a
     # block instead of a few dozen an iteration), blocks sized to DRAW_BLOCK_BYTES
-    budget = DRAW_BLOCK_BYTES["torch" if xp.is_torch else "numpy"]
+    budget = DRAW_BLOCK_BYTES["torch" if xp.is_torch and not stop_at_optimum else "numpy"]
     block = int(np.clip(budget // (8 * batch * population * (2 + length)), 1, iterations))
+    optimum = fitness_of.optimum if stop_at_optimum else None
+    result, alive = global_best, None  # the trials still iterating (None: all of them)
+    drawn_for = None  # their rows in the block's draws, where some left since it was drawn
     for q in range(iterations):
         if q % block == 0:
             drawn = slice(q, min(q + block, iterations))
             r_block = to_unit(element_bits(r_bases[:, :, drawn, None], particle))  # (2, B, Q, P)
             u_block = _flip_uniform_np(flip_bases[:, drawn, None, None], hash_element, lane_shift)
+            drawn_for = None
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        r1, r2 = r_block[:, :, q % block]
-        u = u_block[:, q % block]  # (B, P, L)
+        if drawn_for is None:
+            r1, r2 = r_block[:, :, q % block]
+            u = u_block[:, q % block]  # (B, P, L)
+        else:
+            r1, r2 = r_block[:, drawn_for, q % block]
+            u = u_block[drawn_for, q % block]
         velocities = (
             inertia * velocities
             + (c1 * r1)[..., None] * (personal_best - positions)
@@ -125,34 +144,91 @@ def run_numpy(
         better = personal_fit[rows, candidate] > global_fit
         global_best = xp.where(better[:, None], personal_best[rows, candidate], global_best)
         global_fit = xp.where(better, personal_fit[rows, candidate], global_fit)
-    return global_best
+        if optimum is None or q == iterations - 1:
+            continue
+        final = global_fit >= optimum
+        if not bool(final.any()):
+            continue
+        if alive is None:
+            result, alive = xp.copy(global_best), xp.arange(batch)
+        result[alive[final]] = global_best[final]
+        keep = ~final
+        left = int(keep.sum())
+        if left == 0:
+            return result
+        alive, rows = alive[keep], xp.arange(left)
+        positions, velocities = positions[keep], velocities[keep]
+        personal_best, personal_fit = personal_best[keep], personal_fit[keep]
+        global_best, global_fit, optimum = global_best[keep], global_fit[keep], optimum[keep]
+        r_bases, flip_bases = r_bases[:, keep], flip_bases[keep]
+        # the block's draws stay as drawn (on torch a block is every iteration's: large to copy)
+        drawn_for = xp.arange(keep.shape[0])[keep] if drawn_for is None else drawn_for[keep]
+        fitness_of.keep(keep)
+    if alive is None:
+        return global_best
+    result[alive] = global_best
+    return result
 
 
-def _fitness_function(
-    index: NDArray[np.float64], length: int, num_tx: int, tx_count: int, rx_count: int
-) -> Callable[[NDArray[np.int8]], tuple[NDArray[np.float64], NDArray[np.bool_]]]:
-    """eq19 of a swarm's positions (B, P, L) and whether each is valid: looked up in a table of
-    every bit pattern's value per trial (:func:`_fitness_np` of each pattern, so the same numbers)
-    where it fits FITNESS_TABLE_BYTES, a few operations an iteration instead of one a channel;
-    else summed directly."""
-    xp = namespace(index)
-    batch, channels = index.shape[0], index.shape[1] * index.shape[2]
-    if 8 * batch * channels << length > FITNESS_TABLE_BYTES:
-        return lambda positions: _fitness_np(index, positions, num_tx, tx_count, rx_count)
-    bit = xp.arange(length, dtype=np.int64)
-    patterns = xp.astype((xp.arange(1 << length, dtype=np.int64)[:, None] >> bit) & 1, np.int8)  # (C, L)
-    table, valid_pattern = _fitness_np(index, patterns[None], num_tx, tx_count, rx_count)  # (B, C), (1, C)
-    weights = 1 << bit  # bit j of a pattern is station j
+class _Fitness:
+    """eq19 of a swarm's positions (B, P, L) and whether each is valid (a call): looked up in a
+    table of every bit pattern's value per trial (:func:`_fitness_np` of each pattern, so the same
+    numbers) where it fits FITNESS_TABLE_BYTES, a few operations an iteration instead of one a
+    channel; else summed directly. With the table, ``optimum`` is each trial's largest value of a
+    valid pattern (else None), and :meth:`keep` keeps the rows of the trials still iterating."""
 
-    def lookup(positions: NDArray[np.int8]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
-        code = (xp.astype(positions, np.int64) * weights).sum(axis=-1)  # (B, P)
-        return xp.take_along_axis(table, code, axis=1), valid_pattern[0][code]
+    def __init__(
+        self, index: NDArray[np.float64], length: int, num_tx: int, tx_count: int, rx_count: int
+    ) -> None:
+        xp = namespace(index)
+        self.index, self.counts = index, (num_tx, tx_count, rx_count)
+        self.table: Any = None
+        self.optimum: Any = None
+        batch, channels = index.shape[0], index.shape[1] * index.shape[2]
+        table_bytes = 8 * batch << length
+        if table_bytes > FITNESS_TABLE_BYTES:
+            return
+        # only the valid patterns are summed (a tenth of them at the paper's 4 x 6): the others are 0
+        valid_codes = _valid_patterns(num_tx, index.shape[2], tx_count, rx_count)
+        if table_bytes + 8 * batch * len(valid_codes) * channels > FITNESS_TABLE_BYTES:
+            return
+        bit = xp.arange(length, dtype=np.int64)
+        codes = xp.constant(valid_codes)
+        values, _ = _fitness_np(index, xp.astype((codes[:, None] >> bit) & 1, np.int8)[None], *self.counts)
+        self.table = xp.zeros((batch, 1 << length), dtype=values.dtype)  # (B, C)
+        self.table[:, codes] = values
+        self.valid_pattern = xp.zeros(1 << length, dtype=bool)
+        self.valid_pattern[codes] = True
+        self.optimum = xp.max(values, axis=1)
+        self.weights = 1 << bit  # bit j of a pattern is station j
+        self.xp = xp
 
-    return lookup
+    def __call__(self, positions: NDArray[np.int8]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        if self.table is None:
+            return _fitness_np(self.index, positions, *self.counts)
+        code = (self.xp.astype(positions, np.int64) * self.weights).sum(axis=-1)  # (B, P)
+        return self.xp.take_along_axis(self.table, code, axis=1), self.valid_pattern[code]
+
+    def keep(self, rows: Any) -> None:
+        self.index = self.index[rows]
+        if self.table is not None:
+            self.table, self.optimum = self.table[rows], self.optimum[rows]
 
 
-#: The most memory eq19's table of every bit pattern may take to build (one term a channel,
-#: pattern and trial); a larger batch sums each particle's channels directly.
+@functools.cache
+def _valid_patterns(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> tuple[int, ...]:
+    """The bit patterns (bit j: station j, transmitters first) with ``tx_count`` transmitters and
+    ``rx_count`` receivers set, ascending."""
+    tx = [sum(1 << m for m in chosen) for chosen in itertools.combinations(range(num_tx), tx_count)]
+    rx = [
+        sum(1 << (num_tx + n) for n in chosen) for chosen in itertools.combinations(range(num_rx), rx_count)
+    ]
+    return tuple(sorted(t | r for t in tx for r in rx))
+
+
+#: The most memory eq19's table may take: a value per bit pattern and trial, and the terms it is
+#: summed from (one a channel, valid pattern and trial); a larger batch sums each particle's
+#: channels directly.
 FITNESS_TABLE_BYTES = 256 * 2**20
 
 

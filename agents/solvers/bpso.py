@@ -79,24 +79,23 @@ class BPSOSolver(SuperArmSolver):
         (Kennedy & Eberhart's binary PSO, the one the paper cites; reading 1).
     use_numba : bool
         Run the compiled kernel when numba is installed (default). The pure-numpy
-        kernel gives the same numbers, far slower: at the paper's size and 500 trials, on one
-        thread of the development machine, about 27x with rule ``"xor"`` and 150x with
-        ``"set"`` (it runs every iteration, the compiled kernel stops at the optimum).
+        kernel gives the same numbers, more slowly (docs/performance.md times both).
 
     Random numbers come from the agent's per-trial streams (initial particles, and one key per
     trial and call for the iteration streams), ``r1``, ``r2`` once per particle and iteration,
     one 16-bit flip draw per bit; the sigmoid uses an exp built from + and *
     (relative error < 1e-7). Both kernels share these, so they agree number for number.
-    The compiled kernel stops a trial's swarm as soon as its global best holds the best value
-    any valid super arm has (its eq19 table's maximum): only a strictly larger fitness replaces
-    a best, so the remaining iterations could not change the result. How much that saves
-    depends on the rule: on i.i.d. exponential indices ``"set"`` reaches the optimum in about
-    99 % of trials and ``"xor"`` in about half (docs/performance.md).
+    Both kernels stop a trial's swarm as soon as its global best holds the best value any valid
+    super arm has (its eq19 table's maximum; the numpy kernel then drops the trial from its
+    arrays): only a strictly larger fitness replaces a best, so the remaining iterations could
+    not change the result. How much that saves depends on the rule: on i.i.d. exponential
+    indices ``"set"`` reaches the optimum in about 99 % of trials and ``"xor"`` in about half
+    (docs/performance.md).
 
-    On torch the numpy kernel runs on the index's device; on CUDA its iterations (tens of
-    thousands of small kernels a selection) are captured once per batch shape as one CUDA graph
-    and replayed (:class:`~mimo_radar_env.envs.device_forms.GraphReplay`): the same kernels, the
-    same numbers.
+    On torch the numpy kernel runs on the index's device; on CUDA its iterations (thousands of
+    small kernels a selection) are captured once per batch shape as one CUDA graph and replayed
+    (:class:`~mimo_radar_env.envs.device_forms.GraphReplay`): the same kernels, the same numbers,
+    every trial running every iteration (a graph's shapes cannot depend on the data).
     """
 
     name = "bpso"
@@ -213,7 +212,15 @@ class BPSOSolver(SuperArmSolver):
         return xp.astype(best[:, :num_tx], bool), xp.astype(best[:, num_tx:], bool)
 
     def _iterations(self, index: Any, positions: Any, keys: Any) -> Any:
-        """Every iteration of the swarm on torch tensors: the numpy kernel, a function of them."""
+        """The swarm's iterations on torch tensors: the numpy kernel, a function of them. Where
+        they are captured as a CUDA graph, every trial runs every iteration (a graph has no shape
+        that depends on the data); elsewhere a trial stops at its optimum, as on numpy."""
         return _bpso_kernels().run_numpy(
-            index, self.tx_count, self.rx_count, positions, keys, *self.swarm_arguments()
+            index,
+            self.tx_count,
+            self.rx_count,
+            positions,
+            keys,
+            *self.swarm_arguments(),
+            stop_at_optimum=index.device.type != GraphReplay.capture_on,
         )

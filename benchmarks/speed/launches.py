@@ -7,9 +7,9 @@ none), and at the paper's 500 trials a launch costs more than its arithmetic, so
 where eager torch code is launch-bound there. They are counts of the code's calls, the same on any
 device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees every operation.
 Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO's iterations)
-are counted apart: on CUDA they replay as one graph. ``--compiled`` also counts the calls of the
-env's step as ``torch.compile`` (inductor) writes it on this machine's torch. docs/performance.md's
-table is generated from the JSON.
+are counted apart, run as they are captured: on CUDA they replay as one graph. ``--compiled``
+also counts the calls of the env's step as ``torch.compile`` (inductor) writes it on this
+machine's torch. docs/performance.md's table is generated from the JSON.
 """
 
 from __future__ import annotations
@@ -48,12 +48,17 @@ def counting() -> Iterator[dict[str, int]]:
             return func(*args, **(kwargs or {}))
 
     call = GraphReplay.__call__
+    where = GraphReplay.capture_on
 
     def replayed(self: GraphReplay, *args: Any) -> Any:
+        # run as where it is captured: every operation a CUDA graph would hold (BPSO runs every
+        # iteration there; on the CPU its trials stop at their optimum)
         inside[0] = True
+        GraphReplay.capture_on = args[0].device.type
         try:
-            return call(self, *args)
+            return self.function(*args)
         finally:
+            GraphReplay.capture_on = where
             inside[0] = False
 
     GraphReplay.__call__ = replayed  # type: ignore[method-assign]

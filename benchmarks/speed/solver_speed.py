@@ -1,11 +1,12 @@
 """Super-arm solvers at the paper's size: time per batched selection and optimality.
 
-Run: ``python -m benchmarks.speed.solver_speed [--trials 500] [--repeats 5]``.
+Run: ``python -m benchmarks.speed.solver_speed [--trials 500] [--repeats 5] [--write FILE]``.
 Index matrices are i.i.d. Exponential(1) (SINR-like), (B, 4, 6), Ms = 2, Ns = 3.
 Prints the time per batched selection of ``exact``, ``bpso`` (numba kernel and,
 once, the numpy kernel) and ``alternating``, their ratios, BPSO's optimality rate
 against ``exact``, and the alternating solver's gap on a 10 x 12 layout. With numba, it also
-times the agents' BPSO selection in one thread under both position rules. Earlier versions of
+times the agents' BPSO selection in one thread under both position rules; under both, it times
+BPSO's iterations where numba is not used (:func:`without_numba`). Earlier versions of
 the kernel are compared across commits (:mod:`benchmarks.speed.across_commits`), not with copies
 kept in the tree.
 """
@@ -13,8 +14,10 @@ kept in the tree.
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -24,6 +27,8 @@ from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.streams import TrialRandom
 
 from ..precompile import paper_index
+from ..study import machine
+from . import write_json
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:
@@ -67,6 +72,44 @@ def one_thread(index, repeats: int, rule: str = "xor") -> dict[str, float]:
     }
 
 
+def without_numba(index, repeats: int, rule: str) -> dict[str, float]:
+    """BPSO's iterations where numba is not used, the paper's swarm under rule ``rule``, best of
+    ``repeats``: the numpy kernel (``bpso_numpy_iterations_ms_RULE``), each trial stopping at its
+    optimum, against the same kernel running every iteration of every trial
+    (``..._every_iteration_ms_RULE``, the same selections, checked); with torch installed the
+    same on torch's CPU (``bpso_torch_cpu_...``; every iteration is what a CUDA graph replays)."""
+    from agents.solvers import _bpso_kernels
+
+    solver = BPSOSolver(2, 3, rule=rule)
+    out: dict[str, float] = {}
+    namespaces = [("numpy", None)]
+    if importlib.util.find_spec("torch") is not None:
+        from mimo_radar_env.core.arrays import device_namespace
+
+        namespaces.append(("torch_cpu", device_namespace("cpu")))
+    for name, xp in namespaces:
+        random = (
+            TrialRandom.for_batch(0, len(index)) if xp is None else TrialRandom.for_batch(0, len(index), xp)
+        )
+        positions, keys = solver.initial_swarm(random, 4, 6)
+        given = index if xp is None else xp.asarray(index)
+        arguments = (given, 2, 3, positions, keys, *solver.swarm_arguments())
+        chosen = {}
+        for stop, key in (
+            (True, f"bpso_{name}_iterations_ms_{rule}"),
+            (False, f"bpso_{name}_every_iteration_ms_{rule}"),
+        ):
+            seconds = []
+            for _ in range(repeats):
+                start = time.perf_counter()
+                chosen[stop] = np.asarray(_bpso_kernels.run_numpy(*arguments, stop_at_optimum=stop))
+                seconds.append(time.perf_counter() - start)
+            out[key] = min(seconds) * 1e3
+        if not np.array_equal(chosen[True], chosen[False]):  # pragma: no cover - a bug
+            raise AssertionError(f"BPSO's {name} kernel selected differently when its trials stop")
+    return out
+
+
 def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
     index = paper_index(trials)
     exact_s, (etx, erx) = _time(ExactSolver(2, 3), index, repeats)
@@ -95,12 +138,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--repeats", type=int, default=5)
     parser.add_argument("--json", action="store_true", help="end with the figures as one JSON line")
+    parser.add_argument(
+        "--write", type=Path, default=None, help="also write the figures and the machine here"
+    )
     args = parser.parse_args(argv)
     r = measure(args.trials, args.repeats)
-    if HAVE_NUMBA:
-        index = paper_index(args.trials)
-        for rule in BPSO_RULES:
+    index = paper_index(args.trials)
+    for rule in BPSO_RULES:
+        if HAVE_NUMBA:
             r.update(one_thread(index, args.repeats, rule))
+        r.update(without_numba(index, args.repeats, rule))
     print(
         f"super-arm solvers, M=4 N=6 Ms=2 Ns=3, {args.trials} trials per batched selection"
         f" (numba {'on' if HAVE_NUMBA else 'not installed'})"
@@ -122,6 +169,17 @@ def main(argv: list[str] | None = None) -> None:
                 f"    rule {rule}: {r[f'bpso_1thread_ms_{rule}']:.1f} ms"
                 f" ({100 * r[f'bpso_optimality_rate_{rule}']:.1f} %)"
             )
+    print("  BPSO's iterations without numba (best of the repeats), each trial stopping at its optimum,")
+    print("  against every iteration of every trial:")
+    for name in ("numpy", "torch_cpu"):
+        for rule in BPSO_RULES:
+            if f"bpso_{name}_iterations_ms_{rule}" in r:
+                stopping = r[f"bpso_{name}_iterations_ms_{rule}"]
+                every = r[f"bpso_{name}_every_iteration_ms_{rule}"]
+                ratio = every / stopping
+                print(f"    {name:9s} rule {rule}: {stopping:8.1f} ms against {every:8.1f} ms ({ratio:.1f}x)")
+    if args.write is not None:
+        write_json(args.write, {"trials": args.trials, "repeats": args.repeats, "machine": machine(), **r})
     if args.json:
         print(json.dumps(r))
 

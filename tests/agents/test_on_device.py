@@ -151,6 +151,7 @@ def test_bpsos_iterations_ask_the_host_nothing_and_copy_nothing_from_it(monkeypa
     from agents.solvers import BPSOSolver
 
     solver = BPSOSolver(2, 3, iterations=5)
+    monkeypatch.setattr(device_forms.GraphReplay, "capture_on", torch.device(DEVICE).type)  # as captured
     index = torch.as_tensor(np.random.default_rng(1).exponential(size=(4, 4, 6)), device=DEVICE)
     positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, 4, device_namespace(DEVICE)), 4, 6)
     solver._iterations(index, positions, keys)  # the warm-up a capture runs first

@@ -33,6 +33,40 @@ def test_bpso_numpy_kernel_draws_the_same_numbers_in_any_block_of_iterations(mon
     np.testing.assert_array_equal(blocks[1], whole[1])
 
 
+@pytest.mark.parametrize("rule", ["xor", "set"])
+def test_the_numpy_kernel_stops_each_trial_at_its_optimum_and_selects_what_every_iteration_selects(
+    monkeypatch, rule
+):
+    """A trial whose global best holds its table's largest valid value leaves the swarm's arrays
+    (as the compiled kernel stops it); the others run on: the same global bests, to the bit, as
+    every trial running every iteration, and those that stopped hold the exact optimum."""
+    index = np.random.default_rng(8).exponential(size=(40, 4, 6))
+    solver = BPSOSolver(2, 3, iterations=60, rule=rule, use_numba=False)
+    positions, keys = solver.initial_swarm(streams(index, 2), 4, 6)
+    arguments = (index, 2, 3, positions, keys, *solver.swarm_arguments())
+    left = []
+    keep = _bpso_kernels._Fitness.keep
+    monkeypatch.setattr(
+        _bpso_kernels._Fitness, "keep", lambda self, rows: left.append(int(rows.sum())) or keep(self, rows)
+    )
+    stopping = _bpso_kernels.run_numpy(*arguments)
+    every = _bpso_kernels.run_numpy(*arguments, stop_at_optimum=False)
+    np.testing.assert_array_equal(stopping, every)
+    assert left and left == sorted(left, reverse=True) and left[-1] < 40  # trials left, fewer each time
+    values = np.einsum("bm,bn,bmn->b", every[:, :4].astype(float), every[:, 4:].astype(float), index)
+    best = ExactSolver(2, 3).solve(index, streams(index))
+    optimum = np.einsum("bm,bn,bmn->b", best[0].astype(float), best[1].astype(float), index)
+    assert (values <= optimum + 1e-12).all() and np.isclose(values, optimum).sum() >= 40 - left[-1]
+
+
+@pytest.mark.parametrize(("shape", "counts"), [((4, 6), (2, 3)), ((3, 3), (1, 1)), ((5, 2), (5, 1))])
+def test_the_valid_patterns_are_every_bit_pattern_with_the_stations_counts(shape, counts):
+    code = np.arange(1 << sum(shape))
+    bits = (code[:, None] >> np.arange(sum(shape))) & 1
+    valid = (bits[:, : shape[0]].sum(axis=1) == counts[0]) & (bits[:, shape[0] :].sum(axis=1) == counts[1])
+    assert _bpso_kernels._valid_patterns(*shape, *counts) == tuple(code[valid].tolist())
+
+
 def test_bpso_numpy_kernels_fitness_table_gives_the_direct_sums_bit_for_bit(monkeypatch):
     """eq19 looked up in the table of every bit pattern is each particle's direct sum, to the bit,
     for valid and invalid particles alike; a batch whose table would not fit sums directly, and
@@ -41,7 +75,7 @@ def test_bpso_numpy_kernels_fitness_table_gives_the_direct_sums_bit_for_bit(monk
     index = rng.normal(size=(5, 4, 6)) * 10.0 ** rng.integers(-3, 4, size=(5, 4, 6))
     positions = rng.integers(0, 2, size=(5, 40, 10)).astype(np.int8)
     direct = _bpso_kernels._fitness_np(index, positions, 4, 2, 3)
-    lookup = _bpso_kernels._fitness_function(index, 10, 4, 2, 3)(positions)
+    lookup = _bpso_kernels._Fitness(index, 10, 4, 2, 3)(positions)
     assert direct[1].any() and not direct[1].all()
     np.testing.assert_array_equal(lookup[1], direct[1])
     assert lookup[0].tobytes() == direct[0].tobytes()

@@ -25,10 +25,15 @@ def test_counting_sees_every_operation_and_those_of_a_replayed_function_apart():
     assert counts == {"total": 0, "replayed": 0}
 
 
-def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone():
+def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone(monkeypatch):
     """The operations a row puts in the replayed graph are those of BPSO's iterations called on
-    their own with the same shapes; on CUDA they become one dispatch."""
+    their own with the same shapes, as where they are captured (every iteration: on the CPU the
+    trials would stop at their optimum); on CUDA they become one dispatch."""
+    from mimo_radar_env.envs.device_forms import GraphReplay
+
     row = launches.policy_row("mg-crb-cl", 6, 1)
+    assert GraphReplay.capture_on == "cuda"  # as it was
+    monkeypatch.setattr(GraphReplay, "capture_on", "cpu")
     from agents.solvers import BPSOSolver
 
     solver = BPSOSolver(2, 3)

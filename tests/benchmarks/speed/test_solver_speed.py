@@ -43,3 +43,24 @@ def test_the_measured_figures_mean_what_they_say():
         suffix = "" if solver == "bpso" else "_10x12"
         assert 0 <= r[f"{solver}_optimality_rate{suffix}"] <= 1
         assert r[f"{solver}_mean_gap{suffix}"] >= 0  # never better than the exact optimum
+
+
+def test_bpso_without_numba_is_timed_stopping_and_running_every_iteration(monkeypatch):
+    """Both kernels of each namespace run (every iteration asked of the numpy kernel once a
+    namespace), and the figures are the kernel's own times, named by namespace and rule."""
+    from agents.solvers import _bpso_kernels
+
+    calls = []
+    run = _bpso_kernels.run_numpy
+    monkeypatch.setattr(
+        _bpso_kernels,
+        "run_numpy",
+        lambda *a, stop_at_optimum: calls.append(stop_at_optimum) or run(*a, stop_at_optimum=stop_at_optimum),
+    )
+    r = solver_speed.without_numba(np.random.default_rng(0).exponential(size=(20, 4, 6)), 2, "set")
+    names = ["numpy", "torch_cpu"] if "bpso_torch_cpu_iterations_ms_set" in r else ["numpy"]
+    assert calls == [True, True, False, False] * len(names)
+    assert sorted(r) == sorted(
+        f"bpso_{n}_{k}_ms_set" for n in names for k in ("iterations", "every_iteration")
+    )
+    assert all(value > 0 for value in r.values())
