@@ -1161,6 +1161,26 @@ def bpso_float32_table(docs: Path) -> str:
     return "\n".join(lines)
 
 
+@values("without-numba")
+def without_numba_values(docs: Path) -> dict[str, str]:
+    """``solver_speed.json`` (``solver_speed --write``): ``trials``, ``repeats``, ``cores``; per
+    namespace N (``numpy``, ``torch_cpu``) and rule R, BPSO's iterations with each trial stopping
+    at its optimum, ``N.R.stopping``, and every trial running every iteration, ``N.R.every`` (ms),
+    and ``N.R.ratio``, the second over the first."""
+    r = read_json(docs, "perf/solver_speed.json")
+    table = {"trials": f"{r['trials']:,}", "repeats": str(r["repeats"]), "cores": str(r["machine"]["cores"])}
+    for name in ("numpy", "torch_cpu"):
+        for rule in ("xor", "set"):
+            stopping = r[f"bpso_{name}_iterations_ms_{rule}"]
+            every = r[f"bpso_{name}_every_iteration_ms_{rule}"]
+            table |= {
+                f"{name}.{rule}.stopping": f"{stopping:.0f}",
+                f"{name}.{rule}.every": f"{every:.0f}",
+                f"{name}.{rule}.ratio": f"{every / stopping:.1f}",
+            }
+    return table
+
+
 @values("first-run")
 def first_run_values(docs: Path) -> dict[str, str]:
     """``python -m benchmarks.speed.first_run``: the quickstart's first run against its second,

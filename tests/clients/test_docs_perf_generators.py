@@ -106,3 +106,22 @@ def test_the_bpso_breakdown_values(tmp_path, kernel_ms, polynomial_without_ms, w
     (docs / "results" / "perf" / "bpso_parts.json").write_text(json.dumps(figures))
     with pytest.raises(ValueError, match="the rules' parts differ"):
         generators.bpso_parts_table(docs)
+
+
+def test_bpso_without_numba_values(tmp_path):
+    """Each namespace's and rule's two times, and the second over the first, from the figures."""
+    docs = write_perf(tmp_path, 1.0, 1.0)
+    figures = {"trials": 1500, "repeats": 3, "machine": {"cores": 16}}
+    for name, scale in (("numpy", 1.0), ("torch_cpu", 2.0)):
+        for rule, stopping in (("xor", 300.4), ("set", 50.0)):
+            figures[f"bpso_{name}_iterations_ms_{rule}"] = scale * stopping
+            figures[f"bpso_{name}_every_iteration_ms_{rule}"] = scale * 600.0
+    (docs / "results" / "perf" / "solver_speed.json").write_text(json.dumps(figures))
+    table = generators.without_numba_values(docs)
+    assert (table["trials"], table["repeats"], table["cores"]) == ("1,500", "3", "16")
+    assert (table["numpy.xor.stopping"], table["numpy.xor.every"], table["numpy.xor.ratio"]) == (
+        "300",
+        "600",
+        "2.0",
+    )
+    assert (table["torch_cpu.set.stopping"], table["torch_cpu.set.ratio"]) == ("100", "12.0")
