@@ -10,7 +10,6 @@ without it the numpy kernel runs.
 from __future__ import annotations
 
 import functools
-import itertools
 from typing import Any
 
 import numpy as np
@@ -19,8 +18,7 @@ from numpy.typing import NDArray
 from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.compiled import CHUNK, HAVE_NUMBA, numba, twins
 from mimo_radar_env.core.counter_hash import Stream, element_bits, stream_bases, to_unit
-
-from .bpso import TABLE_BITS
+from mimo_radar_env.core.superarm import all_super_arms
 
 if HAVE_NUMBA:  # pragma: no branch
     from mimo_radar_env.core._counter_hash_kernels import element_bits_nb, stream_base_nb, to_unit_nb
@@ -72,12 +70,14 @@ def run_numpy(
     inertia_start: float,
     inertia_end: float,
     velocity_clamp: float,
-    set_rule: bool = False,
+    set_rule: bool,
+    table_bits: int,
     stop_at_optimum: bool = True,
 ) -> NDArray[np.int8]:
     """The iterations, vectorised over trials and particles. Returns the global bests (B, L).
 
-    With ``stop_at_optimum`` and eq19's table (:class:`_Fitness`), a trial leaves the
+    With ``stop_at_optimum`` and eq19's table (:class:`_Fitness`: particles of at most
+    ``table_bits`` bits, where it fits in memory), a trial leaves the
     swarm's arrays once its global best holds the largest value any valid super arm has, as the
     compiled kernel stops it: a best is replaced only by a strictly larger fitness, so no later
     iteration could change it, and each trial's draws are its own, so the others go on as they
@@ -85,100 +85,151 @@ def run_numpy(
     data: what a CUDA graph captures."""
     xp = namespace(index)
     batch, population, length = positions.shape
-    num_tx = index.shape[1]
-    positions = xp.copy(positions)
-    velocities = xp.zeros(positions.shape)
-    fitness_of = _Fitness(index, length, num_tx, tx_count, rx_count)
-    fitness, valid = fitness_of(positions)
-    personal_best = xp.copy(positions)
-    personal_fit = xp.where(valid, fitness, -np.inf)
-    rows = xp.arange(batch)
-    first = xp.argmax(personal_fit, axis=1)
-    global_best = xp.copy(personal_best[rows, first])
-    global_fit = xp.copy(personal_fit[rows, first])
-    particle = xp.arange(population, dtype=np.int64)[None, :]
-    lanes = (length + 3) // 4
-    bit = xp.arange(length, dtype=np.int64)
-    hash_element = (xp.arange(population, dtype=np.int64)[:, None] * lanes + bit // 4)[None]  # (1, P, L)
-    lane_shift = xp.words(16 * (bit % 4)) if not xp.is_torch else 16 * (bit % 4)
+    fitness_of = _Fitness(index, length, index.shape[1], tx_count, rx_count, table_bits)
+    swarm = _Swarm(positions, fitness_of)
+    draws = _Draws(keys, population, length, iterations, whole_blocks=xp.is_torch and not stop_at_optimum)
     steps = max(iterations - 1, 1)
-    # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
-    r_bases = xp.stack([stream_bases(keys, s, iterations) for s in (Stream.BPSO_R1, Stream.BPSO_R2)])
-    flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
-    # the draws depend on no state: hashed for a block of iterations at once (a few operations a
-    # block instead of a few dozen an iteration), blocks sized to DRAW_BLOCK_BYTES
-    budget = DRAW_BLOCK_BYTES["torch" if xp.is_torch and not stop_at_optimum else "numpy"]
-    block = int(np.clip(budget // (8 * batch * population * (2 + length)), 1, iterations))
     optimum = fitness_of.optimum if stop_at_optimum else None
-    result, alive = global_best, None  # the trials still iterating (None: all of them)
-    drawn_for = None  # their rows in the block's draws, where some left since it was drawn
+    result, alive = None, None  # the bests of the trials that stopped; the rows still iterating
     for q in range(iterations):
-        if q % block == 0:
-            drawn = slice(q, min(q + block, iterations))
-            r_block = to_unit(element_bits(r_bases[:, :, drawn, None], particle))  # (2, B, Q, P)
-            u_block = _flip_uniform_np(flip_bases[:, drawn, None, None], hash_element, lane_shift)
-            drawn_for = None
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        if drawn_for is None:
-            r1, r2 = r_block[:, :, q % block]
-            u = u_block[:, q % block]  # (B, P, L)
-        else:
-            r1, r2 = r_block[:, drawn_for, q % block]
-            u = u_block[drawn_for, q % block]
-        velocities = (
-            inertia * velocities
-            + (c1 * r1)[..., None] * (personal_best - positions)
-            + (c2 * r2)[..., None] * (global_best[:, None, :] - positions)
-        )  # eq20
-        velocities = xp.minimum(xp.maximum(velocities, -velocity_clamp), velocity_clamp)
-        draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
-        if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
-            positions = xp.astype(draw, np.int8)
-        else:  # eq21 as written: the bit flips with probability sigmoid(V)
-            positions = xp.astype(xp.where(draw, 1 - positions, positions), np.int8)
-        fitness, valid = fitness_of(positions)
-        improved = valid & (fitness > personal_fit)
-        personal_best = xp.where(improved[..., None], positions, personal_best)
-        personal_fit = xp.where(improved, fitness, personal_fit)
-        candidate = xp.argmax(personal_fit, axis=1)
-        better = personal_fit[rows, candidate] > global_fit
-        global_best = xp.where(better[:, None], personal_best[rows, candidate], global_best)
-        global_fit = xp.where(better, personal_fit[rows, candidate], global_fit)
+        swarm.move(*draws.at(q), inertia, c1, c2, velocity_clamp, set_rule)
         if optimum is None or q == iterations - 1:
             continue
-        final = global_fit >= optimum
+        final = swarm.global_fit >= optimum
         if not bool(final.any()):
             continue
-        if alive is None:
-            result, alive = xp.copy(global_best), xp.arange(batch)
-        result[alive[final]] = global_best[final]
+        if result is None:
+            result, alive = xp.copy(swarm.global_best), xp.arange(batch)
+        result[alive[final]] = swarm.global_best[final]
         keep = ~final
-        left = int(keep.sum())
-        if left == 0:
+        if not bool(keep.any()):
             return result
-        alive, rows = alive[keep], xp.arange(left)
-        positions, velocities = positions[keep], velocities[keep]
-        personal_best, personal_fit = personal_best[keep], personal_fit[keep]
-        global_best, global_fit, optimum = global_best[keep], global_fit[keep], optimum[keep]
-        r_bases, flip_bases = r_bases[:, keep], flip_bases[keep]
-        # the block's draws stay as drawn (on torch a block is every iteration's: large to copy)
-        drawn_for = xp.arange(keep.shape[0])[keep] if drawn_for is None else drawn_for[keep]
-        fitness_of.keep(keep)
-    if alive is None:
-        return global_best
-    result[alive] = global_best
+        alive, optimum = alive[keep], optimum[keep]
+        for part in (swarm, draws, fitness_of):
+            part.keep(keep)
+    if result is None:
+        return swarm.global_best
+    result[alive] = swarm.global_best
     return result
+
+
+class _Swarm:
+    """The particles of every trial still iterating: positions and velocities (B, P, L), personal
+    bests and their fitness, the global best (B, L) and its fitness."""
+
+    def __init__(self, positions: NDArray[np.int8], fitness_of: _Fitness) -> None:
+        xp = self.xp = namespace(positions)
+        self.fitness_of = fitness_of
+        self.positions = xp.copy(positions)
+        self.velocities = xp.zeros(positions.shape)
+        fitness, valid = fitness_of(self.positions)
+        self.personal_best = xp.copy(self.positions)
+        self.personal_fit = xp.where(valid, fitness, -np.inf)
+        self.rows = xp.arange(positions.shape[0])
+        first = xp.argmax(self.personal_fit, axis=1)
+        self.global_best = xp.copy(self.personal_best[self.rows, first])
+        self.global_fit = xp.copy(self.personal_fit[self.rows, first])
+
+    def move(
+        self, r1: Any, r2: Any, u: Any, inertia: float, c1: float, c2: float, clamp: float, set_rule: bool
+    ) -> None:
+        """One iteration: eq20's velocities, eq21's positions, then the bests."""
+        xp, rows = self.xp, self.rows
+        velocities = (
+            inertia * self.velocities
+            + (c1 * r1)[..., None] * (self.personal_best - self.positions)
+            + (c2 * r2)[..., None] * (self.global_best[:, None, :] - self.positions)
+        )  # eq20
+        self.velocities = velocities = xp.minimum(xp.maximum(velocities, -clamp), clamp)
+        draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
+        if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
+            self.positions = positions = xp.astype(draw, np.int8)
+        else:  # eq21 as written: the bit flips with probability sigmoid(V)
+            self.positions = positions = xp.astype(
+                xp.where(draw, 1 - self.positions, self.positions), np.int8
+            )
+        fitness, valid = self.fitness_of(positions)
+        improved = valid & (fitness > self.personal_fit)
+        self.personal_best = xp.where(improved[..., None], positions, self.personal_best)
+        self.personal_fit = xp.where(improved, fitness, self.personal_fit)
+        candidate = xp.argmax(self.personal_fit, axis=1)
+        better = self.personal_fit[rows, candidate] > self.global_fit
+        self.global_best = xp.where(better[:, None], self.personal_best[rows, candidate], self.global_best)
+        self.global_fit = xp.where(better, self.personal_fit[rows, candidate], self.global_fit)
+
+    def keep(self, rows: Any) -> None:
+        for name in ("positions", "velocities", "personal_best", "personal_fit", "global_best", "global_fit"):
+            setattr(self, name, getattr(self, name)[rows])
+        self.rows = self.xp.arange(self.positions.shape[0])
+
+
+class _Draws:
+    """The iterations' random numbers, which depend on no state: r1, r2 per particle and the
+    16-bit flip uniforms per bit, hashed for a block of iterations at once (a few operations a
+    block instead of a few dozen an iteration), blocks sized to DRAW_BLOCK_BYTES (``whole_blocks``:
+    the torch budget, where every trial runs every iteration)."""
+
+    def __init__(self, keys: Any, population: int, length: int, iterations: int, whole_blocks: bool) -> None:
+        xp = self.xp = namespace(keys)
+        batch = keys.shape[0]
+        self.iterations = iterations
+        # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
+        self.r_bases = xp.stack([stream_bases(keys, s, iterations) for s in (Stream.BPSO_R1, Stream.BPSO_R2)])
+        self.flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
+        self.particle = xp.arange(population, dtype=np.int64)[None, :]
+        lanes = (length + 3) // 4
+        bit = xp.arange(length, dtype=np.int64)
+        self.hash_element = (xp.arange(population, dtype=np.int64)[:, None] * lanes + bit // 4)[
+            None
+        ]  # (1, P, L)
+        self.lane_shift = xp.words(16 * (bit % 4)) if not xp.is_torch else 16 * (bit % 4)
+        budget = DRAW_BLOCK_BYTES["torch" if whole_blocks else "numpy"]
+        self.block = int(np.clip(budget // (8 * batch * population * (2 + length)), 1, iterations))
+        self.drawn_for: Any = None  # the block's rows of the trials left, where some stopped since
+
+    def at(self, q: int) -> tuple[Any, Any, Any]:
+        """Iteration ``q``'s r1, r2 (B, P) and flip uniforms (B, P, L)."""
+        block = self.block
+        if q % block == 0:
+            drawn = slice(q, min(q + block, self.iterations))
+            self.r_block = to_unit(
+                element_bits(self.r_bases[:, :, drawn, None], self.particle)
+            )  # (2, B, Q, P)
+            self.u_block = _flip_uniform_np(
+                self.flip_bases[:, drawn, None, None], self.hash_element, self.lane_shift
+            )
+            self.drawn_for = None
+        if self.drawn_for is None:
+            r1, r2 = self.r_block[:, :, q % block]
+            return r1, r2, self.u_block[:, q % block]
+        r1, r2 = self.r_block[:, self.drawn_for, q % block]
+        return r1, r2, self.u_block[self.drawn_for, q % block]
+
+    def keep(self, rows: Any) -> None:
+        self.r_bases, self.flip_bases = self.r_bases[:, rows], self.flip_bases[rows]
+        # the block's draws stay as drawn (on torch a block is every iteration's: large to copy)
+        self.drawn_for = (
+            self.xp.arange(rows.shape[0])[rows] if self.drawn_for is None else self.drawn_for[rows]
+        )
 
 
 class _Fitness:
     """eq19 of a swarm's positions (B, P, L) and whether each is valid (a call): looked up in a
-    table of every bit pattern's value per trial (:func:`_fitness_np` of each pattern, so the same
-    numbers) where it fits FITNESS_TABLE_BYTES, a few operations an iteration instead of one a
-    channel; else summed directly. With the table, ``optimum`` is each trial's largest value of a
-    valid pattern (else None), and :meth:`keep` keeps the rows of the trials still iterating."""
+    table of every bit pattern's value per trial (:func:`_fitness_np` of each valid pattern, so
+    the same numbers) for particles of at most ``table_bits`` bits where it fits
+    FITNESS_TABLE_BYTES, a few operations an iteration instead of one a channel; else summed
+    directly. With the table, ``optimum`` is each trial's largest value of a valid pattern (else
+    None), and :meth:`keep` keeps the rows of the trials still iterating."""
 
     def __init__(
-        self, index: NDArray[np.float64], length: int, num_tx: int, tx_count: int, rx_count: int
+        self,
+        index: NDArray[np.float64],
+        length: int,
+        num_tx: int,
+        tx_count: int,
+        rx_count: int,
+        table_bits: int,
     ) -> None:
         xp = namespace(index)
         self.index, self.counts = index, (num_tx, tx_count, rx_count)
@@ -186,7 +237,7 @@ class _Fitness:
         self.optimum: Any = None
         batch, channels = index.shape[0], index.shape[1] * index.shape[2]
         table_bytes = 8 * batch << length
-        if table_bytes > FITNESS_TABLE_BYTES:
+        if length > table_bits or table_bytes > FITNESS_TABLE_BYTES:
             return
         # only the valid patterns are summed (a tenth of them at the paper's 4 x 6): the others are 0
         valid_codes = _valid_patterns(num_tx, index.shape[2], tx_count, rx_count)
@@ -217,13 +268,10 @@ class _Fitness:
 
 @functools.cache
 def _valid_patterns(num_tx: int, num_rx: int, tx_count: int, rx_count: int) -> tuple[int, ...]:
-    """The bit patterns (bit j: station j, transmitters first) with ``tx_count`` transmitters and
-    ``rx_count`` receivers set, ascending."""
-    tx = [sum(1 << m for m in chosen) for chosen in itertools.combinations(range(num_tx), tx_count)]
-    rx = [
-        sum(1 << (num_tx + n) for n in chosen) for chosen in itertools.combinations(range(num_rx), rx_count)
-    ]
-    return tuple(sorted(t | r for t in tx for r in rx))
+    """The bit patterns (bit j: station j, transmitters first) of every super arm, ascending."""
+    tx, rx = all_super_arms(num_tx, num_rx, tx_count, rx_count)
+    bits = np.concatenate([tx, rx], axis=1).astype(np.int64) << np.arange(num_tx + num_rx)
+    return tuple(sorted(bits.sum(axis=1).tolist()))
 
 
 #: The most memory eq19's table may take: a value per bit pattern and trial, and the terms it is
@@ -352,11 +400,12 @@ if HAVE_NUMBA:  # pragma: no branch
         inertia_end,
         velocity_clamp,
         set_rule,
+        table_bits,
     ):
         """Same numbers as :func:`run_numpy`. Per trial, the swarm is laid out (bit, particle) in
         float64 (positions are 0 or 1, exact), particles padded to :data:`LANES`, so that every
         inner loop runs over particles with one type and vectorises; eq19 is a table lookup
-        (:func:`_valid_entries`) for particles of at most :data:`TABLE_BITS` bits. With the table,
+        (:func:`_valid_entries`) for particles of at most ``table_bits`` bits. With the table,
         a trial stops once its global best holds the table's largest value: a best is replaced
         only by a strictly larger fitness, so no later iteration could change it (the numpy
         kernel runs every iteration and selects the same)."""
@@ -366,7 +415,7 @@ if HAVE_NUMBA:  # pragma: no branch
         lanes = (length + 3) // 4
         width = (population + LANES - 1) // LANES * LANES
         steps = max(iterations - 1, 1)
-        by_table = length <= TABLE_BITS
+        by_table = length <= table_bits
         tx_codes = _valid_codes(tx_count, num_tx if by_table else 0)
         rx_codes = _valid_codes(rx_count, num_rx if by_table else 0)
         tx_selected = _selected(tx_codes, tx_count)

@@ -34,8 +34,7 @@ def _bpso_kernels() -> ModuleType:
 
 
 #: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
-#: trial); longer particles sum their selected channels directly. Here, not in the kernels'
-#: module, so that the cost model asks it without importing numba.
+#: trial; the kernels' last argument); longer particles sum their selected channels directly.
 TABLE_BITS = 14
 #: Iterations the ``"set"`` rule takes to reach a tabulated optimum, roughly (its cost model).
 SET_RULE_ITERATIONS = 20
@@ -180,9 +179,10 @@ class BPSOSolver(SuperArmSolver):
             positions = masks_to_actions(tx, rx)
         return positions, random.keys_for(Stream.BPSO_KEYS)
 
-    def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool]:
+    def swarm_arguments(self) -> tuple[int, float, float, float, float, float, bool, int]:
         """The kernels' arguments after ``keys``: ``q_max``, ``c1``, ``c2``, the inertia at the first
-        and last iteration, the velocity clamp and whether the rule is ``"set"``."""
+        and last iteration, the velocity clamp, whether the rule is ``"set"`` and
+        :data:`TABLE_BITS`."""
         return (
             self.iterations,
             float(self.c1),
@@ -191,6 +191,7 @@ class BPSOSolver(SuperArmSolver):
             float(self.inertia_end),
             float(self.velocity_clamp),
             self.rule == "set",
+            TABLE_BITS,
         )
 
     def solve(

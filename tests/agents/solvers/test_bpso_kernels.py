@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from agents.solvers import BPSOSolver, ExactSolver, _bpso_kernels
+from agents.solvers.bpso import TABLE_BITS
 from mimo_radar_env.core.superarm import top_mask
 from tests.agents.solvers.helpers import streams
 
@@ -75,7 +76,7 @@ def test_bpso_numpy_kernels_fitness_table_gives_the_direct_sums_bit_for_bit(monk
     index = rng.normal(size=(5, 4, 6)) * 10.0 ** rng.integers(-3, 4, size=(5, 4, 6))
     positions = rng.integers(0, 2, size=(5, 40, 10)).astype(np.int8)
     direct = _bpso_kernels._fitness_np(index, positions, 4, 2, 3)
-    lookup = _bpso_kernels._Fitness(index, 10, 4, 2, 3)(positions)
+    lookup = _bpso_kernels._Fitness(index, 10, 4, 2, 3, 14)(positions)
     assert direct[1].any() and not direct[1].all()
     np.testing.assert_array_equal(lookup[1], direct[1])
     assert lookup[0].tobytes() == direct[0].tobytes()
@@ -121,11 +122,11 @@ def test_bpso_serial_kernel_is_taken_with_one_thread_and_gives_the_same_numbers(
     ],
 )
 def test_bpso_kernels_agree_by_table_and_by_direct_sum(shape, counts, population):
-    """The compiled kernel looks eq19 up in a table up to TABLE_BITS bits and sums it beyond;
+    """The kernels look eq19 up in a table up to TABLE_BITS bits and sum it beyond;
     both, with any population, select what the numpy kernel selects, under both rules."""
     if not _bpso_kernels.HAVE_NUMBA:
         pytest.skip("numba is not installed: only the numpy kernel exists")
-    assert (sum(shape) <= _bpso_kernels.TABLE_BITS) == (shape == (4, 6) or shape == (3, 3))
+    assert (sum(shape) <= TABLE_BITS) == (shape == (4, 6) or shape == (3, 3))
     index = np.random.default_rng(sum(shape)).exponential(size=(9, *shape))
     for rule in ("xor", "set"):
         solvers = [
