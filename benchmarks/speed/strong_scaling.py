@@ -191,14 +191,15 @@ def measure(
     model_from: int | None = None,
     measured_only: Callable[[dict[str, Any]], None] | None = None,
     repeats: int = 1,
+    model: bool = True,
 ) -> dict[str, Any]:
     """The measured runs at ``counts`` workers (``repeats`` times each, alternately) and the
     model's predictions at ``predictions``, from the runs at ``model_from`` workers (default the
     most measured): their time outside the tasks. ``measured_only`` is given the result without
     the model as soon as the runs are measured (the model's probes take minutes: a run stopped
-    then keeps its measurements)."""
+    then keeps its measurements); without ``model`` that is the result."""
     with tempfile.TemporaryDirectory(prefix="strong-scaling-") as scratch:
-        return _measure(study, counts, predictions, model_from, Path(scratch), measured_only, repeats)
+        return _measure(study, counts, predictions, model_from, Path(scratch), measured_only, repeats, model)
 
 
 def _measure(
@@ -209,6 +210,7 @@ def _measure(
     scratch: Path,
     measured_only: Callable[[dict[str, Any]], None] | None = None,
     repeats: int = 1,
+    model: bool = True,
 ) -> dict[str, Any]:
     trials = int(study[study.index("--trials") + 1])
     runs: dict[int, list[dict[str, Any]]] = {w: [] for w in counts}
@@ -239,6 +241,8 @@ def _measure(
     }
     if measured_only is not None:
         measured_only({**result, "model": []})
+    if not model:
+        return {**result, "model": []}
     source = model_from or max(counts)
     order = queue_order(folders[source])
     overheads = []
@@ -305,6 +309,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--repeats", type=int, default=1, help="runs of each worker count, alternately (default 1)"
     )
+    parser.add_argument(
+        "--no-model", action="store_true", help="measure only (the model's probes take minutes)"
+    )
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     if args.repeats < 1:
@@ -324,6 +331,7 @@ def main(argv: list[str] | None = None) -> None:
         args.model_from,
         lambda partial: write_json(args.json, partial),
         args.repeats,
+        model=not args.no_model,
     )
     for row in result["measured"]:
         wall, efficiency = row["wall_s"], row["efficiency"]

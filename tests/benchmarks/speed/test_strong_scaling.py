@@ -53,6 +53,15 @@ def test_a_tiny_study_is_measured_and_modelled(tmp_path):
         assert row["wall_s"] == pytest.approx(result["outside_tasks_s"] + row["makespan_s"])
 
 
+@pytest.mark.filterwarnings("ignore")
+def test_without_the_model_only_the_runs_are_measured(tmp_path, monkeypatch):
+    probed = []
+    monkeypatch.setattr(strong_scaling, "predict", lambda *args: probed.append(args) or [])
+    study = ("claims", "--scenarios", "1", "--trials", "4", "--steps", "3")
+    result = strong_scaling.measure(study, [2], [4], model=False)
+    assert result["model"] == [] and probed == [] and [r["workers"] for r in result["measured"]] == [2]
+
+
 def test_repeated_runs_give_means_and_intervals_paired_by_repeat():
     """Two runs of a count: each figure is the mean of the runs' own; the efficiency is each
     repeat's against the base count's run of the same repeat, averaged, with its t interval."""
