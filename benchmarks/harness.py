@@ -16,6 +16,7 @@ configuration and its shard, so every backend gives the same numbers.
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import fcntl
 import functools
@@ -876,6 +877,7 @@ def run_many(
     device: Any = None,
     threads: int | None = None,
     device_mode: str = "eager",
+    on_policy: Callable[[int, str, dict[str, NDArray]], None] | None = None,
 ) -> list[bool]:
     """Run the tasks of several runs (a study's) on one set of workers; whether each run is
     complete.
@@ -885,7 +887,10 @@ def run_many(
     next starts, so that no worker idles at a run's end. ``on_complete(i, per_trial)`` is called
     in this process as soon as run ``i`` has all its shards (at once for a run already complete),
     with its shards joined (:func:`load_per_trial`), while the workers go on with the next run's
-    tasks: the place to write its outputs. The shards this call checked or wrote are joined from
+    tasks: the place to write its outputs. ``on_policy(i, policy, joined)`` is called likewise as
+    soon as this call has saved the last shard of one policy of run ``i``, with that policy's
+    shards joined (the same arrays ``on_complete`` then gets): the place to start on that policy's
+    outputs while the workers go on. The shards this call checked or wrote are joined from
     memory (up to :func:`held_bytes` of them), not read again. ``max_tasks``
     and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
     process on torch on that device (``workers=1``, the local backend), the step in form
@@ -906,10 +911,10 @@ def run_many(
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
             prepare_output(out, config)
-        held = _Held(held_bytes() if on_complete is not None else 0)
+        held = _Held(held_bytes() if on_complete is not None or on_policy is not None else 0)
         todo, estimated = _queue(configs, folders, max_tasks, held)
         started = time.perf_counter()
-        saving = _Saving(configs, folders, todo, on_complete, held)
+        saving = _Saving(configs, folders, todo, on_complete, held, on_policy)
         if max_tasks is None:
             _say_resumed(configs, folders, saving.left)
         threads = _threads_for(configs, todo, workers, backend, threads)
@@ -979,8 +984,8 @@ class _Held:
 
 class _Saving:
     """A run's finished tasks: each one's shard written at once (and held, :class:`_Held`), the
-    progress bar moved, and ``on_complete(i, per_trial)`` called as soon as run ``i`` has all its
-    shards."""
+    progress bar moved, ``on_policy(i, policy, joined)`` called as soon as one policy of run ``i``
+    has all its shards and ``on_complete(i, per_trial)`` as soon as run ``i`` has."""
 
     def __init__(
         self,
@@ -989,11 +994,14 @@ class _Saving:
         todo: list[tuple[int, str, int]],
         on_complete: Callable[[int, dict[str, dict[str, NDArray]]], None] | None,
         held: _Held,
+        on_policy: Callable[[int, str, dict[str, NDArray]], None] | None = None,
     ) -> None:
         self.configs, self.folders, self.todo, self.on_complete = configs, folders, todo, on_complete
-        self.held = held
+        self.held, self.on_policy = held, on_policy
         self.payloads = [config.to_json() for config in configs]
         self.left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
+        self.left_of_policy = collections.Counter((n, p) for n, p, _ in todo)
+        self.joined: dict[int, dict[str, dict[str, NDArray]]] = {}  # the policies given to on_policy
         self.steps_of = [  # the trial-steps of each run's tasks
             {(p, s): len(c.shard_trials(p, s)) * c.steps for p, s in c.tasks()} for c in configs
         ]
@@ -1012,9 +1020,9 @@ class _Saving:
         config, folder = self.configs[number], self.folders[number]
         if all(shard_path(folder, p, s).exists() for p, s in config.tasks()):
             self.complete[number] = True
-            held = self.held.pop(number)
+            held, joined = self.held.pop(number), self.joined.pop(number, {})
             if self.on_complete is not None:
-                self.on_complete(number, load_per_trial(folder, config, held))
+                self.on_complete(number, load_per_trial(folder, config, held, joined))
 
     def finished(self, position: int, result: dict[str, NDArray]) -> None:
         number, policy, shard = self.todo[position]
@@ -1030,6 +1038,11 @@ class _Saving:
         self.bar.update(self.steps_of[number][policy, shard])
         self.bar.set_postfix_str(policy if len(self.configs) == 1 else f"{config.scenario['name']}: {policy}")
         self.left[number] -= 1
+        self.left_of_policy[number, policy] -= 1
+        if self.left_of_policy[number, policy] == 0 and self.on_policy is not None:
+            joined = join_policy(self.folders[number], config, policy, self.held.shards.get(number, {}))
+            self.joined.setdefault(number, {})[policy] = joined
+            self.on_policy(number, policy, joined)
         if self.left[number] == 0:
             self.run_done(number)
 
@@ -1269,22 +1282,37 @@ def _read(out: Path, config: RunConfig, policy: str, shard: int) -> dict[str, ND
 
 
 def load_per_trial(
-    out: Path, config: RunConfig, held: Mapping[tuple[str, int], Mapping[str, NDArray]] | None = None
+    out: Path,
+    config: RunConfig,
+    held: Mapping[tuple[str, int], Mapping[str, NDArray]] | None = None,
+    joined: Mapping[str, dict[str, NDArray]] | None = None,
 ) -> dict[str, dict[str, NDArray]]:
-    """Every policy's shard fields joined in trial order: the per-trial arrays concatenated
+    """Every policy's shard fields joined (:func:`join_policy`); a policy in ``joined`` (joined
+    already by the caller) is taken from there."""
+    joined = joined or {}
+    return {
+        policy: joined[policy] if policy in joined else join_policy(out, config, policy, held)
+        for policy in config.policies
+    }
+
+
+def join_policy(
+    out: Path,
+    config: RunConfig,
+    policy: str,
+    held: Mapping[tuple[str, int], Mapping[str, NDArray]] | None = None,
+) -> dict[str, NDArray]:
+    """One policy's shard fields joined in trial order: the per-trial arrays concatenated
     (trials first), the selection counts and compute times summed over shards (in shard
     order, so every backend gives the same numbers). A shard in ``held`` (its data, checked or
     written by the caller) is taken from there, the others read from ``out``."""
     held = held or {}
-    per_trial: dict[str, dict[str, NDArray]] = {}
-    for policy in config.policies:
-        parts = [
-            held[policy, shard] if (policy, shard) in held else _read(Path(out), config, policy, shard)
-            for shard in range(config.shards_of(policy))
-        ]
-        joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
-        for key in ("selections", "wall_s", "tracker_repairs"):
-            joined[key] = functools.reduce(np.add, (part[key] for part in parts))
-        joined[TRUTH_FIELD] = parts[0][TRUTH_FIELD]  # trial 0's truth, the same for every policy
-        per_trial[policy] = joined
-    return per_trial
+    parts = [
+        held[policy, shard] if (policy, shard) in held else _read(Path(out), config, policy, shard)
+        for shard in range(config.shards_of(policy))
+    ]
+    joined = {key: np.concatenate([part[key] for part in parts]) for key in TRIAL_FIELDS}
+    for key in ("selections", "wall_s", "tracker_repairs"):
+        joined[key] = functools.reduce(np.add, (part[key] for part in parts))
+    joined[TRUTH_FIELD] = parts[0][TRUTH_FIELD]  # trial 0's truth, the same for every policy
+    return joined

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -77,8 +78,12 @@ PAPER_ASR = {
 def trial_metrics(config: RunConfig, per_trial: dict[str, dict[str, NDArray]]) -> dict[str, TrialMetrics]:
     """Every policy's :class:`~benchmarks.metrics.TrialMetrics`: the one source of every
     number the run reports."""
-    channels = config.scenario_object.num_channels_per_step
-    return {policy: TrialMetrics(per_trial[policy], channels) for policy in config.policies}
+    return {policy: policy_metrics(config, per_trial[policy]) for policy in config.policies}
+
+
+def policy_metrics(config: RunConfig, joined: dict[str, NDArray]) -> TrialMetrics:
+    """One policy's :class:`~benchmarks.metrics.TrialMetrics` from its joined shard fields."""
+    return TrialMetrics(joined, config.scenario_object.num_channels_per_step)
 
 
 #: The table's value keys of a summary row, in order; each also has its ``ci`` and ``method``.
@@ -90,14 +95,17 @@ def summarize(
     config: RunConfig,
     per_trial: dict[str, dict[str, NDArray]],
     metrics: dict[str, TrialMetrics] | None = None,
+    estimated: Mapping[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """The summary.json document (schema in docs/benchmark.md): each policy's metrics with
     their 95 % intervals and the method of each (``ci``, ``method``), its compute time, and
-    every pair of policies' paired differences."""
+    every pair of policies' paired differences. ``estimated`` holds policies'
+    :func:`uncertainty.policy_estimates` computed already (as the run went)."""
     metrics = metrics or trial_metrics(config, per_trial)
+    estimated = estimated or {}
     policies = {}
     for policy, m in metrics.items():
-        estimates = uncertainty.policy_estimates(m, config.seed)
+        estimates = estimated[policy] if policy in estimated else uncertainty.policy_estimates(m, config.seed)
         row: dict[str, Any] = {key: None for key in VALUE_KEYS}
         ci: dict[str, Any] = {}
         method: dict[str, Any] = {}
@@ -381,16 +389,18 @@ def write_outputs(
     figures: bool = True,
     pairs: str = "reference",
     metrics: dict[str, TrialMetrics] | None = None,
+    estimated: Mapping[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
     """Write summary.json, curves.csv, table.md and (optionally) the PNG figures into ``out``,
     from the run's per-trial arrays (read from ``out`` when ``per_trial`` is None) and their
-    :func:`trial_metrics` (computed from them when ``metrics`` is None). table.md's
+    :func:`trial_metrics` (computed from them when ``metrics`` is None; ``estimated`` as in
+    :func:`summarize`). table.md's
     paired differences are the first policy's against each other (``pairs`` ``"reference"``) or
     every pair (``"all"``); summary.json holds every pair."""
     out = Path(out)
     per_trial = per_trial if per_trial is not None else load_per_trial(out, config)
     metrics = metrics if metrics is not None else trial_metrics(config, per_trial)
-    summary = summarize(config, per_trial, metrics)
+    summary = summarize(config, per_trial, metrics, estimated)
     (out / "summary.json").write_text(json.dumps(summary, indent=2, allow_nan=False))
     rows = curves(config, metrics)
     with open(out / "curves.csv", "w", newline="") as handle:

@@ -110,19 +110,39 @@ def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False)
     ``keep_metrics`` keeps each run's per-trial metrics in memory (:attr:`Finished.metrics`), for
     a judge that reads them all: it need not read the shards again."""
     configs = configure(runs, settings)
-    from . import report
+    from . import report, uncertainty
 
     # scipy's statistics, which the first interval needs, load in this process while the workers
     # start on the tasks rather than before the first task or after the last
     threading.Thread(target=importlib.import_module, args=("scipy.stats",), daemon=True).start()
 
     written: dict[int, Finished] = {}
+    # each policy's metrics and intervals, computed as soon as its last shard is saved (while the
+    # workers run the other tasks), not all after the run's last task
+    early: dict[int, dict[str, tuple[Any, dict[str, Any]]]] = {}
+
+    def policy_done(number: int, policy: str, joined: dict[str, Any]) -> None:
+        metrics = report.policy_metrics(configs[number], joined)
+        early.setdefault(number, {})[policy] = (
+            metrics,
+            uncertainty.policy_estimates(metrics, configs[number].seed),
+        )
 
     def write(number: int, per_trial: dict[str, dict[str, Any]]) -> None:
         run, config = runs[number], configs[number]
-        metrics = report.trial_metrics(config, per_trial)
+        given = early.pop(number, {})
+        metrics = {
+            p: given[p][0] if p in given else report.policy_metrics(config, per_trial[p])
+            for p in config.policies
+        }
         summary = report.write_outputs(
-            config, per_trial, run.folder, figures=settings.figures, pairs=settings.pairs, metrics=metrics
+            config,
+            per_trial,
+            run.folder,
+            figures=settings.figures,
+            pairs=settings.pairs,
+            metrics=metrics,
+            estimated={p: estimates for p, (_, estimates) in given.items()},
         )
         written[number] = Finished(run, config, summary, metrics if keep_metrics else None)
 
@@ -130,6 +150,7 @@ def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False)
         [(config, run.folder) for run, config in zip(runs, configs, strict=True)],
         progress=settings.progress,
         on_complete=write,
+        on_policy=policy_done,
         **settings.execution(),
     )
     return {run.key: written[number] for number, run in enumerate(runs)}

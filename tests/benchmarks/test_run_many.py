@@ -210,3 +210,40 @@ def test_a_run_that_will_compile_kernels_says_so_on_its_progress_bar(tmp_path, m
     config = make_config("paper-1", ["fix1"], trials=2, steps=3, shard_size=1, say=lambda m: None)
     assert run_many([(config, tmp_path / "out")]) == [True]
     assert ("compiling numba kernels (first run only" in capsys.readouterr().err) != cached
+
+
+def test_each_policy_is_handed_over_as_soon_as_its_last_shard_is_saved(tmp_path, calls):
+    """``on_policy`` comes after a policy's last task and before the next policy's first, with the
+    policy's shards joined: the arrays ``on_complete`` then gets (the same objects) and those
+    read from the folder. A resumed call hands over only the policies it completes."""
+    config = make_config("paper-1", ["ucb1", "mg-crb-cl"], trials=5, steps=4, shard_size=2)
+    given, first_call = {}, {}
+
+    def policy_done(number, policy, joined):
+        calls.append(("policy", policy))
+        given[policy] = joined
+        first_call.setdefault(policy, joined)
+
+    def complete(number, per_trial):
+        calls.append(("complete", number))
+        for policy, joined in given.items():
+            assert per_trial[policy] is joined
+        given.clear()
+
+    assert run_many([(config, tmp_path)], progress=False, on_complete=complete, on_policy=policy_done) == [
+        True
+    ]
+    events = [c[1] if c[0] in ("policy", "complete") else c[1] for c in calls]
+    assert events == ["mg-crb-cl"] * 4 + ["ucb1"] * 3 + ["ucb1", 0]  # three tasks each, longest first
+    assert calls[3] == ("policy", "mg-crb-cl") and calls[-2:] == [("policy", "ucb1"), ("complete", 0)]
+    fresh = load_per_trial(tmp_path, config)
+    for policy in config.policies:
+        assert set(first_call[policy]) == set(fresh[policy])
+        for key, value in fresh[policy].items():
+            np.testing.assert_array_equal(first_call[policy][key], value)
+    calls.clear()
+    harness.shard_path(tmp_path, "ucb1", 1).unlink()
+    assert run_many([(config, tmp_path)], progress=False, on_complete=complete, on_policy=policy_done) == [
+        True
+    ]
+    assert calls == [("paper-1", "ucb1", 1), ("policy", "ucb1"), ("complete", 0)]

@@ -101,6 +101,39 @@ def test_the_claims_command_judges_the_metrics_its_report_read(tmp_path, monkeyp
     assert len(shards) == 6 and sorted(reads) == shards  # judged afresh: each shard read from the folder
 
 
+def test_each_policys_intervals_are_computed_while_the_other_tasks_run(tmp_path, monkeypatch):
+    """A policy's metrics and intervals are computed as soon as its last shard is saved, between
+    the tasks, not all after the last one; the summary is the one computed afresh from the folder."""
+    from benchmarks import harness, report, uncertainty
+
+    events = []
+    task, estimates = harness.run_task, uncertainty.policy_estimates
+    monkeypatch.setattr(harness, "run_task", lambda *args: events.append("task") or task(*args))
+    monkeypatch.setattr(
+        uncertainty, "policy_estimates", lambda *args: events.append("estimates") or estimates(*args)
+    )
+    argv = [
+        "claims",
+        "--scenarios",
+        "1",
+        "--trials",
+        "4",
+        "--steps",
+        "30",
+        "--workers",
+        "1",
+        "--shard-size",
+        "4",
+    ]
+    assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
+    assert events == ["task", "estimates"] * 6  # one task a policy, each followed by its intervals
+    monkeypatch.undo()
+    folder = tmp_path / "paper-1-v1"
+    config = harness.RunConfig(**json.loads((folder / "config.json").read_text()))
+    afresh = report.summarize(config, harness.load_per_trial(folder, config))
+    assert json.loads((folder / "summary.json").read_text()) == json.loads(json.dumps(afresh))
+
+
 def test_compare_claims_puts_scorecards_side_by_side(tmp_path, capsys):
     import json
 
