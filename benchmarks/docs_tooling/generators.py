@@ -1768,6 +1768,49 @@ def threads_value(docs: Path, key: str) -> str:
     raise BenchError(f"unknown threads figure {key!r}: workers, run, said")
 
 
+@values("across")
+def across_values(docs: Path) -> dict[str, str]:
+    """Each ``perf/across/NAME.json`` that ``benchmarks.speed.across_commits --json`` wrote:
+    ``NAME.first`` and ``NAME.second`` (the commits), ``NAME.repeats``, ``NAME.command`` (as
+    code), ``NAME.first-median`` and ``NAME.second-median``, ``NAME.ratio`` (the first's over the
+    second's), ``NAME.difference``, the first's value minus the second's, the mean over the
+    interleaved pairs with its 95 % t interval, and ``NAME.shown``, what the interval shows."""
+    from ..speed import t_interval
+
+    table: dict[str, str] = {}
+    for path in sorted((docs / "results" / "perf" / "across").glob("*.json")):
+        record, name = json.loads(path.read_text()), path.stem
+        first, second = record["values"]
+        differences = np.subtract(record["values"][first], record["values"][second])
+        low, high = t_interval(differences)
+        shown = (
+            "lower at the second commit"
+            if low > 0
+            else "higher at the second commit"
+            if high < 0
+            else "not told apart"
+        )
+        table |= {
+            f"{name}.first": first,
+            f"{name}.second": second,
+            f"{name}.repeats": str(record["repeats"]),
+            f"{name}.command": f"`{shlex.join(record['command'])}`",
+            f"{name}.first-median": f"{record['medians'][first]:.3g}",
+            f"{name}.second-median": f"{record['medians'][second]:.3g}",
+            f"{name}.ratio": f"{record['ratio']:.2f}",
+            f"{name}.difference": " ".join(
+                [_two_digits(differences.mean()), f"[{_two_digits(low)}, {_two_digits(high)}]"]
+            ),
+            f"{name}.shown": shown,
+        }
+    return table
+
+
+def _two_digits(value: float) -> str:
+    """Two significant digits, without an exponent (``0.058``, ``350``)."""
+    return np.format_float_positional(value, precision=2, unique=False, fractional=False, trim="-")
+
+
 def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, difference: str) -> str:
     """Alternating runs of a study (``benchmarks.speed.ray_cluster.alternate``): each variant's
     (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval

@@ -125,3 +125,29 @@ def test_bpso_without_numba_values(tmp_path):
         "2.0",
     )
     assert (table["torch_cpu.set.stopping"], table["torch_cpu.set.ratio"]) == ("100", "12.0")
+
+
+def test_comparisons_across_commits_give_each_commits_median_and_the_paired_difference(tmp_path):
+    docs = tmp_path / "docs"
+    (docs / "results" / "perf" / "across").mkdir(parents=True)
+    record = {
+        "key": "after_last_task_s",
+        "command": ["python", "-m", "x", "--study", "claims --trials 5"],
+        "repeats": 3,
+        "values": {"aaa": [1.0, 1.2, 1.1], "bbb": [0.5, 0.7, 0.6]},
+        "medians": {"aaa": 1.1, "bbb": 0.6},
+        "ratio": 1.1 / 0.6,
+    }
+    (docs / "results" / "perf" / "across" / "cut.json").write_text(json.dumps(record))
+    record["values"] = {"aaa": [1.0, 2.0, 3.0], "bbb": [2.0, 1.0, 3.0]}
+    (docs / "results" / "perf" / "across" / "same.json").write_text(json.dumps(record))
+    table = generators.across_values(docs)
+    assert (table["cut.first"], table["cut.second"], table["cut.repeats"]) == ("aaa", "bbb", "3")
+    assert table["cut.command"] == "`python -m x --study 'claims --trials 5'`"
+    assert (table["cut.first-median"], table["cut.second-median"], table["cut.ratio"]) == (
+        "1.1",
+        "0.6",
+        "1.83",
+    )
+    assert table["cut.difference"] == "0.5 [0.5, 0.5]"  # every pair 0.5 apart
+    assert (table["cut.shown"], table["same.shown"]) == ("lower at the second commit", "not told apart")
