@@ -981,6 +981,13 @@ class _Held:
         self.nbytes -= sum(a.nbytes for data in shards.values() for a in data.values())
         return shards
 
+    def pop_policy(self, number: int, policy: str) -> dict[tuple[str, int], dict[str, NDArray]]:
+        """The shards of one policy of run ``number``, no longer held."""
+        run = self.shards.get(number, {})
+        shards = {key: run.pop(key) for key in [key for key in run if key[0] == policy]}
+        self.nbytes -= sum(a.nbytes for data in shards.values() for a in data.values())
+        return shards
+
 
 class _Saving:
     """A run's finished tasks: each one's shard written at once (and held, :class:`_Held`), the
@@ -1040,7 +1047,7 @@ class _Saving:
         self.left[number] -= 1
         self.left_of_policy[number, policy] -= 1
         if self.left_of_policy[number, policy] == 0 and self.on_policy is not None:
-            joined = join_policy(self.folders[number], config, policy, self.held.shards.get(number, {}))
+            joined = join_policy(self.folders[number], config, policy, self.held.pop_policy(number, policy))
             self.joined.setdefault(number, {})[policy] = joined
             self.on_policy(number, policy, joined)
         if self.left[number] == 0:

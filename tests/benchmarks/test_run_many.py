@@ -247,3 +247,14 @@ def test_each_policy_is_handed_over_as_soon_as_its_last_shard_is_saved(tmp_path,
         True
     ]
     assert calls == [("paper-1", "ucb1", 1), ("policy", "ucb1"), ("complete", 0)]
+
+
+def test_a_policy_handed_over_is_no_longer_held_shard_by_shard():
+    held = harness._Held(1 << 20)
+    data = {key: np.zeros(3) for key in harness.DATA_FIELDS}
+    for policy, shard in (("a", 0), ("a", 1), ("b", 0)):
+        held.add(0, policy, shard, data)
+    each = sum(a.nbytes for a in data.values())
+    assert held.nbytes == 3 * each
+    assert sorted(held.pop_policy(0, "a")) == [("a", 0), ("a", 1)]
+    assert held.nbytes == each and list(held.shards[0]) == [("b", 0)]
