@@ -406,17 +406,24 @@ class TorchNamespace:
         nothing is copied from the host when a step indexes with it (graphs)."""
         cached = self._constants.get(values)
         if cached is None:
-            cached = self._constants[values] = self.torch.tensor(
-                values, dtype=self.torch.int64, device=self.device
-            )
+            cached = self._constants[values] = self._made_once(values, self.torch.int64)
         return cached
 
     def word_array(self, value: int) -> Any:
         """A 64-bit word as a 0-d ``int64`` tensor on the device (made once per value)."""
         cached = self._words.get(value)
         if cached is None:
-            cached = self._words[value] = self.torch.tensor(self.word(value), device=self.device)
+            cached = self._words[value] = self._made_once(self.word(value), self.torch.int64)
         return cached
+
+    def _made_once(self, values: Any, dtype: Any) -> Any:
+        """A real tensor of ``values`` to keep, whatever traces the code that first asks for it: made
+        inside a step's trace (``make_fx``'s fake tensors), it would be a fake tensor, kept for the
+        next env's steps in this process (the namespace is one per device)."""
+        from torch.utils._python_dispatch import _disable_current_modes
+
+        with _disable_current_modes():
+            return self.torch.tensor(values, dtype=dtype, device=self.device)
 
     def words(self, a: Any) -> Any:
         """An ``int64`` tensor of 64-bit words from numpy ``uint64`` (or ``int64``) bits."""

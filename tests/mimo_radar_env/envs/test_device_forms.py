@@ -70,6 +70,32 @@ def test_the_graph_form_gives_the_eager_numbers_bit_for_bit(version, fusion):
     assert engine._forms.eager_steps == 0  # every step ran traced
 
 
+def test_a_second_traced_engine_in_the_process_gives_the_eager_numbers(monkeypatch):
+    """The device's namespace is one per process: a constant its first trace made (a fake tensor
+    under make_fx, had it been kept) must serve the next engine's steps as a real tensor, as a
+    study's policies, one engine each, run one after another on the device."""
+    from torch._subclasses.fake_tensor import FakeTensor
+
+    from mimo_radar_env.core.arrays import device_namespace
+
+    xp = device_namespace(DEVICE)
+    monkeypatch.setattr(xp, "_constants", {})  # as in a fresh process: made first inside a trace
+    monkeypatch.setattr(xp, "_words", {})
+    keys, sc = _keys(3), load_scenario(VERSIONS["v1"].default_scenario)
+    actions = random_super_arms(
+        np.random.default_rng(5), 3, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step
+    )
+    rewards = []
+    for mode in ("graph", "graph", "eager"):
+        engine = _engine("v1", "average", 3, mode)
+        engine.reset_from_keys(keys)
+        rewards.append([engine.step(torch.as_tensor(actions, device=DEVICE))[1] for _ in range(3)])
+        cached = [*xp._constants.values(), *xp._words.values()]
+        assert cached and not any(isinstance(tensor, FakeTensor) for tensor in cached)
+    for first, second, eager in zip(*rewards, strict=True):
+        assert torch.equal(first, eager) and torch.equal(second, eager)
+
+
 def test_the_graph_form_in_float32_gives_the_eager_float32_numbers_bit_for_bit():
     worst, engine = _play("v1", "centralized", "graph", steps=12, precision="float32")
     assert worst == 0.0 and engine._forms.eager_steps == 0
