@@ -208,7 +208,7 @@ class _Draws:
 
     def keep(self, rows: Any) -> None:
         self.r_bases, self.flip_bases = self.r_bases[:, rows], self.flip_bases[rows]
-        # the block's draws stay as drawn (on torch a block is every iteration's: large to copy)
+        # the block's draws stay as drawn, read through the rows of the trials left (not copied)
         self.drawn_for = (
             self.xp.arange(rows.shape[0])[rows] if self.drawn_for is None else self.drawn_for[rows]
         )
@@ -408,7 +408,7 @@ if HAVE_NUMBA:  # pragma: no branch
         (:func:`_valid_entries`) for particles of at most ``table_bits`` bits. With the table,
         a trial stops once its global best holds the table's largest value: a best is replaced
         only by a strictly larger fitness, so no later iteration could change it (the numpy
-        kernel runs every iteration and selects the same)."""
+        kernel stops its trials likewise and selects the same)."""
         batch, population, length = positions.shape
         num_tx = index.shape[1]
         num_rx = index.shape[2]
