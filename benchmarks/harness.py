@@ -1006,7 +1006,6 @@ class _Saving:
         self.configs, self.folders, self.todo, self.on_complete = configs, folders, todo, on_complete
         self.held, self.on_policy = held, on_policy
         self.payloads = [config.to_json() for config in configs]
-        self.left = [sum(1 for n, _, _ in todo if n == number) for number in range(len(configs))]
         self.left_of_policy = collections.Counter((n, p) for n, p, _ in todo)
         self.joined: dict[int, dict[str, dict[str, NDArray]]] = {}  # the policies given to on_policy
         self.steps_of = [  # the trial-steps of each run's tasks
@@ -1044,7 +1043,6 @@ class _Saving:
         self.saved.append(position)
         self.bar.update(self.steps_of[number][policy, shard])
         self.bar.set_postfix_str(policy if len(self.configs) == 1 else f"{config.scenario['name']}: {policy}")
-        self.left[number] -= 1
         self.left_of_policy[number, policy] -= 1
         if self.left_of_policy[number, policy] == 0 and self.on_policy is not None:
             joined = join_policy(self.folders[number], config, policy, self.held.pop_policy(number, policy))
@@ -1052,6 +1050,14 @@ class _Saving:
             self.on_policy(number, policy, joined)
         if self.left[number] == 0:
             self.run_done(number)
+
+    @property
+    def left(self) -> list[int]:
+        """Each run's tasks not yet saved."""
+        left = [0] * len(self.configs)
+        for (number, _), count in self.left_of_policy.items():
+            left[number] += count
+        return left
 
 
 def _say_resumed(configs: Sequence[RunConfig], folders: Sequence[Path], left: Sequence[int]) -> None:

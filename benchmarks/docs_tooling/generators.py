@@ -1775,20 +1775,13 @@ def across_values(docs: Path) -> dict[str, str]:
     code), ``NAME.first-median`` and ``NAME.second-median``, ``NAME.ratio`` (the first's over the
     second's), ``NAME.difference``, the first's value minus the second's, the mean over the
     interleaved pairs with its 95 % t interval, and ``NAME.shown``, what the interval shows."""
-    from ..speed import t_interval
-
     table: dict[str, str] = {}
     for path in sorted((docs / "results" / "perf" / "across").glob("*.json")):
         record, name = json.loads(path.read_text()), path.stem
         first, second = record["values"]
-        differences = np.subtract(record["values"][first], record["values"][second])
-        low, high = t_interval(differences)
-        shown = (
-            "lower at the second commit"
-            if low > 0
-            else "higher at the second commit"
-            if high < 0
-            else "not told apart"
+        differences, low, high, side = _paired_difference(record["values"][first], record["values"][second])
+        shown = {"above": "lower at the second commit", "below": "higher at the second commit"}.get(
+            side, "not told apart"
         )
         table |= {
             f"{name}.first": first,
@@ -1811,13 +1804,21 @@ def _two_digits(value: float) -> str:
     return np.format_float_positional(value, precision=2, unique=False, fractional=False, trim="-")
 
 
+def _paired_difference(a: Sequence[float], b: Sequence[float]) -> tuple[np.ndarray, float, float, str | None]:
+    """``a`` minus ``b``, paired by position, with the 95 % t interval of their mean, and
+    ``"above"`` or ``"below"`` where that interval lies above or below 0 (None where it holds 0)."""
+    from ..speed import t_interval
+
+    differences = np.subtract(a, b)
+    low, high = t_interval(differences)
+    return differences, low, high, "above" if low > 0 else "below" if high < 0 else None
+
+
 def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, difference: str) -> str:
     """Alternating runs of a study (``benchmarks.speed.ray_cluster.alternate``): each variant's
     (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval
     (the row named ``difference``), what the interval shows, and whether every run wrote the same
     numbers."""
-    from ..speed import t_interval
-
     walls: dict[str, list[float]] = {}
     for run in record["runs"]:
         walls.setdefault(run[key], []).append(run["wall_s"])
@@ -1825,8 +1826,7 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
         [name, ", ".join(f"{v:.1f}" for v in values), f"{np.mean(values):.1f}"]
         for name, values in walls.items()
     ]
-    differences = np.subtract(walls[other], walls[base])
-    low, high = t_interval(differences)
+    differences, low, high, side = _paired_difference(walls[other], walls[base])
     rows.append(
         [
             difference,
@@ -1834,9 +1834,9 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
             f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}]",
         ]
     )
-    if low > 0:
+    if side == "above":
         reading = f"{other} took longer than {base}: the interval lies above 0."
-    elif high < 0:
+    elif side == "below":
         reading = f"{other} took less time than {base}: the interval lies below 0."
     else:
         reading = (

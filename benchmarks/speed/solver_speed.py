@@ -23,6 +23,7 @@ import numpy as np
 
 from agents.solvers import AlternatingSolver, BPSOSolver, ExactSolver
 from agents.solvers.bpso import BPSO_RULES
+from mimo_radar_env.core.arrays import NUMPY
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.streams import TrialRandom
 
@@ -82,17 +83,14 @@ def without_numba(index, repeats: int, rule: str) -> dict[str, float]:
 
     solver = BPSOSolver(2, 3, rule=rule)
     out: dict[str, float] = {}
-    namespaces = [("numpy", None)]
+    namespaces = [("numpy", NUMPY)]
     if importlib.util.find_spec("torch") is not None:
         from mimo_radar_env.core.arrays import device_namespace
 
         namespaces.append(("torch_cpu", device_namespace("cpu")))
     for name, xp in namespaces:
-        random = (
-            TrialRandom.for_batch(0, len(index)) if xp is None else TrialRandom.for_batch(0, len(index), xp)
-        )
-        positions, keys = solver.initial_swarm(random, 4, 6)
-        given = index if xp is None else xp.asarray(index)
+        positions, keys = solver.initial_swarm(TrialRandom.for_batch(0, len(index), xp), 4, 6)
+        given = xp.asarray(index)
         arguments = (given, 2, 3, positions, keys, *solver.swarm_arguments())
         chosen = {}
         for stop, key in (
