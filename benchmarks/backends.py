@@ -253,9 +253,16 @@ def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
 
 
 def run_ray(
-    runner: Runner, todo: list[Task], finished: Finished, address: str | None, threads: int = 1
+    runner: Runner,
+    todo: list[Task],
+    finished: Finished,
+    address: str | None,
+    threads: int = 1,
+    started: Callable[[], None] = lambda: None,
 ) -> None:
-    """The tasks on Ray, each reserving ``threads`` CPUs and running on as many threads."""
+    """The tasks on Ray, each reserving ``threads`` CPUs and running on as many threads;
+    ``started()`` is called once they are all submitted. Ray is shut down at the end where it
+    was started here."""
     from mimo_radar_env.extras import require
 
     ray = require("ray", "ray", "--backend ray")
@@ -271,6 +278,7 @@ def run_ray(
             if id(payload) not in payloads:
                 payloads[id(payload)] = ray.put(payload)
             pending[remote_task.remote(runner, threads, payloads[id(payload)], policy, shard)] = number
+        started()
         while pending:
             done, _ = ray.wait(list(pending), num_returns=1)
             for ref in done:

@@ -1083,11 +1083,10 @@ def _dispatch(
     local worker processes of ``threads`` threads each, the last tasks taking up the cores of
     those that ended where the kernels over threads of the runs ``configs`` are compiled already
     (one compiled in mid-task would cost more than the cores give). ``starting()`` is called
-    as the tasks start: once they are submitted to the worker processes, which then start
-    without waiting for it (it may import numba here, as the tail's check does)."""
+    as the tasks start: once they are submitted to the worker processes or to Ray, which then
+    start without waiting for it (it may import numba here, as the tail's check does)."""
     if backend == "ray":
-        starting()
-        backends.run_ray(run_task, tasks, finished, address, threads or 1)
+        backends.run_ray(run_task, tasks, finished, address, threads or 1, started=starting)
     elif workers == 1:
         starting()
         with compiled.with_threads(threads):

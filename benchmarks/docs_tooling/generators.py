@@ -1818,22 +1818,30 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
     """Alternating runs of a study (``benchmarks.speed.ray_cluster.alternate``): each variant's
     (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval
     (the row named ``difference``), what the interval shows, and whether every run wrote the same
-    numbers."""
+    numbers; where every run recorded them, the mean wall seconds before the first task and
+    after the last, and their paired differences."""
+    parts = [p for p in ("before_first_task_s", "after_last_task_s") if all(p in r for r in record["runs"])]
     walls: dict[str, list[float]] = {}
+    serial: dict[tuple[str, str], list[float]] = {}
     for run in record["runs"]:
         walls.setdefault(run[key], []).append(run["wall_s"])
+        for part in parts:
+            serial.setdefault((run[key], part), []).append(run[part])
     rows = [
         [name, ", ".join(f"{v:.1f}" for v in values), f"{np.mean(values):.1f}"]
+        + [f"{np.mean(serial[name, part]):.2f}" for part in parts]
         for name, values in walls.items()
     ]
     differences, low, high, side = _paired_difference(walls[other], walls[base])
-    rows.append(
-        [
-            difference,
-            ", ".join(f"{d:+.1f}" for d in differences),
-            f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}]",
-        ]
-    )
+    row = [
+        difference,
+        ", ".join(f"{d:+.1f}" for d in differences),
+        f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}]",
+    ]
+    for part in parts:
+        part_differences, part_low, part_high, _ = _paired_difference(serial[other, part], serial[base, part])
+        row.append(f"{part_differences.mean():+.2f} [{part_low:+.2f}, {part_high:+.2f}]")
+    rows.append(row)
     if side == "above":
         reading = f"{other} took longer than {base}: the interval lies above 0."
     elif side == "below":
@@ -1844,7 +1852,8 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
             "told apart, so neither is shown faster."
         )
     same = all(run["same_numbers"] for run in record["runs"])
-    table = markdown_table([key, "wall of each run (s)", "mean (s)"], rows)
+    headings = {"before_first_task_s": "before the first task (s)", "after_last_task_s": "after the last (s)"}
+    table = markdown_table([key, "wall of each run (s)", "mean (s)", *(headings[p] for p in parts)], rows)
     return "\n".join(
         [table, "", reading, f"Every run wrote the numbers of the first: {'yes' if same else 'NO'}."]
     )
@@ -1875,8 +1884,28 @@ def tail_value(docs: Path, key: str) -> str:
 
 @value_source("ray")
 def ray_value(docs: Path, key: str) -> str:
-    """A figure of the Ray runs: ``study`` (its command, as code), ``workers``, ``repeats``."""
-    return _alternating_value(read_json(docs, "perf/ray.json"), key)
+    """A figure of the Ray runs: ``study`` (its command, as code), ``workers``, ``repeats``; or
+    Ray's minus local's seconds paired by repeat, with their 95 % t interval, of a part of the
+    wall time: ``before.difference`` (before the first task), ``after.difference`` (after the
+    last) and ``between.difference`` (from the first task's start to the last's end), and what
+    that interval shows (``PART.shown``: "longer on Ray", "shorter on Ray" or "not told apart")."""
+    record = read_json(docs, "perf/ray.json")
+    part, _, rest = key.partition(".")
+    if rest not in ("difference", "shown") or part not in ("before", "after", "between"):
+        return _alternating_value(record, key)
+    seconds: dict[str, list[float]] = {}
+    for run in record["runs"]:
+        serial = run["before_first_task_s"] + run["after_last_task_s"]
+        value = {
+            "before": run["before_first_task_s"],
+            "after": run["after_last_task_s"],
+            "between": run["wall_s"] - serial,
+        }[part]
+        seconds.setdefault(run["backend"], []).append(value)
+    differences, low, high, side = _paired_difference(seconds["ray"], seconds["local"])
+    if rest == "shown":
+        return {"above": "longer on Ray", "below": "shorter on Ray", None: "not told apart"}[side]
+    return f"{differences.mean():+.2f} [{low:+.2f}, {high:+.2f}]"
 
 
 def _alternating_value(record: dict[str, Any], key: str) -> str:

@@ -18,6 +18,7 @@ import os
 import subprocess
 import sys
 import tempfile
+import time
 from pathlib import Path
 from typing import Any
 
@@ -25,7 +26,7 @@ import numpy as np
 
 from ..study import machine
 from . import write_json
-from .strong_scaling import STUDY, run_study
+from .strong_scaling import STUDY, read_tasks, run_study
 
 BACKENDS = {"local": (), "ray": ("--backend", "ray", "--address", "auto")}
 
@@ -66,7 +67,9 @@ def alternate(
     arguments before the study's and the study's extra arguments), alternately, the order
     reversed every other repeat (so that a drift of the machine's speed falls on both), every run
     a fresh command into a fresh folder: per run, its variant (under ``key``), repeat, wall
-    seconds and whether it wrote the numbers of the first run."""
+    seconds, whether it wrote the numbers of the first run, and the wall seconds before its
+    first task started and after its last ended (from its shards, as
+    :mod:`.strong_scaling` reads them: the command's serial parts)."""
     runs: list[dict[str, Any]] = []
     reference: dict[str, np.ndarray] | None = None
     with tempfile.TemporaryDirectory(prefix="alternate-") as scratch:
@@ -74,12 +77,16 @@ def alternate(
             order = list(variants.items())
             for name, (python, extra) in order if repeat % 2 == 0 else order[::-1]:
                 out = Path(scratch) / f"{name.replace(' ', '-')}-{repeat}"
+                started = time.time()
                 wall = run_study((*study, *extra), workers, out, python)
                 arrays = shard_arrays(out)
                 reference = arrays if reference is None else reference
-                runs.append(
-                    {key: name, "repeat": repeat, "wall_s": wall, "same_numbers": same(reference, arrays)}
-                )
+                run = {key: name, "repeat": repeat, "wall_s": wall, "same_numbers": same(reference, arrays)}
+                tasks = read_tasks(out, started)
+                if tasks:
+                    run["before_first_task_s"] = min(t.finished - t.seconds for t in tasks)
+                    run["after_last_task_s"] = wall - max(t.finished for t in tasks)
+                runs.append(run)
                 print(f"  {name:>10}, repeat {repeat}: {wall:.1f} s", flush=True)
     return runs
 

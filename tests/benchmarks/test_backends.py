@@ -163,3 +163,57 @@ def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd):
     assert sorted(capfd.readouterr().out.split("-")[:2]) == ["one", "two"]
     assert len(results) == 2 and multiprocessing.active_children() == []
     assert backends._SPAWN.Process.run is not multiprocessing.context.SpawnProcess.run
+
+
+def test_ray_calls_started_once_every_task_is_submitted(monkeypatch):
+    """On Ray, as on local workers, what the command does as the tasks start (the progress
+    bar's compile check, which imports numba) comes after they are all submitted, not before:
+    a stand-in of Ray's API records the order."""
+    import types
+
+    events, outputs = [], {}
+
+    class Remote:
+        def __init__(self, function):
+            self.function = function
+
+        def remote(self, *arguments):
+            events.append("submit")
+            outputs[len(outputs)] = self.function(*arguments)
+            return len(outputs) - 1
+
+    fake = types.SimpleNamespace(
+        is_initialized=lambda: True,
+        remote=lambda num_cpus: Remote,
+        put=lambda value: value,
+        wait=lambda refs, num_returns: (refs[:num_returns], refs[num_returns:]),
+        get=outputs.__getitem__,
+        cancel=lambda ref, force: None,
+        shutdown=lambda: events.append("shutdown"),
+    )
+    monkeypatch.setitem(sys.modules, "ray", fake)
+    monkeypatch.setattr(backends, "pin_threads", lambda threads: None)
+    results = {}
+    todo = [({"run": 0}, "fix1", shard) for shard in range(3)]
+    backends.run_ray(
+        lambda payload, policy, shard: {"shard": shard},
+        todo,
+        lambda number, result: results.__setitem__(number, result),
+        address=None,
+        started=lambda: events.append("started"),
+    )
+    assert events == ["submit", "submit", "submit", "started"]  # Ray was running: not shut down here
+    assert results == {number: {"shard": number} for number in range(3)}
+
+
+def test_the_harness_leaves_rays_start_callback_to_run_ray(monkeypatch):
+    from benchmarks import harness
+
+    seen, calls = {}, []
+    monkeypatch.setattr(
+        backends, "run_ray", lambda *arguments, started, **_: seen.setdefault("started", started)
+    )
+    harness._dispatch([], lambda number, result: None, 2, "ray", None, 1, starting=lambda: calls.append(1))
+    assert calls == []  # not before the tasks are submitted: run_ray calls it then
+    seen["started"]()
+    assert calls == [1]

@@ -220,3 +220,47 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     for key in ("compiled.fused.centralized", "compiled.loops.average"):
         with pytest.raises(generators.BenchError, match=r"compiled.\(fused\|library\|eager\).FUSION"):
             generators.launches_value(tmp_path, key)
+
+
+def test_the_ray_table_gives_each_backends_serial_parts_where_every_run_recorded_them(tmp_path):
+    """The Ray table's wall times, and each backend's mean time before the first task and after
+    the last with Ray's minus local's paired by repeat (a t interval computed here with scipy);
+    a record without those parts (runs measured before them) keeps the table of wall times."""
+    from scipy import stats
+
+    from benchmarks.docs_tooling import generators
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    walls = {"local": [35.0, 36.0, 34.0], "ray": [36.5, 37.0, 36.0]}
+    befores = {"local": [1.0, 1.2, 1.1], "ray": [2.0, 2.5, 2.3]}
+    runs = [
+        {"backend": b, "repeat": r, "wall_s": walls[b][r], "same_numbers": True,
+         "before_first_task_s": befores[b][r], "after_last_task_s": 0.5}
+        for r in range(3) for b in ("local", "ray")
+    ]  # fmt: skip
+    (perf / "ray.json").write_text(json.dumps({"study": ["x"], "workers": 2, "runs": runs}))
+    lines = generators.ray_backend(tmp_path).splitlines()
+    assert lines[0] == (
+        "| backend | wall of each run (s) | mean (s) | before the first task (s) | after the last (s) |"
+    )
+    assert lines[2] == "| local | 35.0, 36.0, 34.0 | 35.0 | 1.10 | 0.50 |"
+    assert lines[3] == "| ray | 36.5, 37.0, 36.0 | 36.5 | 2.27 | 0.50 |"
+    before = [r - l for r, l in zip(befores["ray"], befores["local"], strict=True)]
+    low, high = stats.t.interval(0.95, len(before) - 1, loc=sum(before) / 3, scale=stats.sem(before))
+    assert lines[4].split(" | ")[3] == f"+{sum(before) / 3:.2f} [+{low:.2f}, +{high:.2f}]"
+    assert lines[4].endswith("| +0.00 [+0.00, +0.00] |")
+    assert generators.ray_value(tmp_path, "before.difference") == lines[4].split(" | ")[3]
+    assert generators.ray_value(tmp_path, "before.shown") == "longer on Ray"
+    # from the first task's start to the last's end: wall less both parts, Ray's minus local's
+    between = [(36.5 - 2.0) - (35.0 - 1.0), (37.0 - 2.5) - (36.0 - 1.2), (36.0 - 2.3) - (34.0 - 1.1)]
+    low, high = stats.t.interval(0.95, 2, loc=sum(between) / 3, scale=stats.sem(between))
+    assert generators.ray_value(tmp_path, "between.difference") == (
+        f"{sum(between) / 3:+.2f} [{low:+.2f}, {high:+.2f}]"
+    )
+    assert generators.ray_value(tmp_path, "between.shown") == "not told apart"
+    assert generators.ray_value(tmp_path, "workers") == "2"
+    for run in runs:
+        del run["before_first_task_s"], run["after_last_task_s"]
+    (perf / "ray.json").write_text(json.dumps({"study": ["x"], "workers": 2, "runs": runs}))
+    assert generators.ray_backend(tmp_path).splitlines()[0] == "| backend | wall of each run (s) | mean (s) |"

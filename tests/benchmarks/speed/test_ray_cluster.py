@@ -1,8 +1,10 @@
 """The Ray-against-local benchmark (``benchmarks/speed/ray_cluster.py``): its runs alternate the
-backends, the order reversed every other repeat, and a run whose numbers differ from the first
-one's is caught (no cluster started)."""
+backends, the order reversed every other repeat, a run whose numbers differ from the first
+one's is caught, and each run's time before its first task and after its last is read from its
+shards (no cluster started)."""
 
 import numpy as np
+import pytest
 
 from benchmarks.speed import ray_cluster
 
@@ -10,6 +12,7 @@ from benchmarks.speed import ray_cluster
 def _shard(folder, values, seconds):
     path = folder / "run" / "shards" / "fix1" / "shard_0.npz"
     path.parent.mkdir(parents=True)
+    (folder / "run" / "config.json").write_text('{"steps": 5}')
     np.savez(
         path, trial_expected=np.asarray(values), wall_s=np.array(seconds), checksum=np.array(str(seconds))
     )
@@ -34,3 +37,8 @@ def test_the_backends_alternate_and_a_changed_number_is_caught(tmp_path, monkeyp
     assert [r["wall_s"] for r in result["runs"]] == [11.0, 12.0, 13.0, 14.0]
     # NaN equals NaN; the compute time and its checksum differ in every run and are left out
     assert [r["same_numbers"] for r in result["runs"]] == [True, True, True, False]
+    # the shard was written as the fake run returned: its task started its compute seconds
+    # before, and the run's wall time ends at once after it
+    for number, run in enumerate(result["runs"], start=1):
+        assert run["before_first_task_s"] == pytest.approx(-number, abs=0.5)
+        assert run["after_last_task_s"] == pytest.approx(run["wall_s"], abs=0.5)
