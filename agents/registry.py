@@ -256,6 +256,12 @@ class UnknownAgentError(ValueError):
     """A policy name that is no registered agent, plugin or ``module:Class``."""
 
 
+class AgentParameterError(TypeError, ValueError):
+    """A parameter an agent does not take, or one it needs and was not given: a ``TypeError``,
+    as Python and Gymnasium raise for keywords, that is also the ``ValueError`` of the library's
+    other bad input."""
+
+
 def _spec(name: str) -> AgentSpec:
     if name not in _REGISTRY:
         load_plugins()
@@ -299,13 +305,14 @@ def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
 
 
 def make_agent(name: str, scenario: Scenario | str, **params: Any) -> Agent:
-    """Create a registered agent; unknown or missing parameters raise an error naming them."""
+    """Create a registered agent; unknown or missing parameters raise
+    :class:`AgentParameterError` naming them."""
     spec = _spec(name)
     allowed = agent_parameters(name)
     unknown = sorted(set(params) - set(allowed))
     if unknown:
-        raise ValueError(f"unknown parameter(s) {unknown} for agent {name!r}; allowed: {allowed}")
+        raise AgentParameterError(f"unknown parameter(s) {unknown} for agent {name!r}; allowed: {allowed}")
     missing = sorted(set(required_parameters(name)) - set(params))
     if missing:
-        raise ValueError(f"agent {name!r} needs the parameter(s) {missing}")
+        raise AgentParameterError(f"agent {name!r} needs the parameter(s) {missing}")
     return spec.cls(scenario, **spec.preset, **params)

@@ -11,10 +11,15 @@ PAPER = load_scenario("paper-3")  # K = 2, Omega = [0.6, 0.4]
 def test_registry_errors_list_what_exists():
     with pytest.raises(ValueError, match="unknown agent 'ucb2'; available agents are .*mg-crb-cl"):
         agents.make_agent("ucb2", PAPER)
+    # an unknown or missing keyword is a TypeError, as Python raises for a class's keywords (and
+    # Gymnasium for gym.make's), and the ValueError of the library's other bad input
     with pytest.raises(
-        ValueError, match=r"unknown parameter\(s\) \['gamma'\] for agent 'ucb1'; allowed: .*beta"
-    ):
+        TypeError, match=r"unknown parameter\(s\) \['gamma'\] for agent 'ucb1'; allowed: .*beta"
+    ) as unknown:
         agents.make_agent("ucb1", PAPER, gamma=3)
+    assert isinstance(unknown.value, ValueError)
+    with pytest.raises(TypeError, match=r"agent 'ppo' needs the parameter\(s\) \['path'\]"):
+        agents.make_agent("ppo", PAPER)
     assert {
         "mg-crb-cl",
         "ucb1",
