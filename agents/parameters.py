@@ -16,9 +16,11 @@ def check_parameter(
         hint = ""
         if isinstance(value, str):
             try:
-                hint = f" (text: YAML reads an exponent without a dot as text; write {float(value):.1e})"
+                number = float(value)
             except ValueError:
-                pass
+                number = np.nan
+            if np.isfinite(number):  # "1e3", not "nan" or "inf", which YAML reads as text too
+                hint = f" (text: YAML reads an exponent without a dot as text; write {number:.1e})"
         raise ValueError(f"{name} must be a number in {bracket}{low:g}, {upper}, got {value!r}{hint}")
     if not np.isfinite(value):
         raise ValueError(f"{name} must be a finite number in {bracket}{low:g}, {upper}, got {value}")

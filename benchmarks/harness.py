@@ -761,6 +761,8 @@ def output_lock(out: Path) -> Iterator[None]:
     the lock file, and the folder, are removed again where this call made them."""
     made_folder = not out.exists()
     made_lock = not (out / LOCK_FILE).exists()
+    if out.exists() and not out.is_dir():
+        raise HarnessError(f"`out` {out} is a file, not a folder: choose a folder, new or a run's own")
     try:
         out.mkdir(parents=True, exist_ok=True)
         handle = open(out / LOCK_FILE, "a+")  # held (and locked) for the whole run

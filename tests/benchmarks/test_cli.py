@@ -107,6 +107,15 @@ def test_an_unusable_out_is_one_line(tmp_path, capsys):
     assert exit_info.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "cannot write into --out" in err[0]
+    with pytest.raises(SystemExit) as exit_info:
+        main([*argv, "--out", str(blocker), "--quiet", "--no-figures"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == [
+        f"mimo-radar-bench: error: --out {blocker} is a file, not a folder: "
+        "choose a folder, new or a run's own"
+    ]
+    assert blocker.read_text() == "not a folder"
 
 
 def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, capsys):
@@ -183,6 +192,7 @@ def test_subprocess_cli_scenario_errors_are_one_line(tmp_path):
             "policy 'mg-crb-cl': velocity_clamp must be in (0, 100], got 0",
         ),
         ("ucb1.beta=inf", "policy 'ucb1': beta must be a number in [0, inf), got 'inf'"),
+        ("ucb1.beta=nan", "policy 'ucb1': beta must be a number in [0, inf), got 'nan'"),
         ("ucb1.beta=.inf", "policy 'ucb1': beta must be a finite number in [0, inf), got inf"),
         ("ucb1.beta=1e3", "got '1e3' (text: YAML reads an exponent without a dot as text; write 1.0e+03)"),
     ],
@@ -195,6 +205,8 @@ def test_solver_parameters_are_checked_when_the_agent_is_made(param, message, tm
     assert exit_info.value.code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0], err
+    if param.endswith(("=inf", "=nan")):  # text too, but no exponent to write otherwise
+        assert err[0].endswith(message), err
     assert not out.exists()
 
 
