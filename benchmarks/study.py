@@ -26,7 +26,7 @@ import platform
 import sys
 import threading
 import time
-from collections.abc import Hashable, Sequence
+from collections.abc import Callable, Hashable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -103,12 +103,20 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
     ]
 
 
-def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False) -> dict[Hashable, Finished]:
+#: What a judge reads of one policy alone, computed as soon as that policy's tasks are saved:
+#: ``prepare(config, policy, metrics)`` (:meth:`Study.prepare_policy`).
+Prepare = Callable[[harness.RunConfig, str, Any], None]
+
+
+def execute(
+    runs: Sequence[Run], settings: Settings, keep_metrics: bool = False, prepare: Prepare | None = None
+) -> dict[Hashable, Finished]:
     """Configure every run, then run them all (resumably) on one set of workers
     (:func:`~benchmarks.harness.run_many`), each into its folder, writing a run's outputs as
     soon as its last task is saved, while the workers go on with the next run's tasks.
     ``keep_metrics`` keeps each run's per-trial metrics in memory (:attr:`Finished.metrics`), for
-    a judge that reads them all: it need not read the shards again."""
+    a judge that reads them all: it need not read the shards again. ``prepare`` is called with
+    each policy's metrics as soon as its last task is saved."""
     configs = configure(runs, settings)
     from . import report, uncertainty
 
@@ -127,6 +135,8 @@ def execute(runs: Sequence[Run], settings: Settings, keep_metrics: bool = False)
             metrics,
             uncertainty.policy_estimates(metrics, configs[number].seed),
         )
+        if prepare is not None:
+            prepare(configs[number], policy, metrics)
 
     def write(number: int, per_trial: dict[str, dict[str, Any]]) -> None:
         run, config = runs[number], configs[number]
@@ -195,6 +205,11 @@ class Study(Command):
         """Results judged on the finished runs (None: the study only reports)."""
         return None
 
+    def prepare_policy(self, config: harness.RunConfig, policy: str, metrics: Any) -> None:
+        """What :meth:`judge` reads of ``policy`` alone in the run of ``config``, computed from its
+        :class:`~benchmarks.metrics.TrialMetrics` as soon as its tasks are saved, while the
+        workers run the others (default: nothing)."""
+
     def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
         """Write the study's own outputs; the text the command prints."""
         raise NotImplementedError
@@ -202,7 +217,9 @@ class Study(Command):
     def main(self) -> int:
         start = time.perf_counter()
         load_before = machine()
-        finished = execute(self.runs(), self.settings, keep_metrics=self.keeps_metrics)
+        finished = execute(
+            self.runs(), self.settings, keep_metrics=self.keeps_metrics, prepare=self.prepare_policy
+        )
         text = self.report(finished, self.judge(finished))
         write_timing(self.settings.out, self.name, time.perf_counter() - start, load_before)
         print(text)

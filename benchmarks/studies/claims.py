@@ -13,6 +13,7 @@ paper's 1000-step horizon (time in seconds, ``Ts = 1 s``); a window the run did 
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 from collections.abc import Callable, Hashable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -24,7 +25,7 @@ from numpy.typing import NDArray
 
 from benchmarks.metrics import TrialMetrics
 from mimo_radar_env import Scenario, env_version
-from mimo_radar_env.envs.versions import SCENARIO_SETS
+from mimo_radar_env.envs.versions import SCENARIO_SETS, paper_key
 
 from .. import uncertainty, verdicts
 from ..cli import Command
@@ -60,15 +61,26 @@ def _metric(p: Policies, metric: str, policy: str, w: NDArray, **kw: Any) -> NDA
     return getattr(p[policy], METRICS[metric])(w, **kw)
 
 
+#: A metric of one policy that a statistic reads: ``(metric, policy, its keywords as items)``.
+Part = tuple[str, str, tuple[tuple[str, Any], ...]]
+
+
 @dataclass(frozen=True)
 class Comparison:
-    """``statistic(policies, w)`` claimed ``> 0`` (``sign=+1``) or ``< 0`` (``sign=-1``)."""
+    """``statistic(policies, w)`` claimed ``> 0`` (``sign=+1``) or ``< 0`` (``sign=-1``);
+    ``parts``, where given, are the metrics of one policy each that the statistic combines
+    (:func:`prepare` computes them before the other policies are done)."""
 
     text: str
     statistic: Callable[[Policies, NDArray], NDArray]
     sign: int
     policies: tuple[str, ...]
     reaches: int = 0  # the last step the statistic reads (0: any run)
+    parts: tuple[Part, ...] = ()
+
+
+def _parts(metric: str, policies: Sequence[str], **kw: Any) -> tuple[Part, ...]:
+    return tuple((metric, policy, tuple(sorted(kw.items()))) for policy in policies)
 
 
 @dataclass(frozen=True)
@@ -86,12 +98,18 @@ def _diff(metric: str, a: str, b: str, sign: int, window: Window = None, **kw: A
     target = f" of target {kw['target'] + 1}" if "target" in kw else ""
     op = ">" if sign > 0 else "<"
 
+    extra = {"window": window} if window and metric in ("sinr_db", "armse") else {}
+
     def statistic(p: Policies, w: NDArray) -> NDArray:
-        extra = {"window": window} if window and metric in ("sinr_db", "armse") else {}
         return _metric(p, metric, a, w, **extra, **kw) - _metric(p, metric, b, w, **extra, **kw)
 
     return Comparison(
-        f"{metric}{target}{where}: {a} {op} {b}", statistic, sign, (a, b), window[1] if window else 0
+        f"{metric}{target}{where}: {a} {op} {b}",
+        statistic,
+        sign,
+        (a, b),
+        window[1] if window else 0,
+        _parts(metric, (a, b), **extra, **kw),
     )
 
 
@@ -128,9 +146,9 @@ def _versus_best_of(
     """``metric(policy) - max(metric(others))`` (sign +1) or ``- min(...)`` (sign -1)."""
     extreme = np.max if sign > 0 else np.min
     word = "above all of" if sign > 0 else "below all of"
+    extra = {"window": window} if window else {}
 
     def statistic(p: Policies, w: NDArray) -> NDArray:
-        extra = {"window": window} if window else {}
         values = [_metric(p, metric, o, w, **extra) for o in others]
         return _metric(p, metric, policy, w, **extra) - extreme(values, axis=0)
 
@@ -141,6 +159,7 @@ def _versus_best_of(
         sign,
         (policy, *others),
         window[1] if window else 0,
+        _parts(metric, (policy, *others), **extra),
     )
 
 
@@ -385,6 +404,31 @@ def judge_all(comparisons: Sequence[Comparison], policies: Policies, seed: int =
     return results
 
 
+def prepare(scenario: str, policy: str, metrics: TrialMetrics, seed: int = 0) -> None:
+    """What the claims of ``scenario`` (``paper-N``) read of ``policy`` alone (the comparisons'
+    :attr:`~Comparison.parts`), bootstrapped now, as the judge will with ``seed``: ``metrics``
+    keeps their terms on those resamples (``TrialMetrics`` keeps them by weight array), so the
+    judge, once every policy is done, finds them computed. The same numbers; the work is done
+    while the workers run the other policies' tasks."""
+    parts = {
+        part
+        for claim in paper_claims()
+        if claim.scenario == scenario
+        for comparison in claim.comparisons
+        if comparison.reaches <= metrics.steps
+        for part in comparison.parts
+        if part[1] == policy
+    }
+    if parts and metrics.num_trials > 1:
+        parts_of = {part: functools.partial(_part, metrics, part) for part in sorted(parts)}
+        uncertainty.estimates(parts_of, metrics.num_trials, seed)
+
+
+def _part(metrics: TrialMetrics, part: Part, w: NDArray) -> NDArray:
+    metric, _, keywords = part
+    return getattr(metrics, METRICS[metric])(w, **dict(keywords))
+
+
 def evaluate(policies_by_scenario: dict[str, Policies], seed: int = 0) -> list[dict[str, Any]]:
     """Every claim whose scenario was run, judged (each scenario's comparisons from one bootstrap)."""
     claims = [claim for claim in paper_claims() if claim.scenario in policies_by_scenario]
@@ -407,6 +451,11 @@ def evaluate(policies_by_scenario: dict[str, Policies], seed: int = 0) -> list[d
     ]
 
 
+def prepare_policy(config: RunConfig, policy: str, metrics: TrialMetrics) -> None:
+    """:func:`prepare` for a paper study's run (a :data:`~benchmarks.study.Prepare`)."""
+    prepare(paper_key(config.scenario["name"]), policy, metrics, config.seed)
+
+
 def paper_runs(scenarios: Sequence[str | Scenario], out: Path) -> list[Run]:
     """The paper study (:data:`~benchmarks.harness.PAPER_POLICIES`) on each scenario (a name or
     a :class:`~mimo_radar_env.Scenario`), into ``out/<scenario name>``."""
@@ -420,7 +469,8 @@ def paper_runs(scenarios: Sequence[str | Scenario], out: Path) -> list[Run]:
 def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings) -> list[dict[str, Any]]:
     """Run the paper studies of ``scenarios`` into ``out`` (resumably), judge the claims and
     write ``out/claims.md`` and ``out/claims.json``; the judged claims."""
-    finished = execute(paper_runs(scenarios, out), settings, keep_metrics=True).values()
+    runs = paper_runs(scenarios, out)
+    finished = execute(runs, settings, keep_metrics=True, prepare=prepare_policy).values()
     folders = [f.folder for f in finished]
     results = judge_studies(folders, settings.seed, {f.folder: f.metrics for f in finished})
     write_scorecard(results, out, describe_studies(folders), scorecard_title(folders))
@@ -465,6 +515,9 @@ class ClaimsStudy(Study):
                 )
         names = [source.paper_scenario(n) for n in paper_numbers(self.args.scenarios)]
         return paper_runs(names, self.settings.out)
+
+    def prepare_policy(self, config: RunConfig, policy: str, metrics: TrialMetrics) -> None:
+        prepare_policy(config, policy, metrics)
 
     def judge(self, finished: dict[Hashable, Finished]) -> tuple[list[Path], list[dict[str, Any]]]:
         folders = [Path(r) for r in self.args.runs] or [f.folder for f in finished.values()]
@@ -600,8 +653,6 @@ def load_study(run_dir: str | Path, metrics: dict[str, TrialMetrics] | None = No
     """The paper scenario (``paper-N`` of any version) and the policies of a finished run (their
     per-trial ``metrics`` read from its shards unless given)."""
     run_dir = Path(run_dir)
-    from mimo_radar_env.envs.versions import paper_key
-
     config = RunConfig(**json.loads((run_dir / "config.json").read_text()))
     if metrics is None:
         metrics = trial_metrics(config, load_per_trial(run_dir, config))

@@ -8,6 +8,7 @@ import pytest
 from benchmarks import uncertainty, verdicts
 from benchmarks.cli import main
 from benchmarks.studies import claims
+from mimo_radar_env import load_scenario
 
 SHARED = np.random.default_rng(9).normal(0, 0.5, size=(60, 1))  # per-trial, common to all policies
 
@@ -50,6 +51,41 @@ def test_s2_3_is_judged_right(mg_regret, verdict):
     assert "S1.2" not in results  # a scenario that was not run
     first = results["S2.1"]["comparisons"][0]  # epsilon-greedy vs fix1: fix1 was not run
     assert first["verdict"] == "not evaluated" and results["S2.1"]["verdict"] != "holds"
+
+
+def test_what_prepare_computes_early_is_what_the_judge_reads_with_the_same_numbers(monkeypatch):
+    """Each policy prepared alone (as its tasks end): the judge then computes no ARMSE term of its
+    own (every windowed and per-target term of the claims was prepared on the resamples it draws),
+    and judges every claim of the scenario as it does afresh, to the bit."""
+    from benchmarks import metrics as metrics_module
+    from benchmarks.harness import PAPER_POLICIES
+
+    def study():
+        rng = np.random.default_rng(3)
+        made = {p: _metrics(rng, 0.2 * i) for i, p in enumerate(PAPER_POLICIES)}
+        for i, m in enumerate(made.values()):  # position errors that differ by policy and trial
+            m.squared = (m.squared * (1 + i + rng.random((60, 1000, 1)))).astype(np.float32)
+        return claims.Policies(made, load_scenario("paper-1-v1"))
+
+    afresh = claims.evaluate({"paper-1": study()}, seed=4)
+    prepared = study()
+    for policy, metrics in prepared.items():
+        claims.prepare("paper-1", policy, metrics, seed=4)
+    calls = []
+    terms = metrics_module._root_mean_square
+    monkeypatch.setattr(
+        metrics_module, "_root_mean_square", lambda *a, **k: calls.append(1) or terms(*a, **k)
+    )
+    judged = claims.evaluate({"paper-1": prepared}, seed=4)
+    assert calls == []
+    assert any(
+        "armse" in c["comparison"] and " over " in c["comparison"] for r in judged for c in r["comparisons"]
+    )
+    assert json.dumps(judged, sort_keys=True) == json.dumps(afresh, sort_keys=True)
+    prepared = study()
+    claims.prepare("paper-1", "ucb1", prepared["ucb1"], seed=5)  # another seed: other resamples
+    claims.evaluate({"paper-1": prepared}, seed=4)
+    assert calls != []
 
 
 def test_claim_verdicts_combine_their_comparisons():
@@ -102,8 +138,9 @@ def test_the_claims_command_judges_the_metrics_its_report_read(tmp_path, monkeyp
 
 
 def test_each_policys_intervals_are_computed_while_the_other_tasks_run(tmp_path, monkeypatch):
-    """A policy's metrics and intervals are computed as soon as its last shard is saved, between
-    the tasks, not all after the last one; the summary is the one computed afresh from the folder."""
+    """A policy's metrics and intervals, and the claims' parts of it (:func:`claims.prepare`), are
+    computed as soon as its last shard is saved, between the tasks, not all after the last one;
+    the summary is the one computed afresh from the folder."""
     from benchmarks import harness, report, uncertainty
 
     events = []
@@ -112,6 +149,8 @@ def test_each_policys_intervals_are_computed_while_the_other_tasks_run(tmp_path,
     monkeypatch.setattr(
         uncertainty, "policy_estimates", lambda *args: events.append("estimates") or estimates(*args)
     )
+    prepare = claims.prepare
+    monkeypatch.setattr(claims, "prepare", lambda *args: events.append("prepare") or prepare(*args))
     argv = [
         "claims",
         "--scenarios",
@@ -126,7 +165,8 @@ def test_each_policys_intervals_are_computed_while_the_other_tasks_run(tmp_path,
         "4",
     ]
     assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
-    assert events == ["task", "estimates"] * 6  # one task a policy, each followed by its intervals
+    # one task a policy, each followed by its intervals and what the claims read of it alone
+    assert events == ["task", "estimates", "prepare"] * 6
     monkeypatch.undo()
     folder = tmp_path / "paper-1-v1"
     config = harness.RunConfig(**json.loads((folder / "config.json").read_text()))
