@@ -417,7 +417,7 @@ def prepare(scenario: str, policy: str, metrics: TrialMetrics, seed: int = 0) ->
         for comparison in claim.comparisons
         if comparison.reaches <= metrics.steps
         for part in comparison.parts
-        if part[1] == policy
+        if part[1] == policy and (part[0] != "armse" or metrics.tracked)  # else the judge says why
     }
     if parts and metrics.num_trials > 1:
         parts_of = {part: functools.partial(_part, metrics, part) for part in sorted(parts)}

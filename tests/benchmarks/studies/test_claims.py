@@ -86,6 +86,9 @@ def test_what_prepare_computes_early_is_what_the_judge_reads_with_the_same_numbe
     claims.prepare("paper-1", "ucb1", prepared["ucb1"], seed=5)  # another seed: other resamples
     claims.evaluate({"paper-1": prepared}, seed=4)
     assert calls != []
+    untracked = _metrics(np.random.default_rng(0), 0.0)
+    untracked.tracked = False  # a run without the tracker: no ARMSE to prepare, the judge says so
+    claims.prepare("paper-1", "ucb1", untracked, seed=4)
 
 
 def test_claim_verdicts_combine_their_comparisons():
