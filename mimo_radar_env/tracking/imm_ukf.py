@@ -26,7 +26,7 @@ from ..core.model import RadarModel
 from ..core.motion import transition_matrix
 from . import imm
 from .fusion import DEFAULT_FUSION, Posterior, Prior, make_fusion
-from .unscented import SigmaPointParameters, repair_covariance, robust_cholesky, sigma_points
+from .unscented import SigmaPointParameters, repair_covariances, robust_cholesky, sigma_points
 
 #: The tracker's models and Markov chain (docs/model.md): NCV, NCT(+3 deg/s), NCT(-3 deg/s).
 DEFAULT_TURN_RATES_DEG = (0.0, 3.0, -3.0)
@@ -184,8 +184,8 @@ class IMMUKFTracker:
         if not everywhere:  # the others are not used: keep their NaN out of the guard
             covs = xp.where(use_update[..., None, None, None], covs, xp.eye(4))
             covariance = xp.where(use_update[..., None, None], covariance, xp.eye(4))
-        posterior_covs, repaired_models = repair_covariance(covs)
-        covariance, repaired_fused = repair_covariance(covariance)
+        repaired = repair_covariances([covs, covariance])
+        (posterior_covs, repaired_models), (covariance, repaired_fused) = repaired
         self.repairs = self.repairs + ((repaired_models.any(axis=-1) | repaired_fused) & use_update).sum(
             axis=1
         )

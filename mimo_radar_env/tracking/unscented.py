@@ -10,6 +10,7 @@ axes.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -167,6 +168,25 @@ def repair_covariance(
     _, rebuilt, low = _floor_eigenvalues(matrix, relative_floor)
     repaired = low | wanted
     return xp.where(repaired[..., None, None], rebuilt, matrix), repaired
+
+
+def repair_covariances(
+    matrices: Sequence[NDArray[np.float64]], relative_floor: float = 1.0 / MAX_CONDITION
+) -> list[tuple[NDArray[np.float64], NDArray[np.bool_]]]:
+    """:func:`repair_covariance` of each of ``matrices`` (4 x 4 covariances, of any batch shapes)
+    with one closed-form test of the healthy ones over all of them (a step's model covariances
+    and its fused covariance): the same results as one call each, in one pass where every one
+    passes (the others are repaired one by one, as alone)."""
+    xp = namespace(matrices[0])
+    if all(m.shape[-2:] == (4, 4) for m in matrices):
+        passed = _certainly_conditioned(
+            xp.concatenate([m.reshape(-1, 4, 4) for m in matrices]), 1.0 / relative_floor
+        )
+        if deferring():  # the check is left to the caller (deferred_checks)
+            defer(passed)
+        if deferring() or xp.all(passed):
+            return [(m, xp.zeros(m.shape[:-2], dtype=bool)) for m in matrices]
+    return [repair_covariance(m, relative_floor) for m in matrices]
 
 
 def robust_cholesky(

@@ -137,7 +137,7 @@ def test_the_traced_step_reads_no_device_value(monkeypatch):
         engine.advance(action)
     monkeypatch.undo()
     assert reads == []
-    assert len(flags) >= 4  # the prior's factors, both guards of the update, the bound's
+    assert len(flags) >= 4  # the prior's factors, the update's guard (both covariances at once), the bound's
 
 
 def test_the_cuda_graph_path_keeps_the_engines_arrays_in_its_buffers(monkeypatch):

@@ -101,3 +101,29 @@ def test_the_covariance_guards_closed_forms_are_the_scalar_expansion_bit_for_bit
     on_torch = torch.as_tensor(matrices)
     np.testing.assert_array_equal(unscented._det4(unscented._minors(on_torch.reshape(-1, 16))).numpy(), det)
     assert unscented._certainly_conditioned(on_torch, 1e12).tolist() == expected
+
+
+def test_repairing_covariances_together_is_repairing_each_alone():
+    """The step's model covariances and its fused covariance share one closed-form test: the
+    same matrices and masks, bit for bit, as one repair each, whether every one passes the test,
+    one of them needs its repair, or the checks are deferred (one flag for both, matrices kept)."""
+    from mimo_radar_env.core.arrays import deferred_checks
+    from mimo_radar_env.tracking import unscented
+
+    rng = np.random.default_rng(2)
+    root = rng.normal(size=(6, 1, 3, 4, 4))
+    models = root @ np.swapaxes(root, -1, -2) + np.eye(4)
+    fused = models[:, :, 0] * 2.0
+    broken = fused.copy()
+    broken[4, 0] = np.diag([1.0, -1e-3, 1.0, 1.0])  # not positive definite: repaired
+    for pair in ([models, fused], [models, broken], [broken, models]):
+        together = unscented.repair_covariances(pair)
+        for (matrix, mask), alone in zip(together, map(unscented.repair_covariance, pair), strict=True):
+            np.testing.assert_array_equal(matrix, alone[0])
+            np.testing.assert_array_equal(mask, alone[1])
+    assert unscented.repair_covariances([models, broken])[1][1].sum() == 1
+    torch = pytest.importorskip("torch")
+    with deferred_checks() as flags:
+        kept = unscented.repair_covariances([torch.as_tensor(models), torch.as_tensor(broken)])
+    assert len(flags) == 1 and not bool(flags[0])
+    assert torch.equal(kept[1][0], torch.as_tensor(broken)) and not kept[1][1].any()
