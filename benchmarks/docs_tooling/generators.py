@@ -1490,7 +1490,9 @@ def launches_value(docs: Path, key: str) -> str:
     """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
     ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), ``trials``, or the
     calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``,
-    with the same env's eager operations, ``compiled.eager.FUSION``."""
+    with the same env's eager operations, ``compiled.eager.FUSION``, and the seconds of the
+    compiled env's first step and of a second one's, ``compiled.compile_s.FUSION`` and
+    ``compiled.again_s.FUSION``."""
     record = read_json(docs, LAUNCHES_FILE)
     if key == "trials":
         return f"{record['rows'][0]['trials']:,}"
@@ -1498,9 +1500,15 @@ def launches_value(docs: Path, key: str) -> str:
         _, kind, fusion = key.split(".", 2)
         for r in record.get("compiled", []):
             at = (r["fusion"], r["trials"], r.get("device", "cpu"))
-            if at == (fusion, record["rows"][0]["trials"], "cpu") and kind in ("fused", "library", "eager"):
+            if at != (fusion, record["rows"][0]["trials"], "cpu"):
+                continue
+            if kind in ("fused", "library", "eager"):
                 return f"{r[kind]:,}"
-        raise BenchError(f"{LAUNCHES_FILE} has no {key!r}: compiled.(fused|library|eager).FUSION")
+            if kind in ("compile_s", "again_s") and kind in r:
+                return f"{r[kind]:.1f}"
+        raise BenchError(
+            f"{LAUNCHES_FILE} has no {key!r}: compiled.(fused|library|eager|compile_s|again_s).FUSION"
+        )
     field, _, rest = key.partition(".")
     policy, _, fusion = rest.rpartition(".")
     for r in record["rows"]:

@@ -16,7 +16,10 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import re
+import tempfile
+import time
 import warnings
 from collections.abc import Iterator
 from pathlib import Path
@@ -112,7 +115,10 @@ def code_calls(code: str) -> dict[str, int]:
 def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any]:
     """The calls of the v1 env's step compiled (``device_mode="compiled"``) on ``device``, as
     inductor writes it there (C++ loops on the CPU, Triton kernels on CUDA), and the operations
-    of the same env's eager step (its third, counted as :func:`policy_row` counts)."""
+    of the same env's eager step (its third, counted as :func:`policy_row` counts); with the
+    seconds of the compiled env's first step (``compile_s``: it traces and compiles) and of a
+    second compiled env's of the same options in this process (``again_s``: what a study's next
+    policy pays, inductor's caches warm)."""
     import gymnasium as gym
     from torch._inductor.utils import run_and_get_code
 
@@ -130,10 +136,17 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
         with counting() as operations:
             eager.step(action)
     compiled = env("compiled")
+    start = time.perf_counter()
     _, codes = run_and_get_code(compiled.step, compiled.oracle_action())
+    compile_s = time.perf_counter() - start
+    again = env("compiled")
+    start = time.perf_counter()
+    again.step(again.oracle_action())
+    again_s = time.perf_counter() - start
     calls = [code_calls(code) for code in codes]
     counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
-    return {"fusion": fusion, "trials": trials, "device": device, **counts, "eager": operations["total"]}
+    return {"fusion": fusion, "trials": trials, "device": device, **counts, "eager": operations["total"],
+            "compile_s": compile_s, "again_s": again_s}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -149,6 +162,16 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--compiled-device", default="cpu", help="where --compiled compiles (default cpu)")
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
+    if not args.compiled:
+        return count(args)
+    # a cold compile: inductor's caches on disk start empty for this run
+    with tempfile.TemporaryDirectory(prefix="launches-inductor-") as cache:
+        os.environ["TORCHINDUCTOR_CACHE_DIR"] = cache
+        count(args)
+
+
+def count(args: argparse.Namespace) -> None:
+    """The counts :func:`main`'s arguments ask for, printed and written."""
     import torch
 
     rows = []
@@ -170,7 +193,8 @@ def main(argv: list[str] | None = None) -> None:
         for row in result["compiled"]:
             print(
                 f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, "
-                f"{row['library']} library calls"
+                f"{row['library']} library calls; first step {row['compile_s']:.1f} s, a second "
+                f"env's {row['again_s']:.1f} s"
             )
     write_json(args.json, result)
     if args.json:
