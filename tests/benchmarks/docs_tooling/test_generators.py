@@ -202,7 +202,8 @@ def test_trainings_sharing_a_device_are_a_line_of_their_own_and_no_rate_reads_th
 
 def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     """``launches compiled.KIND.FUSION`` reads the calls of the step compiled on the CPU at the
-    trials of the operation rows; another count, device, kind or fusion is refused by name."""
+    trials of the operation rows, and its compile times; another count, device, kind or fusion
+    is refused by name."""
     from benchmarks.docs_tooling import generators
 
     perf = tmp_path / "results" / "perf"
@@ -210,15 +211,25 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     rows = [{"policy": "ucb1", "fusion": "average", "trials": 500, "env_step": 1456.0}]
     compiled = [
         {"fusion": "average", "trials": 64, "fused": 9, "library": 9},
-        {"fusion": "average", "trials": 500, "fused": 20, "library": 26, "eager": 1330},
+        {
+            "fusion": "average",
+            "trials": 500,
+            "fused": 20,
+            "library": 26,
+            "eager": 1330,
+            "compile_s": 49.44,
+            "again_s": 2.16,
+        },  # fmt: skip
         {"fusion": "centralized", "trials": 500, "fused": 90, "library": 30, "device": "cuda"},
     ]
     (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled": compiled}))
     assert generators.launches_value(tmp_path, "compiled.fused.average") == "20"
     assert generators.launches_value(tmp_path, "compiled.library.average") == "26"
     assert generators.launches_value(tmp_path, "compiled.eager.average") == "1,330"
-    for key in ("compiled.fused.centralized", "compiled.loops.average"):
-        with pytest.raises(generators.BenchError, match=r"compiled.\(fused\|library\|eager\).FUSION"):
+    assert generators.launches_value(tmp_path, "compiled.compile_s.average") == "49.4"
+    assert generators.launches_value(tmp_path, "compiled.again_s.average") == "2.2"
+    for key in ("compiled.fused.centralized", "compiled.loops.average", "compiled.again_s.centralized"):
+        with pytest.raises(generators.BenchError, match=r"compiled.\(fused\|library\|eager\|compile_s"):
             generators.launches_value(tmp_path, key)
 
 
