@@ -9,7 +9,8 @@ device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees e
 Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO's iterations)
 are counted apart, run as they are captured: on CUDA they replay as one graph. ``--compiled``
 also counts the calls of the env's step as ``torch.compile`` (inductor) writes it on this
-machine's torch. docs/performance.md's table is generated from the JSON.
+machine's torch, and times its compile: the first compiled step from empty caches (a temporary
+cache folder) and a second env's. docs/performance.md's table is generated from the JSON.
 """
 
 from __future__ import annotations
