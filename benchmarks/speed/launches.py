@@ -150,6 +150,13 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
             "compile_s": compile_s, "again_s": again_s}  # fmt: skip
 
 
+def _compiled_line(row: dict[str, Any]) -> str:
+    return (
+        f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, {row['library']} library "
+        f"calls; first step {row['compile_s']:.1f} s, a second env's {row['again_s']:.1f} s"
+    )
+
+
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=500)
@@ -191,12 +198,7 @@ def count(args: argparse.Namespace) -> None:
     if args.compiled:
         fusions = ("average", "centralized")
         result["compiled"] = [compiled_row(args.trials, f, args.compiled_device) for f in fusions]
-        for row in result["compiled"]:
-            print(
-                f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, "
-                f"{row['library']} library calls; first step {row['compile_s']:.1f} s, a second "
-                f"env's {row['again_s']:.1f} s"
-            )
+        print("\n".join(map(_compiled_line, result["compiled"])))
     write_json(args.json, result)
     if args.json:
         print(f"wrote {args.json}")
