@@ -87,13 +87,13 @@ def run_numpy(
     batch, population, length = positions.shape
     fitness_of = _Fitness(index, length, index.shape[1], tx_count, rx_count, table_bits)
     swarm = _Swarm(positions, fitness_of)
-    draws = _Draws(keys, population, length, iterations, whole_blocks=xp.is_torch and not stop_at_optimum)
+    draws = _Draws(keys, population, length, iterations, xp.is_torch and not stop_at_optimum, c1, c2)
     steps = max(iterations - 1, 1)
     optimum = fitness_of.optimum if stop_at_optimum else None
     result, alive = None, None  # the bests of the trials that stopped; the rows still iterating
     for q in range(iterations):
         inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        swarm.move(*draws.at(q), inertia, c1, c2, velocity_clamp, set_rule)
+        swarm.move(*draws.at(q), inertia, velocity_clamp, set_rule)
         if optimum is None or q == iterations - 1:
             continue
         final = swarm.global_fit >= optimum
@@ -131,15 +131,14 @@ class _Swarm:
         self.global_best = xp.copy(self.personal_best[self.rows, first])
         self.global_fit = xp.copy(self.personal_fit[self.rows, first])
 
-    def move(
-        self, r1: Any, r2: Any, u: Any, inertia: float, c1: float, c2: float, clamp: float, set_rule: bool
-    ) -> None:
-        """One iteration: eq20's velocities, eq21's positions, then the bests."""
+    def move(self, c1_r1: Any, c2_r2: Any, u: Any, inertia: float, clamp: float, set_rule: bool) -> None:
+        """One iteration: eq20's velocities (``c1 r1`` and ``c2 r2`` as drawn, :class:`_Draws`),
+        eq21's positions, then the bests."""
         xp, rows = self.xp, self.rows
         velocities = (
             inertia * self.velocities
-            + (c1 * r1)[..., None] * (self.personal_best - self.positions)
-            + (c2 * r2)[..., None] * (self.global_best[:, None, :] - self.positions)
+            + c1_r1[..., None] * (self.personal_best - self.positions)
+            + c2_r2[..., None] * (self.global_best[:, None, :] - self.positions)
         )  # eq20
         self.velocities = velocities = xp.minimum(xp.maximum(velocities, -clamp), clamp)
         draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
@@ -170,8 +169,18 @@ class _Draws:
     block instead of a few dozen an iteration), blocks sized to DRAW_BLOCK_BYTES (``whole_blocks``:
     the torch budget, where every trial runs every iteration)."""
 
-    def __init__(self, keys: Any, population: int, length: int, iterations: int, whole_blocks: bool) -> None:
+    def __init__(
+        self,
+        keys: Any,
+        population: int,
+        length: int,
+        iterations: int,
+        whole_blocks: bool,
+        c1: float,
+        c2: float,
+    ) -> None:
         xp = self.xp = namespace(keys)
+        self.c1, self.c2 = c1, c2
         batch = keys.shape[0]
         self.iterations = iterations
         # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
@@ -189,22 +198,22 @@ class _Draws:
         self.drawn_for: Any = None  # the block's rows of the trials left, where some stopped since
 
     def at(self, q: int) -> tuple[Any, Any, Any]:
-        """Iteration ``q``'s r1, r2 (B, P) and flip uniforms (B, P, L)."""
+        """Iteration ``q``'s ``c1 r1`` and ``c2 r2`` (B, P), each product as eq20 forms it (made
+        for a block at once), and its flip uniforms (B, P, L)."""
         block = self.block
         if q % block == 0:
             drawn = slice(q, min(q + block, self.iterations))
-            self.r_block = to_unit(
-                element_bits(self.r_bases[:, :, drawn, None], self.particle)
-            )  # (2, B, Q, P)
+            r1, r2 = to_unit(element_bits(self.r_bases[:, :, drawn, None], self.particle))  # (B, Q, P)
+            self.r_block = (self.c1 * r1, self.c2 * r2)
             self.u_block = _flip_uniform_np(
                 self.flip_bases[:, drawn, None, None], self.hash_element, self.lane_shift
             )
             self.drawn_for = None
+        c1_r1, c2_r2 = self.r_block
         if self.drawn_for is None:
-            r1, r2 = self.r_block[:, :, q % block]
-            return r1, r2, self.u_block[:, q % block]
-        r1, r2 = self.r_block[:, self.drawn_for, q % block]
-        return r1, r2, self.u_block[self.drawn_for, q % block]
+            return c1_r1[:, q % block], c2_r2[:, q % block], self.u_block[:, q % block]
+        rows = self.drawn_for
+        return c1_r1[rows, q % block], c2_r2[rows, q % block], self.u_block[rows, q % block]
 
     def keep(self, rows: Any) -> None:
         self.r_bases, self.flip_bases = self.r_bases[:, rows], self.flip_bases[rows]
@@ -257,7 +266,7 @@ class _Fitness:
     def __call__(self, positions: NDArray[np.int8]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         if self.table is None:
             return _fitness_np(self.index, positions, *self.counts)
-        code = (self.xp.astype(positions, np.int64) * self.weights).sum(axis=-1)  # (B, P)
+        code = (positions * self.weights).sum(axis=-1)  # (B, P), int64 as the weights
         return self.xp.take_along_axis(self.table, code, axis=1), self.valid_pattern[code]
 
     def keep(self, rows: Any) -> None:
