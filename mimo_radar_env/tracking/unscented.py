@@ -151,11 +151,8 @@ def repair_covariance(
     raised to ``relative_floor`` times the largest; the others are returned as given.
     """
     xp = namespace(matrix)
-    if matrix.shape[-1] == 4 and deferring():  # the check is left to the caller (deferred_checks)
-        defer(_certainly_conditioned(matrix, 1.0 / relative_floor))
+    if _left_as_given([matrix], relative_floor):  # the fast path of every healthy step
         return matrix, xp.zeros(matrix.shape[:-2], dtype=bool)
-    if matrix.shape[-1] == 4 and xp.all(_certainly_conditioned(matrix, 1.0 / relative_floor)):
-        return matrix, xp.zeros(matrix.shape[:-2], dtype=bool)  # the fast path of every healthy step
     try:
         diagonal = xp.diagonal(xp.linalg.cholesky(matrix), axis1=-2, axis2=-1)
         with xp.errstate(divide="ignore", invalid="ignore"):
@@ -178,15 +175,26 @@ def repair_covariances(
     and its fused covariance): the same results as one call each, in one pass where every one
     passes (the others are repaired one by one, as alone)."""
     xp = namespace(matrices[0])
-    if all(m.shape[-2:] == (4, 4) for m in matrices):
-        passed = _certainly_conditioned(
-            xp.concatenate([m.reshape(-1, 4, 4) for m in matrices]), 1.0 / relative_floor
-        )
-        if deferring():  # the check is left to the caller (deferred_checks)
-            defer(passed)
-        if deferring() or xp.all(passed):
-            return [(m, xp.zeros(m.shape[:-2], dtype=bool)) for m in matrices]
+    if _left_as_given(matrices, relative_floor):
+        return [(m, xp.zeros(m.shape[:-2], dtype=bool)) for m in matrices]
     return [repair_covariance(m, relative_floor) for m in matrices]
+
+
+def _left_as_given(matrices: Sequence[NDArray[np.float64]], relative_floor: float) -> bool:
+    """Whether every one of ``matrices`` (4 x 4) is certainly healthy by the closed-form test
+    (:func:`_certainly_conditioned`, one pass over all of them), so is returned as given; with
+    deferred checks the test is left to the caller
+    (:func:`~mimo_radar_env.core.arrays.deferred_checks`) and this is True.
+    Other sizes: False (factorised)."""
+    if not all(m.shape[-2:] == (4, 4) for m in matrices):
+        return False
+    xp = namespace(matrices[0])
+    together = matrices[0] if len(matrices) == 1 else xp.concatenate([m.reshape(-1, 4, 4) for m in matrices])
+    passed = _certainly_conditioned(together, 1.0 / relative_floor)
+    if deferring():
+        defer(passed)
+        return True
+    return bool(xp.all(passed))
 
 
 def robust_cholesky(
