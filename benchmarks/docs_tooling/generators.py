@@ -6,6 +6,7 @@ are written in the pages."""
 from __future__ import annotations
 
 import json
+import operator
 import re
 import shlex
 from collections.abc import Callable, Iterable, Sequence
@@ -1822,6 +1823,17 @@ def _paired_difference(a: Sequence[float], b: Sequence[float]) -> tuple[np.ndarr
     return differences, low, high, "above" if low > 0 else "below" if high < 0 else None
 
 
+def _by_variant(
+    record: dict[str, Any], key: str, of_run: Callable[[dict[str, Any]], float]
+) -> dict[str, list[float]]:
+    """``of_run(run)`` of each alternating run (``ray_cluster.alternate``), by its variant
+    (``run[key]``), in the order of the repeats."""
+    values: dict[str, list[float]] = {}
+    for run in record["runs"]:
+        values.setdefault(run[key], []).append(of_run(run))
+    return values
+
+
 def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, difference: str) -> str:
     """Alternating runs of a study (``benchmarks.speed.ray_cluster.alternate``): each variant's
     (``key``) wall times, and ``other``'s minus ``base``'s paired by repeat with a 95 % t interval
@@ -1829,15 +1841,11 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
     numbers; where every run recorded them, the mean wall seconds before the first task and
     after the last, and their paired differences."""
     parts = [p for p in ("before_first_task_s", "after_last_task_s") if all(p in r for r in record["runs"])]
-    walls: dict[str, list[float]] = {}
-    serial: dict[tuple[str, str], list[float]] = {}
-    for run in record["runs"]:
-        walls.setdefault(run[key], []).append(run["wall_s"])
-        for part in parts:
-            serial.setdefault((run[key], part), []).append(run[part])
+    walls = _by_variant(record, key, lambda run: run["wall_s"])
+    serial = {part: _by_variant(record, key, operator.itemgetter(part)) for part in parts}
     rows = [
         [name, ", ".join(f"{v:.1f}" for v in values), f"{np.mean(values):.1f}"]
-        + [f"{np.mean(serial[name, part]):.2f}" for part in parts]
+        + [f"{np.mean(serial[part][name]):.2f}" for part in parts]
         for name, values in walls.items()
     ]
     differences, low, high, side = _paired_difference(walls[other], walls[base])
@@ -1847,7 +1855,7 @@ def _paired_runs(record: dict[str, Any], key: str, other: str, base: str, differ
         f"{differences.mean():+.1f} [{low:+.1f}, {high:+.1f}]",
     ]
     for part in parts:
-        part_differences, part_low, part_high, _ = _paired_difference(serial[other, part], serial[base, part])
+        part_differences, part_low, part_high, _ = _paired_difference(serial[part][other], serial[part][base])
         row.append(f"{part_differences.mean():+.2f} [{part_low:+.2f}, {part_high:+.2f}]")
     rows.append(row)
     if side == "above":
@@ -1901,15 +1909,12 @@ def ray_value(docs: Path, key: str) -> str:
     part, _, rest = key.partition(".")
     if rest not in ("difference", "shown") or part not in ("before", "after", "between"):
         return _alternating_value(record, key)
-    seconds: dict[str, list[float]] = {}
-    for run in record["runs"]:
-        serial = run["before_first_task_s"] + run["after_last_task_s"]
-        value = {
-            "before": run["before_first_task_s"],
-            "after": run["after_last_task_s"],
-            "between": run["wall_s"] - serial,
-        }[part]
-        seconds.setdefault(run["backend"], []).append(value)
+    of_run = {
+        "before": operator.itemgetter("before_first_task_s"),
+        "after": operator.itemgetter("after_last_task_s"),
+        "between": lambda run: run["wall_s"] - (run["before_first_task_s"] + run["after_last_task_s"]),
+    }[part]
+    seconds = _by_variant(record, "backend", of_run)
     differences, low, high, side = _paired_difference(seconds["ray"], seconds["local"])
     if rest == "shown":
         return {"above": "longer on Ray", "below": "shorter on Ray", None: "not told apart"}[side]
