@@ -13,35 +13,72 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import multiprocessing.connection
+import multiprocessing.util
 import os
 import signal
 import socket
 import sys
 import threading
-import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
 
 
-class _WorkerProcess(multiprocessing.context.SpawnProcess):
-    """A spawned worker that exits at once when its pool tells it to stop: the interpreter's own
+class _ExitsAtOnce:
+    """A worker that exits at once when its pool tells it to stop: the interpreter's own
     teardown of numpy, numba and the project (about 0.2 s a process) would only delay the pool's
-    end. A worker that fails exits as any process does."""
+    end. multiprocessing's own clean-up still runs (numba's threads make a named semaphore in a
+    forked worker, which would otherwise be reported leaked). A worker that fails exits as any
+    process does."""
 
     def run(self) -> None:
-        super().run()
+        super().run()  # type: ignore[misc]
+        multiprocessing.util._run_finalizers(0)
         for stream in (sys.stdout, sys.stderr):
             if stream is not None:
                 stream.flush()
         os._exit(0)
 
 
-class _WorkerContext(multiprocessing.context.SpawnContext):
-    Process = _WorkerProcess
+class _ForkedWorker(_ExitsAtOnce, multiprocessing.context.ForkServerProcess):
+    pass
 
 
-_SPAWN = _WorkerContext()
+class _SpawnedWorker(_ExitsAtOnce, multiprocessing.context.SpawnProcess):
+    pass
+
+
+class _ForkServerContext(multiprocessing.context.ForkServerContext):
+    Process = _ForkedWorker
+
+
+class _SpawnContext(multiprocessing.context.SpawnContext):
+    Process = _SpawnedWorker
+
+
+#: What the fork server imports once, before it forks any worker: what every task imports (numpy,
+#: the env, the agents, the harness) and numba, whose kernels a task loads (where it is installed).
+FORK_SERVER_PRELOAD = ("benchmarks.harness", "numba")
+#: Workers are forked from a server process that has imported :data:`FORK_SERVER_PRELOAD`, so
+#: each starts in milliseconds with nothing of this process inherited (no threads, no state);
+#: spawned, each importing it all again, where fork servers are not available (Windows).
+_CONTEXT = (
+    _ForkServerContext() if "forkserver" in multiprocessing.get_all_start_methods() else _SpawnContext()
+)
+
+
+def start_fork_server() -> None:
+    """Start the fork server now, where the workers come from one: it imports what a task needs
+    while this process goes on (parsing, checking and planning a run), so the workers the run
+    starts later are forked ready to run. Where it runs already, nothing."""
+    if isinstance(_CONTEXT, _ForkServerContext):
+        from multiprocessing import forkserver
+
+        _CONTEXT.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
+        forkserver.ensure_running()
+
+
 #: ``(payload, policy, shard)``: the run's configuration (``RunConfig.to_json()``) and one task.
 Task = tuple[dict[str, Any], str, int]
 #: Called with a task's position in the list and its result.
@@ -57,7 +94,7 @@ _BUDGET: Any = None
 _ENTRY: int | None = None
 
 
-def worker_init(parent: int, threads: int = 1, budget: Any = None) -> None:
+def worker_init(threads: int = 1, budget: Any = None) -> None:
     """Worker set-up: ``threads`` compute threads for the compiled kernels, the run's shared
     thread ``budget``, SIGINT left to the parent, exit when the parent dies."""
     global _BASE_THREADS, _BUDGET
@@ -65,10 +102,12 @@ def worker_init(parent: int, threads: int = 1, budget: Any = None) -> None:
     pin_threads(threads)
     _BASE_THREADS, _BUDGET = threads, budget
 
+    # the pool's process, not os.getppid(): the parent of a worker forked by the fork server
+    sentinel = multiprocessing.parent_process().sentinel
+
     def watch() -> None:
-        while os.getppid() == parent:
-            time.sleep(0.5)
-        os._exit(1)  # the parent is gone: nobody will read our results
+        multiprocessing.connection.wait([sentinel])  # ready when the pool's process has ended
+        os._exit(1)  # nobody will read our results
 
     threading.Thread(target=watch, daemon=True, name="parent-watch").start()
 
@@ -162,14 +201,15 @@ class WorkerPool(ProcessPoolExecutor):
 
 @contextlib.contextmanager
 def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[WorkerPool]:
-    """Spawned worker processes (:func:`worker_init`: ``threads`` compute threads each, the shared
+    """Worker processes (:func:`worker_init`: ``threads`` compute threads each, the shared
     thread ``budget``, exiting when this process dies), all exited when the block ends; on an
     error or an interrupt the running ones are terminated at once, their results not wanted."""
+    start_fork_server()
     pool = WorkerPool(
         max_workers=workers,
-        mp_context=_SPAWN,  # no inherited threads or state
+        mp_context=_CONTEXT,
         initializer=worker_init,
-        initargs=(os.getpid(), threads, budget),
+        initargs=(threads, budget),
     )
     try:
         yield pool
@@ -190,7 +230,7 @@ def run_processes(
     """The tasks on ``workers`` local processes of ``threads`` compute threads each; at the tail,
     with ``share_tail`` (or where it returns true, asked once the tasks are submitted), the tasks
     still running take up the cores of those that ended (:func:`share_idle_cores`)."""
-    budget = _SPAWN.Array("i", max(1, len(todo)), lock=False)
+    budget = _CONTEXT.Array("i", max(1, len(todo)), lock=False)
     with worker_pool(workers, threads, budget) as pool:
         pending = {
             pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)

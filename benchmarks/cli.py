@@ -17,6 +17,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import importlib.util
+import os
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -353,6 +354,10 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     from .errors import BenchError, HarnessError
     from .harness import RunInterrupted
 
+    if _starts_local_workers(args):
+        from .backends import start_fork_server
+
+        start_fork_server()  # the workers' imports, while the command checks and plans its runs
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
@@ -363,3 +368,10 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
         message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
         parser.exit(2, f"{PROG}: error: {message}\n")
     return 0
+
+
+def _starts_local_workers(args: Any) -> bool:
+    """Whether the command may run its tasks on local worker processes: a run or study on the
+    local backend, with no device, and more than one worker (or the machine's cores)."""
+    workers = getattr(args, "workers", None) or os.cpu_count() or 1
+    return getattr(args, "backend", None) == "local" and getattr(args, "device", None) is None and workers > 1

@@ -909,6 +909,8 @@ def run_many(
     folders = [Path(out) for _, out in runs]
     configs = [config for config, _ in runs]
     _check_execution(backend, workers, address, folders, device, configs, threads, device_mode)
+    if backend == "local" and workers > 1 and device is None:
+        backends.start_fork_server()  # the workers' imports, while this process plans the run
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))

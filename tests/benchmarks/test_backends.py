@@ -2,6 +2,7 @@
 
 import multiprocessing
 import os
+import subprocess
 import sys
 import time
 
@@ -158,11 +159,68 @@ def _print_unflushed(text):
 
 
 def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd):
+    from multiprocessing import forkserver
+
+    forkserver._forkserver._stop()  # its workers write where it was started: into this capture
     results = {}
     backends.run_processes(_print_unflushed, [("one-",), ("two-",)], results.__setitem__, workers=2)
     assert sorted(capfd.readouterr().out.split("-")[:2]) == ["one", "two"]
     assert len(results) == 2 and multiprocessing.active_children() == []
-    assert backends._SPAWN.Process.run is not multiprocessing.context.SpawnProcess.run
+    assert backends._CONTEXT.Process.run is backends._ExitsAtOnce.run
+
+
+@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(), reason="no fork server")
+def test_workers_are_forked_from_a_server_that_imported_what_a_task_needs():
+    """The local workers come from the fork server, not from this process, and start with the
+    project (and numba, where installed) imported: their first task imports none of it again."""
+    from tests.benchmarks import worker_probe
+
+    backends.start_fork_server()
+    wanted = [m for m in backends.FORK_SERVER_PRELOAD if m != "numba" or compiled.HAVE_NUMBA]
+    results = {}
+    backends.run_processes(
+        worker_probe.imported, [tuple(wanted)] * 2, results.__setitem__, workers=2, share_tail=False
+    )
+    assert [r["imported"] for r in results.values()] == [[True] * len(wanted)] * 2
+    assert {r["parent"] for r in results.values()} - {os.getpid()} == {r["parent"] for r in results.values()}
+
+
+def test_a_worker_exits_when_the_process_that_started_it_is_killed(tmp_path):
+    """A worker whose pool's process dies (killed: no clean-up) exits by itself, whether it was
+    spawned by that process or forked by its fork server."""
+    script = tmp_path / "orphan.py"
+    script.write_text(
+        "import time\n"
+        "from benchmarks import backends\n"
+        "if __name__ == '__main__':\n"
+        "    with backends.worker_pool(1) as pool:\n"
+        "        pool.submit(time.sleep, 120)\n"
+        "        while not pool._processes:\n"
+        "            time.sleep(0.01)\n"
+        "        print(*pool._processes, flush=True)\n"
+        "        time.sleep(120)\n"
+    )
+    parent = subprocess.Popen([sys.executable, str(script)], stdout=subprocess.PIPE, text=True)
+    worker = int(parent.stdout.readline())
+    os.kill(worker, 0)  # running
+    parent.kill()
+    parent.wait()
+    end = time.monotonic() + 20
+    while time.monotonic() < end and _running(worker):
+        time.sleep(0.05)
+    assert not _running(worker)
+
+
+def _running(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    try:  # a zombie (exited, not reaped yet) is not running
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().split(") ")[-1][0] != "Z"
+    except OSError:
+        return True
 
 
 def test_ray_calls_started_once_every_task_is_submitted(monkeypatch):
