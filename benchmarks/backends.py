@@ -58,8 +58,9 @@ class _SpawnContext(multiprocessing.context.SpawnContext):
 
 
 #: What the fork server imports once, before it forks any worker: what every task imports (numpy,
-#: the env, the agents, the harness) and numba, whose kernels a task loads (where it is installed).
-FORK_SERVER_PRELOAD = ("benchmarks.harness", "numba")
+#: the env, the agents, the harness) and the kernels a worker of one thread calls, loaded from
+#: numba's cache (:mod:`benchmarks.fork_server`).
+FORK_SERVER_PRELOAD = ("benchmarks.fork_server",)
 #: Workers are forked from a server process that has imported :data:`FORK_SERVER_PRELOAD`, so
 #: each starts in milliseconds with nothing of this process inherited (no threads, no state);
 #: spawned, each importing it all again, where fork servers are not available (Windows).
@@ -69,8 +70,8 @@ _CONTEXT = (
 
 
 def start_fork_server() -> None:
-    """Start the fork server now, where the workers come from one: it imports what a task needs
-    while this process goes on (parsing, checking and planning a run), so the workers the run
+    """Start the fork server now, where the workers come from one: it imports (and loads) what a
+    task needs while this process goes on (parsing, checking and planning a run), so the workers the run
     starts later are forked ready to run. Where it runs already, nothing."""
     if isinstance(_CONTEXT, _ForkServerContext):
         from multiprocessing import forkserver

@@ -90,19 +90,20 @@ WORKLOADS: dict[str, tuple[Callable[[], None], float]] = {
 }
 
 
-def all_kernels() -> list[Any]:
+def all_kernels(threaded: bool = True) -> list[Any]:
     """Every numba kernel a run can call: each fusion's update and the bound, the tracking
     search's, and their twins over threads where numba has more than one; BPSO's starting swarm
-    and its one-thread and parallel kernels."""
+    and its one-thread and parallel kernels. Without ``threaded``, those a worker of one thread
+    calls (no twin over threads)."""
     from agents.solvers import _bpso_kernels
     from agents.solvers import compiled_kernels as solver_kernels
 
     kernels: list[Any] = []
-    for threaded in (False, True) if _threads() > 1 else (False,):
+    for twin in (False, True) if threaded and _threads() > 1 else (False,):
         for fusion in FUSIONS:
-            kernels += compiled_kernels(fusion, threaded)
-        kernels += selection_kernels(threaded)
-    kernels += solver_kernels("bpso", threads=1) + [_bpso_kernels.run_numba]
+            kernels += compiled_kernels(fusion, twin)
+        kernels += selection_kernels(twin)
+    kernels += solver_kernels("bpso", threads=1) + ([_bpso_kernels.run_numba] if threaded else [])
     return list(dict.fromkeys(kernels))  # the bound is every fusion's: listed once
 
 

@@ -155,10 +155,27 @@ def uncached(kernels: Iterable[Any]) -> list[str]:
     return names
 
 
+def load_cached(kernels: Iterable[Any]) -> None:
+    """Load into this process the machine code numba's on-disk cache holds for ``kernels`` (each
+    signature cached for this machine and for the kernel's current source), as their first calls
+    would: nothing is compiled and nothing runs, so numba starts no threads. Where the cache
+    cannot be read this way (another numba), a kernel is left to its first call."""
+    for kernel in kernels:
+        try:
+            cache, codegen = kernel._cache, kernel.targetctx.codegen()
+            keys = cache._cache_file._load_index()
+            current = [key[0] for key in keys if key == cache._index_key(key[0], codegen)]
+        except Exception:  # noqa: BLE001 - numba's private cache API: the first call loads it
+            continue
+        for signature in current:
+            kernel.compile(signature)
+
+
 __all__ = [
     "CHUNK",
     "HAVE_NUMBA",
     "LazyKernels",
+    "load_cached",
     "repair_cache",
     "set_threads",
     "threads",

@@ -58,6 +58,34 @@ def test_a_damaged_cache_index_is_found_removed_and_compiled_anew(tmp_path, monk
     assert fresh.doubled(4) == 8 and uncached([fresh.doubled]) == []
 
 
+def test_cached_machine_code_is_loaded_without_a_call_and_a_changed_source_is_left(tmp_path, monkeypatch):
+    """``load_cached`` gives a fresh module's kernel the overload its cache holds (a cache hit, no
+    compilation, no call, no numba threads); for a kernel whose source changed since, the cache
+    holds nothing current, and nothing is compiled."""
+    from numba.np.ufunc import parallel
+
+    from mimo_radar_env.core.compiled import load_cached
+
+    module, spec = _kernel_module(tmp_path, monkeypatch, "kernel_for_load_test")
+    assert module.doubled(3) == 6  # writes the cache
+    fresh = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(fresh)
+    assert fresh.doubled.overloads == {}
+    load_cached([fresh.doubled, object()])  # not a numba kernel: left alone
+    assert len(fresh.doubled.overloads) == 1
+    assert sum(fresh.doubled.stats.cache_hits.values()) == 1
+    assert sum(fresh.doubled.stats.cache_misses.values()) == 0
+    threads_started = parallel._is_initialized
+    source = tmp_path / "kernel_for_load_test.py"
+    source.write_text(KERNEL.replace("2 * x", "3 * x"))
+    changed = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(changed)
+    load_cached([changed.doubled])
+    assert changed.doubled.overloads == {} and not changed.doubled.stats.cache_misses
+    assert changed.doubled(3) == 9
+    assert parallel._is_initialized == threads_started  # loading started none
+
+
 def test_a_run_lists_its_fusion_bound_and_solver_kernels():
     from agents.solvers import _bpso_kernels
     from benchmarks.harness import PAPER_POLICIES, make_config, run_kernels

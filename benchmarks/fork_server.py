@@ -1,0 +1,21 @@
+"""What the local workers' fork server imports before it forks any worker
+(:func:`benchmarks.backends.start_fork_server`): every module a task imports, and the numba
+kernels a worker of one thread calls, loaded from numba's on-disk cache where ``compile`` (or an
+earlier run) put them. Each worker forked from the server starts with both; spawned, a worker
+paid for them in its first task (about 0.5 s for MG-CRB-CL's on two cores). Nothing here may
+start a thread: a process is forked from this one."""
+
+from __future__ import annotations
+
+import contextlib
+import warnings
+
+from mimo_radar_env.core.compiled import HAVE_NUMBA, load_cached
+
+from . import harness  # noqa: F401 - what every task imports
+from .precompile import all_kernels
+
+if HAVE_NUMBA:
+    with warnings.catch_warnings(), contextlib.suppress(Exception):
+        warnings.simplefilter("ignore")
+        load_cached(all_kernels(threaded=False))
