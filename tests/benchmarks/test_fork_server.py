@@ -1,0 +1,39 @@
+"""The fork server the local workers come from: what it imports and loads before it forks one."""
+
+import multiprocessing
+import os
+
+import pytest
+
+from benchmarks import backends
+from mimo_radar_env.core import compiled
+
+
+@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(), reason="no fork server")
+def test_workers_are_forked_from_a_server_that_imported_and_loaded_what_a_task_needs():
+    """The local workers come from the fork server, not from this process, and start with the
+    project imported and, with numba, the one-thread kernels its cache holds loaded (here BPSO's,
+    cached first): their first task imports and loads none of it again."""
+    from multiprocessing import forkserver
+
+    from tests.benchmarks import worker_probe
+
+    if compiled.HAVE_NUMBA:
+        from benchmarks import precompile
+
+        precompile._bpso(1)  # cached (compiled at most once), before the server starts
+    forkserver._forkserver._stop()
+    backends.start_fork_server()
+    results = {}
+    modules = ("benchmarks.harness", "agents.solvers._bpso_kernels", "mimo_radar_env.tracking.imm_ukf")
+    backends.run_processes(
+        worker_probe.imported, [modules] * 2, results.__setitem__, workers=2, share_tail=False
+    )
+    assert [r["imported"] for r in results.values()] == [[True] * len(modules)] * 2
+    parents = {r["parent"] for r in results.values()}
+    assert len(parents) == 1 and os.getpid() not in parents
+    if compiled.HAVE_NUMBA:
+        loaded = {}
+        task = ("agents.solvers._bpso_kernels", "run_numba_serial")
+        backends.run_processes(worker_probe.overloads, [task], loaded.__setitem__, workers=2)
+        assert loaded == {0: 1}
