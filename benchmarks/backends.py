@@ -61,6 +61,8 @@ class _SpawnContext(multiprocessing.context.SpawnContext):
 #: the env, the agents, the harness) and the kernels a worker of one thread calls, loaded from
 #: numba's cache (:mod:`benchmarks.fork_server`).
 FORK_SERVER_PRELOAD = ("benchmarks.fork_server",)
+#: The environment that gives a process one BLAS (and OpenMP) thread: read as the libraries load.
+ONE_BLAS_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
 #: Workers are forked from a server process that has imported :data:`FORK_SERVER_PRELOAD`, so
 #: each starts in milliseconds with nothing of this process inherited (no threads, no state);
 #: spawned, each importing it all again, where fork servers are not available (Windows).
@@ -71,13 +73,25 @@ _CONTEXT = (
 
 def start_fork_server() -> None:
     """Start the fork server now, where the workers come from one: it imports (and loads) what a
-    task needs while this process goes on (parsing, checking and planning a run), so the workers the run
-    starts later are forked ready to run. Where it runs already, nothing."""
-    if isinstance(_CONTEXT, _ForkServerContext):
-        from multiprocessing import forkserver
+    task needs while this process goes on (parsing, checking and planning a run), so the workers
+    a run starts later are forked ready to run. It starts with :data:`ONE_BLAS_THREAD` in its
+    environment, read as it imports numpy: each worker then has one BLAS thread, as a spawned one
+    has. Where it runs already, nothing."""
+    if not isinstance(_CONTEXT, _ForkServerContext):
+        return
+    from multiprocessing import forkserver
 
-        _CONTEXT.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
+    _CONTEXT.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
+    saved = {name: os.environ.get(name) for name in ONE_BLAS_THREAD}
+    os.environ.update(ONE_BLAS_THREAD)
+    try:
         forkserver.ensure_running()
+    finally:
+        for name, value in saved.items():
+            if value is None:
+                os.environ.pop(name, None)
+            else:
+                os.environ[name] = value
 
 
 #: ``(payload, policy, shard)``: the run's configuration (``RunConfig.to_json()``) and one task.
@@ -117,8 +131,7 @@ def pin_threads(threads: int) -> None:
     """This process's compute threads: ``threads`` for numba's kernels, one for BLAS and the
     libraries imported later (torch, for a trained PPO policy, starts one per core by default:
     two workers on two cores ran PPO 3x slower)."""
-    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
-        os.environ[name] = "1"
+    os.environ.update(ONE_BLAS_THREAD)
     from mimo_radar_env.core import compiled
 
     if compiled.HAVE_NUMBA:

@@ -37,3 +37,22 @@ def test_workers_are_forked_from_a_server_that_imported_and_loaded_what_a_task_n
         task = ("agents.solvers._bpso_kernels", "run_numba_serial")
         backends.run_processes(worker_probe.overloads, [task], loaded.__setitem__, workers=2)
         assert loaded == {0: 1}
+
+
+@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(), reason="no fork server")
+def test_a_forked_worker_has_one_blas_thread_as_a_spawned_one_has():
+    """numpy loads its BLAS in the fork server, before a worker could set its own thread count:
+    the server starts with one BLAS thread in its environment, and this process's environment is
+    left as it was."""
+    pytest.importorskip("threadpoolctl", reason="reads the BLAS libraries' thread counts")
+    from multiprocessing import forkserver
+
+    from tests.benchmarks import worker_probe
+
+    before = {name: os.environ.get(name) for name in backends.ONE_BLAS_THREAD}
+    forkserver._forkserver._stop()
+    backends.start_fork_server()
+    assert {name: os.environ.get(name) for name in backends.ONE_BLAS_THREAD} == before
+    counts = {}
+    backends.run_processes(worker_probe.blas_threads, [()] * 2, counts.__setitem__, workers=2)
+    assert [set(c) for c in counts.values()] == [{1}, {1}]

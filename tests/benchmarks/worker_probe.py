@@ -15,3 +15,10 @@ def imported(*modules: str) -> dict[str, object]:
 def overloads(module: str, kernel: str) -> int:
     """How many compiled overloads numba kernel ``kernel`` of the imported ``module`` holds."""
     return len(getattr(sys.modules[module], kernel).overloads)
+
+
+def blas_threads() -> list[int]:
+    """The thread count of each BLAS library this process has loaded (threadpoolctl's view)."""
+    from threadpoolctl import threadpool_info
+
+    return [info["num_threads"] for info in threadpool_info() if info["user_api"] == "blas"]
