@@ -1,9 +1,10 @@
 """What the local workers' fork server imports before it forks any worker
 (:func:`benchmarks.backends.start_fork_server`): every module a task imports, and the numba
 kernels a worker of one thread calls, loaded from numba's on-disk cache where ``compile`` (or an
-earlier run) put them. Each worker forked from the server starts with both; spawned, a worker
-paid for them in its first task (about 0.5 s for MG-CRB-CL's on two cores). Nothing here may
-start a thread: a process is forked from this one."""
+earlier run) put them (where one is missing, nothing is compiled here: the server would hold
+back every worker meanwhile). Each worker forked from the server starts with both; spawned, a
+worker paid for them in its first task. Nothing here may start a thread: processes are forked
+from this one."""
 
 from __future__ import annotations
 

@@ -158,8 +158,9 @@ def uncached(kernels: Iterable[Any]) -> list[str]:
 def load_cached(kernels: Iterable[Any]) -> None:
     """Load into this process the machine code numba's on-disk cache holds for ``kernels`` (each
     signature cached for this machine and for the kernel's current source), as their first calls
-    would: nothing is compiled and nothing runs, so numba starts no threads. Where the cache
-    cannot be read this way (another numba), a kernel is left to its first call."""
+    would (a cached file that cannot be read back is compiled anew, as that call would). Nothing
+    runs, so numba starts no threads. Where the cache cannot be read this way (another numba), a
+    kernel is left to its first call."""
     for kernel in kernels:
         try:
             cache, codegen = kernel._cache, kernel.targetctx.codegen()
