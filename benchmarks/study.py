@@ -26,7 +26,7 @@ import platform
 import sys
 import threading
 import time
-from collections.abc import Callable, Hashable, Sequence
+from collections.abc import Callable, Hashable, Iterator, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, ClassVar
@@ -230,14 +230,44 @@ TIMING_FILE = "timing.json"
 
 
 def machine() -> dict[str, Any]:
-    """What the timings were measured on: the platform, cores, Python and the load average."""
+    """What the timings were measured on: the platform, cores, Python and the load average, and
+    where the system tells them (Linux), the processor, its physical cores (``cores`` counts
+    hardware threads: two per core where SMT is on), the cores this process may run on and its
+    cgroup's CPU quota in cores (None: no quota)."""
     return {
         "platform": platform.platform(),
         "machine": platform.machine(),
         "cores": os.cpu_count(),
         "python": platform.python_version(),
         "load_average_1min": round(os.getloadavg()[0], 2),
+        **_processor(),
     }
+
+
+def _processor(cpuinfo: str = "/proc/cpuinfo", quota: str = "/sys/fs/cgroup/cpu.max") -> dict[str, Any]:
+    try:
+        entries = [dict(_fields(block)) for block in Path(cpuinfo).read_text().split("\n\n") if block.strip()]
+    except OSError:
+        return {}
+    cores = {(e.get("physical id", "0"), e["core id"]) for e in entries if "core id" in e}
+    try:
+        limit, period = Path(quota).read_text().split()
+        quota_cores = None if limit == "max" else round(int(limit) / int(period), 2)
+    except (OSError, ValueError):
+        quota_cores = None
+    return {
+        "processor": entries[0].get("model name") if entries else None,
+        "physical_cores": len(cores) or None,
+        "usable_cores": len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+        "cpu_quota_cores": quota_cores,
+    }
+
+
+def _fields(block: str) -> Iterator[tuple[str, str]]:
+    for line in block.splitlines():
+        key, colon, value = line.partition(":")
+        if colon:
+            yield key.strip(), value.strip()
 
 
 def write_timing(

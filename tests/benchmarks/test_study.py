@@ -196,3 +196,23 @@ def test_every_import_before_the_command_is_imported_and_a_missing_one_is_named(
     assert exit_.value.code == 0 and "first_module" in sys.modules and COMMANDS["toy"].group == "studies"
     with pytest.raises(SystemExit, match="--import no_such_module_here: No module named"):
         main(["--import", "no_such_module_here", "demo"])
+
+
+def test_the_machine_record_counts_physical_cores_apart_from_hardware_threads(tmp_path):
+    """Two sockets of two cores with two hardware threads each: eight processors, four cores; a
+    cgroup quota of 400 ms per 100 ms is four cores, ``max`` none; no cpuinfo, nothing claimed."""
+    from benchmarks.study import _processor
+
+    blocks = [
+        f"processor\t: {n}\nmodel name\t: Test CPU\nphysical id\t: {n // 4}\ncore id\t\t: {n % 4 // 2}\n"
+        for n in range(8)
+    ]
+    cpuinfo, quota = tmp_path / "cpuinfo", tmp_path / "cpu.max"
+    cpuinfo.write_text("\n".join(blocks))
+    quota.write_text("400000 100000\n")
+    record = _processor(str(cpuinfo), str(quota))
+    assert record["processor"] == "Test CPU" and record["physical_cores"] == 4
+    assert record["cpu_quota_cores"] == 4.0
+    quota.write_text("max 100000\n")
+    assert _processor(str(cpuinfo), str(quota))["cpu_quota_cores"] is None
+    assert _processor(str(tmp_path / "none"), str(quota)) == {}
