@@ -2,6 +2,8 @@
 
 import multiprocessing
 import os
+import subprocess
+import sys
 
 import pytest
 
@@ -56,3 +58,19 @@ def test_a_forked_worker_has_one_blas_thread_as_a_spawned_one_has():
     counts = {}
     backends.run_processes(worker_probe.blas_threads, [()] * 2, counts.__setitem__, workers=2)
     assert [set(c) for c in counts.values()] == [{1}, {1}]
+
+
+def test_what_the_fork_server_imports_starts_no_thread():
+    """Processes are forked from the server: importing its preload (loading the cached kernels
+    included) leaves it with one thread and numba's thread pool not started."""
+    probe = (
+        "import threading, benchmarks.fork_server\n"
+        "from mimo_radar_env.core.compiled import HAVE_NUMBA\n"
+        "started = False\n"
+        "if HAVE_NUMBA:\n"
+        "    from numba.np.ufunc import parallel\n"
+        "    started = parallel._is_initialized\n"
+        "print(threading.active_count(), started)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", probe], capture_output=True, text=True, check=True)
+    assert result.stdout.split() == ["1", "False"]
