@@ -64,11 +64,10 @@ FORK_SERVER_PRELOAD = ("benchmarks.fork_server",)
 #: The environment that gives a process one BLAS (and OpenMP) thread: read as the libraries load.
 ONE_BLAS_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
 #: Workers are forked from a server process that has imported :data:`FORK_SERVER_PRELOAD`, so
-#: each starts in milliseconds with nothing of this process inherited (no threads, no state);
-#: spawned, each importing it all again, where fork servers are not available (Windows).
-_CONTEXT = (
-    _ForkServerContext() if "forkserver" in multiprocessing.get_all_start_methods() else _SpawnContext()
-)
+#: each starts in milliseconds with nothing of this process inherited (no threads, no state), on
+#: Linux, where Python 3.14 makes the fork server its default; elsewhere spawned, each importing
+#: it all again (on macOS a fork after some system libraries have loaded is not safe).
+_CONTEXT = _ForkServerContext() if sys.platform.startswith("linux") else _SpawnContext()
 
 
 def start_fork_server() -> None:

@@ -1,6 +1,5 @@
 """The fork server the local workers come from: what it imports and loads before it forks one."""
 
-import multiprocessing
 import os
 import subprocess
 import sys
@@ -11,7 +10,7 @@ from benchmarks import backends
 from mimo_radar_env.core import compiled
 
 
-@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(), reason="no fork server")
+@pytest.mark.skipif(not isinstance(backends._CONTEXT, backends._ForkServerContext), reason="spawned workers")
 def test_workers_are_forked_from_a_server_that_imported_and_loaded_what_a_task_needs():
     """The local workers come from the fork server, not from this process, and start with the
     project imported and, with numba, the one-thread kernels its cache holds loaded (here BPSO's,
@@ -41,7 +40,7 @@ def test_workers_are_forked_from_a_server_that_imported_and_loaded_what_a_task_n
         assert loaded == {0: 1}
 
 
-@pytest.mark.skipif("forkserver" not in multiprocessing.get_all_start_methods(), reason="no fork server")
+@pytest.mark.skipif(not isinstance(backends._CONTEXT, backends._ForkServerContext), reason="spawned workers")
 def test_a_forked_worker_has_one_blas_thread_as_a_spawned_one_has():
     """numpy loads its BLAS in the fork server, before a worker could set its own thread count:
     the server starts with one BLAS thread in its environment, and this process's environment is
