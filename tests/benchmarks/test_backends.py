@@ -15,7 +15,10 @@ from mimo_radar_env.core import compiled
 from mimo_radar_env.core.compiled import CHUNK
 
 
-def test_local_workers_give_the_numbers_of_one_process(tmp_path):
+@pytest.mark.parametrize("context", ["forked", "spawned"])
+def test_local_workers_give_the_numbers_of_one_process(tmp_path, monkeypatch, context):
+    if context == "spawned":
+        monkeypatch.setattr(backends, "_CONTEXT", backends._SpawnContext())
     config = make_config("paper-1", ["mg-crb-cl", "ucb1"], trials=4, steps=15, shard_size=1)
     one = run(config, tmp_path / "one", workers=1, progress=False)
     two = run(config, tmp_path / "two", workers=2, progress=False)
@@ -158,9 +161,12 @@ def _print_unflushed(text):
     return {"pid": os.getpid()}
 
 
-def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd):
+@pytest.mark.parametrize("context", ["forked", "spawned"])
+def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd, monkeypatch, context):
     from multiprocessing import forkserver
 
+    if context == "spawned":
+        monkeypatch.setattr(backends, "_CONTEXT", backends._SpawnContext())
     forkserver._forkserver._stop()  # its workers write where it was started: into this capture
     results = {}
     backends.run_processes(_print_unflushed, [("one-",), ("two-",)], results.__setitem__, workers=2)
@@ -169,7 +175,8 @@ def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd):
     assert backends._CONTEXT.Process.run is backends._ExitsAtOnce.run
 
 
-def test_a_worker_exits_when_the_process_that_started_it_is_killed(tmp_path):
+@pytest.mark.parametrize("context", ["_ForkServerContext", "_SpawnContext"])
+def test_a_worker_exits_when_the_process_that_started_it_is_killed(tmp_path, context):
     """A worker whose pool's process dies (killed: no clean-up) exits by itself, whether it was
     spawned by that process or forked by its fork server."""
     script = tmp_path / "orphan.py"
@@ -177,6 +184,7 @@ def test_a_worker_exits_when_the_process_that_started_it_is_killed(tmp_path):
         "import time\n"
         "from benchmarks import backends\n"
         "if __name__ == '__main__':\n"
+        f"    backends._CONTEXT = backends.{context}()\n"
         "    with backends.worker_pool(1) as pool:\n"
         "        pool.submit(time.sleep, 120)\n"
         "        while not pool._processes:\n"
