@@ -335,6 +335,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         )
         raise SystemExit(2)
     argv = list(sys.argv[1:] if argv is None else argv)
+    if os.getcwd() not in sys.path and "" not in sys.path:
+        # a user's module in the current folder (--policies mymodule:MyAgent, --import), as under
+        # `python -m benchmarks`, which puts it first; last here, so installed packages win
+        sys.path.append(os.getcwd())
     imports, name = _leading(argv)
     _import_modules(imports)
     parser = build_parser([name] if name in COMMANDS else [])

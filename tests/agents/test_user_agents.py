@@ -84,6 +84,26 @@ def test_the_docs_example_runs_by_module_class_entry_point_and_python_call(tmp_p
     assert printed_again == printed
 
 
+def test_the_command_finds_a_users_module_in_the_current_folder_as_the_docs_say(tmp_path):
+    """docs/agents.md: the module of ``module:Class`` may be in the current folder. The installed
+    command (not ``python -m``, which puts that folder on the path itself) finds it there, and so
+    do its two worker processes."""
+    command = Path(sys.executable).parent / "mimo-radar-bench"
+    if not command.exists():
+        pytest.skip("the mimo-radar-bench command is not installed beside this Python")
+    (tmp_path / "myagents.py").write_text(EXAMPLE)
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    result = subprocess.run(
+        [str(command), "run", *RUN, "--shard-size", "2", "--policies", "myagents:Exploit", "--out", "o"],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr[-2000:]
+    assert "myagents:Exploit" in json.loads((tmp_path / "o" / "summary.json").read_text())["policies"]
+
+
 def test_a_policy_reference_that_does_not_name_an_agent_is_refused_by_name(tmp_path, monkeypatch):
     (tmp_path / "notagents.py").write_text("class Thing:\n    pass\n")
     monkeypatch.syspath_prepend(str(tmp_path))
