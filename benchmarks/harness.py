@@ -1170,6 +1170,15 @@ def device_agents() -> list[str]:
     return [name for name in agents.available_agents() if agents.agent_class(name).needs.device]
 
 
+#: How the device check's messages name the numpy path, in words both the API and the command
+#: line read (the API's None is no flag).
+_NO_DEVICE = (
+    ("must be None, 'cpu', 'cuda' or 'cuda:N'", "must be 'cpu', 'cuda' or 'cuda:N', or no `device` (numpy)"),
+    ("device=None", "no `device`"),
+    (" or None", " or no `device`"),
+)
+
+
 def _check_execution(
     backend: str,
     workers: int,
@@ -1210,7 +1219,10 @@ def _check_execution(
         try:
             device_namespace(device)
         except ValueError as exc:
-            raise HarnessError(str(exc).replace("device", "`device`", 1)) from None
+            message = str(exc).replace("device", "`device`", 1)
+            for python, either in _NO_DEVICE:  # None is the API's; the command line leaves it out
+                message = message.replace(python, either)
+            raise HarnessError(message) from None
         numpy_only = sorted(
             {
                 p

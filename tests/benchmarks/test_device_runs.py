@@ -6,7 +6,8 @@ import re
 
 import pytest
 
-pytest.importorskip("torch")
+torch = pytest.importorskip("torch")
+_HAS_CUDA = torch.cuda.is_available()
 
 from benchmarks import harness  # noqa: E402
 from benchmarks.cli import main  # noqa: E402
@@ -64,10 +65,18 @@ def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
             ["--workers", "2"],
             r"--device 'cpu' runs the tasks in this process, one after another: use --workers 1",
         ),
-        (["--device", "gpu"], r"--device must be None, 'cpu', 'cuda' or 'cuda:N', got 'gpu'$"),
+        (
+            ["--device", "gpu"],
+            r"--device must be 'cpu', 'cuda' or 'cuda:N', or no --device \(numpy\), got 'gpu'$",
+        ),
         (
             ["--device", "cpu", "--policies", "ucb1,cts"],
             r"--device 'cpu': cts act\(s\) on numpy arrays only; run",
+        ),
+        pytest.param(
+            ["--device", "cuda"],
+            r"--device='cuda': torch sees no CUDA device here; use 'cpu' or no --device$",
+            marks=pytest.mark.skipif(_HAS_CUDA, reason="a CUDA device is here"),
         ),
         (
             ["--device-mode", "graph"],
