@@ -1173,10 +1173,24 @@ def device_agents() -> list[str]:
 #: How the device check's messages name the numpy path, in words both the API and the command
 #: line read (the API's None is no flag).
 _NO_DEVICE = (
-    ("must be None, 'cpu', 'cuda' or 'cuda:N'", "must be 'cpu', 'cuda' or 'cuda:N', or no `device` (numpy)"),
+    ("must be None, 'cpu', 'cuda' or 'cuda:N'", "must be 'cpu', 'cuda' or 'cuda:N', or no `device`"),
     ("device=None", "no `device`"),
     (" or None", " or no `device`"),
 )
+
+
+def check_device(device: Any) -> None:
+    """Refuse a ``device`` torch does not have, or any device without torch, with a
+    :class:`HarnessError` naming the argument."""
+    from mimo_radar_env.core.arrays import device_namespace
+
+    try:
+        device_namespace(device)
+    except ValueError as exc:
+        message = str(exc).replace("device", "`device`", 1)
+        for python, either in _NO_DEVICE:  # None is the API's; the command line leaves it out
+            message = message.replace(python, either)
+        raise HarnessError(message) from None
 
 
 def _check_execution(
@@ -1214,15 +1228,7 @@ def _check_execution(
                 f"`device` {device!r} runs the tasks in this process, one after another: use `workers` 1 "
                 f"and the local backend (got workers={workers}, backend={backend!r})"
             )
-        from mimo_radar_env.core.arrays import device_namespace
-
-        try:
-            device_namespace(device)
-        except ValueError as exc:
-            message = str(exc).replace("device", "`device`", 1)
-            for python, either in _NO_DEVICE:  # None is the API's; the command line leaves it out
-                message = message.replace(python, either)
-            raise HarnessError(message) from None
+        check_device(device)
         numpy_only = sorted(
             {
                 p

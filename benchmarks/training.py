@@ -26,12 +26,11 @@ from agents.ppo import (
     save_normalization,
 )
 from mimo_radar_env import DEFAULT_VERSION, VERSIONS, EnvOptions, Scenario, load_scenario
-from mimo_radar_env.core.arrays import device_namespace
 from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
-from .harness import HarnessError, RunInterrupted, duration, output_lock
+from .harness import HarnessError, RunInterrupted, check_device, duration, output_lock
 from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
@@ -411,7 +410,7 @@ def _learner_and_device(
     if algo == TORCH_PPO:
         require("torch", "rl", TORCH_PPO)
         device = "cpu" if device is None else device
-        device_namespace(device)  # a bad device is refused before anything is written
+        check_device(device)  # a bad device is refused before anything is written
         check_device_mode(device_mode, device)
         return learner("ppo"), device
     spec = learner(algo)

@@ -67,7 +67,7 @@ def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
         ),
         (
             ["--device", "gpu"],
-            r"--device must be 'cpu', 'cuda' or 'cuda:N', or no --device \(numpy\), got 'gpu'$",
+            r"--device must be 'cpu', 'cuda' or 'cuda:N', or no --device, got 'gpu'$",
         ),
         (
             ["--device", "cpu", "--policies", "ucb1,cts"],

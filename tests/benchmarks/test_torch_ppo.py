@@ -162,7 +162,7 @@ def test_the_agent_refuses_a_model_of_another_layout(trained):
     ("kwargs", "match"),
     [
         ({"algo": "ppo", "device": "cpu"}, "takes no device"),
-        ({"algo": "torch-ppo", "device": "tpu"}, "device"),
+        ({"algo": "torch-ppo", "device": "tpu"}, r"'cuda:N', or no device, got 'tpu'"),
         ({"algo": "torch-ppo", "action": "scores"}, "Discrete"),
         ({"algo": "torch-ppo", "n_envs": 0}, "n_envs"),
         ({"algo": "torch-ppo", "device_mode": "fused"}, "device_mode must be one of eager, graph"),
