@@ -26,7 +26,7 @@ import numpy as np
 
 from ..study import machine
 from . import write_json
-from .strong_scaling import STUDY, read_tasks, run_study
+from .strong_scaling import STUDY, read_tasks, run_study, serial_parts
 
 BACKENDS = {"local": (), "ray": ("--backend", "ray", "--address", "auto")}
 
@@ -84,8 +84,7 @@ def alternate(
                 run = {key: name, "repeat": repeat, "wall_s": wall, "same_numbers": same(reference, arrays)}
                 tasks = read_tasks(out, started)
                 if tasks:
-                    run["before_first_task_s"] = min(t.finished - t.seconds for t in tasks)
-                    run["after_last_task_s"] = wall - max(t.finished for t in tasks)
+                    run |= serial_parts(wall, tasks)
                 runs.append(run)
                 print(f"  {name:>10}, repeat {repeat}: {wall:.1f} s", flush=True)
     return runs

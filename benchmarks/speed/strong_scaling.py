@@ -92,6 +92,16 @@ def read_tasks(out: Path, started: float) -> list[Task]:
     return tasks
 
 
+def serial_parts(wall: float, tasks: list[Task]) -> dict[str, float]:
+    """The wall seconds of a run before its first task started and after its last ended: the
+    command's serial parts (imports, the run's checks and estimate, the workers' start; the
+    report)."""
+    return {
+        "before_first_task_s": min(t.finished - t.seconds for t in tasks),
+        "after_last_task_s": wall - max(t.finished for t in tasks),
+    }
+
+
 def breakdown(
     wall: float, workers: int, tasks: list[Task], fixed_per_task: dict[str, float]
 ) -> dict[str, float]:
@@ -269,8 +279,9 @@ def _row(
     tasks = [t for r in runs for t in r["tasks"]]
     per_step = sum(t.seconds - fixed[t.policy] for t in tasks) / sum(t.trials * t.steps for t in tasks)
     parts = [breakdown(r["wall_s"], workers, r["tasks"], fixed) for r in runs]
-    before = [min(t.finished - t.seconds for t in r["tasks"]) for r in runs]
-    after = [r["wall_s"] - max(t.finished for t in r["tasks"]) for r in runs]
+    serial = [serial_parts(r["wall_s"], r["tasks"]) for r in runs]
+    before = [s["before_first_task_s"] for s in serial]
+    after = [s["after_last_task_s"] for s in serial]
     row = {
         "workers": workers, "schedule": "by cost", "wall_s": float(walls.mean()),
         "tasks": len(runs[0]["tasks"]), "shard_trials": max(t.trials for t in tasks),
@@ -278,9 +289,6 @@ def _row(
         "efficiency": float(efficiencies.mean()),
         "us_per_trial_step_in_tasks": 1e6 * per_step,
         "breakdown": {k: float(np.mean([p[k] for p in parts])) for k in parts[0]},
-        # wall seconds before the first task started and after the last one ended: the
-        # command's serial parts (imports, the run's checks and estimate, the workers' start;
-        # the report)
         "before_first_task_s": float(np.mean(before)), "after_last_task_s": float(np.mean(after)),
     }  # fmt: skip
     if len(runs) > 1:
