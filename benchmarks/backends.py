@@ -61,6 +61,9 @@ class _SpawnContext(multiprocessing.context.SpawnContext):
 #: the env, the agents, the harness) and the kernels a worker of one thread calls, loaded from
 #: numba's cache (:mod:`benchmarks.fork_server`).
 FORK_SERVER_PRELOAD = ("benchmarks.fork_server",)
+#: What it imports besides for tasks on a device: torch, seconds to import, which starts no thread
+#: and touches no device as it imports (each worker initialises its own CUDA, as a fork needs).
+DEVICE_PRELOAD = ("torch",)
 #: The environment that gives a process one BLAS (and OpenMP) thread: read as the libraries load.
 ONE_BLAS_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
 #: Workers are forked from a server process that has imported :data:`FORK_SERVER_PRELOAD`, so
@@ -70,17 +73,17 @@ ONE_BLAS_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", 
 _CONTEXT = _ForkServerContext() if sys.platform.startswith("linux") else _SpawnContext()
 
 
-def start_fork_server() -> None:
+def start_fork_server(device: bool = False) -> None:
     """Start the fork server now, where the workers come from one: it imports (and loads) what a
     task needs while this process goes on (parsing, checking and planning a run), so the workers
     a run starts later are forked ready to run. It starts with :data:`ONE_BLAS_THREAD` in its
     environment, read as it imports numpy: each worker then has one BLAS thread, as a spawned one
-    has. Where it runs already, nothing."""
+    has. With ``device``, it imports :data:`DEVICE_PRELOAD` too. Where it runs already, nothing."""
     if not isinstance(_CONTEXT, _ForkServerContext):
         return
     from multiprocessing import forkserver
 
-    _CONTEXT.set_forkserver_preload(list(FORK_SERVER_PRELOAD))
+    _CONTEXT.set_forkserver_preload([*FORK_SERVER_PRELOAD, *(DEVICE_PRELOAD if device else ())])
     saved = {name: os.environ.get(name) for name in ONE_BLAS_THREAD}
     os.environ.update(ONE_BLAS_THREAD)
     try:

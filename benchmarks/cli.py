@@ -361,7 +361,8 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     if _starts_local_workers(args):
         from .backends import start_fork_server
 
-        start_fork_server()  # the workers' imports, while the command checks and plans its runs
+        # the workers' imports, while the command checks and plans its runs
+        start_fork_server(device=getattr(args, "device", None) is not None)
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
@@ -376,6 +377,7 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
 
 def _starts_local_workers(args: Any) -> bool:
     """Whether the command may run its tasks on local worker processes: a run or study on the
-    local backend, with no device, and more than one worker (or the machine's cores)."""
-    workers = getattr(args, "workers", None) or os.cpu_count() or 1
-    return getattr(args, "backend", None) == "local" and getattr(args, "device", None) is None and workers > 1
+    local backend with more than one worker (by default the machine's cores; one on a device)."""
+    on_device = getattr(args, "device", None) is not None
+    workers = getattr(args, "workers", None) or (1 if on_device else os.cpu_count() or 1)
+    return getattr(args, "backend", None) == "local" and workers > 1

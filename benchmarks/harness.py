@@ -894,10 +894,11 @@ def run_many(
     shards joined (the same arrays ``on_complete`` then gets): the place to start on that policy's
     outputs while the workers go on. The shards this call checked or wrote are joined from
     memory (up to :func:`held_bytes` of them), not read again. ``max_tasks``
-    and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task in this
-    process on torch on that device (``workers=1``, the local backend), the step in form
-    ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`: ``"eager"``, ``"graph"``,
-    ``"compiled"``).
+    and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task on torch
+    on that device, the step in form ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`:
+    ``"eager"``, ``"graph"``, ``"compiled"``), on the local backend: in this process with one
+    worker, else in ``workers`` processes sharing the device (one thread each unless
+    ``threads``), so that one process's kernel launches leave the device to another's work.
 
     ``workers`` counts cores: with more than one (or on Ray) the tasks run on
     ``workers // threads`` worker processes of ``threads`` compute threads each (the compiled
@@ -909,8 +910,9 @@ def run_many(
     folders = [Path(out) for _, out in runs]
     configs = [config for config, _ in runs]
     _check_execution(backend, workers, address, folders, device, configs, threads, device_mode)
-    if backend == "local" and workers > 1 and device is None:
-        backends.start_fork_server()  # the workers' imports, while this process plans the run
+    if backend == "local" and workers > 1:
+        # the workers' imports, while this process plans the run
+        backends.start_fork_server(device=device is not None)
     with contextlib.ExitStack() as locks:
         for config, out in zip(configs, folders, strict=True):
             locks.enter_context(output_lock(out))
@@ -921,7 +923,12 @@ def run_many(
         saving = _Saving(configs, folders, todo, on_complete, held, on_policy)
         if max_tasks is None:
             _say_resumed(configs, folders, saving.left)
-        threads = _threads_for(configs, todo, workers, backend, threads)
+        # a device's tasks run their steps there, not on the CPU's threads the declared costs count
+        threads = (
+            (threads or 1)
+            if device is not None and workers > 1
+            else _threads_for(configs, todo, workers, backend, threads)
+        )
         saving.bar = _progress_bar(configs, todo, saving.steps_of, progress)
         on_device = () if device is None else (str(device), device_mode)
         tasks = [(saving.payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
@@ -936,6 +943,7 @@ def run_many(
                 threads,
                 configs,
                 starting=functools.partial(_say_compiling, saving.bar, configs, todo, threads),
+                on_device=device is not None,
             )
             _say_if_slow(time.perf_counter() - started, estimated / max(1, min(workers, len(todo))))
         except KeyboardInterrupt:
@@ -1081,6 +1089,7 @@ def _dispatch(
     threads: int | None,
     configs: Sequence[RunConfig] = (),
     starting: Callable[[], None] = lambda: None,
+    on_device: bool = False,
 ) -> None:
     """Runs ``tasks`` on the backend: Ray (tasks of ``threads`` CPUs), this process (one
     worker, on ``threads`` numba threads, None: numba's own count), or ``workers // threads``
@@ -1088,7 +1097,8 @@ def _dispatch(
     those that ended where the kernels over threads of the runs ``configs`` are compiled already
     (one compiled in mid-task would cost more than the cores give). ``starting()`` is called
     as the tasks start: once they are submitted to the worker processes or to Ray, which then
-    start without waiting for it (it may import numba here, as the tail's check does)."""
+    start without waiting for it (it may import numba here, as the tail's check does). Tasks
+    ``on_device`` step on a device, so the tail's cores are not shared among them."""
     if backend == "ray":
         backends.run_ray(run_task, tasks, finished, address, threads or 1, started=starting)
     elif workers == 1:
@@ -1099,7 +1109,7 @@ def _dispatch(
 
         def share_tail() -> bool:
             starting()
-            return not any(uncached(run_kernels(config, workers)) for config in configs)
+            return not on_device and not any(uncached(run_kernels(config, workers)) for config in configs)
 
         backends.run_processes(
             run_task, tasks, finished, workers // (threads or 1), threads or 1, share_tail=share_tail
@@ -1206,7 +1216,7 @@ def _check_execution(
     """Refuses an unknown backend, a worker count that is not a whole number >= 1, threads that
     are not a whole number from 1 to the workers, an
     unreachable Ray address, two runs into one folder, and a device that is not there, with
-    other workers than this process, or with a policy of ``configs`` that acts on numpy only, and
+    another backend than the local one, or with a policy of ``configs`` that acts on numpy only, and
     a form of the step (``device_mode``) that is unknown or without a device."""
     if backend not in ("local", "ray"):
         raise HarnessError(f"`backend` must be 'local' or 'ray', got {backend!r}")
@@ -1223,10 +1233,10 @@ def _check_execution(
             str(exc).replace("device_mode", "`device_mode`", 1).replace("a device", "a `device`")
         ) from None
     if device is not None:
-        if backend != "local" or workers != 1:
+        if backend != "local":
             raise HarnessError(
-                f"`device` {device!r} runs the tasks in this process, one after another: use `workers` 1 "
-                f"and the local backend (got workers={workers}, backend={backend!r})"
+                f"`device` {device!r} runs on the local backend: the tasks in this process, or in "
+                f"`workers` processes sharing the device (got backend={backend!r})"
             )
         check_device(device)
         numpy_only = sorted(

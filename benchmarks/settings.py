@@ -404,8 +404,8 @@ def add_run_arguments(
         "--workers",
         type=integer(1),
         default=None,
-        help="cores the local workers use (default: all of them), as worker processes of --threads "
-        "compute threads each",
+        help="cores the local workers use (default: all of them; with --device, 1: this process), as "
+        "worker processes of --threads compute threads each",
     )
     parser.add_argument(
         "--threads",
@@ -426,9 +426,10 @@ def add_run_arguments(
     parser.add_argument(
         "--device",
         default=None,
-        help="run every task in this process on torch on this device ('cuda', 'cuda:1', 'cpu'): the "
-        "same numbers as numpy to rounding; a policy's trials are one batch unless --shard-size, and "
-        "--max-hours (a CPU estimate) is not applied (default: numpy, no torch needed)",
+        help="run the tasks on torch on this device ('cuda', 'cuda:1', 'cpu'), in this process, or with "
+        "--workers W in W processes sharing it: the same numbers as numpy to rounding; a policy's "
+        "trials are one batch unless --shard-size, and --max-hours (a CPU estimate) is not applied "
+        "(default: numpy, no torch needed)",
     )
     parser.add_argument(
         "--device-mode",

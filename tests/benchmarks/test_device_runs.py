@@ -9,7 +9,7 @@ import pytest
 torch = pytest.importorskip("torch")
 _HAS_CUDA = torch.cuda.is_available()
 
-from benchmarks import harness  # noqa: E402
+from benchmarks import backends, harness  # noqa: E402
 from benchmarks.cli import main  # noqa: E402
 from benchmarks.speed import device as device_bench  # noqa: E402
 
@@ -58,12 +58,30 @@ def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
     assert harness.recorded_shard_size(tmp_path / "two") == 4
 
 
+def test_device_tasks_on_worker_processes_give_the_numbers_of_one_process(tmp_path, monkeypatch):
+    """``--workers 2`` with ``--device``: the tasks run in two worker processes sharing the device
+    (not in this process), one thread each, and every number is the one process's."""
+    common = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,mg-crb-cl,random", "--trials", "5"]
+    common += ["--steps", "8", "--quiet", "--no-figures", "--device", "cpu"]
+    assert main([*common, "--out", str(tmp_path / "one")]) == 0
+    pools = []
+    original = backends.run_processes
+    monkeypatch.setattr(backends, "run_inline", None)  # not one task in this process
+    monkeypatch.setattr(backends, "run_processes", lambda *a, **k: pools.append(a[3:5]) or original(*a, **k))
+    assert main([*common, "--out", str(tmp_path / "two"), "--workers", "2"]) == 0
+    assert pools == [(2, 1)]  # two processes of one thread
+    compared = device_bench.study_differences(tmp_path / "one", tmp_path / "two")
+    assert "summary.json" in compared["files"]
+    assert not compared["differing"], compared["differing"][:5]
+
+
 @pytest.mark.parametrize(
     ("extra", "message"),
     [
         (
-            ["--workers", "2"],
-            r"--device 'cpu' runs the tasks in this process, one after another: use --workers 1",
+            ["--backend", "ray"],
+            r"--device 'cpu' runs on the local backend: the tasks in this process, or in --workers "
+            r"processes sharing the device \(got backend='ray'\)$",
         ),
         (
             ["--device", "gpu"],
@@ -87,7 +105,7 @@ def test_a_run_on_a_device_is_one_batch_per_policy_unless_told(tmp_path):
 def test_a_device_run_that_cannot_be_is_refused_in_one_line(tmp_path, capsys, extra, message):
     args = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "2", "--steps", "2"]
     args += ["--quiet", "--out", str(tmp_path / "r")]
-    args += ["--device", "cpu", *extra] if extra[0] == "--workers" else extra
+    args += ["--device", "cpu", *extra] if extra[0] == "--backend" else extra
     with pytest.raises(SystemExit) as exit_info:
         main(args)
     assert exit_info.value.code == 2

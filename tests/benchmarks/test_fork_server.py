@@ -41,6 +41,26 @@ def test_workers_are_forked_from_a_server_that_imported_and_loaded_what_a_task_n
 
 
 @pytest.mark.skipif(not isinstance(backends._CONTEXT, backends._ForkServerContext), reason="spawned workers")
+def test_a_server_started_for_a_device_run_imported_torch_and_no_other_did():
+    """Workers whose tasks run on a device start with torch imported (seconds, paid once in the
+    server); a server started for numpy runs leaves torch out."""
+    pytest.importorskip("torch")
+    from multiprocessing import forkserver
+
+    from tests.benchmarks import worker_probe
+
+    try:
+        for device in (False, True):
+            forkserver._forkserver._stop()
+            backends.start_fork_server(device=device)
+            results = {}
+            backends.run_processes(worker_probe.imported, [("torch",)], results.__setitem__, workers=2)
+            assert results[0]["imported"] == [device]
+    finally:
+        forkserver._forkserver._stop()
+
+
+@pytest.mark.skipif(not isinstance(backends._CONTEXT, backends._ForkServerContext), reason="spawned workers")
 def test_a_forked_worker_has_one_blas_thread_as_a_spawned_one_has():
     """numpy loads its BLAS in the fork server, before a worker could set its own thread count:
     the server starts with one BLAS thread in its environment, and this process's environment is
