@@ -895,10 +895,9 @@ def run_many(
     outputs while the workers go on. The shards this call checked or wrote are joined from
     memory (up to :func:`held_bytes` of them), not read again. ``max_tasks``
     and Ctrl-C as in :func:`run`. ``device`` (``"cuda"``, ``"cpu"``...) runs every task on torch
-    on that device, the step in form ``device_mode`` (:mod:`mimo_radar_env.envs.device_forms`:
-    ``"eager"``, ``"graph"``, ``"compiled"``), on the local backend: in this process with one
-    worker, else in ``workers`` processes sharing the device (one thread each unless
-    ``threads``), so that one process's kernel launches leave the device to another's work.
+    on that device, the step in form ``device_mode`` (``"eager"``, ``"graph"``, ``"compiled"``),
+    on the local backend: in this process, or in ``workers`` processes sharing the device, so
+    that one process's kernel launches leave the device to another's work.
 
     ``workers`` counts cores: with more than one (or on Ray) the tasks run on
     ``workers // threads`` worker processes of ``threads`` compute threads each (the compiled
@@ -923,12 +922,7 @@ def run_many(
         saving = _Saving(configs, folders, todo, on_complete, held, on_policy)
         if max_tasks is None:
             _say_resumed(configs, folders, saving.left)
-        # a device's tasks run their steps there, not on the CPU's threads the declared costs count
-        threads = (
-            (threads or 1)
-            if device is not None and workers > 1
-            else _threads_for(configs, todo, workers, backend, threads)
-        )
+        threads = _threads_for(configs, todo, workers, backend, threads, device is not None)
         saving.bar = _progress_bar(configs, todo, saving.steps_of, progress)
         on_device = () if device is None else (str(device), device_mode)
         tasks = [(saving.payloads[number], policy, shard, *on_device) for number, policy, shard in todo]
@@ -1122,11 +1116,16 @@ def _threads_for(
     workers: int,
     backend: str,
     threads: int | None,
+    on_device: bool = False,
 ) -> int | None:
     """The threads per worker: ``threads`` where given; None for one local worker (numba's own
-    count in this process); else :func:`choose_threads`, said where it is more than one."""
+    count in this process); one for tasks ``on_device`` (their steps run there, not on the
+    threads the declared costs count); else :func:`choose_threads`, said where it is more than
+    one."""
     if threads is not None or (workers == 1 and backend == "local") or not todo:
         return threads
+    if on_device:
+        return 1
     threads, seconds, one_each = choose_threads(configs, todo, workers)
     if threads > 1:
         processes = workers // threads

@@ -426,10 +426,9 @@ def add_run_arguments(
     parser.add_argument(
         "--device",
         default=None,
-        help="run the tasks on torch on this device ('cuda', 'cuda:1', 'cpu'), in this process, or with "
-        "--workers W in W processes sharing it: the same numbers as numpy to rounding; a policy's "
-        "trials are one batch unless --shard-size, and --max-hours (a CPU estimate) is not applied "
-        "(default: numpy, no torch needed)",
+        help="run the tasks on torch on this device ('cuda', 'cuda:1', 'cpu'), in this process or in "
+        "--workers processes sharing it: numpy's numbers to rounding; a policy's trials are one "
+        "batch unless --shard-size; no --max-hours (a CPU estimate) (default: numpy, no torch)",
     )
     parser.add_argument(
         "--device-mode",
