@@ -1597,6 +1597,8 @@ def training_value(docs: Path, key: str) -> str:
 # ------------------------------------------------------------------ strong scaling
 SCALING_FILES = {
     "2 cores": "perf/strong-scaling.json",
+    # before the fork server, and each policy's intervals and judge terms computed as it ends
+    "2 cores, at 764dcf1": "perf/strong-scaling-764dcf1.json",
     # before a run's end joined its shards from memory and its workers exited at once
     "2 cores, at 496aa87": "perf/strong-scaling-496aa87.json",
     "2 cores, at 601a6e2": "perf/strong-scaling-601a6e2.json",  # before a run's end read its shards once
@@ -1607,6 +1609,7 @@ SCALING_FILES = {
 #: The value spans' names of the strong-scaling runs (``scaling MACHINE.KIND.W``).
 SCALING_MACHINES = {
     "2": "2 cores",
+    "2-764dcf1": "2 cores, at 764dcf1",
     "2-496aa87": "2 cores, at 496aa87",
     "2-601a6e2": "2 cores, at 601a6e2",
     "2-ef5e440": "2 cores, at ef5e440",
