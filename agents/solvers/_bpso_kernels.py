@@ -123,9 +123,8 @@ class _Swarm:
         self.fitness_of = fitness_of
         self.positions = xp.copy(positions)
         self.velocities = xp.zeros(positions.shape)
-        fitness, valid = fitness_of(self.positions)
         self.personal_best = xp.copy(self.positions)
-        self.personal_fit = xp.where(valid, fitness, -np.inf)
+        self.personal_fit = fitness_of(self.positions)
         self.rows = xp.arange(positions.shape[0])
         first = xp.argmax(self.personal_fit, axis=1)
         self.global_best = xp.copy(self.personal_best[self.rows, first])
@@ -140,7 +139,7 @@ class _Swarm:
             + c1_r1[..., None] * (self.personal_best - self.positions)
             + c2_r2[..., None] * (self.global_best[:, None, :] - self.positions)
         )  # eq20
-        self.velocities = velocities = xp.minimum(xp.maximum(velocities, -clamp), clamp)
+        self.velocities = velocities = xp.clip(velocities, -clamp, clamp)
         draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
         if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
             self.positions = positions = xp.astype(draw, np.int8)
@@ -148,14 +147,18 @@ class _Swarm:
             self.positions = positions = xp.astype(
                 xp.where(draw, 1 - self.positions, self.positions), np.int8
             )
-        fitness, valid = self.fitness_of(positions)
-        improved = valid & (fitness > self.personal_fit)
+        # an invalid position's fitness is -inf, so it improves on nothing; and a best is replaced
+        # only by a larger fitness, so each best's fitness is the larger of the two (never NaN:
+        # the index is finite)
+        fitness = self.fitness_of(positions)
+        improved = fitness > self.personal_fit
         self.personal_best = xp.where(improved[..., None], positions, self.personal_best)
-        self.personal_fit = xp.where(improved, fitness, self.personal_fit)
+        self.personal_fit = xp.maximum(fitness, self.personal_fit)
         candidate = xp.argmax(self.personal_fit, axis=1)
-        better = self.personal_fit[rows, candidate] > self.global_fit
+        candidate_fit = self.personal_fit[rows, candidate]
+        better = candidate_fit > self.global_fit
         self.global_best = xp.where(better[:, None], self.personal_best[rows, candidate], self.global_best)
-        self.global_fit = xp.where(better, self.personal_fit[rows, candidate], self.global_fit)
+        self.global_fit = xp.maximum(candidate_fit, self.global_fit)
 
     def keep(self, rows: Any) -> None:
         for name in ("positions", "velocities", "personal_best", "personal_fit", "global_best", "global_fit"):
@@ -224,7 +227,8 @@ class _Draws:
 
 
 class _Fitness:
-    """eq19 of a swarm's positions (B, P, L) and whether each is valid (a call): looked up in a
+    """eq19 of a swarm's positions (B, P, L), -inf where a position is not a valid super arm (a
+    call), as the compiled kernel's table holds it: looked up in a
     table of every bit pattern's value per trial (:func:`_fitness_np` of each valid pattern, so
     the same numbers) for particles of at most ``table_bits`` bits where it fits
     FITNESS_TABLE_BYTES, a few operations an iteration instead of one a channel; else summed
@@ -255,19 +259,18 @@ class _Fitness:
         bit = xp.arange(length, dtype=np.int64)
         codes = xp.constant(valid_codes)
         values, _ = _fitness_np(index, xp.astype((codes[:, None] >> bit) & 1, np.int8)[None], *self.counts)
-        self.table = xp.zeros((batch, 1 << length), dtype=values.dtype)  # (B, C)
+        self.table = xp.full((batch, 1 << length), -np.inf, dtype=values.dtype)  # (B, C)
         self.table[:, codes] = values
-        self.valid_pattern = xp.zeros(1 << length, dtype=bool)
-        self.valid_pattern[codes] = True
         self.optimum = xp.max(values, axis=1)
         self.weights = 1 << bit  # bit j of a pattern is station j
         self.xp = xp
 
-    def __call__(self, positions: NDArray[np.int8]) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    def __call__(self, positions: NDArray[np.int8]) -> NDArray[np.float64]:
         if self.table is None:
-            return _fitness_np(self.index, positions, *self.counts)
+            value, valid = _fitness_np(self.index, positions, *self.counts)
+            return namespace(value).where(valid, value, -np.inf)
         code = (positions * self.weights).sum(axis=-1)  # (B, P), int64 as the weights
-        return self.xp.take_along_axis(self.table, code, axis=1), self.valid_pattern[code]
+        return self.xp.take_along_axis(self.table, code, axis=1)
 
     def keep(self, rows: Any) -> None:
         self.index = self.index[rows]
