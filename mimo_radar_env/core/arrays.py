@@ -375,6 +375,15 @@ class TorchNamespace:
         return self.torch.sort(a, dim=axis).values
 
     def take_along_axis(self, a: Any, index: Any, axis: int) -> Any:
+        """numpy's ``take_along_axis`` for indices in ``[0, size)``: one gather where ``index`` has
+        ``a``'s shape off ``axis`` (torch's ``take_along_dim``, which broadcasts, first wraps every
+        index, an operation more); there a negative index, which numpy wraps, is refused as out
+        of range."""
+        same = a.ndim == index.ndim and all(
+            n == m for d, (n, m) in enumerate(zip(a.shape, index.shape, strict=True)) if d != axis % a.ndim
+        )
+        if same:
+            return self.torch.gather(a, axis, index)
         return self.torch.take_along_dim(a, index, dim=axis)
 
     def put_along_axis(self, a: Any, index: Any, values: Any, axis: int) -> None:

@@ -38,6 +38,7 @@ def test_the_torch_namespace_computes_what_numpy_does():
     rng = np.random.default_rng(0)
     a, b = rng.normal(size=(3, 4, 5)), rng.normal(size=(3, 4, 5))
     index = np.argsort(a, axis=-1)[..., :2]
+    by_rows = np.argsort(a, axis=1)[:, :2]
     cases = {
         "maximum": lambda xp, x, y: xp.maximum(x, y),
         "clip": lambda xp, x, y: xp.clip(x, -0.5, 0.5),
@@ -46,6 +47,8 @@ def test_the_torch_namespace_computes_what_numpy_does():
         "argmin": lambda xp, x, y: xp.argmin(x, axis=1),
         "sort": lambda xp, x, y: xp.sort(x, axis=-1),
         "take": lambda xp, x, y: xp.take_along_axis(x, xp.asarray(index), axis=-1),
+        "take, broadcast": lambda xp, x, y: xp.take_along_axis(x, xp.asarray(index[:1]), axis=-1),
+        "take, axis 1": lambda xp, x, y: xp.take_along_axis(x, xp.asarray(by_rows), axis=1),
         "repeat": lambda xp, x, y: xp.repeat(x, 2, axis=1),
         "where": lambda xp, x, y: xp.where(x > y, x, y),
         "stack": lambda xp, x, y: xp.stack([x, y], axis=1),
@@ -57,6 +60,28 @@ def test_the_torch_namespace_computes_what_numpy_does():
         # a sum may add in another order: equal to rounding; every other op bit for bit
         rtol = 1e-15 if name in ("sum", "trace") else 0
         np.testing.assert_allclose(CPU.to_numpy(got), expected, rtol=rtol, atol=0, err_msg=name)
+
+
+def test_the_torch_take_along_axis_is_one_gather_and_refuses_a_negative_index():
+    """Where the index has the array's shape off the axis, one operation (torch's
+    ``take_along_dim`` is two: it wraps every index first); a negative index, which numpy wraps,
+    is refused there, not taken from the end."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    calls = []
+
+    class Count(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            calls.append(str(func))
+            return func(*args, **(kwargs or {}))
+
+    table, index = CPU.asarray(np.arange(12.0).reshape(3, 4)), CPU.asarray(np.array([[3, 0]] * 3))
+    with Count():
+        taken = CPU.take_along_axis(table, index, axis=1)
+    assert calls == ["aten.gather.default"]
+    np.testing.assert_array_equal(CPU.to_numpy(taken), [[3.0, 0.0], [7.0, 4.0], [11.0, 8.0]])
+    with pytest.raises(RuntimeError, match="out of bounds"):
+        CPU.take_along_axis(table, CPU.asarray(np.array([[-1, 0]] * 3)), axis=1)
 
 
 @pytest.mark.parametrize(
