@@ -7,7 +7,7 @@
   (:meth:`RadarEngine.state_slots`) and the actions. On CUDA it is captured as one CUDA graph and
   replayed at every step; on the CPU the traced function runs.
 * ``"compiled"`` runs the traced function through ``torch.compile`` (on CUDA with
-  ``mode="reduce-overhead"``, which also replays CUDA graphs).
+  ``mode="reduce-overhead"``'s CUDA graphs, and eager's numerics: :data:`COMPILE_OPTIONS`).
 
 The step is the eager code itself, traced: no second copy of the model. The host reads one
 boolean per step, whether every deferred check passed; where one failed, the step is undone and
@@ -30,6 +30,12 @@ if TYPE_CHECKING:
 
 #: The forms of the torch step (:mod:`.device_forms`); ``"eager"`` is the reference.
 DEVICE_MODES = ("eager", "graph", "compiled")
+
+#: inductor's options for the compiled step: eager's numerics where its Triton kernels would
+#: depart from them on CUDA (no fused multiply-adds, PyTorch's libdevice, IEEE float32 division;
+#: its C++ loops on the CPU contract nothing already), with ``mode="reduce-overhead"``'s CUDA
+#: graphs there.
+COMPILE_OPTIONS = {"emulate_precision_casts": True, "eager_numerics.division_rounding": True}
 
 
 def check_device_mode(device_mode: Any, device: Any) -> None:
@@ -85,7 +91,8 @@ class TracedStep:
         if self.mode == "compiled":
             import torch
 
-            return torch.compile(traced, mode="reduce-overhead" if self.cuda else None, dynamic=False)
+            options = {**COMPILE_OPTIONS, "triton.cudagraphs": self.cuda}
+            return torch.compile(traced, options=options, dynamic=False)
         return traced
 
     # ------------------------------------------------------------------ a step

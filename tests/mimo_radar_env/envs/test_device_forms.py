@@ -175,6 +175,28 @@ def test_the_compiled_form_gives_the_eager_numbers_to_round_off():
     assert engine._forms.eager_steps == 0
 
 
+def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkeypatch):
+    """inductor is asked for no fused multiply-adds, PyTorch's libdevice and IEEE division (where
+    its Triton kernels would depart from the eager step) and, on CUDA only, the CUDA graphs of
+    ``mode="reduce-overhead"``; inductor knows every option."""
+    import torch._inductor as inductor
+
+    calls = []
+    monkeypatch.setattr(torch, "compile", lambda fn, **kwargs: calls.append(kwargs) or fn)
+    engine = _engine("v1", "average", 2, "compiled")
+    engine.reset_from_keys(_keys(2))
+    state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
+    for on_cuda in (False, True):
+        engine._forms.cuda = on_cuda
+        engine._forms._trace(engine.oracle_action(), state)
+    assert [call["options"].pop("triton.cudagraphs") for call in calls] == [False, True]
+    assert inductor.list_mode_options("reduce-overhead") == {"triton.cudagraphs": True}
+    assert calls == [{"options": device_forms.COMPILE_OPTIONS, "dynamic": False}] * 2
+    assert device_forms.COMPILE_OPTIONS["emulate_precision_casts"]
+    with inductor.config.patch(device_forms.COMPILE_OPTIONS):  # an unknown option raises here
+        assert inductor.config.emulate_precision_casts and inductor.config.eager_numerics.division_rounding
+
+
 def test_a_step_that_cannot_be_captured_runs_traced_with_a_warning(monkeypatch):
     def refuse(body, warm_up):
         raise RuntimeError("operation not permitted when stream is capturing")
