@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.arrays import namespace
 from mimo_radar_env.core.geometry import path_gain
+from mimo_radar_env.core.motion import positions
 
 from .base import IndexPolicy, Observation, blend_samples, ucb_bonus
 from .costs import Needs
@@ -49,7 +50,7 @@ def geometric_prediction(
     estimate (``track``) and prediction (``track_pred``); the RCS ratio is 1."""
     xp = namespace(estimate)
     tx, rx = xp.asarray(scenario.tx_positions), xp.asarray(scenario.rx_positions)
-    ratio = path_gain(obs["track_pred"][..., [0, 2]], tx, rx) / path_gain(obs["track"][..., [0, 2]], tx, rx)
+    ratio = path_gain(positions(obs["track_pred"]), tx, rx) / path_gain(positions(obs["track"]), tx, rx)
     return alpha * ratio * estimate + (1.0 - alpha) * estimate
 
 

@@ -10,7 +10,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.geometry import path_gain
-from mimo_radar_env.core.motion import transition_matrix
+from mimo_radar_env.core.motion import positions, transition_matrix
 from mimo_radar_env.tracking.fusion import DEFAULT_FUSION
 from mimo_radar_env.tracking.information import channel_information
 from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
@@ -162,17 +162,17 @@ class PlanTrackingUCB(TrackingUCB):
         predicted = [np.asarray(obs["track_pred"], dtype=np.float64)]
         for _ in range(1, self.horizon):
             predicted.append(predicted[-1] @ self.transition.T)
-        positions = np.stack(predicted, axis=1)[..., [0, 2]]  # (B, H, K, 2)
+        planned = positions(np.stack(predicted, axis=1))  # (B, H, K, 2)
         estimate = self.learning.estimate[:, None]  # Y_hat(t-1), (B, 1, K, M, N)
-        now = path_gain(np.asarray(obs["track"])[..., [0, 2]], sc.tx_positions, sc.rx_positions)[:, None]
-        ahead = path_gain(positions, sc.tx_positions, sc.rx_positions)
+        now = path_gain(positions(np.asarray(obs["track"])), sc.tx_positions, sc.rx_positions)[:, None]
+        ahead = path_gain(planned, sc.tx_positions, sc.rx_positions)
         alpha = self.learning.alpha
         sinr = alpha * ahead / now * estimate + (1.0 - alpha) * estimate  # eq16 along the plan
         optimistic = sinr + ucb_bonus(self.learning.beta, self.t, self.learning.counts)[:, None, None]  # eq18
         return Forecast(
             covariance=np.asarray(obs["track_pred_cov"], dtype=np.float64),
             information=channel_information(
-                positions,
+                planned,
                 sc.tx_positions,
                 sc.rx_positions,
                 self.selector.variance(optimistic),  # eq32

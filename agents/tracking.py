@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 from mimo_radar_env import Scenario
 from mimo_radar_env.core.arrays import NumpyNamespace, TorchNamespace, namespace
 from mimo_radar_env.core.model import RadarModel
+from mimo_radar_env.core.motion import positions
 from mimo_radar_env.core.superarm import super_arm_count
 from mimo_radar_env.envs.options import option_choices
 from mimo_radar_env.tracking.fusion import DEFAULT_FUSION
@@ -95,8 +96,8 @@ class TrackingSelector:
         """TX and RX masks (B, M), (B, N) for the coming step."""
         variance = self.variance(sinr)
         model = self.model_in(namespace(sinr))
-        positions = obs["track_pred"][..., [0, 2]]
-        information = channel_information(positions, model.tx, model.rx, variance)
+        predicted = positions(obs["track_pred"])
+        information = channel_information(predicted, model.tx, model.rx, variance)
         return select_for_tracking(
             obs[PREDICTED_COVARIANCE],
             information,

@@ -387,6 +387,9 @@ class TorchNamespace:
         return self.torch.take_along_dim(a, index, dim=axis)
 
     def put_along_axis(self, a: Any, index: Any, values: Any, axis: int) -> None:
+        if isinstance(values, bool | int | float):  # an argument of the kernel: no tensor from the host
+            a.scatter_(axis, index, values)
+            return
         source = self.torch.as_tensor(values, dtype=a.dtype, device=self.device)
         a.scatter_(axis, index, source.expand_as(index))
 

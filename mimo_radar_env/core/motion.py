@@ -8,6 +8,24 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from .arrays import namespace
+
+#: The positions x and y of a state ``[x, vx, y, vy]``, and its velocities: every other entry. A
+#: slice, where a list of indices would, on a device, first be copied there from the host's
+#: memory, which torch does synchronously.
+POSITION = slice(0, None, 2)
+VELOCITY = slice(1, None, 2)
+
+
+def positions(states: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The positions (..., 2) of states (..., 4): a new array, as indexing with ``[0, 2]`` gives."""
+    return namespace(states).ascontiguousarray(states[..., POSITION])
+
+
+def position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The position block (..., 2, 2) of covariances (..., 4, 4): a new array."""
+    return namespace(covariance).ascontiguousarray(covariance[..., POSITION, POSITION])
+
 
 def transition_matrix(turn_rate: ArrayLike, sample_time: float) -> NDArray[np.float64]:
     """NCT transition matrix for turn rate(s) ``w`` (rad/s); ``w = 0`` gives NCV.

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from . import motion
 from .counter_hash import Stream
 from .geometry import bistatic_measurement, wrap_angle
 from .model import RadarModel
@@ -191,7 +192,7 @@ class RadarSimulation:
     @property
     def positions(self) -> NDArray[np.float64]:
         """True positions (B, K, 2)."""
-        return self.state[..., [0, 2]]
+        return motion.positions(self.state)
 
     def mean_sinr(self) -> NDArray[np.float64]:
         """True mean SINR at the current step, (B, K, M, N)."""

@@ -38,6 +38,13 @@ def subset_masks(size: int, chosen: int) -> NDArray[np.bool_]:
     return masks
 
 
+@functools.cache
+def subset_rows(size: int, chosen: int) -> tuple[tuple[int, ...], ...]:
+    """:func:`subset_masks` as nested tuples of 0 and 1, made once: what ``xp.constant`` keeps on
+    a device, so that a step copies no table from the host."""
+    return tuple(tuple(int(bit) for bit in row) for row in subset_masks(size, chosen))
+
+
 def masks_to_actions(tx: NDArray[np.bool_], rx: NDArray[np.bool_]) -> NDArray[np.int8]:
     """The env's actions (..., M + N) int8 of transmitter and receiver masks (..., M), (..., N)."""
     xp = namespace(tx)
@@ -122,7 +129,7 @@ def exact_super_arm(
             f"exact super-arm search would enumerate {num_subsets} subsets (> {MAX_EXACT_SUBSETS}) for "
             f"M={num_tx}, N={num_rx}, Ms={tx_count}, Ns={rx_count}; use the alternating solver instead"
         )
-    tx_subsets = xp.asarray(subset_masks(num_tx, tx_count))  # (S, M)
+    tx_subsets = xp.constant(subset_rows(num_tx, tx_count))  # (S, M) of 0 and 1
     batch_size = weights.shape[0]
     # one BLAS product for the whole batch: (S, M) @ (M, B * N)
     flat = xp.ascontiguousarray(xp.moveaxis(weights, 1, 0)).reshape(num_tx, batch_size * num_rx)
@@ -132,7 +139,7 @@ def exact_super_arm(
     subset_value = top.sum(axis=-1).T  # (B, S)
     best = xp.argmax(subset_value, axis=-1)
     batch = xp.arange(batch_size)
-    tx = tx_subsets[best]
+    tx = xp.astype(tx_subsets[best], bool)
     rx = top_mask(column_sums[best, batch], rx_count)
     return tx, rx, subset_value[batch, best]
 

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from ..core.arrays import check_precision, device_namespace, float_precision, namespace
 from ..core.geometry import channel_jacobian
 from ..core.model import RadarModel
-from ..core.motion import transition_matrix
+from ..core.motion import POSITION, position_block, positions, transition_matrix
 from ..core.simulation import ChannelObservations, RadarSimulation
 from ..core.streams import keys_from_generator
 from ..core.superarm import best_super_arm, masks_to_actions, super_arm_value
@@ -293,7 +293,7 @@ class RadarEngine:
     @_in_precision
     def oracle_action(self) -> NDArray[np.int8]:
         """The optimal super arm for the true mean SINR of the coming step, (B, M + N)."""
-        upcoming = self.simulation.upcoming_state()[..., [0, 2]]
+        upcoming = positions(self.simulation.upcoming_state())
         weights = self.model.channel_weights(self.model.mean_sinr(upcoming))
         tx, rx, _ = best_super_arm(
             weights, self.scenario.tx_per_step, self.scenario.rx_per_step, self.options.oracle_solver
@@ -310,11 +310,11 @@ class RadarEngine:
         if self.tracker is None:
             raise RuntimeError("the tracking oracle needs the tracker: make the env with tracking=True")
         sc = self.scenario
-        upcoming = self.simulation.upcoming_state()[..., [0, 2]]
+        upcoming = positions(self.simulation.upcoming_state())
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(upcoming)))
         predicted = self.tracker.predicted_state()
         position_cov = self._predicted_position_covariance()
-        info = channel_information(predicted[..., [0, 2]], self.model.tx, self.model.rx, variance)
+        info = channel_information(positions(predicted), self.model.tx, self.model.rx, variance)
         tx, rx = select_for_tracking(
             position_cov, info, sc.weights, sc.tx_per_step, sc.rx_per_step, criterion, self.options.fusion
         )
@@ -331,16 +331,16 @@ class RadarEngine:
         self._numpy_only("the tracking forecast")
         if isinstance(horizon, bool) or not isinstance(horizon, int) or horizon < 1:
             raise ValueError(f"horizon must be an integer >= 1, got {horizon!r}")
-        truth = self.simulation.future_states(horizon)[..., [0, 2]]  # (B, H, K, 2)
+        truth = positions(self.simulation.future_states(horizon))  # (B, H, K, 2)
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(truth)))
         F = transition_matrix(0.0, self.scenario.sample_time)
         predicted = [self.tracker.predicted_state()]
         for _ in range(1, horizon):
             predicted.append(predicted[-1] @ F.T)
-        positions = np.stack(predicted, axis=1)[..., [0, 2]]
+        planned = positions(np.stack(predicted, axis=1))
         return Forecast(
             covariance=self.tracker.predicted_covariance(),
-            information=channel_information(positions, self.model.tx, self.model.rx, variance),
+            information=channel_information(planned, self.model.tx, self.model.rx, variance),
             transition=F,
             process_cov=self.model.process_cov,
             weights=np.asarray(self.scenario.weights, dtype=np.float64),
@@ -358,7 +358,7 @@ class RadarEngine:
         horizon = self.horizon - self.step_index
         if horizon < 1:
             raise RuntimeError(f"the episode ended after {self.horizon} steps; call reset()")
-        truth = self.simulation.future_states(horizon)[..., [0, 2]]
+        truth = positions(self.simulation.future_states(horizon))
         variance = self.model.measurement_variance(self.simulation.quality(self.model.mean_sinr(truth)))
         transitions = np.moveaxis(self.model.transitions, 1, 0)  # (T, K, 4, 4): step t -> t + 1
         F = transitions[self.step_index]
@@ -385,10 +385,10 @@ class RadarEngine:
     def _advance_bound(self, channels: ChannelObservations) -> None:
         """The PCRB of the step: the true motion, then the probed channels at the true
         positions with their true covariances (docs/model.md, section 14)."""
-        positions = self.simulation.positions[:, :, None, :]  # the truth of this step, (B, K, 1, 2)
+        truth = self.simulation.positions[:, :, None, :]  # the truth of this step, (B, K, 1, 2)
         tx = self.model.tx[channels.tx_index][:, None]  # (B, 1, C, 2)
         rx = self.model.rx[channels.rx_index][:, None]
-        jac = channel_jacobian(positions, tx, rx)  # (B, K, C, 2, 2)
+        jac = channel_jacobian(truth, tx, rx)  # (B, K, C, 2, 2)
         per_channel = jacobian_information(jac, channels.noise_variance)  # the true Sigma0 / lambda
         measured = per_channel.sum(axis=2) * channels.valid[:, None, None, None]
         transition = self.model.transition_at(self.simulation.clock - 1)  # (K, 4, 4): step t-1 -> t
@@ -441,19 +441,19 @@ class RadarEngine:
         obs |= {
             "track": self.xp.copy(tracker.estimate),
             "track_pred": tracker.predicted_state(),
-            "track_pos_cov": tracker.covariance[..., [[0], [2]], [0, 2]],
+            "track_pos_cov": position_block(tracker.covariance),
             "mode_prob": tracker.model_probabilities,
         }
         if self.options.prediction_covariance:
             predicted = tracker.predicted_covariance()
-            obs["track_pred_pos_cov"] = predicted[..., [[0], [2]], [0, 2]]
+            obs["track_pred_pos_cov"] = position_block(predicted)
             obs["track_pred_cov"] = predicted
         return obs
 
     def _predicted_position_covariance(self) -> NDArray[np.float64]:
         """The position block of the tracker's predicted mixture covariance, (B, K, 2, 2)."""
         assert self.tracker is not None
-        return self.tracker.predicted_covariance()[..., [[0], [2]], [0, 2]]
+        return position_block(self.tracker.predicted_covariance())
 
     def _truth_info(self) -> dict[str, NDArray]:
         state = self.simulation.state
@@ -461,6 +461,6 @@ class RadarEngine:
         info = {"mean_sinr": self.simulation.mean_sinr(), "true_state": xp.copy(state)}
         if self.tracker is not None:
             info["position_error"] = xp.linalg.norm(
-                self.tracker.estimate[..., [0, 2]] - state[..., [0, 2]], axis=-1
+                self.tracker.estimate[..., POSITION] - state[..., POSITION], axis=-1
             )
         return info

@@ -19,6 +19,7 @@ from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
 from ..core.arrays import check_precision, device_namespace, float_precision
+from ..core.motion import positions
 from ..core.superarm import random_super_arms
 from ..rendering import draw_scenario, figure_to_rgb
 from ..scenarios import Scenario
@@ -222,8 +223,8 @@ class MimoRadarSelectEnv(HorizonSpec, gym.Env[dict[str, NDArray], NDArray[np.int
         check_reset(seed, options)
         super().reset(seed=seed)
         obs, info = self.engine.reset([self.np_random])
-        self._truth_history = [info["true_state"][0][:, [0, 2]]]
-        self._track_history = [obs["track"][0][:, [0, 2]]] if "track" in obs else []
+        self._truth_history = [positions(info["true_state"][0])]
+        self._track_history = [positions(obs["track"][0])] if "track" in obs else []
         if self.render_mode == "human":
             self.render()
         return _squeeze(obs), _squeeze(info)
@@ -238,9 +239,9 @@ class MimoRadarSelectEnv(HorizonSpec, gym.Env[dict[str, NDArray], NDArray[np.int
         obs, reward, terminated, truncated, info = self.engine.step(
             _single_action(action, self.engine.action_size)
         )
-        self._truth_history.append(info["true_state"][0][:, [0, 2]])
+        self._truth_history.append(positions(info["true_state"][0]))
         if "track" in obs:
-            self._track_history.append(obs["track"][0][:, [0, 2]])
+            self._track_history.append(positions(obs["track"][0]))
         if self.render_mode == "human":
             self.render()
         return (

@@ -326,7 +326,7 @@ class Scenario:
 
     def _check_tracks(self) -> None:
         """The noise-free tracks stay finite and at least ``MIN_STATION_DISTANCE`` from every station."""
-        from ..core.motion import nominal_trajectories, transition_matrix
+        from ..core.motion import nominal_trajectories, positions, transition_matrix
 
         rates = turn_rate_schedule(self)
         with np.errstate(over="ignore", invalid="ignore"):
@@ -344,7 +344,7 @@ class Scenario:
         stations = np.concatenate([self.tx_positions, self.rx_positions])
         names = [f"TX{m + 1}" for m in range(self.num_tx)] + [f"RX{n + 1}" for n in range(self.num_rx)]
         for k in range(self.num_targets):
-            distance, step, station = closest_approach(nominal[k][:, [0, 2]], stations)
+            distance, step, station = closest_approach(positions(nominal[k]), stations)
             if distance < MIN_STATION_DISTANCE:
                 raise ScenarioError(
                     f"targets[{k}]'s noise-free track passes {distance:.3g} m from {names[station]} "

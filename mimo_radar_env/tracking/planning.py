@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.motion import position_block
 from ..core.superarm import all_super_arms, super_arm_count
 from .fusion import fusion_class
 from .information import inverse_2x2
@@ -86,10 +87,6 @@ class Forecast:
         return self.transition if self.transition.ndim == 2 else self.transition[h]
 
 
-def _position_block(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
-    return covariance[..., [[0], [2]], [0, 2]]
-
-
 def posterior_covariance(
     covariance: NDArray[np.float64],
     information: NDArray[np.float64],
@@ -104,7 +101,7 @@ def posterior_covariance(
     centralised, the gain of the summed information; eq22's average, the mean of each
     channel's gain)."""
     selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(np.float64)  # (S, M, N)
-    gain = fusion_class(fusion).planning_gain(information, _position_block(covariance), selected)
+    gain = fusion_class(fusion).planning_gain(information, position_block(covariance), selected)
     cross = covariance[..., :, 0::2]  # P E: (S, K, 4, 2)
     return covariance - cross @ gain @ np.swapaxes(cross, -1, -2)
 
@@ -200,7 +197,7 @@ class Planner:
         agrees with it to rounding (tested) and is several times faster."""
         if first:
             return super_arm_criterion(
-                _position_block(covariance),
+                position_block(covariance),
                 information,
                 self.tx_masks,
                 self.rx_masks,
@@ -211,7 +208,7 @@ class Planner:
         return self._fast_costs(covariance, information, weights)
 
     def _fast_costs(self, covariance, information, weights) -> NDArray:
-        prior_info, _ = inverse_2x2(_position_block(covariance))  # (S, K, 2, 2)
+        prior_info, _ = inverse_2x2(position_block(covariance))  # (S, K, 2, 2)
         posterior = fusion_class(self.fusion)
         terms = posterior.channel_terms(prior_info, information)  # (S, K, M, N, 2, 2)
         S, K = terms.shape[:2]

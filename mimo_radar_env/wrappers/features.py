@@ -11,6 +11,7 @@ import numpy as np
 from gymnasium import spaces
 from numpy.typing import NDArray
 
+from ..core import motion
 from ..core.arrays import namespace
 from ..core.geometry import squared_range_products
 from ..scenarios import Scenario
@@ -72,7 +73,7 @@ class RadarFeatures:
         sc = self.scenario
         if "track_pred" in obs:
             pred = xp.astype(xp.asarray(obs["track_pred"]), np.float64)
-            positions = pred[..., [0, 2]]
+            positions = motion.positions(pred)
             log_gain = -xp.log10(
                 squared_range_products(positions, xp.asarray(sc.tx_positions), xp.asarray(sc.rx_positions))
             )
@@ -80,7 +81,7 @@ class RadarFeatures:
             track = xp.concatenate(
                 [
                     (positions - xp.asarray(self.centre)) / self.extent,
-                    pred[..., [1, 3]] / 100.0,
+                    pred[..., motion.VELOCITY] / 100.0,
                 ],
                 axis=-1,
             )

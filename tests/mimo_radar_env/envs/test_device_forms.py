@@ -140,6 +140,36 @@ def test_the_traced_step_reads_no_device_value(monkeypatch):
     assert len(flags) >= 4  # the prior's factors, the update's guard (both covariances at once), the bound's
 
 
+@pytest.mark.parametrize(("version", "fusion"), [("v1", "average"), ("v1", "centralized"), ("v0", "average")])
+def test_an_eager_step_makes_no_tensor_from_host_data(version, fusion):
+    """No tensor of an eager step is made from host data (a list of indices, a numpy table, a
+    scalar written into a tensor): on a GPU each would be copied there from the host, which waits
+    for the device's queue, several times a step. The oracle's action, read between steps, too."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    made = []
+
+    class Watch(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            if func is torch.ops.aten.lift_fresh.default:
+                made.append(func)
+            return func(*args, **(kwargs or {}))
+
+    engine = _engine(version, fusion, 4, "eager")
+    engine.reset_from_keys(_keys(4))
+    sc = engine.scenario
+    actions = random_super_arms(
+        np.random.default_rng(0), 3, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step
+    )
+    actions = torch.as_tensor(actions, device=DEVICE)[:, None]
+    engine.step(actions[0].expand(4, -1))  # the constants a step keeps are made once, here
+    with Watch():
+        for action in actions[1:]:
+            engine.oracle_action()
+            engine.step(action.expand(4, -1))
+    assert made == []
+
+
 def test_the_cuda_graph_path_keeps_the_engines_arrays_in_its_buffers(monkeypatch):
     monkeypatch.setattr(device_forms, "cuda_graph", StandInGraph)
     monkeypatch.setattr(device_forms.TracedStep, "__init__", _as_if_on_cuda)
