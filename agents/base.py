@@ -33,6 +33,7 @@ from mimo_radar_env.core.arrays import NUMPY, NumpyNamespace, TorchNamespace, na
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import masks_to_actions, top_mask
+from mimo_radar_env.envs.device_forms import check_device_mode
 
 from .costs import BOOKKEEPING, SOLVER, Cost, Needs
 from .solvers import SuperArmSolver, make_solver
@@ -105,6 +106,8 @@ class Agent(ABC):
         self.weights = self.scenario.weights
         self.batch_size = 0
         self.t = 0
+        #: the form it acts in on torch (:meth:`use_device_mode`)
+        self.device_mode = "eager"
         #: the array namespace of the observations it acts on (:mod:`mimo_radar_env.core.arrays`):
         #: numpy, or torch on the device of an env made with ``device=``; set by :meth:`reset`
         self.xp: NumpyNamespace | TorchNamespace = NUMPY
@@ -146,6 +149,14 @@ class Agent(ABC):
         self.t += 1
         actions = self._act(batch)
         return actions if batched else actions[0]
+
+    def use_device_mode(self, device_mode: str) -> None:
+        """Act in form ``device_mode`` on torch (``"eager"``, ``"graph"``, ``"compiled"``:
+        :mod:`mimo_radar_env.envs.device_forms`), as its env steps: in ``"compiled"``, what has a
+        compiled form (BPSO's iteration) runs through ``torch.compile``; the same selections in
+        every form. A :class:`~agents.rollout.Rollout` sets its env's."""
+        check_device_mode(device_mode)
+        self.device_mode = device_mode
 
     def update(self, obs: Observation, reward: Any) -> None:
         """Learn from the observation and reward of the step just taken; ``ValueError`` naming
@@ -248,6 +259,10 @@ class IndexPolicy(Agent):
             solver or self.default_solver, self.tx_count, self.rx_count, **(solver_params or {})
         )
         self.solver.check_layout(self.scenario.num_tx, self.scenario.num_rx)
+
+    def use_device_mode(self, device_mode: str) -> None:
+        super().use_device_mode(device_mode)
+        self.solver.device_mode = device_mode
 
     # -------------------------------------------------------------- state
     def _reset(self, obs: Observation) -> None:

@@ -81,7 +81,8 @@ class Step:
 
 class Rollout:
     """An episode of ``agent`` on ``env`` from ``env.reset(seed=seed)``: attaches the env to an
-    oracle agent, resets both, then each :meth:`step` acts, steps the env and updates the agent.
+    oracle agent, gives the agent the env's form on torch (``device_mode``), resets both, then
+    each :meth:`step` acts, steps the env and updates the agent.
 
     ``obs`` and ``info`` are the latest the env returned (the reset's until the first step)."""
 
@@ -89,6 +90,7 @@ class Rollout:
         self.agent, self.env = agent, env
         if agent.needs.oracle:
             agent.attach(env)  # type: ignore[attr-defined]
+        agent.use_device_mode(getattr(env, "device_mode", "eager"))
         self.obs, self.info = env.reset(seed=seed)
         agent.reset(self.obs)
         self.t = 0

@@ -10,6 +10,7 @@ without it the numpy kernel runs.
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
@@ -73,6 +74,7 @@ def run_numpy(
     set_rule: bool,
     table_bits: int,
     stop_at_optimum: bool = True,
+    iterate: Callable[..., tuple[Any, ...]] | None = None,
 ) -> NDArray[np.int8]:
     """The iterations, vectorised over trials and particles. Returns the global bests (B, L).
 
@@ -82,18 +84,25 @@ def run_numpy(
     compiled kernel stops it: a best is replaced only by a strictly larger fitness, so no later
     iteration could change it, and each trial's draws are its own, so the others go on as they
     would have. Without it every trial runs every iteration, with no shape that depends on the
-    data: what a CUDA graph captures."""
+    data: what a CUDA graph captures. ``iterate`` runs an iteration in place of
+    :func:`swarm_iteration`, with its arguments (its compiled twin:
+    :class:`~mimo_radar_env.envs.device_forms.CompiledFunction`)."""
     xp = namespace(index)
     batch, population, length = positions.shape
     fitness_of = _Fitness(index, length, index.shape[1], tx_count, rx_count, table_bits)
     swarm = _Swarm(positions, fitness_of)
     draws = _Draws(keys, population, length, iterations, xp.is_torch and not stop_at_optimum, c1, c2)
-    steps = max(iterations - 1, 1)
+    # omega of each iteration, linear from the first to the last (a 0-d array each: one compiled
+    # iteration serves them all); the same operations as on Python floats, so the same numbers
+    steps = xp.arange(iterations, dtype=np.float64)
+    inertias = list(inertia_start - (inertia_start - inertia_end) * steps / max(iterations - 1, 1))
+    iterate = iterate or swarm_iteration
+    constants = {"clamp": velocity_clamp, "set_rule": set_rule, "counts": fitness_of.counts}
     optimum = fitness_of.optimum if stop_at_optimum else None
     result, alive = None, None  # the bests of the trials that stopped; the rows still iterating
     for q in range(iterations):
-        inertia = inertia_start - (inertia_start - inertia_end) * q / steps
-        swarm.move(*draws.at(q), inertia, velocity_clamp, set_rule)
+        arrays = (*swarm.state, swarm.rows, *draws.at(q), inertias[q], *fitness_of.arrays)
+        swarm.state = iterate(*arrays, **constants)
         if optimum is None or q == iterations - 1:
             continue
         final = swarm.global_fit >= optimum
@@ -114,56 +123,87 @@ def run_numpy(
     return result
 
 
+#: The swarm's state, in :func:`swarm_iteration`'s order: positions and velocities (B, P, L),
+#: personal bests (B, P, L) and their fitness (B, P), the global best (B, L) and its fitness (B,).
+SWARM_STATE = ("positions", "velocities", "personal_best", "personal_fit", "global_best", "global_fit")
+
+
 class _Swarm:
-    """The particles of every trial still iterating: positions and velocities (B, P, L), personal
-    bests and their fitness, the global best (B, L) and its fitness."""
+    """The particles of every trial still iterating (:data:`SWARM_STATE`), their rows 0..B-1."""
 
     def __init__(self, positions: NDArray[np.int8], fitness_of: _Fitness) -> None:
         xp = self.xp = namespace(positions)
-        self.fitness_of = fitness_of
-        self.positions = xp.copy(positions)
-        self.velocities = xp.zeros(positions.shape)
-        self.personal_best = xp.copy(self.positions)
-        self.personal_fit = fitness_of(self.positions)
+        personal_fit = fitness_of(positions)
         self.rows = xp.arange(positions.shape[0])
-        first = xp.argmax(self.personal_fit, axis=1)
-        self.global_best = xp.copy(self.personal_best[self.rows, first])
-        self.global_fit = xp.copy(self.personal_fit[self.rows, first])
+        first = xp.argmax(personal_fit, axis=1)
+        self.state: tuple[Any, ...] = (
+            xp.copy(positions),
+            xp.zeros(positions.shape),
+            xp.copy(positions),
+            personal_fit,
+            xp.copy(positions[self.rows, first]),
+            xp.copy(personal_fit[self.rows, first]),
+        )
 
-    def move(self, c1_r1: Any, c2_r2: Any, u: Any, inertia: float, clamp: float, set_rule: bool) -> None:
-        """One iteration: eq20's velocities (``c1 r1`` and ``c2 r2`` as drawn, :class:`_Draws`),
-        eq21's positions, then the bests."""
-        xp, rows = self.xp, self.rows
-        velocities = (
-            inertia * self.velocities
-            + c1_r1[..., None] * (self.personal_best - self.positions)
-            + c2_r2[..., None] * (self.global_best[:, None, :] - self.positions)
-        )  # eq20
-        self.velocities = velocities = xp.clip(velocities, -clamp, clamp)
-        draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
-        if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
-            self.positions = positions = xp.astype(draw, np.int8)
-        else:  # eq21 as written: the bit flips with probability sigmoid(V)
-            self.positions = positions = xp.astype(
-                xp.where(draw, 1 - self.positions, self.positions), np.int8
-            )
-        # an invalid position's fitness is -inf, so it improves on nothing; and a best is replaced
-        # only by a larger fitness, so each best's fitness is the larger of the two (never NaN:
-        # the index is finite)
-        fitness = self.fitness_of(positions)
-        improved = fitness > self.personal_fit
-        self.personal_best = xp.where(improved[..., None], positions, self.personal_best)
-        self.personal_fit = xp.maximum(fitness, self.personal_fit)
-        candidate = xp.argmax(self.personal_fit, axis=1)
-        candidate_fit = self.personal_fit[rows, candidate]
-        better = candidate_fit > self.global_fit
-        self.global_best = xp.where(better[:, None], self.personal_best[rows, candidate], self.global_best)
-        self.global_fit = xp.maximum(candidate_fit, self.global_fit)
+    @property
+    def global_best(self) -> Any:
+        return self.state[4]
+
+    @property
+    def global_fit(self) -> Any:
+        return self.state[5]
 
     def keep(self, rows: Any) -> None:
-        for name in ("positions", "velocities", "personal_best", "personal_fit", "global_best", "global_fit"):
-            setattr(self, name, getattr(self, name)[rows])
-        self.rows = self.xp.arange(self.positions.shape[0])
+        self.state = tuple(part[rows] for part in self.state)
+        self.rows = self.xp.arange(self.state[0].shape[0])
+
+
+def swarm_iteration(
+    positions: Any,
+    velocities: Any,
+    personal_best: Any,
+    personal_fit: Any,
+    global_best: Any,
+    global_fit: Any,
+    rows: Any,
+    c1_r1: Any,
+    c2_r2: Any,
+    u: Any,
+    inertia: Any,
+    *fitness_arrays: Any,
+    clamp: float,
+    set_rule: bool,
+    counts: tuple[int, int, int],
+) -> tuple[Any, ...]:
+    """One iteration, a function of arrays: eq20's velocities (``c1 r1`` and ``c2 r2`` as drawn,
+    :class:`_Draws`; ``inertia`` a 0-d array), eq21's positions, then the bests. Returns the new
+    state (:data:`SWARM_STATE`); ``rows`` is 0..B-1, ``fitness_arrays`` and ``counts`` eq19's
+    (:func:`fitness`)."""
+    xp = namespace(positions)
+    velocities = (
+        inertia * velocities
+        + c1_r1[..., None] * (personal_best - positions)
+        + c2_r2[..., None] * (global_best[:, None, :] - positions)
+    )  # eq20
+    velocities = xp.clip(velocities, -clamp, clamp)
+    draw = u * (1.0 + exp_negative(velocities)) < 1.0  # u < sigmoid(V)
+    if set_rule:  # Kennedy-Eberhart: the bit is 1 with probability sigmoid(V)
+        positions = xp.astype(draw, np.int8)
+    else:  # eq21 as written: the bit flips with probability sigmoid(V)
+        positions = xp.astype(xp.where(draw, 1 - positions, positions), np.int8)
+    # an invalid position's fitness is -inf, so it improves on nothing; and a best is replaced
+    # only by a larger fitness, so each best's fitness is the larger of the two (never NaN:
+    # the index is finite)
+    value = fitness(positions, *fitness_arrays, counts=counts)
+    improved = value > personal_fit
+    personal_best = xp.where(improved[..., None], positions, personal_best)
+    personal_fit = xp.maximum(value, personal_fit)
+    candidate = xp.argmax(personal_fit, axis=1)
+    candidate_fit = personal_fit[rows, candidate]
+    better = candidate_fit > global_fit
+    global_best = xp.where(better[:, None], personal_best[rows, candidate], global_best)
+    global_fit = xp.maximum(candidate_fit, global_fit)
+    return positions, velocities, personal_best, personal_fit, global_best, global_fit
 
 
 class _Draws:
@@ -186,9 +226,11 @@ class _Draws:
         self.c1, self.c2 = c1, c2
         batch = keys.shape[0]
         self.iterations = iterations
-        # column q is iteration q's stream_base: r1's and r2's stacked (2, B, q_max), hashed together
-        self.r_bases = xp.stack([stream_bases(keys, s, iterations) for s in (Stream.BPSO_R1, Stream.BPSO_R2)])
-        self.flip_bases = stream_bases(keys, Stream.BPSO_FLIP, iterations)
+        # row q is iteration q's stream_base: r1's and r2's stacked (2, q_max, B), hashed together;
+        # iteration-major, so that each iteration's draws are contiguous, laid out alike in any block
+        r_streams = (Stream.BPSO_R1, Stream.BPSO_R2)
+        self.r_bases = xp.stack([stream_bases(keys, s, iterations).T for s in r_streams])
+        self.flip_bases = xp.ascontiguousarray(stream_bases(keys, Stream.BPSO_FLIP, iterations).T)
         self.particle = xp.arange(population, dtype=np.int64)[None, :]
         lanes = (length + 3) // 4
         bit = xp.arange(length, dtype=np.int64)
@@ -206,20 +248,20 @@ class _Draws:
         block = self.block
         if q % block == 0:
             drawn = slice(q, min(q + block, self.iterations))
-            r1, r2 = to_unit(element_bits(self.r_bases[:, :, drawn, None], self.particle))  # (B, Q, P)
+            r1, r2 = to_unit(element_bits(self.r_bases[:, drawn, :, None], self.particle))  # (Q, B, P)
             self.r_block = (self.c1 * r1, self.c2 * r2)
             self.u_block = _flip_uniform_np(
-                self.flip_bases[:, drawn, None, None], self.hash_element, self.lane_shift
+                self.flip_bases[drawn, :, None, None], self.hash_element, self.lane_shift
             )
             self.drawn_for = None
         c1_r1, c2_r2 = self.r_block
         if self.drawn_for is None:
-            return c1_r1[:, q % block], c2_r2[:, q % block], self.u_block[:, q % block]
+            return c1_r1[q % block], c2_r2[q % block], self.u_block[q % block]
         rows = self.drawn_for
-        return c1_r1[rows, q % block], c2_r2[rows, q % block], self.u_block[rows, q % block]
+        return c1_r1[q % block][rows], c2_r2[q % block][rows], self.u_block[q % block][rows]
 
     def keep(self, rows: Any) -> None:
-        self.r_bases, self.flip_bases = self.r_bases[:, rows], self.flip_bases[rows]
+        self.r_bases, self.flip_bases = self.r_bases[:, :, rows], self.flip_bases[:, rows]
         # the block's draws stay as drawn, read through the rows of the trials left (not copied)
         self.drawn_for = (
             self.xp.arange(rows.shape[0])[rows] if self.drawn_for is None else self.drawn_for[rows]
@@ -263,19 +305,32 @@ class _Fitness:
         self.table[:, codes] = values
         self.optimum = xp.max(values, axis=1)
         self.weights = 1 << bit  # bit j of a pattern is station j
-        self.xp = xp
+
+    @property
+    def arrays(self) -> tuple[Any, ...]:
+        """:func:`fitness`'s arrays: the table and its weights, or the index."""
+        return (self.index,) if self.table is None else (self.table, self.weights)
 
     def __call__(self, positions: NDArray[np.int8]) -> NDArray[np.float64]:
-        if self.table is None:
-            value, valid = _fitness_np(self.index, positions, *self.counts)
-            return namespace(value).where(valid, value, -np.inf)
-        code = (positions * self.weights).sum(axis=-1)  # (B, P), int64 as the weights
-        return self.xp.take_along_axis(self.table, code, axis=1)
+        return fitness(positions, *self.arrays, counts=self.counts)
 
     def keep(self, rows: Any) -> None:
         self.index = self.index[rows]
         if self.table is not None:
             self.table, self.optimum = self.table[rows], self.optimum[rows]
+
+
+def fitness(positions: Any, *arrays: Any, counts: tuple[int, int, int]) -> Any:
+    """eq19 of positions (B, P, L), -inf where one is not a valid super arm: looked up in the
+    table of every bit pattern's value (``arrays``: the table (B, 2^L) and the weights 2^j of the
+    bits), or summed from the index (``arrays``: the index (B, M, N); ``counts``: M, Ms, Ns)."""
+    xp = namespace(positions)
+    if len(arrays) == 1:
+        value, valid = _fitness_np(arrays[0], positions, *counts)
+        return xp.where(valid, value, -np.inf)
+    table, weights = arrays
+    code = (positions * weights).sum(axis=-1)  # (B, P), int64 as the weights
+    return xp.take_along_axis(table, code, axis=1)
 
 
 @functools.cache

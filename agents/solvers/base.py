@@ -32,6 +32,10 @@ class SuperArmSolver(ABC):
     seconds_per_operation: float = 1e-9
     #: Its selection runs in a compiled kernel that spreads the trials over threads.
     threaded: bool = False
+    #: The form of its work on torch (:data:`~mimo_radar_env.envs.device_forms.DEVICE_MODES`; an
+    #: agent sets its env's, :meth:`~agents.base.Agent.use_device_mode`): the same selections in
+    #: every form.
+    device_mode: str = "eager"
 
     def __init__(self, tx_count: int, rx_count: int) -> None:
         if tx_count < 1 or rx_count < 1:

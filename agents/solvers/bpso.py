@@ -12,7 +12,7 @@ from mimo_radar_env.core.compiled import HAVE_NUMBA
 from mimo_radar_env.core.counter_hash import Stream
 from mimo_radar_env.core.streams import TrialRandom
 from mimo_radar_env.core.superarm import masks_to_actions, top_mask
-from mimo_radar_env.envs.device_forms import GraphReplay
+from mimo_radar_env.envs.device_forms import CompiledFunction, GraphReplay
 
 from ..parameters import check_integer, check_parameter
 from .base import SuperArmSolver
@@ -31,6 +31,11 @@ def _bpso_kernels() -> ModuleType:
     from . import _bpso_kernels
 
     return _bpso_kernels
+
+
+def _swarm_iteration(*arrays: Any, **constants: Any) -> tuple[Any, ...]:
+    """:func:`._bpso_kernels.swarm_iteration`, its module imported when first called."""
+    return _bpso_kernels().swarm_iteration(*arrays, **constants)
 
 
 #: eq19 by table lookup when the particle has at most this many bits (``2^bits`` doubles per
@@ -94,7 +99,12 @@ class BPSOSolver(SuperArmSolver):
     On torch the numpy kernel runs on the index's device; on CUDA its iterations (thousands of
     small kernels a selection) are captured once per batch shape as one CUDA graph and replayed
     (:class:`~mimo_radar_env.envs.device_forms.GraphReplay`): the same kernels, the same numbers,
-    every trial running every iteration (a graph's shapes cannot depend on the data).
+    every trial running every iteration (a graph's shapes cannot depend on the data). In the
+    compiled form (:attr:`device_mode` ``"compiled"``, which an agent takes from its env's
+    ``device_mode``) each iteration (:func:`~._bpso_kernels.swarm_iteration`) is compiled by
+    ``torch.compile`` into a few fused kernels in place of its few dozen
+    (:class:`~mimo_radar_env.envs.device_forms.CompiledFunction`), every trial running every
+    iteration; on CUDA the graph replays those.
     """
 
     name = "bpso"
@@ -137,6 +147,7 @@ class BPSOSolver(SuperArmSolver):
         self.rule = rule
         self.use_numba = use_numba
         self._replayed = GraphReplay(self._iterations, "BPSO's iterations")
+        self._compiled_iteration = CompiledFunction(_swarm_iteration, "BPSO's iteration")
 
     @property
     def threaded(self) -> bool:  # type: ignore[override]
@@ -213,9 +224,11 @@ class BPSOSolver(SuperArmSolver):
         return xp.astype(best[:, :num_tx], bool), xp.astype(best[:, num_tx:], bool)
 
     def _iterations(self, index: Any, positions: Any, keys: Any) -> Any:
-        """The swarm's iterations on torch tensors: the numpy kernel, a function of them. Where
-        they are captured as a CUDA graph, every trial runs every iteration (a graph has no shape
-        that depends on the data); elsewhere a trial stops at its optimum, as on numpy."""
+        """The swarm's iterations on torch tensors: the numpy kernel, a function of them, each
+        iteration compiled in the compiled form. Where they are captured as a CUDA graph or
+        compiled, every trial runs every iteration (no shape that depends on the data); elsewhere
+        a trial stops at its optimum, as on numpy."""
+        compiled = self.device_mode == "compiled"
         return _bpso_kernels().run_numpy(
             index,
             self.tx_count,
@@ -223,5 +236,6 @@ class BPSOSolver(SuperArmSolver):
             positions,
             keys,
             *self.swarm_arguments(),
-            stop_at_optimum=index.device.type != GraphReplay.capture_on,
+            stop_at_optimum=index.device.type != GraphReplay.capture_on and not compiled,
+            iterate=self._compiled_iteration if compiled else None,
         )

@@ -1486,6 +1486,10 @@ def device_launches(docs: Path) -> str:
     return markdown_table(head, rows)
 
 
+#: The fields of MG-CRB-CL's compiled act in results/perf/launches.json (``compiled_act``).
+COMPILED_ACT = ("act", "act_replayed", "compiled_calls", "fused", "library", "compile_s")
+
+
 @value_source("launches")
 def launches_value(docs: Path, key: str) -> str:
     """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
@@ -1493,10 +1497,19 @@ def launches_value(docs: Path, key: str) -> str:
     calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``,
     with the same env's eager operations, ``compiled.eager.FUSION``, and the seconds of the
     compiled env's first step and of a second one's, ``compiled.compile_s.FUSION`` and
-    ``compiled.again_s.FUSION``."""
+    ``compiled.again_s.FUSION``; MG-CRB-CL's act in the compiled form, ``compiled-act.FIELD``
+    (FIELD one of :data:`COMPILED_ACT`)."""
     record = read_json(docs, LAUNCHES_FILE)
     if key == "trials":
         return f"{record['rows'][0]['trials']:,}"
+    if key.startswith("compiled-act."):
+        field = key.partition(".")[2]
+        act = record.get("compiled_act", {})
+        if field not in COMPILED_ACT or field not in act or act["trials"] != record["rows"][0]["trials"]:
+            raise BenchError(
+                f"{LAUNCHES_FILE} has no {key!r}: compiled-act.FIELD, FIELD one of {COMPILED_ACT}"
+            )
+        return f"{act[field]:.1f}" if field == "compile_s" else f"{act[field]:,}"
     if key.startswith("compiled."):
         _, kind, fusion = key.split(".", 2)
         for r in record.get("compiled", []):

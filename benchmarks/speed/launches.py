@@ -10,7 +10,8 @@ Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO
 are counted apart, run as they are captured: on CUDA they replay as one graph. ``--compiled``
 also counts the calls of the env's step as ``torch.compile`` (inductor) writes it on this
 machine's torch, and times its compile: the first compiled step from empty caches (a temporary
-cache folder) and a second env's. docs/performance.md's table is generated from the JSON.
+cache folder) and a second env's; and those of MG-CRB-CL's act in the compiled form, BPSO's
+iteration compiled. docs/performance.md's table is generated from the JSON.
 """
 
 from __future__ import annotations
@@ -37,19 +38,33 @@ SCENARIO = "paper-1-v1"
 @contextlib.contextmanager
 def counting() -> Iterator[dict[str, int]]:
     """Counts the torch operations run in the block: ``"total"``, and ``"replayed"`` those inside
-    a :class:`GraphReplay` call."""
+    a :class:`GraphReplay` call; ``"compiled"``, the calls of a compiled function
+    (:class:`~mimo_radar_env.envs.device_forms.CompiledFunction`), whose own operations are
+    inductor's code (:func:`code_calls` counts them), not counted here."""
     from torch.utils._python_dispatch import TorchDispatchMode
 
-    from mimo_radar_env.envs.device_forms import GraphReplay
+    from mimo_radar_env.envs.device_forms import CompiledFunction, GraphReplay
 
-    counts = {"total": 0, "replayed": 0}
+    counts = {"total": 0, "replayed": 0, "compiled": 0}
     inside = [False]
+    compiled = [False]
 
     class Count(TorchDispatchMode):
         def __torch_dispatch__(self, func: Any, types: Any, args: Any = (), kwargs: Any = None) -> Any:
-            counts["total"] += 1
-            counts["replayed"] += inside[0]
+            if not compiled[0]:
+                counts["total"] += 1
+                counts["replayed"] += inside[0]
             return func(*args, **(kwargs or {}))
+
+    compiled_call = CompiledFunction.__call__
+
+    def compiled_function(self: CompiledFunction, *args: Any, **constants: Any) -> Any:
+        counts["compiled"] += 1
+        compiled[0] = True
+        try:
+            return compiled_call(self, *args, **constants)
+        finally:
+            compiled[0] = False
 
     call = GraphReplay.__call__
     where = GraphReplay.capture_on
@@ -66,11 +81,13 @@ def counting() -> Iterator[dict[str, int]]:
             inside[0] = False
 
     GraphReplay.__call__ = replayed  # type: ignore[method-assign]
+    CompiledFunction.__call__ = compiled_function  # type: ignore[method-assign]
     try:
         with Count():
             yield counts
     finally:
         GraphReplay.__call__ = call  # type: ignore[method-assign]
+        CompiledFunction.__call__ = compiled_call  # type: ignore[method-assign]
 
 
 def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") -> dict[str, Any]:
@@ -150,6 +167,34 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
             "compile_s": compile_s, "again_s": again_s}  # fmt: skip
 
 
+def compiled_act_row(trials: int, device: str = "cpu") -> dict[str, Any]:
+    """MG-CRB-CL's act in the compiled form (``use_device_mode("compiled")``: each of BPSO's
+    iterations compiled) on ``device``: the calls of an iteration's code as inductor writes it
+    there (``fused``, ``library``), the seconds of the first act (``compile_s``: it traces and
+    compiles), and a later act's operations outside the compiled code (``act``, of which
+    ``act_replayed`` inside the replayed graph) and its calls of the compiled iteration
+    (``compiled_calls``). On CUDA the graph replays ``act_replayed + compiled_calls x (fused +
+    library)`` kernels."""
+    from torch._inductor.utils import run_and_get_code
+
+    import agents
+
+    agent = agents.make_agent("mg-crb-cl", SCENARIO, seed=0)
+    episode = agents.Rollout(agent, agents.make_env(agent, trials, device=device), seed=0)
+    agent.use_device_mode("compiled")
+    start = time.perf_counter()
+    _, codes = run_and_get_code(agent.act, episode.obs)
+    compile_s = time.perf_counter() - start
+    episode.step()
+    with counting() as act:
+        agent.act(episode.obs)
+    calls = [code_calls(code) for code in codes]
+    counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
+    return {"policy": "mg-crb-cl", "trials": trials, "device": device, **counts, "compile_s": compile_s,
+            "act": act["total"], "act_replayed": act["replayed"],
+            "compiled_calls": act["compiled"]}  # fmt: skip
+
+
 def _compiled_line(row: dict[str, Any]) -> str:
     return (
         f"{row['fusion']:12s} compiled env step: {row['fused']} fused loops, {row['library']} library "
@@ -199,6 +244,12 @@ def count(args: argparse.Namespace) -> None:
         fusions = ("average", "centralized")
         result["compiled"] = [compiled_row(args.trials, f, args.compiled_device) for f in fusions]
         print("\n".join(map(_compiled_line, result["compiled"])))
+        act = result["compiled_act"] = compiled_act_row(args.trials, args.compiled_device)
+        print(
+            f"mg-crb-cl compiled act: {act['act']:,} ops ({act['act_replayed']:,} in a replayed graph) "
+            f"and {act['compiled_calls']} calls of BPSO's iteration compiled, each {act['fused']} fused "
+            f"loops and {act['library']} library calls; first act {act['compile_s']:.1f} s"
+        )
     write_json(args.json, result)
     if args.json:
         print(f"wrote {args.json}")

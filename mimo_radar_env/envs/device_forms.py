@@ -15,7 +15,9 @@ run again eagerly with its checks, so every form gives the eager numbers (to rou
 compiler may reorder).
 
 :class:`GraphReplay` does the same for a pure function of tensors with nothing to check (BPSO's
-iterations): on CUDA, one graph per shape of its arguments, replayed.
+iterations): on CUDA, one graph per shape of its arguments, replayed. :class:`CompiledFunction`
+is the compiled form of such a function (BPSO's iteration, where an agent acts in the compiled
+form), which a graph replays in turn.
 """
 
 from __future__ import annotations
@@ -38,8 +40,9 @@ DEVICE_MODES = ("eager", "graph", "compiled")
 COMPILE_OPTIONS = {"emulate_precision_casts": True, "eager_numerics.division_rounding": True}
 
 
-def check_device_mode(device_mode: Any, device: Any) -> None:
-    """Refuse a form that is not one of :data:`DEVICE_MODES`, or a traced form on numpy."""
+def check_device_mode(device_mode: Any, device: Any = "torch") -> None:
+    """Refuse a form that is not one of :data:`DEVICE_MODES`, or a traced form on numpy
+    (``device`` None)."""
     if device_mode not in DEVICE_MODES:
         raise ValueError(f"device_mode must be one of {', '.join(DEVICE_MODES)}; got {device_mode!r}")
     if device_mode != "eager" and device is None:
@@ -136,8 +139,8 @@ class TracedStep:
         """From now on the eager step, said once in a warning."""
         self._function = False
         warnings.warn(
-            f"device_mode={self.mode!r}: the step could not be {what} ({type(error).__name__}: "
-            f"{str(error).splitlines()[0] if str(error) else ''}); it runs eagerly, with the same numbers",
+            f"device_mode={self.mode!r}: the step could not be {what} ({_named(error)}); it runs "
+            "eagerly, with the same numbers",
             RuntimeWarning,
             stacklevel=6,
         )
@@ -255,6 +258,54 @@ class GraphReplay:
                 stacklevel=6,
             )
             return False
+
+
+class CompiledFunction:
+    """``function``, a pure function of tensors (and of constants given as keywords) that asks the
+    host nothing, traced (``torch.fx``'s ``make_fx``) and compiled by ``torch.compile`` with
+    eager's numerics (:data:`COMPILE_OPTIONS`, no CUDA graphs of its own: a :class:`GraphReplay`
+    may capture its calls), once per signature of its arguments and value of its constants: the
+    first call of each compiles it. Where tracing or compiling fails, it is called as it is, with
+    the same numbers (said once, in a warning naming ``what``)."""
+
+    def __init__(self, function: Any, what: str) -> None:
+        self.function, self.what = function, what
+        self._compiled: dict[tuple[Any, ...], Any] = {}
+
+    def __call__(self, *args: Any, **constants: Any) -> Any:
+        key = (tuple((tuple(a.shape), a.dtype, a.device) for a in args), tuple(sorted(constants.items())))
+        compiled = self._compiled.get(key)
+        if compiled is False:
+            return self.function(*args, **constants)
+        if compiled is not None:
+            return compiled(*args)
+        try:  # traced and compiled, then its first call (where inductor compiles)
+            compiled = self._compile(args, constants)
+            outputs = compiled(*args)
+        except Exception as error:
+            self._compiled[key] = False
+            warnings.warn(
+                f"{self.what} could not be compiled ({_named(error)}); it runs eagerly, with the same "
+                "numbers",
+                RuntimeWarning,
+                stacklevel=2,
+            )
+            return self.function(*args, **constants)
+        self._compiled[key] = compiled
+        return outputs
+
+    def _compile(self, args: tuple[Any, ...], constants: dict[str, Any]) -> Any:
+        import torch
+        from torch.fx.experimental.proxy_tensor import make_fx
+
+        traced = make_fx(lambda *a: self.function(*a, **constants), tracing_mode="fake")(*args)
+        return torch.compile(traced, options=COMPILE_OPTIONS, dynamic=False)
+
+
+def _named(error: Exception) -> str:
+    """An error's type and first line."""
+    text = str(error)
+    return f"{type(error).__name__}: {text.splitlines()[0] if text else ''}"
 
 
 def _cloned(outputs: Any) -> Any:

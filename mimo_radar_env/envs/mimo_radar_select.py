@@ -477,6 +477,8 @@ class MimoRadarSelectVectorEnv(HorizonSpec, VectorEnv):
         )
         #: where the trials run: ``None`` for numpy, else the ``torch.device`` of every tensor returned
         self.device = xp.device
+        #: the step's form on torch (``"eager"``, ``"graph"``, ``"compiled"``)
+        self.device_mode = device_mode
         #: As Gymnasium's own vector envs have it (torchrl's ``GymWrapper`` reads it).
         self.autoreset_mode = autoreset_mode_of(autoreset_mode)
         self.metadata = {**self.metadata, "autoreset_mode": self.autoreset_mode}

@@ -3,6 +3,7 @@ step, for the policies of the paper and the tracking-aware ones, with their draw
 the device."""
 
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -131,6 +132,36 @@ def test_bpso_replayed_as_a_graph_selects_what_it_selects_eagerly(monkeypatch):
     assert len(captured) == 2  # one graph per batch shape
     for ours, theirs in zip(replayed, eager, strict=True):
         np.testing.assert_array_equal(ours, theirs)
+
+
+def test_bpso_compiled_selects_what_it_selects_eagerly_with_one_compile_a_shape(monkeypatch):
+    """In the compiled form each iteration runs as inductor's code (one fused loop on the CPU),
+    compiled once per batch shape, every trial running every iteration: the eager selections,
+    called on their own and replayed as a graph (a stand-in of a CUDA graph's contract)."""
+    from agents.solvers import BPSOSolver
+
+    sizes = [7, 3, 7]
+    eager = _bpso_selections(BPSOSolver(2, 3, iterations=30), sizes)
+    solver = BPSOSolver(2, 3, iterations=30)
+    solver.device_mode = "compiled"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", RuntimeWarning)  # no fall-back to the eager iteration
+        compiled = _bpso_selections(solver, sizes)
+        assert len(solver._compiled_iteration._compiled) == 2  # one a batch shape, each compiled
+        monkeypatch.setattr(device_forms, "cuda_graph", StandInGraph)
+        monkeypatch.setattr(device_forms.GraphReplay, "capture_on", torch.device(DEVICE).type)
+        replayed = _bpso_selections(solver, sizes[:2])
+    for ours, theirs in zip(compiled + replayed, eager + eager[:2], strict=True):
+        np.testing.assert_array_equal(ours, theirs)
+
+
+def test_a_rollout_gives_the_agent_and_its_solver_the_envs_form():
+    agent = agents.make_agent("mg-crb-cl", "paper-1-v1", seed=0)
+    assert agent.device_mode == agent.solver.device_mode == "eager"
+    agents.Rollout(agent, agents.make_env(agent, 2, device=DEVICE, device_mode="graph"), seed=0)
+    assert agent.device_mode == agent.solver.device_mode == "graph"
+    with pytest.raises(ValueError, match="device_mode must be one of eager, graph, compiled; got 'jit'"):
+        agent.use_device_mode("jit")
 
 
 def test_bpso_on_torch_selects_the_same_in_blocks_of_iterations_and_without_its_table(monkeypatch):

@@ -233,6 +233,24 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
             generators.launches_value(tmp_path, key)
 
 
+def test_the_compiled_acts_counts_are_read_at_the_rows_trial_count(tmp_path):
+    from benchmarks.docs_tooling import generators
+
+    perf = tmp_path / "results" / "perf"
+    perf.mkdir(parents=True)
+    rows = [{"policy": "ucb1", "fusion": "average", "trials": 500, "env_step": 1456.0}]
+    act = {"trials": 500, "act": 1779, "act_replayed": 563, "compiled_calls": 100, "fused": 1, "library": 0,
+           "compile_s": 7.64}  # fmt: skip
+    (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled_act": act}))
+    assert generators.launches_value(tmp_path, "compiled-act.act") == "1,779"
+    assert generators.launches_value(tmp_path, "compiled-act.compiled_calls") == "100"
+    assert generators.launches_value(tmp_path, "compiled-act.compile_s") == "7.6"
+    (perf / "launches.json").write_text(json.dumps({"rows": rows, "compiled_act": {**act, "trials": 6}}))
+    for key in ("compiled-act.act", "compiled-act.ops"):
+        with pytest.raises(generators.BenchError, match=r"compiled-act.FIELD, FIELD one of \('act'"):
+            generators.launches_value(tmp_path, key)
+
+
 def test_the_ray_table_gives_each_backends_serial_parts_where_every_run_recorded_them(tmp_path):
     """The Ray table's wall times, and each backend's mean time before the first task and after
     the last with Ray's minus local's paired by repeat (a t interval computed here with scipy);

@@ -19,10 +19,10 @@ def test_counting_sees_every_operation_and_those_of_a_replayed_function_apart():
         c = a + b  # one operation
         d = twice(c)  # one, inside the replay
         (d - a).sum()  # two
-    assert counts == {"total": 4, "replayed": 1}
+    assert counts == {"total": 4, "replayed": 1, "compiled": 0}
     with launches.counting() as counts:
         pass
-    assert counts == {"total": 0, "replayed": 0}
+    assert counts == {"total": 0, "replayed": 0, "compiled": 0}
 
 
 def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone(monkeypatch):
@@ -58,3 +58,30 @@ def test_the_compiled_code_calls_are_its_generated_loops_and_its_library_kernels
     compiled = torch.compile(lambda x, y: ((x.sin() * 2.0) @ y).exp().sum(), dynamic=False)
     _, codes = run_and_get_code(compiled, a, b)
     assert [launches.code_calls(code) for code in codes] == [{"fused": 2, "library": 1}]
+
+
+def test_the_compiled_act_counts_bpsos_iterations_apart_from_the_rest():
+    """MG-CRB-CL's act in the compiled form: the operations in its replayed graph are the graph
+    form's less an eager iteration's for each of the 100 iterations, which are calls of inductor's
+    code instead (one fused loop each on the CPU)."""
+    from agents.solvers import _bpso_kernels
+
+    row = launches.compiled_act_row(6)
+    graph = launches.policy_row("mg-crb-cl", 6, 1)
+    iteration = []
+    run = _bpso_kernels.swarm_iteration
+
+    def counted(*args, **kwargs):
+        with launches.counting() as counts:
+            out = run(*args, **kwargs)
+        iteration.append(counts["total"])
+        return out
+
+    import unittest.mock
+
+    with unittest.mock.patch.object(_bpso_kernels, "swarm_iteration", counted):
+        launches.policy_row("mg-crb-cl", 6, 1)
+    per_iteration = iteration[-1]
+    assert row["compiled_calls"] == 100 and row["fused"] >= 1
+    assert row["act_replayed"] == graph["act_replayed"] - 100 * per_iteration
+    assert row["act"] - row["act_replayed"] == graph["act"] - graph["act_replayed"]

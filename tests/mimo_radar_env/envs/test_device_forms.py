@@ -5,6 +5,7 @@ step, and the CUDA graph's buffers handled as a real graph would hold them (a st
 the same contract)."""
 
 import os
+import warnings
 
 import numpy as np
 import pytest
@@ -292,3 +293,30 @@ def test_a_traced_functions_host_constants_move_to_the_device():
     again = make_fx(function, tracing_mode="fake", _allow_non_fake_inputs=True)(x)
     device_forms.constants_to(again, torch.device("cpu"))  # where they are already: the same function
     torch.testing.assert_close(again(x), function(x), rtol=0, atol=0)
+
+
+def test_a_compiled_function_is_compiled_once_a_signature_and_gives_its_numbers():
+    calls = []
+
+    def scaled(x, *, k):
+        calls.append(k)  # run when traced, not when the compiled code runs
+        return (x * k + 1.0).sum(dim=1)
+
+    compiled = device_forms.CompiledFunction(scaled, "scaling")
+    a, b = torch.arange(6.0).reshape(2, 3), torch.ones(4, 3)
+    for x, k in [(a, 2.0), (a * 3, 2.0), (b, 2.0), (a, 5.0)]:
+        assert torch.equal(compiled(x, k=k), (x * k + 1.0).sum(dim=1))
+    assert len(compiled._compiled) == 3 and calls == [2.0, 2.0, 5.0]  # shapes (2, 3), (4, 3); k=5
+
+
+def test_a_function_that_cannot_be_compiled_runs_as_it_is_with_one_warning():
+    def data_dependent(x):
+        return x * 2.0 if bool(x.sum() > 0) else x  # a host read: no traced form
+
+    compiled = device_forms.CompiledFunction(data_dependent, "doubling")
+    x = torch.arange(3.0)
+    with pytest.warns(RuntimeWarning, match="doubling could not be compiled .*; it runs eagerly"):
+        assert torch.equal(compiled(x), x * 2.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert torch.equal(compiled(-x - 1.0), -x - 1.0)
