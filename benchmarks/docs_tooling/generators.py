@@ -1496,8 +1496,9 @@ def launches_value(docs: Path, key: str) -> str:
     ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), ``trials``, or the
     calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``,
     with the same env's eager operations, ``compiled.eager.FUSION``, and the seconds of the
-    compiled env's first step and of a second one's, ``compiled.compile_s.FUSION`` and
-    ``compiled.again_s.FUSION``; MG-CRB-CL's act in the compiled form, ``compiled-act.FIELD``
+    compiled env's first step, of a second one's and of a new process's,
+    ``compiled.compile_s.FUSION``, ``compiled.again_s.FUSION`` and
+    ``compiled.new_process_s.FUSION``; MG-CRB-CL's act in the compiled form, ``compiled-act.FIELD``
     (FIELD one of :data:`COMPILED_ACT`)."""
     record = read_json(docs, LAUNCHES_FILE)
     if key == "trials":
@@ -1518,10 +1519,11 @@ def launches_value(docs: Path, key: str) -> str:
                 continue
             if kind in ("fused", "library", "eager"):
                 return f"{r[kind]:,}"
-            if kind in ("compile_s", "again_s") and kind in r:
+            if kind in ("compile_s", "again_s", "new_process_s") and kind in r:
                 return f"{r[kind]:.1f}"
         raise BenchError(
-            f"{LAUNCHES_FILE} has no {key!r}: compiled.(fused|library|eager|compile_s|again_s).FUSION"
+            f"{LAUNCHES_FILE} has no {key!r}: "
+            "compiled.(fused|library|eager|compile_s|again_s|new_process_s).FUSION"
         )
     field, _, rest = key.partition(".")
     policy, _, fusion = rest.rpartition(".")

@@ -219,6 +219,7 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
             "eager": 1330,
             "compile_s": 49.44,
             "again_s": 2.16,
+            "new_process_s": 7.71,
         },  # fmt: skip
         {"fusion": "centralized", "trials": 500, "fused": 90, "library": 30, "device": "cuda"},
     ]
@@ -228,6 +229,7 @@ def test_the_compiled_steps_calls_are_read_at_the_rows_trial_count(tmp_path):
     assert generators.launches_value(tmp_path, "compiled.eager.average") == "1,330"
     assert generators.launches_value(tmp_path, "compiled.compile_s.average") == "49.4"
     assert generators.launches_value(tmp_path, "compiled.again_s.average") == "2.2"
+    assert generators.launches_value(tmp_path, "compiled.new_process_s.average") == "7.7"
     for key in ("compiled.fused.centralized", "compiled.loops.average", "compiled.again_s.centralized"):
         with pytest.raises(generators.BenchError, match=r"compiled.\(fused\|library\|eager\|compile_s"):
             generators.launches_value(tmp_path, key)
