@@ -123,13 +123,10 @@ def run_numpy(
     return result
 
 
-#: The swarm's state, in :func:`swarm_iteration`'s order: positions and velocities (B, P, L),
-#: personal bests (B, P, L) and their fitness (B, P), the global best (B, L) and its fitness (B,).
-SWARM_STATE = ("positions", "velocities", "personal_best", "personal_fit", "global_best", "global_fit")
-
-
 class _Swarm:
-    """The particles of every trial still iterating (:data:`SWARM_STATE`), their rows 0..B-1."""
+    """The particles of every trial still iterating, their rows 0..B-1, and their ``state`` in
+    :func:`swarm_iteration`'s order: positions and velocities (B, P, L), personal bests (B, P, L)
+    and their fitness (B, P), the global best (B, L) and its fitness (B,)."""
 
     def __init__(self, positions: NDArray[np.int8], fitness_of: _Fitness) -> None:
         xp = self.xp = namespace(positions)
@@ -177,7 +174,7 @@ def swarm_iteration(
 ) -> tuple[Any, ...]:
     """One iteration, a function of arrays: eq20's velocities (``c1 r1`` and ``c2 r2`` as drawn,
     :class:`_Draws`; ``inertia`` a 0-d array), eq21's positions, then the bests. Returns the new
-    state (:data:`SWARM_STATE`); ``rows`` is 0..B-1, ``fitness_arrays`` and ``counts`` eq19's
+    state, its first six arguments; ``rows`` is 0..B-1, ``fitness_arrays`` and ``counts`` eq19's
     (:func:`fitness`)."""
     xp = namespace(positions)
     velocities = (

@@ -101,10 +101,10 @@ class BPSOSolver(SuperArmSolver):
     (:class:`~mimo_radar_env.envs.device_forms.GraphReplay`): the same kernels, the same numbers,
     every trial running every iteration (a graph's shapes cannot depend on the data). In the
     compiled form (:attr:`device_mode` ``"compiled"``, which an agent takes from its env's
-    ``device_mode``) each iteration (:func:`~._bpso_kernels.swarm_iteration`) is compiled by
-    ``torch.compile`` into a few fused kernels in place of its few dozen
-    (:class:`~mimo_radar_env.envs.device_forms.CompiledFunction`), every trial running every
-    iteration; on CUDA the graph replays those.
+    ``device_mode``) each iteration (:func:`~._bpso_kernels.swarm_iteration`, about fifty
+    operations) runs as the code ``torch.compile`` writes for it, compiled once per batch shape
+    (:class:`~mimo_radar_env.envs.device_forms.CompiledFunction`; one fused loop on the CPU), every
+    trial running every iteration; on CUDA the graph replays its kernels.
     """
 
     name = "bpso"
