@@ -65,13 +65,16 @@ class Command:
 
 @dataclass(frozen=True)
 class CommandEntry:
-    """A registered command: its group in the help, its one-line help, and its class as
-    ``"module:Class"`` (imported by :meth:`load` only when the command runs)."""
+    """A registered command: its group in the help, its one-line help, its class as
+    ``"module:Class"`` (imported by :meth:`load` only when the command runs), and whether it runs
+    tasks on worker processes (``runs_tasks``: a study's ``--workers``, ``--backend`` and
+    ``--device``; their fork server then starts as the command is named, :func:`main`)."""
 
     name: str
     group: str
     help: str
     target: str
+    runs_tasks: bool = False
 
     @property
     def installed(self) -> bool:
@@ -194,19 +197,28 @@ _BUILT_IN = (
         "speed.perf:Perf",
     ),
 )
+#: The built-in commands that run tasks on worker processes (tested against their options).
+_RUNS_TASKS = frozenset(
+    ("paper", "run", "claims", "tracking", "planning", "rl", "ablations")
+    + ("calibrate-layout", "search-layouts")
+)
 #: Every command, by name, in the help's order within its group.
 COMMANDS: dict[str, CommandEntry] = {
-    name: CommandEntry(name, group, help, f"benchmarks.{target}") for name, group, help, target in _BUILT_IN
+    name: CommandEntry(name, group, help, f"benchmarks.{target}", name in _RUNS_TASKS)
+    for name, group, help, target in _BUILT_IN
 }
 
 
-def register_command(name: str, target: str, help: str, group: str = "studies") -> None:
-    """Add a command of one's own (``target``: ``"module:Class"``) to :data:`COMMANDS`."""
+def register_command(
+    name: str, target: str, help: str, group: str = "studies", runs_tasks: bool = False
+) -> None:
+    """Add a command of one's own (``target``: ``"module:Class"``) to :data:`COMMANDS`;
+    ``runs_tasks`` for a study whose tasks run on worker processes (:class:`CommandEntry`)."""
     if group not in GROUPS:
         raise ValueError(f"group must be one of {list(GROUPS)}, got {group!r}")
     if name in COMMANDS and COMMANDS[name].target != target:
         raise ValueError(f"two commands are called {name!r}: {COMMANDS[name].target} and {target}")
-    COMMANDS[name] = CommandEntry(name, group, help, target)
+    COMMANDS[name] = CommandEntry(name, group, help, target, runs_tasks)
 
 
 class OneLineParser(argparse.ArgumentParser):
@@ -341,6 +353,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.path.append(os.getcwd())
     imports, name = _leading(argv)
     _import_modules(imports)
+    if name in COMMANDS and COMMANDS[name].runs_tasks:
+        _start_workers_early(argv)
     parser = build_parser([name] if name in COMMANDS else [])
     args, unknown = parser.parse_known_args(argv)
     if unknown:  # named with the command they were given to, whose --help lists its arguments
@@ -373,6 +387,35 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
         message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
         parser.exit(2, f"{PROG}: error: {message}\n")
     return 0
+
+
+class _EarlyParser(argparse.ArgumentParser):
+    """A first reading of a few options, silent where the full parse will speak."""
+
+    def error(self, message: str) -> None:  # type: ignore[override]
+        raise ValueError(message)
+
+
+def _start_workers_early(argv: list[str]) -> None:
+    """Start the workers' fork server as a command that runs tasks is named, from a first reading
+    of its ``--workers``, ``--backend`` and ``--device`` (:func:`_starts_local_workers`): it imports
+    what a task needs while this process imports the command's module and parses, checks and
+    plans its runs. ``--help``, or an option the first reading cannot read, starts nothing here
+    (:func:`run` starts it after the full parse where it is wanted)."""
+    if "-h" in argv or "--help" in argv:
+        return
+    early = _EarlyParser(add_help=False)
+    early.add_argument("--workers", type=int, default=None)
+    early.add_argument("--backend", default="local")
+    early.add_argument("--device", default=None)
+    try:
+        args, _ = early.parse_known_args(argv)
+    except ValueError:
+        return
+    if _starts_local_workers(args):
+        from .backends import start_fork_server
+
+        start_fork_server(device=args.device is not None)
 
 
 def _starts_local_workers(args: Any) -> bool:

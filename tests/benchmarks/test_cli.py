@@ -383,3 +383,46 @@ def test_the_help_marks_commands_whose_module_is_not_installed(monkeypatch):
     assert "  claims " in listing and f"scorecards side by side ({cli.NOT_INSTALLED})" not in listing
     assert f"  ghost             a command ({cli.NOT_INSTALLED})" in listing
     assert "first steps:\n" in listing and "maintenance:\n" in listing
+
+
+def test_a_command_that_runs_tasks_starts_its_workers_fork_server_before_it_parses(monkeypatch, capsys):
+    """The fork server imports what the workers need while the command imports its module and
+    parses: started as a study is named with local workers, from a first reading of its options,
+    and not for one worker, Ray, --help, an option it cannot read, or a command that runs no tasks."""
+    from benchmarks import backends, cli
+
+    calls = []
+    monkeypatch.setattr(backends, "start_fork_server", lambda device=False: calls.append(("fork", device)))
+    build = cli.build_parser
+    monkeypatch.setattr(cli, "build_parser", lambda *a: calls.append(("parse",)) or build(*a))
+    with pytest.raises(SystemExit):  # the full parse refuses the unknown option: nothing runs
+        main(["claims", "--workers", "2", "--device", "cuda", "--no-such-option"])
+    assert calls[:2] == [("fork", True), ("parse",)]
+    capsys.readouterr()
+    for argv, starts in [
+        (["claims", "--workers", "2"], True),
+        (["claims", "--trials", "9"], True),  # by default, every core (two or more)
+        (["run", "--workers=3", "--backend", "local"], True),
+        (["claims", "--workers", "1"], False),
+        (["claims", "--device", "cpu"], False),  # one worker on a device by default
+        (["claims", "--workers", "2", "--backend", "ray"], False),
+        (["claims", "--workers", "2", "--help"], False),
+        (["claims", "--workers", "two"], False),
+    ]:
+        calls.clear()
+        monkeypatch.setattr(cli.os, "cpu_count", lambda: 2)
+        cli._start_workers_early(argv)
+        assert calls == ([("fork", False)] if starts else []), argv
+    assert capsys.readouterr().err == ""  # the first reading says nothing
+
+
+def test_the_commands_that_run_tasks_are_those_with_a_backend():
+    import argparse
+
+    from benchmarks import cli
+
+    for entry in cli.COMMANDS.values():
+        parser = argparse.ArgumentParser()
+        entry.load().add_arguments(parser)
+        options = {option for action in parser._actions for option in action.option_strings}
+        assert entry.runs_tasks == ("--backend" in options), entry.name
