@@ -44,6 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from benchmarks.metrics import TRIAL_FIELDS
+from mimo_radar_env.core import motion
 
 from .errors import HarnessError
 
@@ -171,7 +172,7 @@ class ShardRecorder:
             "selections": np.zeros((steps, stations)),
             TRUTH_FIELD: np.empty((steps + 1, targets, 2)),
         }
-        self.out[TRUTH_FIELD][0] = host(first_truth[:, [0, 2]])
+        self.out[TRUTH_FIELD][0] = host(motion.positions(first_truth))
         self._pending: list[dict[str, Any]] = []
         self._done = 0
 
@@ -182,7 +183,7 @@ class ShardRecorder:
             "trial_optimal": info["optimal_reward"],
             "trial_matches": self.xp.all(action == info["optimal_action"], axis=1),
             "selections": action.sum(axis=0),
-            TRUTH_FIELD: info["true_state"][0][:, [0, 2]],
+            TRUTH_FIELD: motion.positions(info["true_state"][0]),
         }
         if "position_error" in info:
             values["trial_squared_error"] = info["position_error"] ** 2

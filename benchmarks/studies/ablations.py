@@ -34,6 +34,7 @@ from numpy.typing import NDArray
 
 from benchmarks.metrics import TrialMetrics
 from mimo_radar_env import env_version
+from mimo_radar_env.core import motion
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
 from .. import harness, uncertainty
@@ -166,7 +167,7 @@ def true_super_arm_values(scenario: Any, seed: int, steps: int, options: dict[st
     weights = np.asarray(engine.model.weights, dtype=np.float64)
     values = np.empty((steps, pairs.shape[0]))
     for t in range(steps):
-        mean = engine.model.mean_sinr(engine.simulation.upcoming_state()[..., [0, 2]])  # (1, K, M, N)
+        mean = engine.model.mean_sinr(motion.positions(engine.simulation.upcoming_state()))  # (1, K, M, N)
         values[t] = np.einsum("k,kmn,amn->a", weights, mean[0], pairs)
         env.step(engine.oracle_action())
     return values

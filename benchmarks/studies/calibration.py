@@ -39,6 +39,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import VERSIONS, RadarModel, Scenario, load_scenario
+from mimo_radar_env.core import motion
 from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
@@ -122,7 +123,7 @@ def constraint_check(candidate: Candidate) -> tuple[float, str | None]:
     for sc in scenarios:
         model = RadarModel.from_scenario(sc)
         for k in range(sc.num_targets):
-            distance, _, _ = closest_approach(model.nominal[k][:, [0, 2]], stations)
+            distance, _, _ = closest_approach(motion.positions(model.nominal[k]), stations)
             if distance < MIN_TRACK_DISTANCE:
                 total += (MIN_TRACK_DISTANCE - distance) / MIN_TRACK_DISTANCE
                 reasons.append(f"a station {distance / 1e3:.2f} km from a nominal track of {sc.name}")
@@ -146,7 +147,7 @@ def scan_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], 
     channels on the noise-free track, ``J = sum H_mn' (Sigma0 / lambda_mn)^-1 H_mn`` (eq6,
     eq32): the measurement-only Cramer-Rao bound (m), shape (T+1, K). ``tx``/``rx`` masks
     (T+1, M/N)."""
-    positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)  # (T+1, K, 2)
+    positions = motion.positions(model.nominal).transpose(1, 0, 2)  # (T+1, K, 2)
     variance = model.measurement_variance(model.quality(model.mean_sinr(positions), scale=scale))
     info = channel_information(positions, model.tx, model.rx, variance)  # (T+1, K, M, N, 2, 2)
     selected = (tx[:, :, None] & rx[:, None, :]).astype(float)  # (T+1, M, N)
@@ -168,7 +169,7 @@ def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
             tx[:, list(tx_idx)], rx[:, list(rx_idx)] = True, True
             masks[name] = (tx, rx)
         bound = {p: scan_bound(model, *m, scale) for p, m in masks.items()}
-        positions = model.nominal[:, :, [0, 2]].transpose(1, 0, 2)
+        positions = motion.positions(model.nominal).transpose(1, 0, 2)
         weights = model.channel_weights(model.mean_sinr(positions))  # (T+1, M, N)
 
         def armse(policy: str, a: int = 0, b: int = steps, bound: dict = bound) -> float:

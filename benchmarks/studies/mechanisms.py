@@ -47,6 +47,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import VERSIONS, load_scenario
+from mimo_radar_env.core import motion
 from mimo_radar_env.core.superarm import all_super_arms
 from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 
@@ -116,7 +117,7 @@ def lead_and_sampling_oracles(
     probed_counts = np.zeros((horizon + 1, sc.num_tx, sc.num_rx))
     action = engine.oracle_action()
     for t in range(horizon):
-        upcoming = engine.simulation.upcoming_state()[..., [0, 2]]
+        upcoming = motion.positions(engine.simulation.upcoming_state())
         mean = engine.model.mean_sinr(upcoming)  # (B, K, M, N)
         value = rewards(mean)
         lead[:, t] = leads(value)

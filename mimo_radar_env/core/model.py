@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from ..scenarios import Scenario, ScenarioError, turn_rate_schedule
 from .arrays import NUMPY, NumpyNamespace, TorchNamespace
 from .geometry import squared_range_products
-from .motion import noise_gain, nominal_trajectories, process_covariance, transition_matrix
+from .motion import noise_gain, nominal_trajectories, positions, process_covariance, transition_matrix
 
 #: eq32: the lower end of the measurement-quality factor lambda.
 LAMBDA_FLOOR = 0.2
@@ -188,8 +188,8 @@ def _sinr_extremes(
     highest = np.full(num_targets, -np.inf)
     lowest = np.full(num_targets, np.inf)
     for start in range(0, num_steps, chunk):
-        positions = nominal[:, start : start + chunk][..., [0, 2]]  # (K, c, 2)
-        sinr = raw_gain[:, None] / squared_range_products(positions, tx, rx)
+        where = positions(nominal[:, start : start + chunk])  # (K, c, 2)
+        sinr = raw_gain[:, None] / squared_range_products(where, tx, rx)
         highest = np.maximum(highest, sinr.max(axis=(1, 2, 3)))
         lowest = np.minimum(lowest, sinr.min(axis=(1, 2, 3)))
     return highest, lowest

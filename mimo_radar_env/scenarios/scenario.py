@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from ..core.motion import POSITION, nominal_trajectories, positions, transition_matrix
 from . import validation as check
 from .validation import ScenarioError
 
@@ -229,7 +230,7 @@ class Scenario:
         check.distinct_positions("rx_positions", out["rx_positions"])
         stations = np.concatenate([out["tx_positions"], out["rx_positions"]])
         for k, target in enumerate(out["targets"]):
-            position = target.initial_state[[0, 2]]
+            position = target.initial_state[POSITION]
             if np.any(np.all(np.isclose(stations, position, rtol=0, atol=1e-6), axis=1)):
                 raise ScenarioError(
                     f"targets[{k}].initial_state puts the target on a station at {position.tolist()} m; "
@@ -257,7 +258,7 @@ class Scenario:
         """The scene's size (m): the largest distance between two of its stations and initial
         target positions, at least 1 km. It bounds the noise and uncertainty fields."""
         points = np.concatenate(
-            [self.tx_positions, self.rx_positions, [t.initial_state[[0, 2]] for t in self.targets]]
+            [self.tx_positions, self.rx_positions, [t.initial_state[POSITION] for t in self.targets]]
         )
         spread = np.linalg.norm(points[:, None] - points[None], axis=-1).max()
         return float(max(spread, 1e3))
@@ -296,7 +297,7 @@ class Scenario:
                 raise ScenarioError(f"{name} must be in [{low:.3g}, {high:.3g}] ({unit}), got {value:g}")
         for k, target in enumerate(self.targets):
             where = f"targets[{k}]"
-            position = np.abs(target.initial_state[[0, 2]]).max()
+            position = np.abs(target.initial_state[POSITION]).max()
             if position > MAX_POSITION:
                 raise ScenarioError(
                     f"{where}.initial_state must lie within {MAX_POSITION:g} m of the origin, "
@@ -326,8 +327,6 @@ class Scenario:
 
     def _check_tracks(self) -> None:
         """The noise-free tracks stay finite and at least ``MIN_STATION_DISTANCE`` from every station."""
-        from ..core.motion import nominal_trajectories, positions, transition_matrix
-
         rates = turn_rate_schedule(self)
         with np.errstate(over="ignore", invalid="ignore"):
             nominal = nominal_trajectories(

@@ -8,6 +8,7 @@ from numpy.typing import NDArray
 
 from ..core.arrays import namespace
 from ..core.compiled import HAVE_NUMBA, LazyKernels
+from ..core.motion import POSITION
 from .unscented import MAX_CONDITION, repair_covariance
 
 
@@ -45,7 +46,7 @@ def bound_step(
             return out
     prior, _ = repair_covariance(transition @ covariance @ xp.swapaxes(transition, -1, -2) + process_cov)
     information = xp.linalg.inv(prior)
-    information[..., 0::2, 0::2] += measured
+    information[..., POSITION, POSITION] += measured
     return repair_covariance(xp.linalg.inv(information))[0]
 
 

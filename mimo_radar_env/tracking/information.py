@@ -14,6 +14,7 @@ from numpy.typing import NDArray
 
 from ..core.arrays import namespace
 from ..core.geometry import measurement_jacobian
+from ..core.motion import POSITION
 
 
 def channel_information(
@@ -45,7 +46,7 @@ def det_2x2(a: NDArray[np.float64]) -> NDArray[np.float64]:
 
 def position_determinant(covariance: NDArray[np.float64]) -> NDArray[np.float64]:
     """``det`` of the position block of state covariances (..., 4, 4) (``[x, vx, y, vy]``)."""
-    return det_2x2(covariance[..., 0::2, 0::2])
+    return det_2x2(covariance[..., POSITION, POSITION])
 
 
 def inverse_2x2(a: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:

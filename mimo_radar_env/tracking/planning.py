@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from ..core.motion import position_block
+from ..core.motion import POSITION, position_block
 from ..core.superarm import all_super_arms, super_arm_count
 from .fusion import fusion_class
 from .information import inverse_2x2
@@ -102,7 +102,7 @@ def posterior_covariance(
     channel's gain)."""
     selected = (tx_mask[:, :, None] & rx_mask[:, None, :]).astype(np.float64)  # (S, M, N)
     gain = fusion_class(fusion).planning_gain(information, position_block(covariance), selected)
-    cross = covariance[..., :, 0::2]  # P E: (S, K, 4, 2)
+    cross = covariance[..., :, POSITION]  # P E: (S, K, 4, 2)
     return covariance - cross @ gain @ np.swapaxes(cross, -1, -2)
 
 
