@@ -132,6 +132,12 @@ def code_calls(code: str) -> dict[str, int]:
     return {"fused": len(fused), "library": len(library)}
 
 
+def total_calls(codes: list[str]) -> dict[str, int]:
+    """:func:`code_calls` summed over the modules inductor wrote."""
+    calls = [code_calls(code) for code in codes]
+    return {kind: sum(c[kind] for c in calls) for kind in ("fused", "library")}
+
+
 #: A new process's first compiled step (seconds, printed last), inductor's caches as this one's.
 FIRST_STEP = """
 import time, gymnasium as gym, mimo_radar_env
@@ -180,10 +186,9 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
     first_step = FIRST_STEP.format(trials=trials, scenario=SCENARIO, fusion=fusion, device=device)
     run = subprocess.run([sys.executable, "-c", first_step], capture_output=True, text=True, check=True)
     new_process_s = float(run.stdout.split()[-1])
-    calls = [code_calls(code) for code in codes]
-    counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
-    return {"fusion": fusion, "trials": trials, "device": device, **counts, "eager": operations["total"],
-            "compile_s": compile_s, "again_s": again_s, "new_process_s": new_process_s}  # fmt: skip
+    return {"fusion": fusion, "trials": trials, "device": device, **total_calls(codes),
+            "eager": operations["total"], "compile_s": compile_s, "again_s": again_s,
+            "new_process_s": new_process_s}  # fmt: skip
 
 
 def compiled_act_row(trials: int, device: str = "cpu") -> dict[str, Any]:
@@ -207,10 +212,8 @@ def compiled_act_row(trials: int, device: str = "cpu") -> dict[str, Any]:
     episode.step()
     with counting() as act:
         agent.act(episode.obs)
-    calls = [code_calls(code) for code in codes]
-    counts = {k: sum(c[k] for c in calls) for k in ("fused", "library")}
-    return {"policy": "mg-crb-cl", "trials": trials, "device": device, **counts, "compile_s": compile_s,
-            "act": act["total"], "act_replayed": act["replayed"],
+    return {"policy": "mg-crb-cl", "trials": trials, "device": device, **total_calls(codes),
+            "compile_s": compile_s, "act": act["total"], "act_replayed": act["replayed"],
             "compiled_calls": act["compiled"]}  # fmt: skip
 
 

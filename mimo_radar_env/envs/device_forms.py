@@ -33,10 +33,10 @@ if TYPE_CHECKING:
 #: The forms of the torch step (:mod:`.device_forms`); ``"eager"`` is the reference.
 DEVICE_MODES = ("eager", "graph", "compiled")
 
-#: inductor's options for the compiled step: eager's numerics where its Triton kernels would
+#: inductor's options for what it compiles: eager's numerics where its Triton kernels would
 #: depart from them on CUDA (no fused multiply-adds, PyTorch's libdevice, IEEE float32 division;
-#: its C++ loops on the CPU contract nothing already), with ``mode="reduce-overhead"``'s CUDA
-#: graphs there.
+#: its C++ loops on the CPU contract nothing already). The compiled step adds
+#: ``mode="reduce-overhead"``'s CUDA graphs on CUDA; a :class:`CompiledFunction` adds none.
 COMPILE_OPTIONS = {"emulate_precision_casts": True, "eager_numerics.division_rounding": True}
 
 
@@ -235,7 +235,7 @@ class GraphReplay:
     def __call__(self, *args: Any) -> Any:
         if args[0].device.type != self.capture_on:
             return self.function(*args)
-        key = tuple((tuple(a.shape), a.dtype, a.device) for a in args)
+        key = _signature(args)
         if key not in self._graphs:
             self._graphs[key] = self._capture(args)
         entry = self._graphs[key]
@@ -273,7 +273,7 @@ class CompiledFunction:
         self._compiled: dict[tuple[Any, ...], Any] = {}
 
     def __call__(self, *args: Any, **constants: Any) -> Any:
-        key = (tuple((tuple(a.shape), a.dtype, a.device) for a in args), tuple(sorted(constants.items())))
+        key = (_signature(args), tuple(sorted(constants.items())))
         compiled = self._compiled.get(key)
         if compiled is False:
             return self.function(*args, **constants)
@@ -300,6 +300,11 @@ class CompiledFunction:
 
         traced = make_fx(lambda *a: self.function(*a, **constants), tracing_mode="fake")(*args)
         return torch.compile(traced, options=COMPILE_OPTIONS, dynamic=False)
+
+
+def _signature(args: tuple[Any, ...]) -> tuple[Any, ...]:
+    """The shapes, dtypes and devices of tensors: what a graph or a compiled function is made for."""
+    return tuple((tuple(a.shape), a.dtype, a.device) for a in args)
 
 
 def _named(error: Exception) -> str:
