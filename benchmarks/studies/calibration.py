@@ -147,7 +147,7 @@ def scan_bound(model: RadarModel, tx: NDArray[np.bool_], rx: NDArray[np.bool_], 
     channels on the noise-free track, ``J = sum H_mn' (Sigma0 / lambda_mn)^-1 H_mn`` (eq6,
     eq32): the measurement-only Cramer-Rao bound (m), shape (T+1, K). ``tx``/``rx`` masks
     (T+1, M/N)."""
-    positions = motion.positions(model.nominal).transpose(1, 0, 2)  # (T+1, K, 2)
+    positions = model.nominal_positions  # (T+1, K, 2)
     variance = model.measurement_variance(model.quality(model.mean_sinr(positions), scale=scale))
     info = channel_information(positions, model.tx, model.rx, variance)  # (T+1, K, M, N, 2, 2)
     selected = (tx[:, :, None] & rx[:, None, :]).astype(float)  # (T+1, M, N)
@@ -169,8 +169,7 @@ def noise_free_checks(candidate: Candidate, scale: str) -> dict[str, bool]:
             tx[:, list(tx_idx)], rx[:, list(rx_idx)] = True, True
             masks[name] = (tx, rx)
         bound = {p: scan_bound(model, *m, scale) for p, m in masks.items()}
-        positions = motion.positions(model.nominal).transpose(1, 0, 2)
-        weights = model.channel_weights(model.mean_sinr(positions))  # (T+1, M, N)
+        weights = model.nominal_channel_weights()  # (T+1, M, N)
 
         def armse(policy: str, a: int = 0, b: int = steps, bound: dict = bound) -> float:
             return float(bound[policy][a:b].mean(axis=0).mean())

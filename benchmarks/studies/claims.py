@@ -25,7 +25,6 @@ from numpy.typing import NDArray
 
 from benchmarks.metrics import TrialMetrics
 from mimo_radar_env import Scenario, env_version
-from mimo_radar_env.core import motion
 from mimo_radar_env.envs.versions import SCENARIO_SETS, paper_key
 
 from .. import uncertainty, verdicts
@@ -670,8 +669,7 @@ def noise_free_best(model: Any) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     """Best's TX and RX masks (T+1, M), (T+1, N) on the noise-free tracks of a :class:`RadarModel`."""
     from mimo_radar_env.core.superarm import best_super_arm
 
-    positions = motion.positions(model.nominal).transpose(1, 0, 2)  # (T+1, K, 2)
-    weights = model.channel_weights(model.mean_sinr(positions))
+    weights = model.nominal_channel_weights()
     tx, rx, _ = best_super_arm(weights, model.scenario.tx_per_step, model.scenario.rx_per_step)
     return tx, rx
 

@@ -33,7 +33,6 @@ from numpy.typing import NDArray
 from scipy.optimize import differential_evolution
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
-from mimo_radar_env.core import motion
 
 from .. import harness
 from ..errors import BenchError
@@ -90,8 +89,7 @@ def violation(candidate: calibration.Candidate) -> float:
 def median_lead(model: RadarModel) -> float:
     """The median over the noise-free track's steps of the best super arm's lead over the second
     (best / second - 1)."""
-    positions = motion.positions(model.nominal).transpose(1, 0, 2)
-    weights = model.channel_weights(model.mean_sinr(positions))  # (T+1, M, N)
+    weights = model.nominal_channel_weights()  # (T+1, M, N)
     value = np.einsum("tmn,amn->ta", weights, mechanisms.super_arm_channels(model.scenario))
     return float(np.median(mechanisms.leads(value)))
 
@@ -108,8 +106,7 @@ def predictors(candidate: calibration.Candidate, scale: str = "db") -> dict[str,
         model = RadarModel.from_scenario(sc)
         leads[sc.name] = median_lead(model)
         if number == 2:
-            positions = motion.positions(model.nominal).transpose(1, 0, 2)
-            weights = model.channel_weights(model.mean_sinr(positions))
+            weights = model.nominal_channel_weights()
             for name, (tx_idx, rx_idx) in PAPER_FIXED.items():
                 value = weights[:, list(tx_idx)][:, :, list(rx_idx)].sum(axis=(1, 2))
                 checks[f"S2.2 {name} SINR 400-500 s < 300-400 s"] = bool(

@@ -134,6 +134,16 @@ class RadarModel:
             return self.transitions[:, step]
         return xp.broadcast_to(self.straight, (self.num_targets, 4, 4))
 
+    @property
+    def nominal_positions(self) -> NDArray[np.float64]:
+        """The targets' noise-free positions at each step, (T+1, K, 2)."""
+        return self.xp.moveaxis(positions(self.nominal), 1, 0)
+
+    def nominal_channel_weights(self) -> NDArray[np.float64]:
+        """Each channel's expected reward on the noise-free tracks (:meth:`channel_weights` at
+        :attr:`nominal_positions`), (T+1, M, N)."""
+        return self.channel_weights(self.mean_sinr(self.nominal_positions))
+
     # ---------------------------------------------------------- physics
     def mean_sinr(self, positions: NDArray[np.float64]) -> NDArray[np.float64]:
         """Mean SINR ``S[k, m, n]`` (eq5) for positions (..., K, 2): shape (..., K, M, N)."""

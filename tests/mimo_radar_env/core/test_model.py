@@ -60,3 +60,19 @@ def test_constant_puts_the_peak_at_ten():
         sinr = model.mean_sinr(nominal)
         np.testing.assert_allclose(sinr.max(), 10.0, rtol=1e-12)
         np.testing.assert_allclose(sinr.min(axis=(0, 2, 3)), model.min_sinr, rtol=1e-12)
+
+
+def test_the_nominal_tracks_and_their_channel_weights_follow_the_formulas():
+    """paper-1's one target moves straight (NCV): its nominal positions are x0 + v t at every
+    step, and each channel's nominal weight is Omega S (eq5) there."""
+    scenario = load_scenario("paper-1")
+    model = RadarModel.from_scenario(scenario)
+    x0 = scenario.targets[0].initial_state
+    t = np.arange(scenario.horizon + 1)
+    track = np.stack([x0[0] + x0[1] * t, x0[2] + x0[3] * t], axis=-1)[:, None]  # (T+1, 1, 2)
+    np.testing.assert_allclose(model.nominal_positions, track, rtol=1e-12)
+    steps = range(0, scenario.horizon + 1, 50)
+    expected = [
+        scenario.weights[0] * spec_mean_sinr(scenario, model.sinr_constant, track[i])[0] for i in steps
+    ]
+    np.testing.assert_allclose(model.nominal_channel_weights()[steps], expected, rtol=1e-12)
