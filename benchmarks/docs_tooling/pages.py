@@ -29,6 +29,7 @@ from __future__ import annotations
 import argparse
 import difflib
 import re
+from collections.abc import Callable
 from pathlib import Path
 
 from ..cli import Command
@@ -81,7 +82,7 @@ def render(text: str, docs: Path) -> str:
         name = match.group(2)
         if name not in GENERATORS:
             raise BenchError(f"no generator called {name!r}; known: {sorted(GENERATORS)}")
-        body = GENERATORS[name](docs).rstrip("\n") + "\n"
+        body = _read(lambda: GENERATORS[name](docs), f"the generated block {name!r}").rstrip("\n") + "\n"
         return match.group(1) + body + match.group(4)
 
     coded = CODED_VALUE.search(text)
@@ -95,9 +96,18 @@ def render(text: str, docs: Path) -> str:
         source, key = match.group(2), match.group(3)
         if source not in VALUE_SOURCES:
             raise BenchError(f"no value source called {source!r}; known: {sorted(VALUE_SOURCES)}")
-        return match.group(1) + VALUE_SOURCES[source](docs, key) + match.group(5)
+        value = _read(lambda: VALUE_SOURCES[source](docs, key), f"the value {source} {key}")
+        return match.group(1) + value + match.group(5)
 
     return VALUE.sub(quote, BLOCK.sub(fill, text))
+
+
+def _read(make: Callable[[], str], what: str) -> str:
+    """``make()``, an artefact it reads and cannot find named in one line."""
+    try:
+        return make()
+    except FileNotFoundError as exc:
+        raise BenchError(f"{what} reads {exc.filename}, which is not there") from None
 
 
 def pages(docs: Path) -> list[Path]:
@@ -109,10 +119,15 @@ def pages(docs: Path) -> list[Path]:
 def regenerate(docs: Path, check: bool = False) -> list[str]:
     """Rewrite every page's blocks (or, with ``check``, only compare); the differences found,
     as unified diffs (empty when the pages match the artefacts)."""
-    differences = []
-    for page in pages(docs):
+    rendered = []
+    for page in pages(docs):  # every page rendered before any is written
         old = page.read_text()
-        new = render(old, docs)
+        try:
+            rendered.append((page, old, render(old, docs)))
+        except BenchError as exc:
+            raise BenchError(f"{page}: {exc}") from None
+    differences = []
+    for page, old, new in rendered:
         if new != old:
             diff = difflib.unified_diff(
                 old.splitlines(),
@@ -154,6 +169,11 @@ class DocsCommand(Command):
         docs = Path(self.args.docs)
         if not docs.is_dir():
             raise BenchError(f"--docs {docs} is not a folder")
+        if not (docs / "results").is_dir():
+            raise BenchError(
+                f"--docs {self.args.docs!r} is not a docs folder: it has no results/ folder of the artefacts "
+                "its pages are generated from (the project's is docs/, in a source checkout)"
+            )
         differences = regenerate(docs, check=self.args.check)
         if self.args.check and differences:
             print("\n\n".join(differences))

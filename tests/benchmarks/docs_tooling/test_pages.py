@@ -39,10 +39,40 @@ def test_a_changed_artefact_number_fails_the_check(tmp_path, capsys):
 
 
 def test_an_unknown_generator_is_named(tmp_path, capsys):
+    (tmp_path / "results").mkdir()
     (tmp_path / "page.md").write_text("<!-- generated: no-such-table -->\nx\n<!-- end generated -->\n")
     with pytest.raises(SystemExit) as exit_info:
         main(["docs", "--docs", str(tmp_path), "--check"])
     assert exit_info.value.code == 2 and "no generator called 'no-such-table'" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("folder", ["", "plain"])
+def test_a_folder_with_no_artefacts_is_refused_in_one_line(tmp_path, capsys, monkeypatch, folder):
+    """``--docs ''`` is the current folder: a checkout's root, with the README's generated blocks
+    and no artefacts beside them."""
+    shutil.copy(DOCS.parent / "README.md", tmp_path / "README.md")
+    (tmp_path / "plain").mkdir()
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(SystemExit) as exit_info:
+        main(["docs", "--docs", folder, "--check"])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and err.count("\n") == 1
+    assert f"--docs {folder!r} is not a docs folder: it has no results/ folder" in err
+
+
+def test_a_missing_artefact_is_named_with_its_page_and_no_page_is_written(tmp_path, capsys):
+    docs = tmp_path / "docs"
+    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
+    (docs / "results" / "perf" / "ray.json").unlink()
+    first = docs / "agents.md"  # rendered before the page that reads the missing artefact
+    first.write_text(first.read_text().replace("<!-- end generated -->", "stale\n<!-- end generated -->", 1))
+    stale = first.read_text()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["docs", "--docs", str(docs)])
+    err = capsys.readouterr().err
+    assert exit_info.value.code == 2 and err.count("\n") == 1 and "Traceback" not in err
+    assert "benchmark.md:" in err and "ray.json" in err  # the first page that reads it
+    assert first.read_text() == stale  # nothing written before the refusal
 
 
 def test_prose_numbers_need_an_artefact(tmp_path, capsys):
