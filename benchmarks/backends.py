@@ -34,11 +34,23 @@ class _ExitsAtOnce:
 
     def run(self) -> None:
         super().run()  # type: ignore[misc]
-        multiprocessing.util._run_finalizers(0)
-        for stream in (sys.stdout, sys.stderr):
-            if stream is not None:
-                stream.flush()
-        os._exit(0)
+        _exit_at_once(0)
+
+
+def _exit_at_once(code: int) -> None:
+    """This worker's end without the interpreter's teardown: multiprocessing's clean-up first
+    (the named semaphore numba makes as it starts its threads in a forked worker, which the
+    resource tracker would otherwise report leaked), its output flushed."""
+    multiprocessing.util._run_finalizers(0)
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.flush()
+    os._exit(code)
+
+
+def _stop(signum: int, frame: Any) -> None:
+    """A worker's SIGTERM (:meth:`WorkerPool.terminate`: an interrupted run): out at once, cleanly."""
+    _exit_at_once(128 + signum)
 
 
 class _ForkedWorker(_ExitsAtOnce, multiprocessing.context.ForkServerProcess):
@@ -113,9 +125,11 @@ _ENTRY: int | None = None
 
 def worker_init(threads: int = 1, budget: Any = None) -> None:
     """Worker set-up: ``threads`` compute threads for the compiled kernels, the run's shared
-    thread ``budget``, SIGINT left to the parent, exit when the parent dies."""
+    thread ``budget``, SIGINT left to the parent, a clean exit on SIGTERM, exit when the parent
+    dies."""
     global _BASE_THREADS, _BUDGET
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop)
     pin_threads(threads)
     _BASE_THREADS, _BUDGET = threads, budget
 

@@ -5,6 +5,7 @@ import os
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -173,6 +174,36 @@ def test_a_worker_skips_the_interpreters_teardown_but_not_its_output(capfd, monk
     assert sorted(capfd.readouterr().out.split("-")[:2]) == ["one", "two"]
     assert len(results) == 2 and multiprocessing.active_children() == []
     assert backends._CONTEXT.Process.run is backends._ExitsAtOnce.run
+
+
+def _semaphores(_):
+    """This worker's named semaphores (numba's, made as the pool started its threads)."""
+    import multiprocessing.util
+    from multiprocessing.synchronize import SemLock
+
+    names = [
+        f._args[0]
+        for f in multiprocessing.util._finalizer_registry.values()
+        if f._callback == SemLock._cleanup
+    ]
+    return {"pid": os.getpid(), "names": names}
+
+
+@pytest.mark.skipif(not Path("/dev/shm").is_dir(), reason="named semaphores as files of /dev/shm (Linux)")
+def test_a_terminated_worker_removes_its_named_semaphores():
+    """An interrupted run terminates its workers (SIGTERM): each runs multiprocessing's clean-up
+    before it exits, so no semaphore is left for the resource tracker to report leaked (a second
+    line after the run's one-line message)."""
+    with backends.worker_pool(1, threads=2) as pool:
+        seen = pool.submit(_semaphores, None).result()
+        assert seen["names"], "the worker made no named semaphore: nothing to check"
+        assert all(Path(f"/dev/shm/sem.{name.lstrip('/')}").exists() for name in seen["names"])
+        pool.terminate()
+        end = time.monotonic() + 20
+        while time.monotonic() < end and _running(seen["pid"]):
+            time.sleep(0.05)
+        assert not _running(seen["pid"])
+        assert not any(Path(f"/dev/shm/sem.{name.lstrip('/')}").exists() for name in seen["names"])
 
 
 @pytest.mark.parametrize("context", ["_ForkServerContext", "_SpawnContext"])
