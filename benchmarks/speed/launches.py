@@ -157,8 +157,9 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
     of the same env's eager step (its third, counted as :func:`policy_row` counts); with the
     seconds of the compiled env's first step (``compile_s``: it traces and compiles) and of a
     second compiled env's of the same options in this process (``again_s``: what a study's next
-    policy pays, inductor's caches warm) and in a new process (``new_process_s``: what each worker
-    of a study pays, inductor's caches on disk warm; it traces the step again)."""
+    policy pays: it traces its step, finds the first env's function and runs its compiled step)
+    and in a new process (``new_process_s``: what each worker of a study pays, inductor's caches
+    on disk warm; it traces the step again)."""
     import gymnasium as gym
     from torch._inductor.utils import run_and_get_code
 

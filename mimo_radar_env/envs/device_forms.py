@@ -7,7 +7,9 @@
   (:meth:`RadarEngine.state_slots`) and the actions. On CUDA it is captured as one CUDA graph and
   replayed at every step; on the CPU the traced function runs.
 * ``"compiled"`` runs the traced function through ``torch.compile`` (on CUDA with
-  ``mode="reduce-overhead"``'s CUDA graphs, and eager's numerics: :data:`COMPILE_OPTIONS`).
+  ``mode="reduce-overhead"``'s CUDA graphs, and eager's numerics: :data:`COMPILE_OPTIONS`),
+  once per process for every env whose step traces to the same function (the same code and
+  constants: a study's policies on one scenario).
 
 The step is the eager code itself, traced: no second copy of the model. The host reads one
 boolean per step, whether every deferred check passed; where one failed, the step is undone and
@@ -47,6 +49,12 @@ def check_device_mode(device_mode: Any, device: Any = "torch") -> None:
         raise ValueError(f"device_mode must be one of {', '.join(DEVICE_MODES)}; got {device_mode!r}")
     if device_mode != "eager" and device is None:
         raise ValueError(f"device_mode={device_mode!r} runs on torch: give a device ('cpu', 'cuda')")
+
+
+#: This process's compiled steps by what they compute (:func:`_fingerprint`): an env whose step
+#: traces to an earlier env's function (the same scenario, options, trials, device and precision,
+#: whatever its seed or agent) runs that env's compiled step rather than compiling it again.
+_COMPILED_STEPS: dict[tuple[Any, ...], Any] = {}
 
 
 class TracedStep:
@@ -94,8 +102,11 @@ class TracedStep:
         if self.mode == "compiled":
             import torch
 
-            options = {**COMPILE_OPTIONS, "triton.cudagraphs": self.cuda}
-            return torch.compile(traced, options=options, dynamic=False)
+            key = (_fingerprint(traced), self.cuda)
+            if key not in _COMPILED_STEPS:
+                options = {**COMPILE_OPTIONS, "triton.cudagraphs": self.cuda}
+                _COMPILED_STEPS[key] = torch.compile(traced, options=options, dynamic=False)
+            return _COMPILED_STEPS[key]
         return traced
 
     # ------------------------------------------------------------------ a step
@@ -319,6 +330,26 @@ def _cloned(outputs: Any) -> Any:
     import torch
 
     return torch.utils._pytree.tree_map(lambda a: a.clone(), outputs)
+
+
+def _fingerprint(traced: Any) -> tuple[Any, ...]:
+    """What a traced function computes: its code and every tensor constant it reads (name,
+    dtype, shape, device and values). Two functions with the same fingerprint are the same
+    function of their arguments."""
+    import hashlib
+
+    import torch
+
+    constants = []
+    for node in traced.graph.nodes:
+        if node.op == "get_attr":
+            value = getattr(traced, node.target)
+            if not isinstance(value, torch.Tensor):  # a traced sub-function: this trace's own
+                return (traced,)
+            values = value.detach().cpu().contiguous().numpy().tobytes()
+            digest = hashlib.sha256(values).hexdigest()
+            constants.append((node.target, str(value.dtype), tuple(value.shape), str(value.device), digest))
+    return traced.code, tuple(constants)
 
 
 def constants_to(traced: Any, device: Any) -> None:

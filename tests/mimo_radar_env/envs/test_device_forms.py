@@ -214,6 +214,7 @@ def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkey
 
     calls = []
     monkeypatch.setattr(torch, "compile", lambda fn, **kwargs: calls.append(kwargs) or fn)
+    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", {})
     engine = _engine("v1", "average", 2, "compiled")
     engine.reset_from_keys(_keys(2))
     state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
@@ -226,6 +227,46 @@ def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkey
     assert device_forms.COMPILE_OPTIONS["emulate_precision_casts"]
     with inductor.config.patch(device_forms.COMPILE_OPTIONS):  # an unknown option raises here
         assert inductor.config.emulate_precision_casts and inductor.config.eager_numerics.division_rounding
+
+
+def test_engines_whose_steps_trace_alike_share_one_compiled_step(monkeypatch):
+    """A study's policies, one engine each, on one scenario: the second engine's step traces to
+    the first's function (another seed, the same code and constants) and runs its compiled step,
+    with its own numbers; another fusion, or other station positions of the same sizes (other
+    constants), compiles its own. A stand-in compile counts (the traced function runs as it is)."""
+    compiled = []
+    monkeypatch.setattr(torch, "compile", lambda fn, **kwargs: compiled.append(fn) or fn)
+    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", {})
+    scenario = load_scenario(VERSIONS["v1"].default_scenario)
+    moved = scenario.replace(tx_positions=scenario.tx_positions + 1.0)
+    actions = torch.as_tensor(
+        random_super_arms(
+            np.random.default_rng(2),
+            3,
+            scenario.num_tx,
+            scenario.num_rx,
+            scenario.tx_per_step,
+            scenario.rx_per_step,
+        ),
+        device=DEVICE,
+    )
+
+    def stepped(mode, fusion="average", seed=0, sc=scenario):
+        options = VERSIONS["v1"].options(fusion=fusion)
+        engine = RadarEngine(options, sc, batch_size=3, device=DEVICE, device_mode=mode)
+        engine.reset_from_keys(_keys(3, seed=seed))
+        return engine, [engine.step(actions)[1] for _ in range(2)]
+
+    first, _ = stepped("compiled")
+    second, rewards = stepped("compiled", seed=7)
+    assert len(compiled) == 1 and second._forms._function is first._forms._function
+    for ours, eager in zip(rewards, stepped("eager", seed=7)[1], strict=True):
+        assert torch.equal(ours, eager)
+    stepped("compiled", fusion="centralized")
+    assert len(compiled) == 2
+    elsewhere, _ = stepped("compiled", sc=moved)
+    assert len(compiled) == 3
+    assert elsewhere._forms._function.code == first._forms._function.code  # only the constants differ
 
 
 def test_a_step_that_cannot_be_captured_runs_traced_with_a_warning(monkeypatch):
