@@ -38,8 +38,8 @@ from .generators import GENERATORS, VALUE_SOURCES, forget_values
 
 BLOCK = re.compile(r"(<!-- generated: ([\w.-]+) -->\n)(.*?)(<!-- end generated -->)", re.DOTALL)
 VALUE = re.compile(r"(<!-- value: ([\w.-]+) ([\w.+-]+) -->)(.*?)(<!-- end value -->)")
-#: A value span opened inside a code span (Markdown shows a code span's comments as text).
-CODED_VALUE = re.compile(r"`<!-- value: [\w.-]+ [\w.+-]+ -->[^`\n]*`")
+#: A value span's opening comment, as it may stand inside a code span.
+VALUE_OPENING = re.compile(r"<!-- value: [\w.-]+ [\w.+-]+ -->")
 #: Numbers shaped like measurements; a match outside a generated block or value span is unsourced.
 MEASUREMENT = re.compile(
     r"(?<![\w.])(?:"
@@ -73,6 +73,27 @@ def unsourced_numbers(text: str) -> list[tuple[int, str]]:
     return [(text.count("\n", 0, match.start()) + 1, match.group(0)) for match in MEASUREMENT.finditer(text)]
 
 
+def coded_values(text: str) -> list[str]:
+    """The code spans of ``text`` that hold a value span, where the page would show its comments as
+    text. A code span is CommonMark's: a run of backticks closed by the next run of the same
+    length in its paragraph."""
+    found = []
+    for paragraph in re.split(r"\n[ \t]*\n", text):
+        runs = list(re.finditer(r"`+", paragraph))
+        opening = 0
+        while opening < len(runs):
+            length = len(runs[opening].group())
+            closing = next((k for k in range(opening + 1, len(runs)) if len(runs[k].group()) == length), None)
+            if closing is None:  # literal backticks
+                opening += 1
+                continue
+            span = paragraph[runs[opening].start() : runs[closing].end()]
+            if VALUE_OPENING.search(span):
+                found.append(span)
+            opening = closing + 1
+    return found
+
+
 def render(text: str, docs: Path) -> str:
     """``text`` with every generated block and value span filled from the artefacts; an unknown
     generator, value source or key is an error."""
@@ -85,10 +106,10 @@ def render(text: str, docs: Path) -> str:
         body = _read(lambda: GENERATORS[name](docs), f"the generated block {name!r}").rstrip("\n") + "\n"
         return match.group(1) + body + match.group(4)
 
-    coded = CODED_VALUE.search(text)
+    coded = coded_values(text)
     if coded:
         raise BenchError(
-            f"a value span inside a code span shows its comments on the page: {coded.group(0)!r} "
+            f"a value span inside a code span shows its comments on the page: {coded[0]!r} "
             "(let the value carry its backticks)"
         )
 

@@ -98,3 +98,19 @@ def test_prose_numbers_need_an_artefact(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "model.md:" in out and "'12.5 s' is quoted without an artefact" in out
     assert "1 number(s) in prose rest on no artefact" in out
+
+
+def test_a_value_span_anywhere_inside_a_code_span_is_found():
+    """The page would show its comments as text: the span in the middle of a command line, as
+    three of performance.md's did, is found; a value that carries its own backticks, a span between
+    two code spans, and backticks left unpaired in their paragraph are not code around a span."""
+    from benchmarks.docs_tooling.pages import coded_values
+
+    span = "<!-- value: across x.first -->abc<!-- end value -->"
+    inside = f"(`python -m tool {span} --key k`)"
+    assert coded_values(inside) == [inside[1:-1]]
+    assert coded_values(f"``a ` {span} ``") == [f"``a ` {span} ``"]  # a longer run closes it
+    carried = "<!-- value: across x.command -->`python -m tool`<!-- end value -->"
+    assert coded_values(f"running {carried}, then `b` and {span} and `c`") == []
+    assert coded_values(f"one ` here\n\nand {span} and ` there") == []  # two paragraphs: no pair
+    assert coded_values("`<!-- value: <source> <key> -->...<!-- end value -->`") == []  # the syntax, shown
