@@ -115,7 +115,6 @@ def _alive(pid):
 BIG_RUN = ["paper", "--scenario", "3", "--trials", "40", "--steps", "300", "--shard-size", "5"]
 
 
-@pytest.mark.slow
 def test_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_path):
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out), start_new_session=True)
@@ -137,7 +136,6 @@ def test_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_pat
     assert "not valid" not in out_text + err and kept >= 1
 
 
-@pytest.mark.slow
 def test_workers_exit_when_their_parent_is_killed(tmp_path):
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out))
