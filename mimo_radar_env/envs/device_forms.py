@@ -25,6 +25,7 @@ form), which a graph replays in turn.
 from __future__ import annotations
 
 import warnings
+from collections import OrderedDict
 from typing import TYPE_CHECKING, Any
 
 from ..core.arrays import all_passed, deferred_checks
@@ -51,10 +52,13 @@ def check_device_mode(device_mode: Any, device: Any = "torch") -> None:
         raise ValueError(f"device_mode={device_mode!r} runs on torch: give a device ('cpu', 'cuda')")
 
 
-#: This process's compiled steps by what they compute (:func:`_fingerprint`): an env whose step
-#: traces to an earlier env's function (the same scenario, options, trials, device and precision,
-#: whatever its seed or agent) runs that env's compiled step rather than compiling it again.
-_COMPILED_STEPS: dict[tuple[Any, ...], Any] = {}
+#: This process's latest compiled steps by what they compute (:func:`_fingerprint`): an env whose
+#: step traces to an earlier env's function (the same scenario, options, trials, device and
+#: precision, whatever its seed or agent) runs that env's compiled step rather than compiling it
+#: again. The last :data:`COMPILED_STEPS_KEPT` are kept (each holds its code, constants and, on
+#: CUDA, its graphs' memory).
+_COMPILED_STEPS: OrderedDict[tuple[Any, ...], Any] = OrderedDict()
+COMPILED_STEPS_KEPT = 8
 
 
 class TracedStep:
@@ -106,6 +110,9 @@ class TracedStep:
             if key not in _COMPILED_STEPS:
                 options = {**COMPILE_OPTIONS, "triton.cudagraphs": self.cuda}
                 _COMPILED_STEPS[key] = torch.compile(traced, options=options, dynamic=False)
+                while len(_COMPILED_STEPS) > COMPILED_STEPS_KEPT:
+                    _COMPILED_STEPS.popitem(last=False)
+            _COMPILED_STEPS.move_to_end(key)
             return _COMPILED_STEPS[key]
         return traced
 
@@ -338,15 +345,14 @@ def _fingerprint(traced: Any) -> tuple[Any, ...]:
     function of their arguments."""
     import hashlib
 
-    import torch
-
     constants = []
     for node in traced.graph.nodes:
         if node.op == "get_attr":
             value = getattr(traced, node.target)
-            if not isinstance(value, torch.Tensor):  # a traced sub-function: this trace's own
+            try:  # a traced sub-function, or a dtype numpy lacks: this trace's own
+                values = value.detach().cpu().contiguous().numpy().tobytes()
+            except (AttributeError, TypeError):
                 return (traced,)
-            values = value.detach().cpu().contiguous().numpy().tobytes()
             digest = hashlib.sha256(values).hexdigest()
             constants.append((node.target, str(value.dtype), tuple(value.shape), str(value.device), digest))
     return traced.code, tuple(constants)

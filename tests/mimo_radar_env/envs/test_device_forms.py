@@ -214,7 +214,7 @@ def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkey
 
     calls = []
     monkeypatch.setattr(torch, "compile", lambda fn, **kwargs: calls.append(kwargs) or fn)
-    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", {})
+    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", device_forms.OrderedDict())
     engine = _engine("v1", "average", 2, "compiled")
     engine.reset_from_keys(_keys(2))
     state = [getattr(owner, name).contiguous() for owner, name in engine.state_slots()]
@@ -233,10 +233,12 @@ def test_engines_whose_steps_trace_alike_share_one_compiled_step(monkeypatch):
     """A study's policies, one engine each, on one scenario: the second engine's step traces to
     the first's function (another seed, the same code and constants) and runs its compiled step,
     with its own numbers; another fusion, or other station positions of the same sizes (other
-    constants), compiles its own. A stand-in compile counts (the traced function runs as it is)."""
+    constants), compiles its own; the latest few are kept. A stand-in compile counts (the traced
+    function runs as it is)."""
     compiled = []
     monkeypatch.setattr(torch, "compile", lambda fn, **kwargs: compiled.append(fn) or fn)
-    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", {})
+    monkeypatch.setattr(device_forms, "_COMPILED_STEPS", device_forms.OrderedDict())
+    monkeypatch.setattr(device_forms, "COMPILED_STEPS_KEPT", 2)
     scenario = load_scenario(VERSIONS["v1"].default_scenario)
     moved = scenario.replace(tx_positions=scenario.tx_positions + 1.0)
     actions = torch.as_tensor(
@@ -267,6 +269,10 @@ def test_engines_whose_steps_trace_alike_share_one_compiled_step(monkeypatch):
     elsewhere, _ = stepped("compiled", sc=moved)
     assert len(compiled) == 3
     assert elsewhere._forms._function.code == first._forms._function.code  # only the constants differ
+    stepped("compiled", fusion="centralized")  # the latest two are kept: the first was let go
+    assert len(compiled) == 3 and len(device_forms._COMPILED_STEPS) == 2
+    stepped("compiled", seed=3)
+    assert len(compiled) == 4
 
 
 def test_a_step_that_cannot_be_captured_runs_traced_with_a_warning(monkeypatch):
