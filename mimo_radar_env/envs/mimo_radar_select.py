@@ -7,6 +7,7 @@ The single env and the native vector env stand side by side, as in Gymnasium's
 from __future__ import annotations
 
 import dataclasses
+import inspect
 from typing import Any
 
 import gymnasium as gym
@@ -202,6 +203,7 @@ class MimoRadarSelectEnv(HorizonSpec, gym.Env[dict[str, NDArray], NDArray[np.int
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
             raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
+        _refuse_vector_keywords(kwargs)
         self.options, self.scenario = _resolve(kwargs)
         self.engine = RadarEngine(self.options, self.scenario, batch_size=1)
         self.action_space = spaces.MultiBinary(self.engine.action_size)
@@ -388,6 +390,21 @@ def autoreset_mode_of(value: str | AutoresetMode) -> AutoresetMode:
             f"got {value!r}"
         )
     return mode
+
+
+def _refuse_vector_keywords(kwargs: dict[str, Any]) -> None:
+    """A keyword of the vector env alone (``device``, ``device_mode``, ``precision``...) given to
+    the single env: the ``TypeError`` of an unexpected keyword, saying where it belongs."""
+    own = inspect.signature(MimoRadarSelectVectorEnv.__init__).parameters
+    vector_only = [name for name in own if name in kwargs and name not in ("self", "render_mode", "kwargs")]
+    if vector_only:
+        name = vector_only[0]
+        given = "" if name == "num_envs" else f", {name}=..."
+        raise TypeError(
+            f"MimoRadarSelect got an unexpected keyword argument {name!r}: it is a keyword of the "
+            "vector env, whose trials may run on torch: gym.make_vec('MimoRadarSelect-v1', num_envs=N, "
+            f"vectorization_mode='vector_entry_point'{given}) (num_envs=1 for one trial)"
+        )
 
 
 def _resolve(kwargs: dict[str, Any]) -> tuple[EnvOptions, Scenario]:
