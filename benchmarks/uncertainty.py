@@ -25,6 +25,7 @@ the percentile bootstrap applied to each step's value.
 
 from __future__ import annotations
 
+import functools
 import warnings
 from collections.abc import Callable, Mapping
 from itertools import combinations
@@ -57,6 +58,23 @@ METHOD = (
 )
 
 Metric = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+
+
+def _on_one_blas_thread(function: Callable[..., Any]) -> Callable[..., Any]:
+    """``function`` with BLAS (numpy's matrix products: the metrics of resampled trials) held to
+    one thread. A product's last bits depend on how many threads share it, so this makes a
+    report's numbers the same bits on any count of cores; and while a study's workers hold the
+    cores, the statistics its parent computes as each policy ends do not start a BLAS thread per
+    core among them."""
+
+    @functools.wraps(function)
+    def on_one_thread(*args: Any, **kwargs: Any) -> Any:
+        from threadpoolctl import threadpool_limits
+
+        with threadpool_limits(limits=1, user_api="blas"):
+            return function(*args, **kwargs)
+
+    return on_one_thread
 
 
 class IntervalError(ArithmeticError):
@@ -115,6 +133,7 @@ def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     return estimates({"": metric}, num_trials, seed)[""]
 
 
+@_on_one_blas_thread
 def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> dict[Any, dict[str, Any]]:
     """:func:`estimate` of each of ``metrics``, by key, from one bootstrap of all of them: the
     same numbers as one call each (every call resamples the trials with ``seed``, and scipy
@@ -165,6 +184,7 @@ def interval(metric: Metric, num_trials: int, seed: int = 0) -> tuple[float, flo
     return (float("nan"), float("nan")) if ci is None else (ci[0], ci[1])
 
 
+@_on_one_blas_thread
 def band(curve: Metric, num_trials: int, seed: int = 0) -> tuple[NDArray, NDArray]:
     """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``."""
     if num_trials < 2:
