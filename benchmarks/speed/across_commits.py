@@ -9,7 +9,8 @@ Run, from a git checkout::
 Each commit is checked out into a temporary ``git worktree``; the command runs there
 ``--repeats`` times, the two commits interleaved (so that a change in the machine's load falls
 on both), and must end its output with one JSON object; ``--key`` names the number taken from
-it. It prints each commit's median and their ratio (the first commit's over the second's: for a
+it; ``--warmup N`` runs each commit's command N times first, not recorded (a new checkout's
+first run compiles the numba kernels into its own cache). It prints each commit's median and their ratio (the first commit's over the second's: for a
 time, the speed-up of the second), and writes them as JSON with ``--json``.
 """
 
@@ -55,10 +56,16 @@ def _figure(command: Sequence[str], where: Path, key: str) -> float:
 
 
 def compare(
-    repo: str | Path, commits: tuple[str, str], command: Sequence[str], key: str, repeats: int = 3
+    repo: str | Path,
+    commits: tuple[str, str],
+    command: Sequence[str],
+    key: str,
+    repeats: int = 3,
+    warmup: int = 0,
 ) -> dict[str, Any]:
     """Each commit's median of ``key`` over ``repeats`` interleaved runs of ``command``, and the
-    ratio of the first commit's to the second's."""
+    ratio of the first commit's to the second's; after ``warmup`` runs of each, not recorded (a
+    new checkout's first run compiles the numba kernels into its own cache)."""
     repo = Path(repo).resolve()
     values: dict[str, list[float]] = {commit: [] for commit in commits}
     with tempfile.TemporaryDirectory() as scratch:
@@ -66,9 +73,11 @@ def compare(
         try:
             for commit, tree in trees.items():
                 _checkout(repo, commit, tree)
-            for _ in range(repeats):
+            for run in range(warmup + repeats):
                 for commit, tree in trees.items():
-                    values[commit].append(_figure(command, tree, key))
+                    figure = _figure(command, tree, key)
+                    if run >= warmup:
+                        values[commit].append(figure)
         finally:
             for tree in trees.values():
                 subprocess.run(
@@ -80,6 +89,7 @@ def compare(
         "key": key,
         "command": list(command),
         "repeats": repeats,
+        **({"warmup": warmup} if warmup else {}),
         "values": values,
         "medians": medians,
         "ratio": medians[first] / medians[second],
@@ -97,6 +107,9 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     parser.add_argument("second", nargs="?", default="HEAD", help="the later commit (default HEAD)")
     parser.add_argument("--key", required=True, help="the number to take from the command's JSON line")
     parser.add_argument("--repeats", type=int, default=3, help="runs per commit (default 3)")
+    parser.add_argument(
+        "--warmup", type=int, default=0, help="runs per commit first, not recorded (default 0)"
+    )
     parser.add_argument("--repo", default=".", help="the git checkout (default: here)")
     parser.add_argument("--json", default=None, help="also write the result to this file")
     args = parser.parse_args(argv[: argv.index("--")] if "--" in argv else argv)
@@ -104,7 +117,9 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         parser.error("give the benchmark command after '--'")
     if args.repeats < 1:
         parser.error(f"--repeats must be at least 1, got {args.repeats}")
-    result = compare(args.repo, (args.first, args.second), command, args.key, args.repeats)
+    if args.warmup < 0:
+        parser.error(f"--warmup must be 0 or more, got {args.warmup}")
+    result = compare(args.repo, (args.first, args.second), command, args.key, args.repeats, args.warmup)
     first, second = result["medians"]
     print(
         f"{args.key}: {first} {result['medians'][first]:.4g}, {second} {result['medians'][second]:.4g}; "

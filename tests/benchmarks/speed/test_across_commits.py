@@ -46,3 +46,32 @@ def test_a_figure_is_compared_across_two_commits_of_a_repository(tmp_path):
     )
     with pytest.raises(RuntimeError, match="did not end with a JSON object holding 'nope'"):
         across_commits.compare(repo, (commits[0], commits[1]), [sys.executable, "bench.py"], "nope", 1)
+
+
+def test_warm_up_runs_are_run_first_and_not_recorded(tmp_path):
+    """A benchmark slow on its first run in a checkout (as numba compiles into a new checkout's
+    cache): with ``warmup=1`` each commit's first run is left out of its figures."""
+    import subprocess
+
+    from benchmarks.speed import across_commits
+
+    repo = tmp_path / "repo"
+    repo.mkdir()
+    (repo / "bench.py").write_text(
+        "import json, pathlib\n"
+        "runs = pathlib.Path('runs')\n"
+        "count = int(runs.read_text()) + 1 if runs.exists() else 1\n"
+        "runs.write_text(str(count))\n"
+        "print(json.dumps({'s': 100.0 if count == 1 else float(count)}))\n"
+    )
+    for args in (
+        ("init", "-q"),
+        ("add", "bench.py"),
+        ("-c", "user.name=t", "-c", "user.email=t@t", "commit", "-q", "-m", "b"),
+    ):
+        subprocess.run(["git", "-C", str(repo), *args], check=True, capture_output=True)
+    result = across_commits.compare(repo, ("HEAD", "HEAD~0"), [sys.executable, "bench.py"], "s", 2, warmup=1)
+    assert result["values"] == {"HEAD": [2.0, 3.0], "HEAD~0": [2.0, 3.0]}
+    assert result["warmup"] == 1
+    with pytest.raises(SystemExit):
+        across_commits.main(["HEAD", "--key", "s", "--warmup", "-1", "--", sys.executable, "bench.py"])
