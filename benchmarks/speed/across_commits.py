@@ -9,9 +9,10 @@ Run, from a git checkout::
 Each commit is checked out into a temporary ``git worktree``; the command runs there
 ``--repeats`` times, the two commits interleaved (so that a change in the machine's load falls
 on both), and must end its output with one JSON object; ``--key`` names the number taken from
-it; ``--warmup N`` runs each commit's command N times first, not recorded (a new checkout's
-first run compiles the numba kernels into its own cache). It prints each commit's median and their ratio (the first commit's over the second's: for a
-time, the speed-up of the second), and writes them as JSON with ``--json``.
+it. ``--warmup N`` runs each commit's command N times first, not recorded (a new checkout's
+first run compiles the numba kernels into its own cache). It prints each commit's median and
+their ratio (the first commit's over the second's: for a time, the speed-up of the second),
+and writes them as JSON with ``--json``.
 """
 
 from __future__ import annotations
