@@ -1800,9 +1800,9 @@ def across_values(docs: Path) -> dict[str, str]:
     """Each ``perf/across/NAME.json`` that ``benchmarks.speed.across_commits --json`` wrote:
     ``NAME.first`` and ``NAME.second`` (the commits), ``NAME.repeats``, ``NAME.command`` (as
     code), ``NAME.call`` (the comparison's command line, as code), ``NAME.first-median`` and
-    ``NAME.second-median``, ``NAME.ratio`` (the first's over the second's),
-    ``NAME.difference``, the first's value minus the second's, the mean over the interleaved
-    pairs with its 95 % t interval, and ``NAME.shown``, what the interval shows."""
+    ``NAME.second-median`` (``--warmup``'s runs not among them), ``NAME.ratio`` (the first's
+    over the second's), ``NAME.difference``, the first's value minus the second's, the mean over
+    the interleaved pairs with its 95 % t interval, and ``NAME.shown``, what the interval shows."""
     table: dict[str, str] = {}
     for path in sorted((docs / "results" / "perf" / "across").glob("*.json")):
         record, name = json.loads(path.read_text()), path.stem
@@ -1817,7 +1817,8 @@ def across_values(docs: Path) -> dict[str, str]:
             f"{name}.repeats": str(record["repeats"]),
             f"{name}.command": f"`{shlex.join(record['command'])}`",
             f"{name}.call": "`python -m benchmarks.speed.across_commits "
-            f"{first} {second} --key {record['key']} --repeats {record['repeats']}`",
+            f"{first} {second} --key {record['key']} --repeats {record['repeats']}"
+            + (f" --warmup {record['warmup']}`" if record.get("warmup") else "`"),
             f"{name}.first-median": f"{record['medians'][first]:.3g}",
             f"{name}.second-median": f"{record['medians'][second]:.3g}",
             f"{name}.ratio": f"{record['ratio']:.2f}",

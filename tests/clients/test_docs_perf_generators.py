@@ -151,3 +151,9 @@ def test_comparisons_across_commits_give_each_commits_median_and_the_paired_diff
     )
     assert table["cut.difference"] == "0.5 [0.5, 0.5]"  # every pair 0.5 apart
     assert (table["cut.shown"], table["same.shown"]) == ("lower at the second commit", "not told apart")
+    assert (
+        table["cut.call"]
+        == "`python -m benchmarks.speed.across_commits aaa bbb --key after_last_task_s --repeats 3`"
+    )
+    (docs / "results" / "perf" / "across" / "warm.json").write_text(json.dumps({**record, "warmup": 1}))
+    assert generators.across_values(docs)["warm.call"].endswith("--repeats 3 --warmup 1`")
