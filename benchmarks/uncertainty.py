@@ -65,7 +65,9 @@ def _on_one_blas_thread(function: Callable[..., Any]) -> Callable[..., Any]:
     one thread. A product's last bits depend on how many threads share it, so this makes a
     report's numbers the same bits on any count of cores; and while a study's workers hold the
     cores, the statistics its parent computes as each policy ends do not start a BLAS thread per
-    core among them."""
+    core among them. The limit is set and given back around each call, in the calling thread:
+    calls from several threads at once may see each other's (the harness and the studies make
+    them from one)."""
 
     @functools.wraps(function)
     def on_one_thread(*args: Any, **kwargs: Any) -> Any:
