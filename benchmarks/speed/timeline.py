@@ -7,8 +7,9 @@ runs ``mimo-radar-bench ARGS`` in this process while a thread samples the main t
 every ``--interval`` seconds. A sample is placed at the innermost frame of the project's
 packages (``path:function``; the innermost frame of all where none is the project's), with the
 innermost function beside it (``wait``: the command idle while the tasks run; ``read``: waiting
-for a process). Consecutive samples at one place make a span. It prints each place's total and
-the spans of at least ``--min-span`` seconds, and writes them as JSON.
+for a process). Consecutive samples at one place make a span. It prints a study's wall time in
+parts (:func:`parts`), each place's total and the spans of at least ``--min-span`` seconds, and
+writes them as JSON.
 
 The workers' tasks are timed by their shards (:mod:`.strong_scaling`); this is the command's part
 of the wall time: its set-up before the first task, what it computes while the tasks run, and
@@ -115,6 +116,32 @@ def totals(of: Sequence[Span]) -> dict[str, float]:
     return dict(sorted(seconds.items(), key=lambda item: -item[1]))
 
 
+#: The places where a study's command waits for its tasks (local workers or Ray), and where it
+#: computes intervals.
+WAITING = ("benchmarks/backends.py:run_processes", "benchmarks/backends.py:run_ray")
+STATISTICS = ("benchmarks/metrics.py:", "benchmarks/uncertainty.py:")
+#: :func:`parts`' keys, in time order.
+PARTS = ("until it first waits", "waiting", "statistics between", "other work between", "after it last waits")
+
+
+def parts(of: Sequence[Span], wall: float) -> dict[str, float]:
+    """A study's command's wall seconds in :data:`PARTS`: until it first waits for its tasks (its
+    imports, checks and plan, and starting the workers), then, up to the end of its last wait, the
+    waits, the intervals it computed (as policies finished) and its other work (saving shards,
+    joining them), and after its last wait (the last intervals, the report). Empty where it never
+    waited (a run in its own process)."""
+    waits = [span for span in of if span.where in WAITING]
+    if not waits:
+        return {}
+    first, last = waits[0].start, waits[-1].end
+    between = [span for span in of if first <= span.start and span.end <= last]
+    waited = sum(span.seconds for span in waits)
+    statistics = sum(span.seconds for span in between if span.where.startswith(STATISTICS))
+    return dict(
+        zip(PARTS, (first, waited, statistics, last - first - waited - statistics, wall - last), strict=True)
+    )
+
+
 def _run_command(argv: list[str]) -> int:
     from benchmarks import cli
 
@@ -145,10 +172,14 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         "exit_code": code,
         "interval_s": args.interval,
         "wall_s": wall,
+        "parts_s": parts(timeline, wall),
         "totals_s": totals(timeline),
         "spans": [asdict(span) for span in timeline],
     }
-    print(f"{' '.join(record['command'])}: {wall:.2f} s (exit code {code}); the main thread's time by place:")
+    print(f"{' '.join(record['command'])}: {wall:.2f} s (exit code {code})")
+    for name, seconds in record["parts_s"].items():
+        print(f"  {seconds:7.2f} s  {name}")
+    print("the main thread's time by place:")
     for key, seconds in record["totals_s"].items():
         if seconds >= args.min_span:
             print(f"  {seconds:7.2f} s  {key}")

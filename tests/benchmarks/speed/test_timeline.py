@@ -68,3 +68,21 @@ def test_the_command_line_runs_a_command_and_writes_its_timeline(tmp_path, capsy
         timeline.main(["agents"])  # no '--'
     with pytest.raises(SystemExit):
         timeline.main(["--interval", "0", "--", "agents"])
+
+
+def test_a_studys_wall_time_splits_into_its_parts_around_its_waits():
+    S = timeline.Span
+    wait, stats = "benchmarks/backends.py:run_processes", "benchmarks/metrics.py:_root_mean_square"
+    spans = [
+        S(0.0, 1.5, "benchmarks/harness.py:make_config", "x"),
+        S(1.5, 5.0, wait, "wait"),
+        S(5.0, 5.5, stats, "y"),
+        S(5.5, 5.75, "benchmarks/shards.py:write_shard", "write"),
+        S(5.75, 9.0, wait, "wait"),
+        S(9.0, 9.75, "benchmarks/report.py:write_outputs", "z"),
+    ]
+    parts = timeline.parts(spans, wall=10.0)
+    assert list(parts) == list(timeline.PARTS)
+    assert list(parts.values()) == [1.5, 6.75, 0.5, 0.25, 1.0]
+    assert sum(parts.values()) == 10.0
+    assert timeline.parts(spans[:1], wall=1.5) == {}
