@@ -120,8 +120,14 @@ def totals(of: Sequence[Span]) -> dict[str, float]:
 #: computes intervals.
 WAITING = ("benchmarks/backends.py:run_processes", "benchmarks/backends.py:run_ray")
 STATISTICS = ("benchmarks/metrics.py:", "benchmarks/uncertainty.py:")
-#: :func:`parts`' keys, in time order.
-PARTS = ("until it first waits", "waiting", "statistics between", "other work between", "after it last waits")
+#: :func:`parts`' keys, in time order, and what each holds.
+PARTS = {
+    "before": "until it first waits for its tasks",
+    "waiting": "waiting for its tasks",
+    "statistics": "computing intervals, between its waits",
+    "other": "other work between its waits",
+    "after": "after its last wait",
+}
 
 
 def parts(of: Sequence[Span], wall: float) -> dict[str, float]:
@@ -178,7 +184,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     }
     print(f"{' '.join(record['command'])}: {wall:.2f} s (exit code {code})")
     for name, seconds in record["parts_s"].items():
-        print(f"  {seconds:7.2f} s  {name}")
+        print(f"  {seconds:7.2f} s  {PARTS[name]}")
     print("the main thread's time by place:")
     for key, seconds in record["totals_s"].items():
         if seconds >= args.min_span:
