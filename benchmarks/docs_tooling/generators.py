@@ -1830,6 +1830,25 @@ def across_values(docs: Path) -> dict[str, str]:
     return table
 
 
+@values("timeline")
+def timeline_values(docs: Path) -> dict[str, str]:
+    """Each ``perf/timeline-NAME.json`` that ``benchmarks.speed.timeline --json`` wrote:
+    ``NAME.command`` (as code), ``NAME.wall`` (s), ``NAME.PART`` for each of its parts
+    (:data:`benchmarks.speed.timeline.PARTS`: ``before``, ``waiting``, ``statistics``,
+    ``other``, ``after``; s), and ``NAME.place.I`` for its ``I``-th place by time (from 1):
+    seconds and the place."""
+    table: dict[str, str] = {}
+    for path in sorted((docs / "results" / "perf").glob("timeline-*.json")):
+        record, name = json.loads(path.read_text()), path.stem.removeprefix("timeline-")
+        table[f"{name}.command"] = f"`{shlex.join(record['command'])}`"
+        table[f"{name}.wall"] = f"{record['wall_s']:.1f}"
+        table |= {f"{name}.{part}": f"{seconds:.2f}" for part, seconds in record["parts_s"].items()}
+        for rank, (place, seconds) in enumerate(record["totals_s"].items(), start=1):
+            where, leaf = place.split(" | ")
+            table[f"{name}.place.{rank}"] = f"{seconds:.2f} s at `{where}` (in `{leaf}`)"
+    return table
+
+
 def _two_digits(value: float) -> str:
     """Two significant digits, without an exponent (``0.058``, ``350``)."""
     return np.format_float_positional(value, precision=2, unique=False, fractional=False, trim="-")

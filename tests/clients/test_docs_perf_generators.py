@@ -157,3 +157,20 @@ def test_comparisons_across_commits_give_each_commits_median_and_the_paired_diff
     )
     (docs / "results" / "perf" / "across" / "warm.json").write_text(json.dumps({**record, "warmup": 1}))
     assert generators.across_values(docs)["warm.call"].endswith("--repeats 3 --warmup 1`")
+
+
+def test_a_timeline_gives_its_parts_and_its_places_by_time(tmp_path):
+    docs = tmp_path / "docs"
+    (docs / "results" / "perf").mkdir(parents=True)
+    record = {
+        "command": ["mimo-radar-bench", "claims", "--trials", "5"],
+        "wall_s": 10.04,
+        "parts_s": {"before": 1.5, "waiting": 6.75, "statistics": 0.5, "other": 0.25, "after": 1.04},
+        "totals_s": {"benchmarks/backends.py:run_processes | wait": 6.75, "benchmarks/metrics.py:f | g": 0.5},
+    }
+    (docs / "results" / "perf" / "timeline-two.json").write_text(json.dumps(record))
+    table = generators.timeline_values(docs)
+    assert table["two.command"] == "`mimo-radar-bench claims --trials 5`"
+    assert (table["two.wall"], table["two.before"], table["two.after"]) == ("10.0", "1.50", "1.04")
+    assert table["two.place.1"] == "6.75 s at `benchmarks/backends.py:run_processes` (in `wait`)"
+    assert table["two.place.2"] == "0.50 s at `benchmarks/metrics.py:f` (in `g`)"

@@ -62,7 +62,9 @@ def test_the_command_line_runs_a_command_and_writes_its_timeline(tmp_path, capsy
     record = timeline.main(["--json", str(out), "--min-span", "0", "--", "agents"])
     assert record["exit_code"] == 0 and record["command"] == ["mimo-radar-bench", "agents"]
     assert json.loads(out.read_text())["wall_s"] == pytest.approx(record["wall_s"])
-    assert record["spans"] and sum(record["totals_s"].values()) <= record["wall_s"] + 1e-9
+    # a command this short may end before the first sample (its attribution: the tests above)
+    assert sum(record["totals_s"].values()) <= record["wall_s"] + 1e-9
+    assert record["parts_s"] == {}  # it never waits for tasks
     assert "the main thread's time by place" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         timeline.main(["agents"])  # no '--'
