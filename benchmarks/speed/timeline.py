@@ -132,9 +132,11 @@ PARTS = {
 
 def parts(of: Sequence[Span], wall: float) -> dict[str, float]:
     """A study's command's wall seconds in :data:`PARTS`: until it first waits for its tasks (its
-    imports, checks and plan, and starting the workers), then, up to the end of its last wait, the
-    waits, the intervals it computed (as policies finished) and its other work (saving shards,
-    joining them), and after its last wait (the last intervals, the report). Empty where it never
+    imports, checks and plan, starting the workers, and what it does once the tasks are
+    submitted and before it waits: the first tasks may start within this part), then, up to the
+    end of its last wait, the waits, the intervals it computed (as policies finished) and its
+    other work (saving shards, joining them), and after its last wait (the last intervals, the
+    report). Empty where it never
     waited (a run in its own process)."""
     waits = [span for span in of if span.where in WAITING]
     if not waits:
