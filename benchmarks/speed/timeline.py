@@ -136,8 +136,7 @@ def parts(of: Sequence[Span], wall: float) -> dict[str, float]:
     submitted and before it waits: the first tasks may start within this part), then, up to the
     end of its last wait, the waits, the intervals it computed (as policies finished) and its
     other work (saving shards, joining them), and after its last wait (the last intervals, the
-    report). Empty where it never
-    waited (a run in its own process)."""
+    report). Empty where it never waited (a run in its own process)."""
     waits = [span for span in of if span.where in WAITING]
     if not waits:
         return {}
