@@ -40,7 +40,12 @@ class _ExitsAtOnce:
 def _exit_at_once(code: int) -> None:
     """This worker's end without the interpreter's teardown: multiprocessing's clean-up first
     (the named semaphore numba makes as it starts its threads in a forked worker, which the
-    resource tracker would otherwise report leaked), its output flushed."""
+    resource tracker would otherwise report leaked), its output flushed. A SIGTERM from here on
+    is ignored (an interrupted run's pool sends a second one, from its manager thread, once a
+    first worker has ended): its handler, run in the middle of the clean-up, would end the
+    process between a semaphore's unlinking and the tracker being told, which then reports it
+    leaked."""
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
     multiprocessing.util._run_finalizers(0)
     for stream in (sys.stdout, sys.stderr):
         if stream is not None:

@@ -2,6 +2,7 @@
 
 import multiprocessing
 import os
+import signal
 import subprocess
 import sys
 import time
@@ -204,6 +205,34 @@ def test_a_terminated_worker_removes_its_named_semaphores():
             time.sleep(0.05)
         assert not _running(seen["pid"])
         assert not any(Path(f"/dev/shm/sem.{name.lstrip('/')}").exists() for name in seen["names"])
+
+
+@pytest.mark.skipif(not Path("/dev/shm").is_dir(), reason="named semaphores as files of /dev/shm (Linux)")
+def test_a_second_sigterm_during_a_workers_clean_up_leaves_no_semaphore_reported_leaked(tmp_path):
+    """An interrupted run's workers get a second SIGTERM: the pool's manager thread terminates
+    the others once one has ended. Arriving after a worker's clean-up had unlinked a semaphore
+    and before it told the resource tracker, it left the tracker's warnings after the run's
+    one-line message (a CI run). Here the second SIGTERM is sent at exactly that point."""
+    script = tmp_path / "second_sigterm.py"
+    script.write_text(
+        "import os, signal, time\n"
+        "from multiprocessing import resource_tracker\n"
+        "from benchmarks import backends\n"
+        "lock = backends._CONTEXT.Lock()  # a named semaphore, registered with the tracker\n"
+        "told = resource_tracker.unregister\n"
+        "def unregister(name, rtype):  # called by the clean-up right after the unlinking\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "    time.sleep(0.2)\n"
+        "    told(name, rtype)\n"
+        "resource_tracker.unregister = unregister\n"
+        "signal.signal(signal.SIGTERM, backends._stop)\n"
+        "os.kill(os.getpid(), signal.SIGTERM)\n"
+        "time.sleep(10)\n"
+    )
+    # the tracker writes to this process's stderr; communicate() waits for it to end too
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 128 + signal.SIGTERM
+    assert done.stderr == ""
 
 
 @pytest.mark.parametrize("context", ["_ForkServerContext", "_SpawnContext"])
