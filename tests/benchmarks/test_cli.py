@@ -138,8 +138,12 @@ def test_ray_address_auto_without_a_cluster_is_named_before_anything_is_written(
     tmp_path, capsys, monkeypatch
 ):
     pytest.importorskip("ray", reason="the ray extra")
+    from ray._private import services
+
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
     monkeypatch.setenv("RAY_TMPDIR", str(tmp_path / "no-ray"))  # no cluster file to find
+    # nor a cluster another test runs meanwhile (auto takes any GCS process it finds on the machine)
+    monkeypatch.setattr(services, "find_gcs_addresses", lambda: [])
     argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
     with pytest.raises(SystemExit) as exit_info:
         main([*argv, "--backend", "ray", "--address", "auto", "--out", str(tmp_path / "o")])
