@@ -20,9 +20,12 @@ import signal
 import socket
 import sys
 import threading
+import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any
+
+from .errors import BenchError
 
 
 class _ExitsAtOnce:
@@ -281,25 +284,66 @@ def run_processes(
                 finished(pending.pop(future), future.result())
 
 
+#: What a gRPC server (a Ray cluster's GCS, a Ray Client server) sends first: an HTTP/2 SETTINGS
+#: frame (RFC 9113, 3.4), answering a client's connection preface and its own SETTINGS.
+_HTTP2_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+_HTTP2_SETTINGS = 4
+_CLUSTER_PORT = "the port 'ray start --head' printed, 6379 by default, not the dashboard's 8265"
+
+
 def check_ray_address(address: str | None, timeout: float = 3.0) -> None:
-    """Fail within ``timeout`` seconds, naming the address, when a Ray head cannot be reached.
-    ``auto`` is resolved as Ray resolves it (``RAY_ADDRESS``, then the cluster started on this
-    machine), so a missing cluster is named before anything is written."""
+    """Fail within ``timeout`` seconds, naming the address, when a Ray head cannot be reached
+    there, or what answers is not a gRPC server as a Ray cluster is (a dashboard, a web server:
+    ``ray.init`` would wait on it for minutes). ``auto`` is resolved as Ray resolves it
+    (``RAY_ADDRESS``, then the cluster started on this machine), so a missing cluster is named
+    before anything is written."""
     if address in (None, "local"):
         return
     if address == "auto":
         address = _resolve_auto_address()
         if address == "auto":
             return
-    target = address.split("://", 1)[-1]
+    scheme, _, target = address.rpartition("://")
+    if scheme not in ("", "ray"):
+        raise ValueError(
+            f"--address {address!r} is a web address (a dashboard's, for job submission): give the "
+            f"cluster's HOST:PORT ({_CLUSTER_PORT}), or ray://HOST:PORT for Ray Client"
+        )
     host, _, port = target.rpartition(":")
     if not host or not port.isdigit():
         raise ValueError(f"--address must look like HOST:PORT (or ray://HOST:PORT), got {address!r}")
+    deadline = time.monotonic() + timeout
     try:
-        with socket.create_connection((host, int(port)), timeout=timeout):
-            pass
+        connection = socket.create_connection((host, int(port)), timeout=timeout)
     except OSError as exc:
         raise ValueError(f"cannot reach the Ray cluster at {address!r}: {exc.strerror or exc}") from None
+    with connection:
+        try:
+            connection.settimeout(max(deadline - time.monotonic(), 0.1))
+            connection.sendall(_HTTP2_PREFACE)
+            first = _read(connection, 9)
+        except TimeoutError:
+            first = None
+        except OSError:  # it reset the connection on the preface
+            first = b""
+    if first is None:
+        raise ValueError(
+            f"nothing at {address!r} answered as a Ray cluster within {timeout:g} s: give the cluster's "
+            f"address ({_CLUSTER_PORT})"
+        )
+    if len(first) < 9 or first[3] != _HTTP2_SETTINGS:
+        raise ValueError(
+            f"what answers at {address!r} is not a Ray cluster (not a gRPC server): give the cluster's "
+            f"address ({_CLUSTER_PORT})"
+        )
+
+
+def _read(connection: socket.socket, size: int) -> bytes:
+    """Up to ``size`` bytes, fewer where the peer closes first (the socket's timeout applies)."""
+    data = b""
+    while len(data) < size and (chunk := connection.recv(size - len(data))):
+        data += chunk
+    return data
 
 
 def _resolve_auto_address() -> str:
@@ -317,6 +361,11 @@ def _resolve_auto_address() -> str:
         raise ValueError(
             "--address auto: no Ray cluster is running on this machine and RAY_ADDRESS is not set; start "
             "one with 'ray start --head', give its HOST:PORT, or leave --address out to start a local Ray"
+        ) from None
+    except ValueError:  # RAY_ADDRESS that Ray cannot read as a cluster's address
+        raise ValueError(
+            f"--address auto: RAY_ADDRESS={os.environ.get('RAY_ADDRESS')!r} is not a Ray cluster's address: "
+            f"set it to the cluster's HOST:PORT ({_CLUSTER_PORT}), or give --address"
         ) from None
 
 
@@ -344,7 +393,12 @@ def run_ray(
     check_ray_address(address)
     started_here = not ray.is_initialized()
     if started_here:
-        ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+        try:
+            ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+        except (ConnectionError, RuntimeError) as exc:  # a gRPC server that is not Ray's, a cluster gone
+            reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            where = f"connect to the Ray cluster at {address!r}" if address else "start Ray on this machine"
+            raise BenchError(f"cannot {where}: {reason}") from None
     pending: dict[Any, int] = {}
     try:
         remote_task = ray.remote(num_cpus=threads)(threaded_task)

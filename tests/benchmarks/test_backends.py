@@ -327,3 +327,105 @@ def test_the_harness_leaves_rays_start_callback_to_run_ray(monkeypatch):
     assert calls == []  # not before the tasks are submitted: run_ray calls it then
     seen["started"]()
     assert calls == [1]
+
+
+class _Server:
+    """A loopback TCP server on a thread that answers each connection with ``reply`` (None: it
+    reads and says nothing until the test ends)."""
+
+    def __init__(self, reply):
+        import socket
+        import threading
+
+        self.listener = socket.create_server(("127.0.0.1", 0))
+        self.address = f"127.0.0.1:{self.listener.getsockname()[1]}"
+        self.held = []
+        self.reply = reply
+        threading.Thread(target=self._serve, daemon=True).start()
+
+    def _serve(self):
+        while True:
+            try:
+                connection, _ = self.listener.accept()
+            except OSError:
+                return
+            self.held.append(connection)
+            connection.recv(1024)
+            if self.reply is not None:
+                connection.sendall(self.reply)
+                connection.close()
+
+    def close(self):
+        self.listener.close()
+        for connection in self.held:
+            connection.close()
+
+
+@pytest.fixture
+def server():
+    made = []
+    yield lambda reply: made.append(_Server(reply)) or made[-1]
+    for one in made:
+        one.close()
+
+
+def test_a_ray_address_is_accepted_where_a_grpc_server_answers(server):
+    """What a Ray cluster's GCS (a gRPC server) sends first on a connection is an HTTP/2
+    SETTINGS frame: a 9-byte header of length, type 4, flags and stream 0 (RFC 9113)."""
+    settings = (0).to_bytes(3, "big") + bytes([4, 0]) + (0).to_bytes(4, "big")
+    grpc = server(settings)
+    backends.check_ray_address(grpc.address)
+    backends.check_ray_address(f"ray://{grpc.address}")
+
+
+def test_a_ray_address_where_a_web_server_or_nothing_answers_is_refused_within_the_timeout(server):
+    """A dashboard (8265) or any server that is not gRPC, and one that never answers, are named
+    at once or within the timeout: ``ray.init`` would wait on them for minutes."""
+    web = server(b"HTTP/1.0 400 Bad Request\r\n\r\n")
+    with pytest.raises(
+        ValueError, match=r"not a Ray cluster \(not a gRPC server\).*not the dashboard's 8265"
+    ):
+        backends.check_ray_address(web.address)
+    closes = server(b"")
+    with pytest.raises(ValueError, match="not a Ray cluster"):
+        backends.check_ray_address(closes.address)
+    silent = server(None)
+    start = time.perf_counter()
+    with pytest.raises(
+        ValueError, match=f"nothing at '{silent.address}' answered as a Ray cluster within 0.5 s"
+    ):
+        backends.check_ray_address(silent.address, timeout=0.5)
+    assert time.perf_counter() - start < 2
+    with pytest.raises(ValueError, match="is a web address"):
+        backends.check_ray_address("http://127.0.0.1:8265")
+
+
+def test_a_ray_that_refuses_the_connection_is_one_line(monkeypatch):
+    """A gRPC server that passes the address check and is not Ray's, or a cluster that refuses
+    the driver: ``ray.init``'s error becomes the command's one line."""
+    import types
+
+    def init(**_):
+        raise ConnectionError("Failed to connect to Ray cluster at 10.0.0.1:6379\nmore")
+
+    fake = types.SimpleNamespace(is_initialized=lambda: False, init=init)
+    monkeypatch.setitem(sys.modules, "ray", fake)
+    monkeypatch.setattr(backends, "check_ray_address", lambda address: None)
+    with pytest.raises(backends.BenchError) as error:
+        backends.run_ray(lambda *task: {}, [], lambda number, result: None, address="10.0.0.1:6379")
+    assert str(error.value) == (
+        "cannot connect to the Ray cluster at '10.0.0.1:6379': "
+        "Failed to connect to Ray cluster at 10.0.0.1:6379"
+    )
+
+
+def test_a_ray_address_in_the_environment_that_is_not_a_clusters_is_named(monkeypatch):
+    """``--address auto`` reads RAY_ADDRESS; the job-submission address Ray's docs have users
+    export there (the dashboard's) is named as such, not Ray's own parse error."""
+    pytest.importorskip("ray", reason="the ray extra")
+    monkeypatch.setenv("RAY_ADDRESS", "http://127.0.0.1:8265")
+    with pytest.raises(ValueError) as error:
+        backends.check_ray_address("auto")
+    assert str(error.value).startswith(
+        "--address auto: RAY_ADDRESS='http://127.0.0.1:8265' is not a Ray cluster's address: set it to"
+    )

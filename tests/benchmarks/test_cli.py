@@ -134,6 +134,36 @@ def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, capsys):
     assert f"cannot reach the Ray cluster at '127.0.0.1:{port}'" in capsys.readouterr().err
 
 
+def test_a_web_server_given_as_the_ray_address_is_one_line_and_writes_nothing(tmp_path, capsys):
+    """The dashboard's port (8265), or any server that is not a Ray cluster, is named before
+    anything is written: ``ray.init`` would wait on it for minutes."""
+    pytest.importorskip("ray", reason="the ray extra")
+    import http.server
+    import threading
+
+    class Quiet(http.server.BaseHTTPRequestHandler):
+        def log_message(self, *arguments):  # the server's own log would share stderr
+            pass
+
+    web = http.server.HTTPServer(("127.0.0.1", 0), Quiet)
+    threading.Thread(target=web.serve_forever, daemon=True).start()
+    address = f"127.0.0.1:{web.server_address[1]}"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
+    try:
+        with pytest.raises(SystemExit) as exit_info:
+            main([*argv, "--backend", "ray", "--address", address, "--out", str(tmp_path / "o")])
+    finally:
+        web.shutdown()
+        web.server_close()
+    assert exit_info.value.code == 2
+    assert capsys.readouterr().err.strip().splitlines() == [
+        f"mimo-radar-bench: error: what answers at '{address}' is not a Ray cluster (not a gRPC server): "
+        "give the cluster's address (the port 'ray start --head' printed, 6379 by default, not the "
+        "dashboard's 8265)"
+    ]
+    assert not (tmp_path / "o").exists()
+
+
 def test_ray_address_auto_without_a_cluster_is_named_before_anything_is_written(
     tmp_path, capsys, monkeypatch
 ):
