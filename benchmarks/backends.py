@@ -397,8 +397,14 @@ def run_ray(
             ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
         except (ConnectionError, RuntimeError) as exc:  # a gRPC server that is not Ray's, a cluster gone
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            where = f"connect to the Ray cluster at {address!r}" if address else "start Ray on this machine"
-            raise BenchError(f"cannot {where}: {reason}") from None
+            if not address:
+                raise BenchError(f"cannot start Ray on this machine: {reason}") from None
+            hint = (  # Ray reads a cluster's auth mode for auto only (its log lines above say why)
+                ""
+                if os.environ.get("RAY_AUTH_MODE") == "token"
+                else "; a cluster with token authentication also needs RAY_AUTH_MODE=token here"
+            )
+            raise BenchError(f"cannot connect to the Ray cluster at {address!r}: {reason}{hint}") from None
     pending: dict[Any, int] = {}
     try:
         remote_task = ray.remote(num_cpus=threads)(threaded_task)

@@ -411,12 +411,17 @@ def test_a_ray_that_refuses_the_connection_is_one_line(monkeypatch):
     fake = types.SimpleNamespace(is_initialized=lambda: False, init=init)
     monkeypatch.setitem(sys.modules, "ray", fake)
     monkeypatch.setattr(backends, "check_ray_address", lambda address: None)
+    monkeypatch.delenv("RAY_AUTH_MODE", raising=False)
     with pytest.raises(backends.BenchError) as error:
         backends.run_ray(lambda *task: {}, [], lambda number, result: None, address="10.0.0.1:6379")
     assert str(error.value) == (
         "cannot connect to the Ray cluster at '10.0.0.1:6379': "
-        "Failed to connect to Ray cluster at 10.0.0.1:6379"
+        "Failed to connect to Ray cluster at 10.0.0.1:6379; "
+        "a cluster with token authentication also needs RAY_AUTH_MODE=token here"
     )
+    monkeypatch.setenv("RAY_AUTH_MODE", "token")  # set: the hint would not help
+    with pytest.raises(backends.BenchError, match="6379$"):
+        backends.run_ray(lambda *task: {}, [], lambda number, result: None, address="10.0.0.1:6379")
 
 
 def test_a_ray_address_in_the_environment_that_is_not_a_clusters_is_named(monkeypatch):
