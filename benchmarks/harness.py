@@ -152,7 +152,7 @@ def make_config(
     seed: int = 0,
     shard_size: int | Mapping[str, int] | None = None,
     agent_params: dict[str, dict[str, Any]] | None = None,
-    options: EnvOptions | None = None,
+    options: EnvOptions | Mapping[str, Any] | None = None,
     workers: int = 1,
     say: Callable[[str], None] = print,
     max_hours: float | None = None,
@@ -168,13 +168,17 @@ def make_config(
     Its time (:func:`estimate_seconds`, with ``parallel`` tasks at once, default ``workers``) is
     said when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
     ``shard_size`` None is the cost-aware schedule for those tasks (:func:`plan_shard_sizes`);
-    a mapping gives each policy's (a resumed run's, :func:`recorded_shard_size`).
+    a mapping gives each policy's (a resumed run's, :func:`recorded_shard_size`). ``options``
+    are the env's (:class:`~mimo_radar_env.EnvOptions`, or a mapping of options over its
+    defaults).
     """
     try:
         sc = load_scenario(scenario)
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
-    options = options or EnvOptions()
+    options = _check_options(options)
+    _check_max_hours(max_hours)
+    _check_counts(("workers", workers, 1), ("parallel", 1 if parallel is None else parallel, 1))
     parallel = parallel or workers
     if isinstance(shard_size, Mapping):
         if sorted(shard_size) != sorted(policies):
@@ -234,16 +238,43 @@ def _shard_sizes(
 
 def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_size: int | None) -> int:
     """Refuses a count that is not a whole number in its range; the run's steps."""
-    given = [("trials", trials, 1), ("seed", seed, 0)]
+    _check_counts(("trials", trials, 1), ("seed", seed, 0))
     if shard_size is not None:
-        given.append(("shard_size", shard_size, 1))
-    for name, value, low in given:
-        if isinstance(value, bool) or not isinstance(value, int) or value < low:
-            raise HarnessError(f"`{name}` must be an integer >= {low}, got {value!r}")
+        _check_counts(("shard_size", shard_size, 1))
     steps = sc.horizon if steps is None else steps
     if isinstance(steps, bool) or not isinstance(steps, int) or not 1 <= steps <= sc.horizon:
         raise HarnessError(f"`steps` must be between 1 and the scenario horizon {sc.horizon}, got {steps!r}")
     return steps
+
+
+def _check_options(options: EnvOptions | Mapping[str, Any] | None) -> EnvOptions:
+    """The run's env options: ``options`` as it is, a mapping of options over the defaults
+    (an unknown option is a ``TypeError``, as in :class:`~mimo_radar_env.EnvOptions`), or the
+    defaults."""
+    if options is None or isinstance(options, EnvOptions):
+        return options or EnvOptions()
+    if not isinstance(options, Mapping):
+        raise HarnessError(
+            f"`options` must be an EnvOptions or a mapping of env options, got {type(options).__name__}"
+        )
+    try:
+        return EnvOptions(**options)
+    except ValueError as exc:
+        raise HarnessError(f"`options`: {exc}") from None
+
+
+def _check_counts(*given: tuple[str, Any, int]) -> None:
+    """Refuses each ``(name, value, low)`` whose value is not an integer >= low."""
+    for name, value, low in given:
+        if isinstance(value, bool) or not isinstance(value, int) or value < low:
+            raise HarnessError(f"`{name}` must be an integer >= {low}, got {value!r}")
+
+
+def _check_max_hours(max_hours: float | None) -> None:
+    if max_hours is not None and (
+        isinstance(max_hours, bool) or not isinstance(max_hours, int | float) or not max_hours > 0
+    ):
+        raise HarnessError(f"`max_hours` must be a number of hours > 0 or None (no limit), got {max_hours!r}")
 
 
 def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) -> dict[str, dict[str, Any]]:

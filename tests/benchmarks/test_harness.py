@@ -152,6 +152,30 @@ def test_outputs_regenerate_from_saved_shards(tmp_path):
             "more than max_hours 1e-09: use fewer trials or steps, more workers",
             "more than --max-hours",
         ),
+        (
+            {"max_hours": 0},
+            "max_hours must be a number of hours > 0 or None (no limit), got 0",
+            "--max-hours must",
+        ),
+        ({"max_hours": float("nan")}, "max_hours must be a number of hours > 0", "--max-hours must"),
+        (
+            {"max_hours": "2"},
+            "max_hours must be a number of hours > 0 or None (no limit), got '2'",
+            "--max-hours",
+        ),
+        ({"workers": 0}, "workers must be an integer >= 1, got 0", "--workers must be"),
+        ({"workers": 2.5}, "workers must be an integer >= 1, got 2.5", "--workers must be"),
+        ({"parallel": -1}, "parallel must be an integer >= 1, got -1", "parallel must be"),
+        (
+            {"options": [("fusion", "centralized")]},
+            "options must be an EnvOptions or a mapping",
+            "options must",
+        ),
+        (
+            {"options": {"fusion": "x"}},
+            "options: fusion must be one of ['average', 'centralized']",
+            "options:",
+        ),
     ],
 )
 def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwargs, python, flag):
@@ -162,6 +186,18 @@ def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwar
         make_config("paper-1-v1", ["ucb1"], say=lambda message: None, **given)
     assert python in str(caught.value) and "--" not in str(caught.value)
     assert flag in caught.value.for_command_line()
+
+
+def test_the_env_options_may_be_a_mapping_over_the_defaults():
+    from mimo_radar_env import EnvOptions
+
+    def config(options):
+        return make_config("paper-1-v1", ["ucb1"], trials=2, steps=3, options=options, say=lambda m: None)
+
+    assert config({"fusion": "centralized"}) == config(EnvOptions(fusion="centralized"))
+    assert config({}) == config(None) == config(EnvOptions())
+    with pytest.raises(TypeError, match="unexpected keyword argument 'bogus'"):  # as in Gymnasium
+        config({"bogus": 1})
 
 
 # ---------------------------------------------------------------- the cost-aware schedule
