@@ -24,6 +24,7 @@ import hashlib
 import heapq
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -937,6 +938,7 @@ def run_many(
     runs the tasks in this process, on numba's threads (all the cores unless ``threads``).
     The numbers are the same whatever the threads.
     """
+    _check_runs(runs)
     folders = [Path(out) for _, out in runs]
     configs = [config for config, _ in runs]
     _check_execution(backend, workers, address, folders, device, configs, threads, device_mode)
@@ -1231,6 +1233,19 @@ def check_device(device: Any) -> None:
         for python, either in _NO_DEVICE:  # None is the API's; the command line leaves it out
             message = message.replace(python, either)
         raise HarnessError(message) from None
+
+
+def _check_runs(runs: Any) -> None:
+    """Refuses ``runs`` that are not (RunConfig, folder) pairs, before a folder is made."""
+    if not isinstance(runs, Sequence) or not all(isinstance(p, tuple | list) and len(p) == 2 for p in runs):
+        raise TypeError("runs must be a list of (RunConfig, folder) pairs")
+    for config, out in runs:
+        if not isinstance(config, RunConfig):
+            raise TypeError(
+                f"a run's config must be a RunConfig (make_config builds one), got {type(config).__name__}"
+            )
+        if not isinstance(out, str | os.PathLike):
+            raise TypeError(f"a run's out must be a folder's path, got {type(out).__name__}")
 
 
 def _check_execution(

@@ -12,7 +12,7 @@ import pytest
 
 from benchmarks import harness
 from benchmarks.cli import main
-from benchmarks.harness import HarnessError, load_per_trial, make_config, run, shard_path
+from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, shard_path
 from benchmarks.report import write_outputs
 from tests.helpers import SUMMARY_KEYS
 
@@ -339,3 +339,18 @@ def test_each_policys_shard_size_is_checked_like_one_for_all():
 def test_policies_given_as_one_string_are_refused_not_read_letter_by_letter():
     with pytest.raises(HarnessError, match=r"policies must be a list of policy names, got the string 'ucb1'"):
         make_config("paper-1-v1", "ucb1", trials=2, say=lambda message: None)
+
+
+def test_runs_that_are_not_a_config_and_a_folder_are_refused_before_a_folder_is_made(tmp_path):
+    config = make_config("paper-1-v1", ["fix1"], trials=2, steps=3, say=lambda m: None)
+    out = tmp_path / "out"
+    with pytest.raises(TypeError, match="a run's out must be a folder's path, got int"):
+        run(config, 5, progress=False)
+    with pytest.raises(
+        TypeError, match="a run's config must be a RunConfig .make_config builds one., got str"
+    ):
+        run("paper-1-v1", out, progress=False)
+    for runs in ([config], (config, out)):
+        with pytest.raises(TypeError, match=r"runs must be a list of \(RunConfig, folder\) pairs"):
+            run_many(runs, progress=False)
+    assert not out.exists()
