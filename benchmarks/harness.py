@@ -938,9 +938,7 @@ def run_many(
     runs the tasks in this process, on numba's threads (all the cores unless ``threads``).
     The numbers are the same whatever the threads.
     """
-    _check_runs(runs)
-    folders = [Path(out) for _, out in runs]
-    configs = [config for config, _ in runs]
+    configs, folders = _checked_runs(runs)
     _check_execution(backend, workers, address, folders, device, configs, threads, device_mode)
     if backend == "local" and workers > 1:
         # the workers' imports, while this process plans the run
@@ -1235,8 +1233,9 @@ def check_device(device: Any) -> None:
         raise HarnessError(message) from None
 
 
-def _check_runs(runs: Any) -> None:
-    """Refuses ``runs`` that are not (RunConfig, folder) pairs, before a folder is made."""
+def _checked_runs(runs: Any) -> tuple[list[RunConfig], list[Path]]:
+    """The configurations and folders of ``runs``; a ``TypeError`` where they are not
+    (RunConfig, folder) pairs, before a folder is made."""
     if not isinstance(runs, Sequence) or not all(isinstance(p, tuple | list) and len(p) == 2 for p in runs):
         raise TypeError("runs must be a list of (RunConfig, folder) pairs")
     for config, out in runs:
@@ -1246,6 +1245,7 @@ def _check_runs(runs: Any) -> None:
             )
         if not isinstance(out, str | os.PathLike):
             raise TypeError(f"a run's out must be a folder's path, got {type(out).__name__}")
+    return [config for config, _ in runs], [Path(out) for _, out in runs]
 
 
 def _check_execution(
