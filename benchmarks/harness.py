@@ -49,6 +49,7 @@ from mimo_radar_env.envs.cost import (
     threaded_seconds_per_trial_step,
 )
 from mimo_radar_env.envs.device_forms import check_device_mode
+from mimo_radar_env.envs.versions import env_version, scenario_version
 from mimo_radar_env.tracking.fusion import compiled_kernels
 from mimo_radar_env.tracking.selection import compiled_kernels as selection_kernels
 
@@ -170,14 +171,15 @@ def make_config(
     said when it is a minute or more, and a run estimated at more than ``max_hours`` is refused.
     ``shard_size`` None is the cost-aware schedule for those tasks (:func:`plan_shard_sizes`);
     a mapping gives each policy's (a resumed run's, :func:`recorded_shard_size`). ``options``
-    are the env's (:class:`~mimo_radar_env.EnvOptions`, or a mapping of options over its
-    defaults).
+    are the env's: an :class:`~mimo_radar_env.EnvOptions`, or a mapping of options over the
+    defaults of the version ``scenario`` belongs to (``paper-1-v1`` v1's, ``paper-1`` v0's, any
+    other scenario v1's); None, those defaults.
     """
     try:
         sc = load_scenario(scenario)
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
-    options = _check_options(options)
+    options = _check_options(options, scenario)
     _check_max_hours(max_hours)
     _check_counts(("workers", workers, 1), ("parallel", 1 if parallel is None else parallel, 1))
     parallel = parallel or workers
@@ -248,18 +250,18 @@ def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_
     return steps
 
 
-def _check_options(options: EnvOptions | Mapping[str, Any] | None) -> EnvOptions:
-    """The run's env options: ``options`` as it is, a mapping of options over the defaults
-    (an unknown option is a ``TypeError``, as in :class:`~mimo_radar_env.EnvOptions`), or the
-    defaults."""
-    if options is None or isinstance(options, EnvOptions):
-        return options or EnvOptions()
-    if not isinstance(options, Mapping):
+def _check_options(options: EnvOptions | Mapping[str, Any] | None, scenario: Any) -> EnvOptions:
+    """The run's env options: ``options`` as it is, or a mapping of options over the defaults of
+    the env version ``scenario`` is a paper scenario of (v1's for any other), or those defaults
+    (an unknown option is a ``TypeError``, as in :class:`~mimo_radar_env.EnvOptions`)."""
+    if isinstance(options, EnvOptions):
+        return options
+    if options is not None and not isinstance(options, Mapping):
         raise HarnessError(
             f"`options` must be an EnvOptions or a mapping of env options, got {type(options).__name__}"
         )
     try:
-        return EnvOptions(**options)
+        return env_version(scenario_version(scenario)).options(**(options or {}))
     except ValueError as exc:
         raise HarnessError(f"`options`: {exc}") from None
 

@@ -191,6 +191,19 @@ def version_conflict(scenario: Any, version: str | None) -> VersionConflict | No
     return None
 
 
+def scenario_version(scenario: Any) -> str:
+    """The env version whose paper scenario, or scenario set, a shipped scenario *name* is;
+    :data:`DEFAULT_VERSION` for any other name, a file or a :class:`Scenario` object."""
+    if isinstance(scenario, str):
+        for version in VERSIONS.values():
+            if scenario in version.paper_scenarios:
+                return version.name
+        for scenario_set in SCENARIO_SETS.values():
+            if scenario in scenario_set.paper_scenarios:
+                return scenario_set.version
+    return DEFAULT_VERSION
+
+
 def check_scenario_version(scenario: Any, version: str | None) -> None:
     """Refuses a scenario *name* that is another version's paper scenario (or in another version's
     scenario set) under env ``version``, naming the version's own: v0's ``paper-3`` under v1 would

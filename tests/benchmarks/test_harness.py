@@ -14,6 +14,7 @@ from benchmarks import harness
 from benchmarks.cli import main
 from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, shard_path
 from benchmarks.report import write_outputs
+from mimo_radar_env import load_scenario
 from tests.helpers import SUMMARY_KEYS
 
 
@@ -188,16 +189,25 @@ def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwar
     assert flag in caught.value.for_command_line()
 
 
-def test_the_env_options_may_be_a_mapping_over_the_defaults():
+def test_the_env_options_default_to_the_scenarios_version_and_a_mapping_goes_over_them():
+    """A run of v1's paper scenario without options is v1's (as ``gym.make`` and the command line
+    make it), not :class:`EnvOptions`' own defaults, which are v0's readings."""
     from mimo_radar_env import EnvOptions
+    from mimo_radar_env.envs.versions import VERSIONS
 
-    def config(options):
-        return make_config("paper-1-v1", ["ucb1"], trials=2, steps=3, options=options, say=lambda m: None)
+    def options(scenario, given):
+        config = make_config(scenario, ["ucb1"], trials=2, steps=3, options=given, say=lambda m: None)
+        return config.env_options
 
-    assert config({"fusion": "centralized"}) == config(EnvOptions(fusion="centralized"))
-    assert config({}) == config(None) == config(EnvOptions())
+    v1, v0 = VERSIONS["v1"].options(), VERSIONS["v0"].options()
+    assert v1 != v0 == EnvOptions()
+    for scenario, version in (("paper-1-v1", v1), ("paper-2-v1-search5", v1), ("paper-1", v0)):
+        assert options(scenario, None) == options(scenario, {}) == version.to_dict()
+        assert options(scenario, {"fusion": "centralized"}) == {**version.to_dict(), "fusion": "centralized"}
+        assert options(scenario, EnvOptions()) == EnvOptions().to_dict()  # an EnvOptions is taken as it is
+    assert options(load_scenario("paper-1"), None) == v1.to_dict()  # an object or a file: v1's, the default
     with pytest.raises(TypeError, match="unexpected keyword argument 'bogus'"):  # as in Gymnasium
-        config({"bogus": 1})
+        options("paper-1-v1", {"bogus": 1})
 
 
 # ---------------------------------------------------------------- the cost-aware schedule
