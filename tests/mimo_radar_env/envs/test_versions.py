@@ -152,3 +152,15 @@ def test_the_version_and_scenario_set_tables_refuse_two_entries_of_one_name():
     assert all(name == entry.name for name, entry in {**VERSIONS, **SCENARIO_SETS}.items())
     with pytest.raises(ValueError, match="two entries are called 'v1'"):
         by_name(EnvVersion("v1", "one"), EnvVersion("v1", "another"))
+
+
+def test_a_shipped_scenario_names_its_version_and_anything_else_the_default():
+    from mimo_radar_env import load_scenario
+    from mimo_radar_env.envs.versions import DEFAULT_VERSION, SCENARIO_SETS, scenario_version
+
+    for version in VERSIONS.values():
+        assert {scenario_version(name) for name in version.paper_scenarios} == {version.name}
+    for scenario_set in SCENARIO_SETS.values():
+        assert {scenario_version(name) for name in scenario_set.paper_scenarios} == {scenario_set.version}
+    for other in ("my-layout.toml", "paper-4", load_scenario("paper-1"), None):
+        assert scenario_version(other) == DEFAULT_VERSION
