@@ -25,6 +25,7 @@ from typing import Any
 from numpy.typing import NDArray
 
 from mimo_radar_env import DEFAULT_VERSION, EnvOptions, MimoRadarSelectVectorEnv, Scenario, env_version
+from mimo_radar_env.envs.versions import check_scenario_version
 
 from . import base
 from .base import Agent, Observation
@@ -52,7 +53,9 @@ def make_env(
     ``gym.make_vec("MimoRadarSelect-v1", ...)`` has them). ``device`` (``"cuda"``, ``"cpu"``)
     runs it on torch there, the agent acting on its tensors, the step in form ``device_mode``
     (``"eager"``, ``"graph"``, ``"compiled"``: :mod:`mimo_radar_env.envs.device_forms`);
-    ``None`` on numpy."""
+    ``None`` on numpy. Another version's paper scenario by name is refused, as ``gym.make``
+    refuses it (its Scenario object is the explicit way to run it under ``version``)."""
+    check_scenario_version(scenario, version)
     if not isinstance(options, EnvOptions):
         options = env_version(version).options(**(options or {}))
     return MimoRadarSelectVectorEnv(

@@ -68,6 +68,23 @@ def test_a_rollout_runs_on_the_single_env_as_the_batch_of_one():
     assert batch.reward[0] == pytest.approx(step.reward, rel=1e-12)
 
 
+def test_make_env_refuses_another_versions_paper_scenario_by_name_as_gym_make_does():
+    """v0's paper-1 under v1's options is a hybrid of the two readings: by name it is refused, as
+    ``gym.make("MimoRadarSelect-v1", scenario="paper-1")`` refuses it; its Scenario object runs."""
+    from mimo_radar_env import load_scenario
+
+    agent = agents.make_agent("ucb1", "paper-1")
+    message = (
+        "scenario 'paper-1' is MimoRadarSelect-v0's paper Scenario 1; MimoRadarSelect-v1's is 'paper-1-v1'"
+    )
+    with pytest.raises(ValueError, match=message):
+        agents.make_env(agent, 2, scenario="paper-1")
+    with pytest.raises(ValueError, match=message):
+        gym.make("MimoRadarSelect-v1", scenario="paper-1")
+    assert agents.make_env(agent, 2, scenario="paper-1", version="v0").options == VERSIONS["v0"].options()
+    assert agents.make_env(agent, 2, scenario=load_scenario("paper-1")).options == VERSIONS["v1"].options()
+
+
 def test_a_rollout_refuses_a_step_count_that_is_not_a_whole_number():
     agent = agents.make_agent("ucb1", "paper-1-v1")
     episode = agents.Rollout(agent, agents.make_env(agent, 2), seed=0)
