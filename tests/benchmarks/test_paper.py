@@ -79,3 +79,25 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
     assert summary["policies"]["best"]["asr"] == 1.0 and summary["policies"]["best"][
         "final_regret"
     ] == pytest.approx(0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"policies": "fix1"}, "policies must be a list of policy names, got the string 'fix1'"),
+        ({"options": {"fusion": "x"}}, "options: fusion must be one of ['average', 'centralized'], got 'x'"),
+        ({"version": "v3"}, "version must be one of ['v0', 'v1'], got 'v3'"),
+        ({"scenario": "paper-1"}, "scenario 'paper-1' is MimoRadarSelect-v0's paper Scenario 1"),
+    ],
+)
+def test_benchmarks_run_refuses_in_one_line_naming_its_argument(tmp_path, kwargs, message):
+    """``benchmarks.run`` (the run command as a Python call): a string of policies is not read as
+    one-letter names, and a bad option is a HarnessError as make_config's are."""
+    from benchmarks.harness import HarnessError
+    from benchmarks.paper import run_policies
+
+    given = {"scenario": "paper-1-v1", "policies": ["fix1"], "trials": 2, "steps": 3, **kwargs}
+    with pytest.raises(HarnessError) as caught:
+        run_policies(**given, out=tmp_path / "out", progress=False)
+    assert str(caught.value).startswith(message)
+    assert not (tmp_path / "out").exists()
