@@ -56,7 +56,12 @@ def load_hyperparams(
         text = (resources.files(__package__) / spec.hyperparams).read_text()
         path = spec.hyperparams
     else:
-        text = Path(path).read_text()
+        try:
+            text = Path(path).read_text()
+        except (OSError, UnicodeDecodeError) as exc:
+            raise ValueError(
+                f"cannot read the hyperparameters {path}: {getattr(exc, 'strerror', None) or exc}"
+            ) from None
     try:
         data = yaml.safe_load(text) or {}
     except yaml.YAMLError as exc:

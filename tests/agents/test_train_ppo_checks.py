@@ -57,6 +57,24 @@ def test_a_bad_hyperparameter_file_is_one_line_and_writes_nothing(extra, message
     assert not (tmp_path / "model").exists()
 
 
+@pytest.mark.parametrize("kind", ["missing", "folder", "binary"])
+def test_a_hyperparameter_file_that_cannot_be_read_is_named_in_one_line(kind, tmp_path, capsys):
+    path = tmp_path / "hp.yml"
+    if kind == "folder":
+        path.mkdir()
+    elif kind == "binary":
+        path.write_bytes(bytes(range(128, 256)))
+    argv = ["train-ppo", "--timesteps", "128", "--hyperparams", str(path), "--out", str(tmp_path / "model")]
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith(
+        f"mimo-radar-bench: error: cannot read the hyperparameters {path}: "
+    )
+    assert not (tmp_path / "model").exists()
+
+
 def test_the_folder_is_locked_and_an_old_model_is_replaced_only_when_asked(tmp_path, capsys):
     pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
     normalised = "  normalize: 'dict(norm_obs=True, norm_reward=False)'"
