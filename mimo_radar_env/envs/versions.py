@@ -176,32 +176,39 @@ class VersionConflict:
     own: str | None
 
 
+def _owner(scenario: Any) -> tuple[EnvVersion, ScenarioSet | None] | None:
+    """The version, and scenario set (None: one of its paper scenarios), that a shipped
+    scenario *name* belongs to; None for any other name, a file or a :class:`Scenario`."""
+    if isinstance(scenario, str):
+        for version in VERSIONS.values():
+            if scenario in version.paper_scenarios:
+                return version, None
+        for scenario_set in SCENARIO_SETS.values():
+            if scenario in scenario_set.paper_scenarios:
+                return env_version(scenario_set.version), scenario_set
+    return None
+
+
 def version_conflict(scenario: Any, version: str | None) -> VersionConflict | None:
     """The conflict of a scenario *name* with env ``version`` (:class:`VersionConflict`), or None:
     a name of the version's own, any other name, a file or a :class:`Scenario` object."""
     if version is None or not isinstance(scenario, str):
         return None
     own = env_version(version)
-    for other in VERSIONS.values():
-        if other.name != version and scenario in other.paper_scenarios:
-            return VersionConflict(other, None, own.paper_scenario(other.paper_scenarios.index(scenario) + 1))
-    for scenario_set in SCENARIO_SETS.values():
-        if scenario_set.version != version and scenario in scenario_set.paper_scenarios:
-            return VersionConflict(env_version(scenario_set.version), scenario_set.name, None)
-    return None
+    owner = _owner(scenario)
+    if owner is None or owner[0].name == version:
+        return None
+    other, scenario_set = owner
+    if scenario_set is None:
+        return VersionConflict(other, None, own.paper_scenario(other.paper_scenarios.index(scenario) + 1))
+    return VersionConflict(other, scenario_set.name, None)
 
 
 def scenario_version(scenario: Any) -> str:
     """The env version whose paper scenario, or scenario set, a shipped scenario *name* is;
     :data:`DEFAULT_VERSION` for any other name, a file or a :class:`Scenario` object."""
-    if isinstance(scenario, str):
-        for version in VERSIONS.values():
-            if scenario in version.paper_scenarios:
-                return version.name
-        for scenario_set in SCENARIO_SETS.values():
-            if scenario in scenario_set.paper_scenarios:
-                return scenario_set.version
-    return DEFAULT_VERSION
+    owner = _owner(scenario)
+    return DEFAULT_VERSION if owner is None else owner[0].name
 
 
 def check_scenario_version(scenario: Any, version: str | None) -> None:
