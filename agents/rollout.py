@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from mimo_radar_env import DEFAULT_VERSION, EnvOptions, MimoRadarSelectVectorEnv, Scenario, env_version
 from mimo_radar_env.envs.versions import check_scenario_version
+from mimo_radar_env.scenarios.scenario import field_differences
 
 from . import base
 from .base import Agent, Observation
@@ -67,6 +68,19 @@ def make_env(
     )
 
 
+def check_same_scenario(made_for: Scenario, runs: Scenario) -> int:
+    """Refuses an env whose scenario is not the one the agent was made for (its horizon aside:
+    no agent reads it); the env's horizon."""
+    differ = [name for name in field_differences(made_for, runs) if name != "horizon"]
+    if differ:
+        raise ValueError(
+            f"the agent was made for scenario {made_for.name!r} and the env runs {runs.name!r}, "
+            f"which differ in {', '.join(differ)}; make the agent for the env's scenario "
+            "(agents.make_agent(name, env.unwrapped.scenario))"
+        )
+    return runs.horizon
+
+
 @dataclass
 class Step:
     """One step of a rollout: the step's number ``t`` (from 1), the action played, what the env
@@ -87,9 +101,13 @@ class Rollout:
     oracle agent, gives the agent the env's form on torch (``device_mode``), resets both, then
     each :meth:`step` acts, steps the env and updates the agent.
 
-    ``obs`` and ``info`` are the latest the env returned (the reset's until the first step)."""
+    ``obs`` and ``info`` are the latest the env returned (the reset's until the first step).
+    The agent must have been made for the env's scenario (a horizon overridden aside), and the
+    rollout ends with the episode: steps past the horizon are refused, not run into the vector
+    env's reset."""
 
     def __init__(self, agent: base.Agent, env: Any, seed: int | None = None) -> None:
+        self.horizon = check_same_scenario(agent.scenario, env.unwrapped.scenario)
         self.agent, self.env = agent, env
         if agent.needs.oracle:
             agent.attach(env)  # type: ignore[attr-defined]
@@ -100,6 +118,8 @@ class Rollout:
 
     def step(self) -> Step:
         """Act, step the env, and update the agent with what it returned."""
+        if self.t == self.horizon:
+            raise RuntimeError(f"the episode ended after its {self.horizon} steps; start a new Rollout")
         start = time.perf_counter()
         action = self.agent.act(self.obs)
         act_seconds = time.perf_counter() - start
@@ -110,8 +130,13 @@ class Rollout:
         return Step(self.t, action, obs, reward, terminated, truncated, info, act_seconds)
 
     def run(self, steps: int) -> Iterator[Step]:
-        """The next ``steps`` steps, one at a time."""
+        """The next ``steps`` steps, one at a time, within the episode."""
         if isinstance(steps, bool) or not isinstance(steps, int) or steps < 0:
             raise ValueError(f"steps must be an integer >= 0, got {steps!r}")
+        if self.t + steps > self.horizon:
+            raise ValueError(
+                f"steps must be at most the {self.horizon - self.t} left of the episode "
+                f"(horizon {self.horizon}, {self.t} run), got {steps}"
+            )
         for _ in range(steps):
             yield self.step()

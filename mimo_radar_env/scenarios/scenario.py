@@ -64,6 +64,19 @@ class Target:
     initial_covariance: NDArray[np.float64]  # (4, 4)
     maneuvers: tuple[Maneuver, ...] = ()
 
+    def __eq__(self, other: object) -> bool:
+        return NotImplemented if type(other) is not type(self) else not field_differences(self, other)
+
+
+def field_differences(a: Any, b: Any) -> list[str]:
+    """The fields in which two dataclasses of one type differ, arrays compared by value (the
+    generated ``__eq__`` compares them with ``==`` and raises on the result's truth value)."""
+
+    def equal(x: Any, y: Any) -> bool:
+        return np.array_equal(x, y) if isinstance(x, np.ndarray) or isinstance(y, np.ndarray) else x == y
+
+    return [f.name for f in dataclasses.fields(a) if not equal(getattr(a, f.name), getattr(b, f.name))]
+
 
 _TARGET_KEYS = {"initial_state", "initial_covariance", "maneuvers"}
 _MANEUVER_KEYS = {"turn_rate_deg", "start", "stop"}
@@ -127,6 +140,9 @@ class Scenario:
     azimuth_variance: float = 0.002
     peak_sinr: float = 10.0
     truth_seed: int = 0
+
+    def __eq__(self, other: object) -> bool:
+        return NotImplemented if type(other) is not type(self) else not field_differences(self, other)
 
     # ------------------------------------------------------------------ sizes
     @property

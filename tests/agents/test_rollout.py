@@ -92,3 +92,36 @@ def test_a_rollout_refuses_a_step_count_that_is_not_a_whole_number():
         with pytest.raises(ValueError, match=r"steps must be an integer >= 0, got"):
             next(episode.run(bad))
     assert episode.t == 0 and list(episode.run(0)) == []
+
+
+def test_a_rollout_refuses_an_agent_made_for_another_scenario():
+    """An agent made for one scenario on an env of another ran silently (a tracking agent's
+    predictions would be another layout's); the horizon alone may differ (no agent reads it)."""
+    from mimo_radar_env import load_scenario
+
+    agent = agents.make_agent("tracking-ucb", "paper-2-v1")
+    with pytest.raises(ValueError, match=r"made for scenario 'paper-2-v1' and the env runs 'paper-1-v1', "):
+        agents.Rollout(agent, agents.make_env(agent, 2, scenario="paper-1-v1"), seed=0)
+    with pytest.raises(ValueError, match=r"which differ in peak_sinr; make the agent for the env's scenario"):
+        agents.Rollout(agent, gym.make("MimoRadarSelect-v1", scenario="paper-2-v1", peak_sinr=20.0), seed=0)
+    short = agents.make_env(agent, 2, scenario=load_scenario("paper-2-v1", horizon=700))
+    assert agents.Rollout(agent, short, seed=0).horizon == 700
+
+
+def test_a_rollout_ends_with_its_episode():
+    """Past the horizon the vector env resets, and the agent would learn from the reset: the
+    rollout refuses those steps before running any, and a step after the last raises."""
+    from mimo_radar_env import load_scenario
+
+    agent = agents.make_agent("ucb1", "paper-1-v1")
+    episode = agents.Rollout(
+        agent, agents.make_env(agent, 2, scenario=load_scenario("paper-1-v1", horizon=3))
+    )
+    with pytest.raises(
+        ValueError, match=r"steps must be at most the 3 left of the episode \(horizon 3, 0 run\)"
+    ):
+        next(episode.run(4))
+    assert episode.t == 0
+    assert [step.truncated.all() for step in episode.run(3)] == [False, False, True]
+    with pytest.raises(RuntimeError, match="the episode ended after its 3 steps"):
+        episode.step()

@@ -125,3 +125,21 @@ def test_missing_required_key():
     del data["tx_positions"]
     with pytest.raises(ScenarioError, match=r"missing required key\(s\) \['tx_positions'\]"):
         Scenario.from_dict(data)
+
+
+def test_scenarios_compare_by_value_field_by_field():
+    """``==`` on two scenarios compares their arrays by value (the dataclass's own ``__eq__``
+    raised on an array's truth value), down to the targets' states and covariances."""
+    from mimo_radar_env.scenarios.scenario import field_differences
+
+    one = load_scenario("paper-1-v1")
+    assert one == load_scenario("paper-1-v1") and one == Scenario.from_dict(one.to_dict())
+    assert one != load_scenario("paper-1-v1", horizon=5) and one != "paper-1-v1"
+    assert field_differences(one, load_scenario("paper-1-v1", horizon=5, peak_sinr=20.0)) == [
+        "horizon",
+        "peak_sinr",
+    ]
+    moved = one.to_dict()
+    moved["targets"][0]["initial_state"][0] += 1.0
+    assert field_differences(one, Scenario.from_dict(moved)) == ["targets"]
+    assert one.targets[0] != Scenario.from_dict(moved).targets[0]
