@@ -773,7 +773,13 @@ def prepare_output(out: Path, config: RunConfig) -> None:
                     "remove it or choose another `out`"
                 )
         if path.exists():
-            existing = json.loads(path.read_text())
+            try:
+                existing = json.loads(path.read_text())
+            except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+                raise HarnessError(
+                    f"{path} is not a run's configuration (not JSON: {exc}): "
+                    "remove it or choose another `out`"
+                ) from exc
             if not isinstance(existing, dict):
                 raise HarnessError(f"{path} is not a run's configuration: remove it or choose another `out`")
             if existing != wanted:
@@ -784,8 +790,8 @@ def prepare_output(out: Path, config: RunConfig) -> None:
                 )
         else:
             path.write_text(json.dumps(wanted, indent=2, allow_nan=False))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise HarnessError(f"cannot use `out` {out}: {getattr(exc, 'strerror', None) or exc}") from exc
+    except OSError as exc:
+        raise HarnessError(f"cannot use `out` {out}: {exc.strerror or exc}") from exc
 
 
 @contextlib.contextmanager

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 from typing import Any
 
 from .alternating import AlternatingSolver
@@ -20,10 +21,13 @@ def make_solver(name: str | SuperArmSolver, tx_count: int, rx_count: int, **para
         return name
     if name not in SOLVERS:
         raise ValueError(f"unknown solver {name!r}; available solvers are {sorted(SOLVERS)}")
-    try:
-        return SOLVERS[name](tx_count, rx_count, **params)
-    except TypeError as exc:
-        raise ValueError(f"bad parameters for solver {name!r}: {exc}") from exc
+    allowed = list(inspect.signature(SOLVERS[name]).parameters)[2:]  # after tx_count, rx_count
+    unknown = sorted(set(params) - set(allowed))
+    if unknown:
+        raise ValueError(
+            f"bad parameters for solver {name!r}: unknown {unknown}; it takes {allowed or 'none'}"
+        )
+    return SOLVERS[name](tx_count, rx_count, **params)
 
 
 def compiled_kernels(name: str, threads: int | None = None) -> list[Any]:

@@ -249,6 +249,8 @@ def _damage(folder: Path, how: str) -> None:
         (folder / "config.json").write_text("[1, 2]")
     elif how == "config-bytes":
         (folder / "config.json").write_bytes(bytes(range(128, 228)))
+    elif how == "config-cut":
+        (folder / "config.json").write_text("{")
     elif how == "summary-folder":
         (folder / "summary.json").unlink()
         (folder / "summary.json").mkdir()
@@ -261,7 +263,8 @@ def _damage(folder: Path, how: str) -> None:
     ("how", "message"),
     [
         ("config-shape", "config.json is not a run's configuration"),
-        ("config-bytes", "cannot use --out"),
+        ("config-bytes", "config.json is not a run's configuration (not JSON: 'utf-8' codec"),
+        ("config-cut", "config.json is not a run's configuration (not JSON: Expecting property name"),
         ("summary-folder", "summary.json should be a file of a run"),
         ("table-folder", "table.md should be a file of a run"),
     ],

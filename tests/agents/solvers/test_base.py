@@ -20,7 +20,13 @@ def test_every_solver_is_valid_on_ties_and_zeros(solver):
 def test_solver_errors():
     with pytest.raises(ValueError, match="unknown solver 'simplex'; available solvers are"):
         make_solver("simplex", 2, 3)
-    with pytest.raises(ValueError, match="bad parameters for solver 'bpso'"):
+    with pytest.raises(
+        ValueError, match=r"solver 'bpso': unknown \['swarm'\]; it takes \['population', 'iterations', "
+    ):
         make_solver("bpso", 2, 3, swarm=3)
+    with pytest.raises(ValueError, match=r"solver 'exact': unknown \['population'\]; it takes none"):
+        make_solver("exact", 2, 3, population=3)
+    with pytest.raises(ValueError, match=r"population must be an integer in \[1, 10,000\], got 'x'"):
+        make_solver("bpso", 2, 3, population="x")  # a bad value keeps its own line
     with pytest.raises(ValueError, match="NaN"):
         ExactSolver(2, 3).solve(np.full((1, 4, 6), np.nan), TrialRandom.for_batch(0, 1))
