@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .scenario import Scenario
+from . import validation as check
+from .scenario import MAX_HORIZON, MAX_POSITION, MAX_RANDOM_TARGETS, MAX_STATIONS, Scenario
 from .validation import ScenarioError
 
 
@@ -24,8 +25,19 @@ def random_scenario(
     central 60 % with random headings and speeds of 50-150 m/s; every other target (the
     1st, 3rd...) turns at -3 deg/s for 30 steps from ``horizon // 3`` when the horizon
     allows. Every other field keeps the paper's value. A draw whose track passes too close to
-    a station (``MIN_STATION_DISTANCE``) is replaced by the generator's next draw.
+    a station (``MIN_STATION_DISTANCE``) is replaced by the generator's next draw. At most
+    ``MAX_STATIONS`` transmitters and receivers and ``MAX_RANDOM_TARGETS`` targets.
     """
+    for name, value, high, what in (
+        ("num_tx", num_tx, MAX_STATIONS, "transmitters"),
+        ("num_rx", num_rx, MAX_STATIONS, "receivers"),
+        ("num_targets", num_targets, MAX_RANDOM_TARGETS, "targets"),
+        ("horizon", horizon, MAX_HORIZON, "steps"),
+    ):
+        check.integer_in(name, value, 1, high, f"a number of {what}")
+    check.integer_in("seed", seed, 0, 2**63 - 1, "a seed")
+    if not 0 < check.number("extent", extent) <= MAX_POSITION:
+        raise ScenarioError(f"extent must be in (0, {MAX_POSITION:g}] m, got {extent!r}")
     rng = np.random.default_rng(seed)
     for _ in range(100):
         try:

@@ -27,6 +27,9 @@ MIN_STATION_DISTANCE = 10.0
 MAX_COORDINATE = 1e12
 #: Stations and initial target positions lie within this distance of the origin (m).
 MAX_POSITION = 1e8
+#: The most transmitters, and the most receivers, of a scenario; the most targets of a random one.
+MAX_STATIONS = 1000
+MAX_RANDOM_TARGETS = 100
 #: The physical ranges of the noise and uncertainty fields (docs/model.md, section 1): a standard
 #: deviation from 1 mm (1 mm/s) up to the scene's extent, an azimuth error from 1 microradian up
 #: to pi. Beyond them the model means nothing and the tracker's arithmetic breaks down.
@@ -201,6 +204,8 @@ class Scenario:
         out["tx_positions"] = check.positions("tx_positions", data["tx_positions"])
         out["rx_positions"] = check.positions("rx_positions", data["rx_positions"])
         for name in ("tx_positions", "rx_positions"):
+            if len(out[name]) > MAX_STATIONS:
+                raise ScenarioError(f"{name} may hold at most {MAX_STATIONS} stations, got {len(out[name])}")
             far = np.abs(out[name]).max()
             if far > MAX_POSITION:
                 raise ScenarioError(f"{name} must lie within {MAX_POSITION:g} m of the origin, got {far:g} m")
