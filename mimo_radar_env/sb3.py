@@ -16,7 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from .envs.versions import ENV_IDS
+from .envs.versions import env_version
 from .extras import require
 from .scenarios import Scenario
 from .wrappers import MimoRadarSelectFlatVectorEnv, make_ppo_env
@@ -58,7 +58,7 @@ class NativeVecEnv(VecEnv):
         version: str = "v1",
         **options: Any,
     ) -> None:
-        probe = make_ppo_env(scenario, action=action, env_id=ENV_IDS[version], **options)
+        probe = make_ppo_env(scenario, action=action, env_id=env_version(version).env_id, **options)
         options = {**probe.unwrapped.options.to_dict(), **options}  # the version's defaults, resolved
         self.flat = MimoRadarSelectFlatVectorEnv(
             num_envs=num_envs, action=action, scenario=probe.unwrapped.scenario, **options

@@ -55,3 +55,13 @@ def test_native_training_vec_env_matches_the_checked_gym_wrapper():
             np.testing.assert_allclose(batch[i], obs, rtol=1e-6)
             assert rewards[i] == pytest.approx(reward, rel=1e-6)
         assert not dones.any()
+
+
+def test_native_vec_env_names_an_unknown_version():
+    """An unknown ``version`` was a bare ``KeyError: 'v9'``."""
+    pytest.importorskip("stable_baselines3", reason="PPO needs the rl extra: pip install -e '.[rl]'")
+    from mimo_radar_env.sb3 import NativeVecEnv
+
+    with pytest.raises(ValueError, match=r"env version must be one of \['v0', 'v1'\], got 'v9'"):
+        NativeVecEnv("paper-1-v1", num_envs=2, version="v9")
+    assert NativeVecEnv("paper-1", num_envs=2, version="v0").env.options.lambda_scale == "linear"
