@@ -3,7 +3,7 @@
 :func:`make_flat_env` is the entry point of the registered ``MimoRadarSelectFlat-v0``/``-v1``,
 for tools that take an env id (``make_vec_env``, rl-zoo3, torchrl's ``GymEnv``);
 :class:`MimoRadarSelectFlatVectorEnv` is their vector entry point, B trials in one batch;
-:func:`make_ppo_env` wraps an env id of one's choice.
+:func:`make_ppo_env` wraps the env of a ``MimoRadarSelect`` id of one's choice.
 """
 
 from __future__ import annotations
@@ -19,13 +19,14 @@ from numpy.typing import NDArray
 
 from ..core.superarm import super_arm_count
 from ..envs.mimo_radar_select import HorizonSpec
+from ..envs.versions import DEFAULT_VERSION, ENV_IDS
 from ..scenarios import Scenario
 from . import actions as action_spaces
 from .features import RadarFeatureObservation, RadarFeatures
 
 
 def make_ppo_env(
-    scenario: Any = None, action: str = "auto", env_id: str = "MimoRadarSelect-v1", **kwargs: Any
+    scenario: Any = None, action: str = "auto", env_id: str = ENV_IDS[DEFAULT_VERSION], **kwargs: Any
 ) -> gym.Env:
     """``MimoRadarSelect`` (``env_id``, default v1) wrapped for PPO: flat features and valid actions.
 
@@ -34,6 +35,8 @@ def make_ppo_env(
     ``action``: ``"discrete"`` (one action per super arm), ``"scores"`` (station
     scores) or ``"auto"`` (discrete when there are at most 1,000 super arms).
     """
+    if env_id not in ENV_IDS.values():
+        raise ValueError(f"env_id must be one of {sorted(ENV_IDS.values())}, got {env_id!r}")
     env = gym.make(env_id, **kwargs) if scenario is None else gym.make(env_id, scenario=scenario, **kwargs)
     return wrap_for_learning(env, action)
 

@@ -120,3 +120,15 @@ def test_station_scores_give_valid_selections_on_paper_and_16x16_layouts():
         SuperArmDiscreteAction(gym.make("MimoRadarSelect-v0", scenario=large_scenario(16, 16, 5)))
     assert isinstance(make_ppo_env(large_scenario(16, 16, 5)).env, StationScoreAction)
     assert isinstance(make_ppo_env("paper-1-v1").env, SuperArmDiscreteAction)
+
+
+def test_make_ppo_env_takes_only_the_env_ids_it_wraps():
+    """Another id failed inside its env's constructor (CartPole: "unexpected keyword argument
+    'scenario'"), and a Flat id would have wrapped the learning wrappers twice."""
+    for other in ("CartPole-v1", "MimoRadarSelectFlat-v1"):
+        with pytest.raises(
+            ValueError,
+            match=rf"env_id must be one of \['MimoRadarSelect-v0', 'MimoRadarSelect-v1'\], got '{other}'",
+        ):
+            make_ppo_env(env_id=other)
+    assert make_ppo_env(env_id="MimoRadarSelect-v0").unwrapped.options.lambda_scale == "linear"
