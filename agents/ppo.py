@@ -286,7 +286,10 @@ class PPOAgent(Agent):
         self.learner.algorithm_class()  # DependencyNotInstalled naming the extra, before anything else
         file = model_file(path)
         if not file.is_file():
-            raise ValueError(f"PPO model {file} does not exist (expected ppo:PATH/TO/model.zip)")
+            raise ValueError(
+                f"{self.name} model {file} does not exist: give a model's .zip file or the folder "
+                f"train-ppo wrote, which holds its {MODEL_FILE}"
+            )
         if not isinstance(allow_pickle, bool):
             raise ValueError(f"allow_pickle must be true or false, got {allow_pickle!r}")
         if normalization is not None and not isinstance(normalization, str | Path):
@@ -426,8 +429,8 @@ class TorchPPOAgent(Agent):
         file = path if path.suffix else path / WEIGHTS_FILE
         if not file.is_file():
             raise ValueError(
-                f"PPO model {file} does not exist (expected torch-ppo:DIR or torch-ppo:DIR/{WEIGHTS_FILE}, "
-                "what train-ppo --algo torch-ppo writes)"
+                f"torch-ppo model {file} does not exist: give the folder train-ppo --algo torch-ppo "
+                f"wrote, or its {WEIGHTS_FILE}"
             )
         self.features = RadarFeatures(self.scenario)
         self.index = SuperArmIndex(self.scenario)

@@ -41,3 +41,19 @@ def test_the_harness_records_the_statistics_the_agent_applies(small_model, tmp_p
     config = make_config("paper-1-v1", [f"ppo:{small_model}"], trials=2, steps=2)
     files = config.policy_files[f"ppo:{small_model}"]
     assert set(files) == {str(small_model / "model.zip"), str(small_model / "vecnormalize.npz")}
+
+
+@pytest.mark.parametrize("name", ["ppo", "maskable-ppo", "recurrent-ppo", "torch-ppo"])
+def test_a_missing_model_is_named_by_its_own_agent(name, tmp_path):
+    """Each learner names itself and what a path may be (every SB3 learner said "expected
+    ppo:PATH/TO/model.zip", the command line's syntax, from the Python API too)."""
+    pytest.importorskip("stable_baselines3", reason="needs the rl extra")
+    import re
+
+    import agents
+
+    file = "model.pt" if name == "torch-ppo" else "model.zip"
+    with pytest.raises(
+        ValueError, match=rf"^{re.escape(name)} model {re.escape(str(tmp_path / file))} does not exist: give "
+    ):
+        agents.make_agent(name, "paper-1-v1", path=tmp_path)

@@ -57,7 +57,7 @@ def test_bad_values_fail_before_config_json_is_written(param, message, tmp_path,
 @pytest.mark.parametrize(
     ("policies", "message"),
     [
-        ("ppo:/etc", "PPO model /etc/model.zip does not exist"),
+        ("ppo:/etc", "ppo model /etc/model.zip does not exist: give a model's .zip file or the folder"),
         ("fixed", "needs the parameter(s) ['rx', 'tx']"),
     ],
 )

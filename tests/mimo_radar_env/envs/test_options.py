@@ -162,7 +162,7 @@ def test_a_bad_agent_parameter_is_refused_before_anything_is_written(
     assert exit_info.value.code == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and err.startswith("mimo-radar-bench: error: ")
-    named = {"solver": "solver", "solver_params": "solver_params", "path": "PPO model"}.get(
+    named = {"solver": "solver", "solver_params": "solver_params", "path": "ppo model"}.get(
         parameter, parameter
     )
     assert named in err
