@@ -158,6 +158,11 @@ class Agent(ABC):
         check_device_mode(device_mode)
         self.device_mode = device_mode
 
+    def env_option_values(self) -> dict[str, Any]:
+        """Its parameters named after env options (``needs.env_option_params``) and their values,
+        which must equal its env's (a :class:`~agents.rollout.Rollout` checks them)."""
+        return {key: getattr(self, key) for key in self.needs.env_option_params}
+
     def update(self, obs: Observation, reward: Any) -> None:
         """Learn from the observation and reward of the step just taken; ``ValueError`` naming
         the key of an observation entry (or the reward) that is not finite."""

@@ -40,7 +40,8 @@ class Needs:
         (tracking-ucb's ``{"prediction_covariance": True}``); the rollout loop sets them.
     env_option_params : tuple of str
         Its parameters named after env options (``"fusion"``...), which must match the env's:
-        the harness passes the run's unless they are given.
+        the harness passes the run's unless they are given, and a rollout refuses an env of
+        other values (:meth:`agents.Agent.env_option_values`).
     tracking_search : bool
         It selects with the tracking search, whose numba kernel a run compiles.
     device : bool

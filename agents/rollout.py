@@ -81,6 +81,17 @@ def check_same_scenario(made_for: Scenario, runs: Scenario) -> int:
     return runs.horizon
 
 
+def check_env_options(agent: Agent, options: EnvOptions) -> None:
+    """Refuses an env whose options differ from the agent's parameters named after them."""
+    for key, value in agent.env_option_values().items():
+        if value != getattr(options, key):
+            raise ValueError(
+                f"{agent.name} was made with {key}={value!r} and the env runs {key}="
+                f"{getattr(options, key)!r}: they must match (make the agent with the env's, "
+                f"{key}=env.unwrapped.options.{key})"
+            )
+
+
 @dataclass
 class Step:
     """One step of a rollout: the step's number ``t`` (from 1), the action played, what the env
@@ -108,6 +119,7 @@ class Rollout:
 
     def __init__(self, agent: base.Agent, env: Any, seed: int | None = None) -> None:
         self.horizon = check_same_scenario(agent.scenario, env.unwrapped.scenario)
+        check_env_options(agent, env.unwrapped.options)
         self.agent, self.env = agent, env
         if agent.needs.oracle:
             agent.attach(env)  # type: ignore[attr-defined]

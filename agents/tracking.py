@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -181,6 +183,9 @@ class TrackingUCB(Agent):
         self.selector = TrackingSelector(
             self.scenario, criterion, fusion, lambda_scale, measurement_quality, sinr_weight
         )
+
+    def env_option_values(self) -> dict[str, Any]:
+        return {key: getattr(self.selector, key) for key in self.needs.env_option_params}
 
     def _reset(self, obs: Observation) -> None:
         if PREDICTED_COVARIANCE not in obs:

@@ -9,9 +9,14 @@ import agents
 from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv
 
 
+def _centralized(policy):
+    """The agent's parameters named after env options, set to the env's centralised fusion."""
+    return {"fusion": "centralized"} if "fusion" in agents.agent_class(policy).needs.env_option_params else {}
+
+
 def _by_hand(policy, env, seed, steps):
     """The loop as every caller used to write it."""
-    agent = agents.make_agent(policy, "paper-1-v1", seed=5)
+    agent = agents.make_agent(policy, "paper-1-v1", seed=5, **_centralized(policy))
     if agent.needs.oracle:
         agent.attach(env)
     obs, _ = env.reset(seed=seed)
@@ -28,7 +33,7 @@ def _by_hand(policy, env, seed, steps):
 
 @pytest.mark.parametrize("policy", ["mg-crb-cl", "best", "tracking-ucb"])
 def test_a_rollout_is_the_loop_written_out(policy):
-    agent = agents.make_agent(policy, "paper-1-v1", seed=5)
+    agent = agents.make_agent(policy, "paper-1-v1", seed=5, **_centralized(policy))
     env = agents.make_env(agent, 4, {"fusion": "centralized"})
     assert env.options.fusion == "centralized"
     steps = list(agents.Rollout(agent, env, seed=9).run(6))
@@ -125,3 +130,25 @@ def test_a_rollout_ends_with_its_episode():
     assert [step.truncated.all() for step in episode.run(3)] == [False, False, True]
     with pytest.raises(RuntimeError, match="the episode ended after its 3 steps"):
         episode.step()
+
+
+def test_a_rollout_refuses_an_env_whose_options_differ_from_the_agents_parameters_named_after_them():
+    """tracking-ucb predicts the posterior with its own ``fusion``, ``lambda_scale`` and
+    ``measurement_quality``: on an env of other options it selected for another tracker, silently
+    (this file's first test ran it so, with average fusion on a centralised env)."""
+    agent = agents.make_agent("tracking-ucb", "paper-1-v1", fusion="average")
+    assert agent.env_option_values() == {
+        "fusion": "average",
+        "lambda_scale": "db",
+        "measurement_quality": None,
+    }
+    with pytest.raises(
+        ValueError,
+        match=r"tracking-ucb was made with fusion='average' and the env runs fusion='centralized': they must",
+    ):
+        agents.Rollout(agent, agents.make_env(agent, 2, {"fusion": "centralized"}))
+    quality = agents.make_agent("plan-tracking-ucb", "paper-1-v1", measurement_quality=2)
+    with pytest.raises(ValueError, match=r"measurement_quality=2 and the env runs measurement_quality=None"):
+        agents.Rollout(quality, agents.make_env(quality, 2))
+    assert agents.Rollout(quality, agents.make_env(quality, 2, {"measurement_quality": 2.0})).t == 0
+    assert agents.make_agent("ucb1", "paper-1-v1").env_option_values() == {}
