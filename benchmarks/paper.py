@@ -21,6 +21,8 @@ from .study import Finished, Run, Study
 
 
 class _OneRun(Study):
+    min_trials = 1  # its table reports estimates alone on fewer trials than an interval needs
+
     def report(self, finished: dict[Hashable, Finished], judged: object) -> str:
         """table.md without how its intervals are computed (it is one file away), and where the
         run's files are, on the last line."""

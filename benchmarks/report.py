@@ -123,7 +123,7 @@ def summarize(
             method[key] = [p["method"] for p in value] if isinstance(value, list) else value["method"]
         row["wall_s"] = float(per_trial[policy]["wall_s"])
         row["tracker_repairs"] = int(per_trial[policy]["tracker_repairs"])
-        if config.trials >= 2:  # an interval needs two trials or more
+        if config.trials >= uncertainty.MIN_INTERVAL_TRIALS:
             row["ci"], row["method"] = ci, method
         policies[policy] = row
     summary = {
@@ -135,8 +135,8 @@ def summarize(
         "agent_params": config.agent_params,
         "policies": policies,
     }
-    if config.trials >= 2:
-        summary["uncertainty"] = uncertainty.METHOD
+    if config.trials >= uncertainty.MIN_INTERVAL_TRIALS:
+        summary["uncertainty"] = uncertainty.method_of(config.trials)
         summary["paired_differences"] = uncertainty.paired_differences(metrics, config.seed)
     return summary
 
@@ -263,7 +263,7 @@ def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "
         "",
         LEGEND,
         "",
-        *([how, ""] if "uncertainty" in summary else []),
+        *([how, ""] if "uncertainty" in summary else [uncertainty.NO_INTERVALS, ""]),
         "| " + " | ".join(head) + " |",
         "|" + "---|" * len(head),
     ]

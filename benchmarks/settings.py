@@ -368,16 +368,21 @@ def add_max_hours(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def trial_count(low: int) -> Callable[[str], int]:
+    """An argparse type: a number of trials from ``low`` (above 1: the trials a paired 95 %
+    interval needs) to ``MAX_TRIALS``."""
+    return integer(low, f"a paired 95 % interval needs {low} trials or more" if low > 1 else "", MAX_TRIALS)
+
+
 def add_run_arguments(
     parser: argparse.ArgumentParser, trials: int = DEFAULT_TRIALS, min_trials: int = 1
 ) -> None:
     """The arguments every study shares: trials, steps, seed, --out, shards, workers, backend,
     figures, progress and the env options (a study that judges paired intervals needs
-    ``min_trials`` = 2)."""
-    why = "a paired 95 % interval needs two trials or more" if min_trials > 1 else ""
+    ``min_trials`` = ``uncertainty.MIN_INTERVAL_TRIALS``)."""
     parser.add_argument(
         "--trials",
-        type=integer(min_trials, why, MAX_TRIALS),
+        type=trial_count(min_trials),
         default=trials,
         help=f"Monte-Carlo trials, at least {min_trials} (default %(default)s)",
     )

@@ -36,6 +36,7 @@ from mimo_radar_env import EnvOptions, Scenario
 from . import harness
 from .cli import Command
 from .settings import DEFAULT_TRIALS, Settings, add_agent_param, add_run_arguments, scenario_for_version
+from .uncertainty import MIN_INTERVAL_TRIALS
 
 
 @dataclass(frozen=True)
@@ -178,8 +179,9 @@ class Study(Command):
     default_trials: ClassVar[int] = DEFAULT_TRIALS
     #: Whether agent parameters start from the env version's paper study.
     paper_study: ClassVar[bool] = False
-    #: The fewest trials the study accepts (2 where it judges paired intervals).
-    min_trials: ClassVar[int] = 1
+    #: The fewest trials the study accepts: those of a 95 % interval, which every study judges
+    #: (a run of policies, which reports estimates alone on fewer, takes 1).
+    min_trials: ClassVar[int] = MIN_INTERVAL_TRIALS
     #: Whether :meth:`judge` reads the runs' per-trial metrics (:attr:`Finished.metrics`).
     keeps_metrics: ClassVar[bool] = False
 
@@ -189,6 +191,10 @@ class Study(Command):
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        if cls.default_trials < cls.min_trials:
+            raise TypeError(
+                f"{cls.__name__}.default_trials {cls.default_trials} is below its min_trials {cls.min_trials}"
+            )
         cls.add_study_arguments(parser)
         add_agent_param(parser, paper_study=cls.paper_study)
         add_run_arguments(parser, trials=cls.default_trials, min_trials=cls.min_trials)

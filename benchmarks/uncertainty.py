@@ -7,7 +7,9 @@ method:
 
 * **BCa** from :data:`BCA_MIN_TRIALS` to :data:`BCA_MAX_TRIALS` trials;
 * **percentile** below that (BCa's acceleration is a jackknife over trials, unreliable on a
-  handful of them), above it (the jackknife's ``n`` statistics of ``n - 1`` trials each would
+  handful of them; there at the level of Hesterberg's expanded percentile interval,
+  :func:`confidence_level`, as one at 95 % is too narrow on a few trials), above it (the
+  jackknife's ``n`` statistics of ``n - 1`` trials each would
   take ``n^2`` memory, 80 GB at 100,000 trials, and BCa's correction shrinks towards the
   percentile interval as trials grow; there resamples are also drawn in batches of at most
   :data:`BATCH_WEIGHTS` weights), where BCa is undefined, or where BCa's interval would exclude
@@ -16,7 +18,8 @@ method:
   rounding) is constant over trials, and its interval is the value itself (Best's zero regret,
   a fixed policy's regret under a shared truth).
 
-Each interval records its method, and every interval contains its value: an end that misses
+Fewer than :data:`MIN_INTERVAL_TRIALS` trials give no interval. Each interval records its
+method, and every interval contains its value: an end that misses
 the value by rounding alone (``<= ROUNDING`` of the resamples' spread) is set to it, and a
 larger miss raises. Comparisons between two policies resample the *same* trials for both
 (paired), so the common truth and channel draws cancel. The per-step bands of the figures are
@@ -37,6 +40,10 @@ from numpy.typing import NDArray
 from benchmarks.metrics import REMEMBERED_WEIGHTS, TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
+#: The fewest trials a 95 % interval is given on. A bootstrap interval lies within the range of
+#: the trials, which holds the median of a symmetric distribution with probability
+#: ``1 - 2^(1 - n)``: under 95 % up to 5 trials (94 % at 5). Fewer trials give estimates alone.
+MIN_INTERVAL_TRIALS = 6
 RESAMPLES = 2000
 BAND_RESAMPLES = 1000
 #: Below this many trials intervals are percentile intervals, not BCa.
@@ -57,7 +64,25 @@ METHOD = (
     f"curve bands: percentile bootstrap per step ({BAND_RESAMPLES} resamples)"
 )
 
+#: How intervals below BCA_MIN_TRIALS are widened (:func:`confidence_level`).
+EXPANDED = (
+    f"below {BCA_MIN_TRIALS} trials the percentile interval's level is Hesterberg's expansion for "
+    "a few trials (its z is Student's t with n - 1 degrees of freedom times sqrt(n / (n - 1)))"
+)
+#: What a table of fewer than MIN_INTERVAL_TRIALS trials says in place of its intervals.
+NO_INTERVALS = (
+    f"No intervals: a 95 % interval needs {MIN_INTERVAL_TRIALS} trials or more (a bootstrap interval "
+    "lies within the range of the trials, which holds the median of a symmetric distribution with "
+    "probability 1 - 2^(1 - n): 94 % at 5 trials)."
+)
+
 Metric = Callable[[NDArray[np.float64]], NDArray[np.float64]]
+
+
+def method_of(num_trials: int) -> str:
+    """How the intervals of a run of ``num_trials`` trials are computed (:data:`METHOD`, with
+    :data:`EXPANDED` below :data:`BCA_MIN_TRIALS` trials)."""
+    return METHOD if num_trials >= BCA_MIN_TRIALS else f"{METHOD}; {EXPANDED}"
 
 
 def _on_one_blas_thread(function: Callable[..., Any]) -> Callable[..., Any]:
@@ -106,6 +131,20 @@ def _shared_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
     return weights
 
 
+def confidence_level(num_trials: int) -> float:
+    """The bootstrap's confidence level for a 95 % interval over ``num_trials`` trials: 95 % from
+    :data:`BCA_MIN_TRIALS` on; below, that of Hesterberg's expanded percentile interval, whose
+    ``z`` is Student's ``t`` with ``n - 1`` degrees of freedom times ``sqrt(n / (n - 1))`` (a
+    percentile interval at 95 % is too narrow on a few trials: tests/benchmarks/test_uncertainty.py
+    measures both on 6 and 10 normal trials)."""
+    from scipy import stats
+
+    if num_trials >= BCA_MIN_TRIALS:
+        return CONFIDENCE
+    z = np.sqrt(num_trials / (num_trials - 1)) * stats.t.ppf((1 + CONFIDENCE) / 2, num_trials - 1)
+    return float(1 - 2 * stats.norm.sf(z))
+
+
 def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, seed: int) -> Any:
     """``scipy.stats.bootstrap`` over resampled trials of ``metric(weights) -> (...,) or (..., T)``."""
     from scipy import stats  # imported at the first interval: a study's set-up does without it
@@ -123,7 +162,7 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
             vectorized=True,
             n_resamples=resamples,
             batch=batch,
-            confidence_level=CONFIDENCE,
+            confidence_level=confidence_level(num_trials),
             method=method,
             random_state=np.random.default_rng(seed),
         )
@@ -131,7 +170,7 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
 
 def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     """``{"estimate", "ci", "method"}``: the metric at equal weights and its 95 % interval
-    (``ci`` None with a single trial, which has no interval)."""
+    (``ci`` None on fewer than :data:`MIN_INTERVAL_TRIALS` trials, which have none)."""
     return estimates({"": metric}, num_trials, seed)[""]
 
 
@@ -145,9 +184,9 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
         return {}
     equal = _shared_weights(np.arange(num_trials), num_trials)
     values = [float(metrics[key](equal)) for key in keys]
-    if num_trials < 2:
-        one = {"ci": None, "method": "none (one trial)"}
-        return {key: {"estimate": v, **one} for key, v in zip(keys, values, strict=True)}
+    if num_trials < MIN_INTERVAL_TRIALS:
+        none = {"ci": None, "method": f"none (fewer than {MIN_INTERVAL_TRIALS} trials)"}
+        return {key: {"estimate": v, **none} for key, v in zip(keys, values, strict=True)}
     method = "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"
 
     def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -188,8 +227,9 @@ def interval(metric: Metric, num_trials: int, seed: int = 0) -> tuple[float, flo
 
 @_on_one_blas_thread
 def band(curve: Metric, num_trials: int, seed: int = 0) -> tuple[NDArray, NDArray]:
-    """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``."""
-    if num_trials < 2:
+    """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``; NaN on fewer
+    than :data:`MIN_INTERVAL_TRIALS` trials."""
+    if num_trials < MIN_INTERVAL_TRIALS:
         nan = np.full(curve(trial_weights(np.arange(num_trials), num_trials)).shape[-1], np.nan)
         return nan, nan
     result = _bootstrap(curve, num_trials, BAND_RESAMPLES, "percentile", seed)

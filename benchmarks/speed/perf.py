@@ -76,8 +76,8 @@ QUICK = {
     "reference_trials": 2,
     "env_steps": 30,
     "solver_repeats": 2,
-    "claims_trials": 4,
-    "tracking_trials": 2,
+    "claims_trials": 6,
+    "tracking_trials": 6,
     "study_steps": 20,
 }
 TARGETS = {

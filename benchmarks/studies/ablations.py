@@ -200,7 +200,6 @@ def maneuver(paper: dict[str, TrialMetrics], values: NDArray, seed: int) -> dict
 
 class AblationsStudy(Study):
     name = "ablations"
-    min_trials = 2
     paper_study = True
     description = __doc__
 

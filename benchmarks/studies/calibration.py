@@ -44,7 +44,7 @@ from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
 from .. import verdicts
-from ..settings import integer
+from ..settings import integer, trial_count
 from ..study import Study, machine, write_timing
 from . import claims
 
@@ -317,7 +317,6 @@ def calibration_markdown(report: dict[str, Any]) -> str:
 
 class CalibrationStudy(Study):
     name = "calibrate-layout"
-    min_trials = 2
     description = (
         "Jitter the reference layout into candidates (seeded), reject those that break the paper's "
         "text (region, 2 km from every nominal track, Best's selections in Scenario 1), rank the rest "
@@ -329,13 +328,13 @@ class CalibrationStudy(Study):
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        for flag, default, text in (
-            ("--candidates", CANDIDATES, "jittered layouts to draw"),
-            ("--screen", SCREEN, "layouts judged by short scorecards"),
-            ("--screen-trials", SCREEN_TRIALS, "trials of the short scorecards"),
-            ("--final", FINAL, "layouts judged by full scorecards"),
+        for flag, default, text, kind in (
+            ("--candidates", CANDIDATES, "jittered layouts to draw", integer(1)),
+            ("--screen", SCREEN, "layouts judged by short scorecards", integer(1)),
+            ("--screen-trials", SCREEN_TRIALS, "trials of the short scorecards", trial_count(cls.min_trials)),
+            ("--final", FINAL, "layouts judged by full scorecards", integer(1)),
         ):
-            parser.add_argument(flag, type=integer(1), default=default, help=f"{text} (default {default})")
+            parser.add_argument(flag, type=kind, default=default, help=f"{text} (default {default})")
 
     def main(self) -> int:
         start = time.perf_counter()

@@ -390,7 +390,7 @@ def judge_all(comparisons: Sequence[Comparison], policies: Policies, seed: int =
         judged = estimated.get(i)
         if judged is None:
             results.append({"comparison": comparison.text, "verdict": verdicts.NOT_EVALUATED})
-        elif judged["ci"] is None:  # one trial: no interval, no verdict
+        elif judged["ci"] is None:  # too few trials: no interval, no verdict
             results.append(
                 {
                     "comparison": comparison.text,
@@ -419,7 +419,7 @@ def prepare(scenario: str, policy: str, metrics: TrialMetrics, seed: int = 0) ->
         for part in comparison.parts
         if part[1] == policy and (part[0] != "armse" or metrics.tracked)  # else the judge says why
     }
-    if parts and metrics.num_trials > 1:
+    if parts and metrics.num_trials >= uncertainty.MIN_INTERVAL_TRIALS:
         parts_of = {part: functools.partial(_part, metrics, part) for part in sorted(parts)}
         uncertainty.estimates(parts_of, metrics.num_trials, seed)
 
@@ -473,14 +473,15 @@ def scorecard(scenarios: Sequence[str | Scenario], out: Path, settings: Settings
     finished = execute(runs, settings, keep_metrics=True, prepare=prepare_policy).values()
     folders = [f.folder for f in finished]
     results = judge_studies(folders, settings.seed, {f.folder: f.metrics for f in finished})
-    write_scorecard(results, out, describe_studies(folders), scorecard_title(folders))
+    write_scorecard(
+        results, out, describe_studies(folders), scorecard_title(folders), studies_trials(folders)
+    )
     return results
 
 
 class ClaimsStudy(Study):
     name = "claims"
     keeps_metrics = True  # judge() reads the runs' per-trial metrics
-    min_trials = 2
     description = (
         "Evaluate the paper's claims (docs/results-claims.md) on finished 'paper' runs, or run the paper "
         "studies first (into OUT/<scenario>, resumable). Writes OUT/claims.md and OUT/claims.json."
@@ -526,7 +527,13 @@ class ClaimsStudy(Study):
 
     def report(self, finished: dict[Hashable, Finished], judged: Any) -> str:
         folders, results = judged
-        write_scorecard(results, self.settings.out, describe_studies(folders), scorecard_title(folders))
+        write_scorecard(
+            results,
+            self.settings.out,
+            describe_studies(folders),
+            scorecard_title(folders),
+            studies_trials(folders),
+        )
         return (self.settings.out / "claims.md").read_text()
 
 
@@ -554,8 +561,8 @@ def judge_studies(
 
 def check_paper_run(folder: Path) -> None:
     """Raise :class:`BenchError` unless ``folder`` holds a paper study the claims can be judged
-    on: the paper's policies and two trials or more (a claim past a shorter run's last step is
-    "not evaluated")."""
+    on: the paper's policies and the trials of an interval (``uncertainty.MIN_INTERVAL_TRIALS``) or
+    more (a claim past a shorter run's last step is "not evaluated")."""
     path = folder / "config.json"
     if not path.is_file():
         raise BenchError(f"{folder} holds no finished run (no config.json)")
@@ -570,8 +577,11 @@ def check_paper_run(folder: Path) -> None:
             f"{folder} ran {', '.join(policies)}; the claims need the paper study's policies "
             f"({', '.join(PAPER_POLICIES)}): run 'mimo-radar-bench paper' or 'claims --out DIR'"
         )
-    if trials < 2:
-        raise BenchError(f"{folder} ran {trials} trial; the claims' paired intervals need two or more")
+    if trials < uncertainty.MIN_INTERVAL_TRIALS:
+        raise BenchError(
+            f"{folder} ran {trials} trials; the claims' paired 95 % intervals need "
+            f"{uncertainty.MIN_INTERVAL_TRIALS} or more"
+        )
 
 
 #: The fields of a judged claim that a scorecard must hold.
@@ -602,6 +612,11 @@ def load_scorecard(path: Path) -> list[dict[str, Any]]:
 def _configs(folders: Sequence[str | Path]) -> list[dict[str, Any]]:
     """The studies' config.json documents."""
     return [json.loads((Path(f) / "config.json").read_text()) for f in folders]
+
+
+def studies_trials(folders: Sequence[str | Path]) -> int:
+    """The trials of the studies judged (the first's: a scorecard judges studies of one size)."""
+    return int(_configs(folders)[0]["trials"])
 
 
 def describe_studies(folders: Sequence[str | Path]) -> str:
@@ -639,14 +654,21 @@ def scorecard_title(folders: Sequence[str | Path]) -> str:
     return f"The paper's claims: {'; '.join(parts)}; {first['trials']} trials"
 
 
-def write_scorecard(results: list[dict[str, Any]], out: str | Path, about: str = "", title: str = "") -> None:
-    """``out/claims.json`` and ``out/claims.md`` (``about``: a line on the studies judged)."""
+def write_scorecard(
+    results: list[dict[str, Any]],
+    out: str | Path,
+    about: str = "",
+    title: str = "",
+    trials: int | None = None,
+) -> None:
+    """``out/claims.json`` and ``out/claims.md`` (``about``: a line on the studies judged, of
+    ``trials`` trials each)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     (out / "claims.json").write_text(json.dumps(results, indent=2, allow_nan=False))
     scenarios = sorted({r["scenario"] for r in results})
     title = title or f"The paper's claims ({', '.join(scenarios)})"
-    (out / "claims.md").write_text(scorecard_markdown(results, title, about))
+    (out / "claims.md").write_text(scorecard_markdown(results, title, about, trials))
 
 
 def load_study(run_dir: str | Path, metrics: dict[str, TrialMetrics] | None = None) -> tuple[str, Policies]:
@@ -728,9 +750,12 @@ def comparison_markdown(scorecards: dict[str, list[dict[str, Any]]], claim_text:
     return "\n".join(lines) + "\n"
 
 
-def scorecard_markdown(results: list[dict[str, Any]], title: str, about: str = "") -> str:
+def scorecard_markdown(
+    results: list[dict[str, Any]], title: str, about: str = "", trials: int | None = None
+) -> str:
     lines = [f"# {title}", ""] + ([about, ""] if about else [])
-    lines += [f"Verdicts from paired 95 % intervals ({uncertainty.METHOD}).", ""]
+    method = uncertainty.METHOD if trials is None else uncertainty.method_of(trials)
+    lines += [f"Verdicts from paired 95 % intervals ({method}).", ""]
     counts = verdicts.count(r["verdict"] for r in results)
     lines += [", ".join(f"{k}: {v}" for k, v in counts.items()), ""]
     lines += [

@@ -211,7 +211,6 @@ def agreement(checks: dict[str, bool], results: list[dict[str, Any]]) -> dict[st
 
 class LayoutSearch(Study):
     name = "search-layouts"
-    min_trials = 2
     paper_study = True
     description = __doc__
 

@@ -55,7 +55,7 @@ from .. import uncertainty
 from ..cli import Command
 from ..errors import BenchError
 from ..report import paired_difference
-from ..settings import folder, integer
+from ..settings import folder, integer, trial_count
 from ..study import machine, write_timing
 
 #: Swerling-I samples per channel of the sampling oracles.
@@ -238,8 +238,12 @@ class MechanismsStudy(Command):
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
+        fewest = uncertainty.MIN_INTERVAL_TRIALS
         parser.add_argument(
-            "--trials", type=integer(1), default=500, help="trials per scenario (default 500)"
+            "--trials",
+            type=trial_count(fewest),
+            default=500,
+            help=f"trials per scenario, at least {fewest} (default 500)",
         )
         parser.add_argument("--seed", type=integer(0), default=0, help="master seed (default 0)")
         parser.add_argument("--steps", type=integer(1), default=None, help="steps (default: the horizon)")

@@ -67,7 +67,6 @@ def planning_policies() -> tuple[str, ...]:
 
 class PlanningStudy(Study):
     name = "planning"
-    min_trials = 2
     default_trials = DEFAULT_TRIALS
     description = (
         f"Run {', '.join(planning_policies())} on the v1 paper scenarios under both fusions (into "

@@ -130,7 +130,6 @@ class Training:
 
 class RLStudy(Study):
     name = "rl"
-    min_trials = 2
     default_trials = DEFAULT_TRIALS
     paper_study = True
     description = (

@@ -122,7 +122,6 @@ def fusion_runs(study: Study, policies: tuple[str, ...]) -> list[Run]:
 
 class TrackingStudy(Study):
     name = "tracking"
-    min_trials = 2
     description = (
         f"Run {', '.join(TRACKING_POLICIES)} on the paper scenarios under both fusions (into "
         "OUT/<scenario>-<fusion>, resumable); judge the targets on paired differences; write "

@@ -273,15 +273,27 @@ def test_an_exact_search_too_large_for_the_layout_is_refused_before_running(tmp_
     assert not out.exists()
 
 
-@pytest.mark.parametrize("study", ["tracking", "claims", "calibrate-layout"])
-def test_judged_studies_need_two_trials(study, tmp_path, capsys):
+@pytest.mark.parametrize(
+    "study",
+    ["tracking", "claims", "calibrate-layout", "planning", "ablations", "search-layouts", "rl", "mechanisms"],
+)
+def test_judged_studies_need_the_trials_of_an_interval(study, tmp_path, capsys):
     with pytest.raises(SystemExit) as exit_info:
-        main([study, "--trials", "1", "--out", str(tmp_path / "x"), "--quiet"])
+        main([study, "--trials", "5", "--out", str(tmp_path / "x"), "--quiet"])
     assert exit_info.value.code == 2
-    assert "must be an integer >= 2 (a paired 95 % interval needs two trials or more), got 1" in (
+    assert "must be an integer >= 6 (a paired 95 % interval needs 6 trials or more), got 5" in (
         capsys.readouterr().err
     )
     assert not (tmp_path / "x").exists()
+
+
+def test_a_run_of_policies_takes_a_single_trial(tmp_path):
+    for command in (["run", "--scenario", "paper-1-v1", "--policies", "best"], ["paper", "--scenario", "1"]):
+        out = tmp_path / command[0]
+        assert (
+            main([*command, "--trials", "1", "--steps", "2", "--quiet", "--no-figures", "--out", str(out)])
+            == 0
+        )
 
 
 def test_workers_beyond_the_cores_are_capped_with_a_message(tmp_path, capsys, monkeypatch):

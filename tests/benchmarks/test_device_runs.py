@@ -15,7 +15,7 @@ from benchmarks.speed import device as device_bench  # noqa: E402
 
 
 def test_the_claims_study_on_torch_gives_the_numpy_studys_verdicts_and_estimates(tmp_path, capsys):
-    common = ["claims", "--trials", "4", "--steps", "10", "--quiet", "--no-figures"]
+    common = ["claims", "--trials", "6", "--steps", "10", "--quiet", "--no-figures"]
     assert main([*common, "--out", str(tmp_path / "numpy")]) == 0
     text_numpy = capsys.readouterr().out
     assert main([*common, "--out", str(tmp_path / "torch"), "--device", "cpu"]) == 0

@@ -30,7 +30,7 @@ def small_run(tmp_path_factory):
         "--policies",
         "mg-crb-cl,fix2",
         "--trials",
-        "5",
+        "6",
         "--steps",
         "12",
     ]
@@ -50,7 +50,7 @@ def test_the_summary_follows_from_the_curves(small_run):
         assert row["asr"] == pytest.approx(np.mean([float(r["asr"]) for r in mine]), abs=1e-12)
         linear = np.mean([10 ** (float(r["mean_sinr_db"]) / 10) for r in mine])
         assert row["mean_sinr_db"] == pytest.approx(10 * np.log10(linear), rel=1e-9)
-        assert row["method"]["armse"] == "percentile"  # 5 trials: below BCa's minimum
+        assert row["method"]["armse"] == "percentile"  # 6 trials: below BCa's minimum
 
 
 def test_the_table_shows_the_summary_with_marks(small_run):
@@ -63,7 +63,7 @@ def test_the_table_shows_the_summary_with_marks(small_run):
 
 def test_the_run_output_explains_once_and_says_where_its_files_are(tmp_path, capsys):
     out = tmp_path / "run"
-    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,random,fix1,best", "--trials", "3"]
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,random,fix1,best", "--trials", "6"]
     argv += ["--steps", "4", "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]
     assert main(argv) == 0
     printed = capsys.readouterr().out
@@ -137,3 +137,20 @@ def test_the_papers_numbers_stand_beside_its_policy_only_as_the_version_reads_it
         "45.84 |",
     ]
     assert paper_cells("paper-1", {}) == ["1.1030", "45.84 |"]
+
+
+def test_fewer_trials_than_an_interval_needs_give_estimates_and_say_why(tmp_path, capsys):
+    """On 2 to 5 trials a bootstrap interval cannot hold 95 %: it lies within the trials' range.
+    The table gives the estimates alone and says so, and the summary has neither intervals nor
+    paired differences."""
+    from benchmarks import uncertainty
+
+    out = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,best", "--trials", "5", "--steps", "4"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures", "--out", str(out)]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    assert "uncertainty" not in summary and "paired_differences" not in summary
+    assert all("ci" not in row for row in summary["policies"].values())
+    table = (out / "table.md").read_text()
+    assert uncertainty.NO_INTERVALS in table and "[" not in table.split("| policy |")[1]
+    assert uncertainty.NO_INTERVALS in capsys.readouterr().out

@@ -21,7 +21,7 @@ def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsy
     judged = json.loads((out / "toy.json").read_text())
     for name in ("paper-1-v1", "paper-3-v1"):
         summary = json.loads((out / name / "summary.json").read_text())
-        assert summary["trials"] == 4 and list(summary["policies"]) == ["best", "random"]
+        assert summary["trials"] == 6 and list(summary["policies"]) == ["best", "random"]
         rows = summary["policies"]
         difference = rows["best"]["final_regret"] - rows["random"]["final_regret"]
         assert judged[name]["estimate"] == pytest.approx(difference, rel=1e-9)
@@ -33,7 +33,7 @@ def test_a_new_study_in_one_module_runs_through_the_command_line(tmp_path, capsy
 
 
 def test_every_run_is_checked_before_any_is_written(tmp_path):
-    settings = Settings(out=tmp_path, trials=2, steps=3, workers=1)
+    settings = Settings(out=tmp_path, trials=6, steps=3, workers=1)
     good = Run("a", "paper-1-v1", ("best",), tmp_path / "a")
     bad = Run("b", "paper-1-v1", ("no-such-agent",), tmp_path / "b")
     with pytest.raises(ValueError, match="unknown policy 'no-such-agent'"):
@@ -112,7 +112,7 @@ def test_the_study_written_in_the_docs_runs_as_written(tmp_path):
     text = (Path(__file__).parents[2] / "docs" / "benchmark.md").read_text()
     start = text.index("```python\nfrom benchmarks import verdicts") + len("```python\n")
     (tmp_path / "docs_study.py").write_text(text[start : text.index("```", start)])
-    argv = ["best-vs-random", "--out", str(tmp_path / "out"), "--trials", "3", "--steps", "10"]
+    argv = ["best-vs-random", "--out", str(tmp_path / "out"), "--trials", "6", "--steps", "10"]
     argv += ["--quiet", "--no-figures", "--workers", "1"]
     code = (
         f"import sys; sys.path.insert(0, {str(tmp_path)!r}); import docs_study; "

@@ -24,6 +24,25 @@ def test_the_bootstrap_interval_covers_a_known_mean_at_its_nominal_rate():
     assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
 
 
+@pytest.mark.parametrize("trials", [6, 10])
+def test_on_a_few_trials_the_interval_covers_a_normal_mean_at_its_nominal_rate(trials):
+    """400 simulated studies of a few normal trials: the expanded percentile interval covers the
+    mean in 95 % of them, within the binomial test's tolerance, where the percentile interval at
+    95 % of the same resamples covers significantly less."""
+    rng = np.random.default_rng(trials)
+    covered, plain, repetitions = 0, 0, 400
+    for r in range(repetitions):
+        x = rng.normal(2.0, 1.0, size=trials)
+        low, high = uncertainty.interval(lambda w, x=x: w @ x, trials, seed=r)
+        covered += low <= 2.0 <= high
+        resampled = stats.bootstrap(
+            (x,), np.mean, n_resamples=uncertainty.RESAMPLES, method="percentile", random_state=r
+        ).confidence_interval
+        plain += resampled.low <= 2.0 <= resampled.high
+    assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
+    assert stats.binomtest(plain, repetitions, 0.95, alternative="less").pvalue < 0.01, plain
+
+
 def _policy(expected, squared, optimal=None):
     n, t = expected.shape
     return uncertainty.TrialMetrics(
@@ -66,6 +85,11 @@ def test_run_outputs_carry_intervals_that_hold_their_values(tmp_path):
     assert main([*argv, "--steps", "40", "--workers", "1", "--quiet", "--out", str(out)]) == 0
     summary = json.loads((out / "summary.json").read_text())
     assert "BCa from 20 trials, percentile below" in summary["uncertainty"]
+    assert summary["uncertainty"].endswith(
+        "; below 20 trials the percentile interval's level is Hesterberg's "
+        "expansion for a few trials (its z is Student's t with n - 1 degrees of freedom times "
+        "sqrt(n / (n - 1)))"
+    )
     for row in summary["policies"].values():
         for key in ("armse", "asr", "final_regret", "mean_sinr_db"):
             low, high = row["ci"][key]
@@ -101,7 +125,7 @@ def _every_estimate(summary):
             yield f"{pair} {key}", judged["estimate"], judged["ci"], judged["method"]
 
 
-@pytest.mark.parametrize("trials", [2, 5, 10, 24])
+@pytest.mark.parametrize("trials", [6, 10, 24])
 def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-3-v1", "--policies", "mg-crb-cl,ucb1,best,fix1,random"]
@@ -118,7 +142,7 @@ def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
         assert "BCa" not in seen
 
 
-@pytest.mark.parametrize("trials", [2, 3, 5, 10, 19, 20, 50, 500])
+@pytest.mark.parametrize("trials", [6, 7, 10, 19, 20, 50, 500])
 def test_every_interval_contains_its_value_on_heavy_tailed_synthetic_policies(trials):
     """Pareto-tailed errors and rewards (the worst case for BCa's skew correction)."""
     rng = np.random.default_rng(trials)
@@ -142,13 +166,15 @@ def test_every_interval_contains_its_value_on_heavy_tailed_synthetic_policies(tr
 
 
 def test_the_estimate_is_the_metric_at_equal_weights_and_a_constant_has_a_point_interval():
-    x = np.array([1.0, 2.0, 4.0, 8.0])
-    judged = uncertainty.estimate(lambda w: w @ x, 4)
+    x = np.array([1.0, 2.0, 4.0, 8.0, 16.0, 32.0])
+    judged = uncertainty.estimate(lambda w: w @ x, 6)
     assert judged["estimate"] == x.mean() and judged["method"] == "percentile"
     constant = uncertainty.estimate(lambda w: w @ np.full(30, 7.0), 30)
     assert constant["estimate"] == pytest.approx(7.0, rel=1e-15)
     assert constant["ci"] == [constant["estimate"]] * 2 and constant["method"] == "constant over trials"
-    assert uncertainty.estimate(lambda w: w @ x[:1], 1)["ci"] is None
+    for few in (1, 2, 5):  # fewer than MIN_INTERVAL_TRIALS: the estimate alone
+        alone = uncertainty.estimate(lambda w, few=few: w @ x[:few], few)
+        assert alone == {"estimate": x[:few].mean(), "ci": None, "method": "none (fewer than 6 trials)"}
     wide = uncertainty.estimate(lambda w: w @ np.random.default_rng(0).normal(size=40), 40)
     assert wide["method"] == "BCa" and wide["ci"][0] < wide["estimate"] < wide["ci"][1]
 
@@ -255,7 +281,8 @@ def test_the_committed_seed_coverage_is_what_the_measurement_gives():
 def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials):
     """``estimates`` bootstraps every metric at once; each interval is, to the last bit, that of
     scipy.stats.bootstrap run on that metric alone with the same seed (percentile below 20
-    trials, BCa above; a constant metric gets its point interval, a skewed one BCa's fallback)."""
+    trials at the expanded level, BCa above at 95 %; a constant metric gets its point interval, a
+    skewed one BCa's fallback)."""
     rng = np.random.default_rng(9)
     values = rng.exponential(1.0, (3, trials))
     values[2] = rng.lognormal(0.0, 3.0, trials)  # heavy tail: BCa may fall back to percentile
@@ -268,6 +295,9 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
     together = uncertainty.estimates(metrics, trials, seed=3)
     assert uncertainty.estimates({}, trials) == {}
     method = "BCa" if trials >= uncertainty.BCA_MIN_TRIALS else "percentile"
+    # Hesterberg's expanded percentile below BCA_MIN_TRIALS, written out: z = sqrt(n/(n-1)) t_{n-1}
+    z = np.sqrt(trials / (trials - 1)) * stats.t.ppf(0.975, trials - 1)
+    level = 0.95 if trials >= uncertainty.BCA_MIN_TRIALS else 1 - 2 * stats.norm.cdf(-z)
     for name, metric in metrics.items():
 
         def statistic(index, axis=-1, metric=metric):
@@ -278,7 +308,7 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
             statistic,
             vectorized=True,
             n_resamples=uncertainty.RESAMPLES,
-            confidence_level=uncertainty.CONFIDENCE,
+            confidence_level=level,
             method=method,
             random_state=np.random.default_rng(3),
         )

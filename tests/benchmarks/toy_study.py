@@ -16,7 +16,7 @@ from benchmarks.study import Run, Study
 
 class ToyStudy(Study):
     name = "toy"
-    default_trials = 4
+    default_trials = 6
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:

@@ -57,7 +57,7 @@ def test_a_tiny_study_is_measured_and_modelled(tmp_path):
 def test_without_the_model_only_the_runs_are_measured(tmp_path, monkeypatch):
     probed = []
     monkeypatch.setattr(strong_scaling, "predict", lambda *args: probed.append(args) or [])
-    study = ("claims", "--scenarios", "1", "--trials", "4", "--steps", "3")
+    study = ("claims", "--scenarios", "1", "--trials", "6", "--steps", "3")
     result = strong_scaling.measure(study, [2], [4], model=False)
     assert result["model"] == [] and probed == [] and [r["workers"] for r in result["measured"]] == [2]
 

@@ -121,7 +121,7 @@ def test_maneuver_counts_rising_super_arms_and_pairs_the_loss_against_best():
 
 def test_the_command_pairs_every_variant_with_the_paper_study(tmp_path):
     out = tmp_path / "ablations"
-    argv = "ablations --scenarios 2 --trials 3 --steps 30 --workers 1 --no-figures --quiet".split()
+    argv = "ablations --scenarios 2 --trials 6 --steps 30 --workers 1 --no-figures --quiet".split()
     code = cli_main([*argv, "--out", str(out)])
     assert code == 0
     result = json.loads((out / "ablations.json").read_text())

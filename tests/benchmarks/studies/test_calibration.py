@@ -108,10 +108,10 @@ def test_calibrate_adopts_only_a_layout_that_beats_the_reference(tmp_path):
 
 
 def test_calibrate_layout_command_runs_end_to_end(tmp_path, capsys):
-    argv = ["calibrate-layout", "--candidates", "6", "--screen", "1", "--screen-trials", "2", "--final", "1"]
+    argv = ["calibrate-layout", "--candidates", "6", "--screen", "1", "--screen-trials", "6", "--final", "1"]
     argv += [
         "--trials",
-        "3",
+        "7",
         "--steps",
         "20",
         "--workers",
@@ -123,7 +123,7 @@ def test_calibrate_layout_command_runs_end_to_end(tmp_path, capsys):
     ]
     assert main(argv) == 0
     report = json.loads((tmp_path / "calibration.json").read_text())
-    assert report["candidates"][0]["scorecards"].keys() == {"2", "3"}
+    assert report["candidates"][0]["scorecards"].keys() == {"6", "7"}
     assert (tmp_path / "final" / "layout-0000" / "claims.md").exists()
     assert "best layout" in capsys.readouterr().out
 

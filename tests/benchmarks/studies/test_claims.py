@@ -134,7 +134,7 @@ def test_the_claims_command_judges_the_metrics_its_report_read(tmp_path, monkeyp
         return read(path, *args)
 
     monkeypatch.setattr(harness, "read_shard", counted)
-    argv = ["claims", "--scenarios", "1", "--trials", "4", "--steps", "30", "--workers", "1"]
+    argv = ["claims", "--scenarios", "1", "--trials", "6", "--steps", "30", "--workers", "1"]
     assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
     assert reads == []
     judged = json.loads((tmp_path / "claims.json").read_text())
@@ -162,13 +162,13 @@ def test_each_policys_intervals_are_computed_while_the_other_tasks_run(tmp_path,
         "--scenarios",
         "1",
         "--trials",
-        "4",
+        "6",
         "--steps",
         "30",
         "--workers",
         "1",
         "--shard-size",
-        "4",
+        "6",
     ]
     assert main([*argv, "--quiet", "--no-figures", "--out", str(tmp_path)]) == 0
     # one task a policy, each followed by its intervals and what the claims read of it alone

@@ -91,9 +91,9 @@ def test_command_scores_the_best_layout_and_records_the_agreement(tmp_path):
     from benchmarks.cli import main as cli_main
 
     args = ["search-layouts", "--generations", "1", "--population", "1", "--final", "1", "--no-v1-scorecard"]
-    assert cli_main([*args, "--trials", "2", "--steps", "20", "--quiet", "--out", str(tmp_path)]) == 0
+    assert cli_main([*args, "--trials", "6", "--steps", "20", "--quiet", "--out", str(tmp_path)]) == 0
     found = json.loads((tmp_path / "search.json").read_text())
-    assert (found["trials"], found["steps"], found["evaluations"]) == (2, 20, 40)
+    assert (found["trials"], found["steps"], found["evaluations"]) == (6, 20, 40)
     (finalist,) = found["finalists"]
     assert finalist["name"] == "search-1"
     judged = [v for v in finalist["verdicts"].values() if v in finalist["counts"]]
@@ -109,13 +109,13 @@ def test_command_scores_only_the_ranks_asked_for(tmp_path, capsys):
 
     args = ["search-layouts", "--generations", "1", "--population", "1", "--no-v1-scorecard", "--quiet"]
     with pytest.raises(SystemExit) as exit_info:
-        cli_main([*args, "--final", "2", "--score", "3", "--trials", "2", "--out", str(tmp_path)])
+        cli_main([*args, "--final", "2", "--score", "3", "--trials", "6", "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     assert "--score 3: ranks run from 1 to --final (2)" in capsys.readouterr().err
     assert not (tmp_path / "search.json").exists()  # refused before the search
     out = tmp_path / "scored"
     assert (
-        cli_main([*args, "--final", "2", "--score", "2", "--trials", "2", "--steps", "5", "--out", str(out)])
+        cli_main([*args, "--final", "2", "--score", "2", "--trials", "6", "--steps", "5", "--out", str(out)])
         == 0
     )
     found = json.loads((out / "search.json").read_text())
@@ -141,7 +141,7 @@ def test_the_search_and_its_scorecards_are_estimated_before_anything_runs(tmp_pa
     args = ["search-layouts", "--generations", "1", "--population", "1", "--quiet", "--out", str(out)]
     for extra, said in (
         (["--final", "0", "--no-v1-scorecard"], "the search and its 0 scorecard(s) would take about"),
-        (["--final", "2", "--trials", "2", "--steps", "5"], "would take about"),  # a scorecard's run, or all
+        (["--final", "2", "--trials", "6", "--steps", "5"], "would take about"),  # a scorecard's run, or all
     ):
         with pytest.raises(SystemExit) as exit_info:
             cli_main([*args, *extra, "--max-hours", "1e-9"])

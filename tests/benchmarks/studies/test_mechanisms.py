@@ -35,12 +35,12 @@ def brute_force_leads(scenario: str, trials: int, seed: int) -> list[float]:
 
 
 def test_lead_matches_brute_force_and_oracles_order_by_information():
-    out = mechanisms.lead_and_sampling_oracles("paper-2-v1", trials=4, seed=3, samples=(1, 10**6), steps=1)
-    assert np.isclose(out["median_lead"]["estimate"], np.mean(brute_force_leads("paper-2-v1", 4, 3)))
+    out = mechanisms.lead_and_sampling_oracles("paper-2-v1", trials=6, seed=3, samples=(1, 10**6), steps=1)
+    assert np.isclose(out["median_lead"]["estimate"], np.mean(brute_force_leads("paper-2-v1", 6, 3)))
     # v1's shared truth: every trial sees the same channels, so the lead is constant over trials
     assert out["median_lead"]["method"] == "constant over trials"
     asr = out["sampling_oracle_asr"]
-    assert asr[str(10**6)]["estimate"] == 1.0  # a million samples: the true best every time
+    assert np.isclose(asr[str(10**6)]["estimate"], 1.0, rtol=0, atol=1e-15)  # the true best every time
 
 
 def test_more_samples_give_a_higher_asr_and_it_reproduces():
@@ -103,7 +103,7 @@ def test_bound_versus_sinr_reads_signs_both_ways(tmp_path):
 
 def test_command_writes_its_results(tmp_path, capsys):
     code = cli_main(
-        ["mechanisms", "--trials", "3", "--steps", "5", "--scenarios", "paper-3-v1", "--out", str(tmp_path)]
+        ["mechanisms", "--trials", "6", "--steps", "5", "--scenarios", "paper-3-v1", "--out", str(tmp_path)]
     )
     assert code == 0
     result = json.loads((tmp_path / "mechanisms.json").read_text())

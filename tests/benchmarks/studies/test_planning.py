@@ -10,11 +10,11 @@ from benchmarks.cli import main
 
 def test_a_short_planning_study_reports_the_horizons_against_the_one_step_policies(tmp_path):
     out = tmp_path / "planning"
-    argv = ["planning", "--scenarios", "1", "--fusions", "centralized", "--trials", "3", "--steps", "12"]
+    argv = ["planning", "--scenarios", "1", "--fusions", "centralized", "--trials", "6", "--steps", "12"]
     assert main([*argv, "--workers", "1", "--quiet", "--out", str(out)]) == 0
     assert (out / "horizons.png").stat().st_size > 10_000  # ARMSE against H
     (run,) = json.loads((out / "planning.json").read_text())
-    assert (run["scenario"], run["fusion"], run["trials"]) == (1, "centralized", 3)
+    assert (run["scenario"], run["fusion"], run["trials"]) == (1, "centralized", 6)
     policies = run["policies"]
     assert {"best-tracking", "tracking-ucb", "plan-tracking:10", "plan-tracking-ucb:5"} <= set(policies)
     # H = 1 is best-tracking on the same trials: a difference of exactly zero
@@ -53,7 +53,7 @@ def _the_docs_say_what_the_planning_json_shows(tmp_path, out, run):
     best = min(run["policies"], key=lambda p: run["policies"][p]["armse"]["value"])
     assert table["bound.1.best"] == f"`{best}`"  # the centralised run's best policy, against the best bound
     tables = planning_tables(docs)
-    assert "## paper-1, centralized (3 trials)" in tables and "ARMSE / best bound" in tables
+    assert "## paper-1, centralized (6 trials)" in tables and "ARMSE / best bound" in tables
 
 
 def test_the_planning_study_refuses_an_unknown_fusion_in_one_line(tmp_path, capsys):
@@ -85,11 +85,11 @@ def test_planners_are_paired_with_another_runs_policies_on_the_trials_both_ran(t
     from benchmarks.errors import BenchError
     from benchmarks.studies.planning import cross_run_differences
 
-    plan = _run(tmp_path / "plan", ["best-tracking", "plan-tracking:2"], trials=4)
+    plan = _run(tmp_path / "plan", ["best-tracking", "plan-tracking:2"], trials=6)
     other = _run(tmp_path / "other", ["best-tracking", "random", "fix1"], trials=6)
-    alone = _run(tmp_path / "alone", ["best-tracking", "plan-tracking:2", "random", "fix1"], trials=4)
+    alone = _run(tmp_path / "alone", ["best-tracking", "plan-tracking:2", "random", "fix1"], trials=6)
     result = cross_run_differences(plan, other.folder, {"pair": ["random", "fix1"]}, seed=0)
-    assert result["trials"] == 4
+    assert result["trials"] == 6
     d = result["minus"]["plan-tracking:2"]["pair"]
 
     from benchmarks import harness
@@ -102,11 +102,11 @@ def test_planners_are_paired_with_another_runs_policies_on_the_trials_both_ran(t
     )
     assert abs(d["estimate"] - expected) < 1e-12
     assert d["ci"][0] <= d["estimate"] <= d["ci"][1]
-    shifted = _run(tmp_path / "shifted", ["best-tracking", "random"], trials=4, seed=1)
+    shifted = _run(tmp_path / "shifted", ["best-tracking", "random"], trials=6, seed=1)
     with pytest.raises(BenchError, match="another seed"):
         cross_run_differences(plan, shifted.folder, {"one": ["random"]}, seed=0)
     tracked_otherwise = _run(
-        tmp_path / "otherwise", ["best-tracking", "random"], trials=4, filter_noise="estimated"
+        tmp_path / "otherwise", ["best-tracking", "random"], trials=6, filter_noise="estimated"
     )
     with pytest.raises(BenchError, match="do not share their trials"):
         cross_run_differences(plan, tracked_otherwise.folder, {"one": ["random"]}, seed=0)

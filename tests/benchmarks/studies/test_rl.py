@@ -71,7 +71,7 @@ def test_a_reduced_rl_study_trains_evaluates_and_reports(tmp_path):
 
     out = tmp_path / "rl"
     argv = ["rl", "--scenarios", "1", "--timesteps", "16384", "--ppo-seeds", "2", "--contrib-seeds", "2"]
-    argv += ["--trials", "2", "--steps", "20", "--workers", "2", "--quiet", "--out", str(out)]
+    argv += ["--trials", "6", "--steps", "20", "--workers", "2", "--quiet", "--out", str(out)]
     assert main(argv) == 0
     judged = json.loads((out / "rl.json").read_text())
     learners = judged["scenarios"][0]["learners"]
@@ -234,7 +234,7 @@ def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_fusions_w
     from benchmarks.cli import main
 
     out = tmp_path / "rl"
-    argv = "rl --scenarios 1 --device cpu --n-envs 4 --timesteps 128 --sweep 256 --ppo-seeds 2 --trials 2"
+    argv = "rl --scenarios 1 --device cpu --n-envs 4 --timesteps 128 --sweep 256 --ppo-seeds 2 --trials 6"
     argv = [*argv.split(), "--steps", "5", "--quiet", "--no-figures", "--out", str(out)]
     assert main(argv) == 0
     judged = json.loads((out / "rl.json").read_text())
@@ -273,7 +273,7 @@ def test_on_a_device_the_study_trains_torch_ppo_under_both_rewards_and_fusions_w
     assert "## Budget sweep: `torch-ppo-information`, paper-1, average fusion" in (out / "rl.md").read_text()
     # the planning study finds the learners of the same scenario and fusion, and no other
     planning = tmp_path / "planning"
-    argv = "planning --scenarios 1 --fusions centralized --trials 2 --steps 5 --workers 1 --quiet"
+    argv = "planning --scenarios 1 --fusions centralized --trials 6 --steps 5 --workers 1 --quiet"
     argv += " --no-figures"
     assert main([*argv.split(), "--rl", str(out), "--out", str(planning)]) == 0
     (run,) = json.loads((planning / "planning.json").read_text())

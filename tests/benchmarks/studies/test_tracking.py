@@ -14,7 +14,7 @@ from benchmarks.studies import tracking
 def study(tmp_path_factory):
     out = tmp_path_factory.mktemp("tracking")
     args = ["tracking", "--out", str(out), "--scenarios", "2", "--fusions", "centralized"]
-    args += ["--trials", "4", "--steps", "15", "--shard-size", "2", "--workers", "1", "--quiet"]
+    args += ["--trials", "6", "--steps", "15", "--shard-size", "3", "--workers", "1", "--quiet"]
     assert main(args) == 0
     return out
 
@@ -23,7 +23,7 @@ def test_it_runs_every_policy_and_writes_the_targets_and_figure(study, capsys):
     folder = study / "paper-2-v1-centralized"
     summary = json.loads((folder / "summary.json").read_text())
     assert list(summary["policies"]) == list(tracking.TRACKING_POLICIES)
-    assert summary["env_options"]["fusion"] == "centralized" and summary["trials"] == 4
+    assert summary["env_options"]["fusion"] == "centralized" and summary["trials"] == 6
     config = json.loads((folder / "config.json").read_text())
     assert config["agent_params"] == {"mg-crb-cl": {"solver_params": {"rule": "set"}}}  # v1's reading
     assert (study / "tradeoff_paper-2.png").stat().st_size > 0
@@ -75,6 +75,6 @@ def test_paired_reads_either_order():
 )
 def test_bad_arguments_are_named(tmp_path, capsys, extra, message):
     with pytest.raises(SystemExit) as exit_info:
-        main(["tracking", "--out", str(tmp_path / "x"), "--trials", "2", "--quiet", *extra])
+        main(["tracking", "--out", str(tmp_path / "x"), "--trials", "6", "--quiet", *extra])
     assert exit_info.value.code == 2
     assert re.search(message, capsys.readouterr().err)

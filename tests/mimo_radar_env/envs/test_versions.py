@@ -91,7 +91,7 @@ def test_the_claims_study_runs_a_scenario_set_and_refuses_another_version(tmp_pa
 
     from benchmarks.cli import main
 
-    args = ["claims", "--scenario-set", "search-5", "--scenarios", "2", "--trials", "2", "--steps", "3"]
+    args = ["claims", "--scenario-set", "search-5", "--scenarios", "2", "--trials", "6", "--steps", "3"]
     args += ["--quiet", "--no-figures", "--workers", "1"]
     assert main([*args, "--out", str(tmp_path / "set")]) == 0
     config = json.loads((tmp_path / "set" / "paper-2-v1-search5" / "config.json").read_text())
