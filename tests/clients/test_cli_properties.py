@@ -45,21 +45,21 @@ COMMANDS = {
 SCORECARD = str(Path(__file__).parents[2] / "docs" / "results" / "claims" / "v1-centralized.json")
 STUDY_COMMANDS = {
     "claims": (
-        ["--scenarios", "1", "--trials", "2", "--steps", "2", "--workers", "1"],
+        ["--scenarios", "1", "--trials", "6", "--steps", "2", "--workers", "1"],
         ["--scenarios", "--trials", "--steps", "--seed", "--env-version", "--fusion", "--shard-size",
          "--max-hours", "--agent-param", "--backend"],
     ),
     "tracking": (
-        ["--scenarios", "1", "--fusions", "average", "--trials", "2", "--steps", "2", "--workers", "1"],
+        ["--scenarios", "1", "--fusions", "average", "--trials", "6", "--steps", "2", "--workers", "1"],
         ["--scenarios", "--fusions", "--ppo", "--trials", "--steps", "--max-hours", "--env-version"],
     ),
     "calibrate-layout": (
-        ["--candidates", "2", "--screen", "1", "--screen-trials", "2", "--final", "1", "--trials", "2",
+        ["--candidates", "2", "--screen", "1", "--screen-trials", "6", "--final", "1", "--trials", "6",
          "--steps", "2", "--workers", "1"],
         ["--candidates", "--screen", "--screen-trials", "--final", "--trials", "--steps"],
     ),
     "planning": (
-        ["--scenarios", "1", "--fusions", "centralized", "--trials", "2", "--steps", "3", "--workers", "1"],
+        ["--scenarios", "1", "--fusions", "centralized", "--trials", "6", "--steps", "3", "--workers", "1"],
         ["--scenarios", "--fusions", "--ppo", "--trials", "--steps", "--max-hours"],
     ),
     "compare-claims": ([f"a={SCORECARD}"], [None]),
