@@ -5,8 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from . import validation as check
-from .scenario import MAX_HORIZON, MAX_POSITION, MAX_RANDOM_TARGETS, MAX_STATIONS, Scenario
+from .scenario import MAX_HORIZON, MAX_POSITION, MAX_STATIONS, Scenario
 from .validation import ScenarioError
+
+#: The most targets of a random layout.
+MAX_RANDOM_TARGETS = 100
 
 
 def random_scenario(

@@ -27,9 +27,8 @@ MIN_STATION_DISTANCE = 10.0
 MAX_COORDINATE = 1e12
 #: Stations and initial target positions lie within this distance of the origin (m).
 MAX_POSITION = 1e8
-#: The most transmitters, and the most receivers, of a scenario; the most targets of a random one.
+#: The most transmitters, and the most receivers, of a scenario.
 MAX_STATIONS = 1000
-MAX_RANDOM_TARGETS = 100
 #: The physical ranges of the noise and uncertainty fields (docs/model.md, section 1): a standard
 #: deviation from 1 mm (1 mm/s) up to the scene's extent, an azimuth error from 1 microradian up
 #: to pi. Beyond them the model means nothing and the tracker's arithmetic breaks down.
