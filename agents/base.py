@@ -160,7 +160,14 @@ class Agent(ABC):
 
     def env_option_values(self) -> dict[str, Any]:
         """Its parameters named after env options (``needs.env_option_params``) and their values,
-        which must equal its env's (a :class:`~agents.rollout.Rollout` checks them)."""
+        which must equal its env's (a :class:`~agents.rollout.Rollout` checks them): its attributes
+        of those names, unless a subclass says otherwise."""
+        missing = [key for key in self.needs.env_option_params if not hasattr(self, key)]
+        if missing:
+            raise TypeError(
+                f"{type(self).__name__} declares env_option_params {missing} but has no such attributes: "
+                "set them in __init__, or override env_option_values()"
+            )
         return {key: getattr(self, key) for key in self.needs.env_option_params}
 
     def update(self, obs: Observation, reward: Any) -> None:

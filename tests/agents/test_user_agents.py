@@ -127,3 +127,23 @@ def test_a_class_from_main_needs_one_worker():
         policy_name(Local, workers=2)
     assert policy_name(Local, workers=1) == f"__main__:{Local.__qualname__}"
     assert agents.agent_class(f"__main__:{Local.__qualname__}") is Local
+
+
+def test_a_users_agent_that_declares_env_option_params_without_their_attributes_is_named():
+    """The rollout compares such parameters with the env's options; a declaration without the
+    attributes was an AttributeError from inside the rollout."""
+    import numpy as np
+
+    from agents.costs import Needs
+
+    class Declares(agents.IndexPolicy):
+        needs = Needs(env_option_params=("fusion",))
+
+        def compute_index(self, predicted, obs):
+            return np.zeros((predicted.shape[0], self.num_tx, self.num_rx))
+
+    agent = Declares("paper-1-v1")
+    with pytest.raises(TypeError, match=r"Declares declares env_option_params \['fusion'\] but has no such"):
+        agents.Rollout(agent, agents.make_env(agent, 2))
+    agent.fusion = "average"
+    assert agents.Rollout(agent, agents.make_env(agent, 2)).t == 0
