@@ -30,7 +30,7 @@ from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
-from .harness import HarnessError, RunInterrupted, check_device, duration, output_lock
+from .harness import CONFIG_FILE, HarnessError, RunInterrupted, check_device, duration, output_lock
 from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}
@@ -310,8 +310,9 @@ def train_ppo(
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
     (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that
-    already holds a model is refused unless ``overwrite``, which first removes every file of the
-    old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
+    holds a benchmark run is refused; one that already holds a model is refused unless
+    ``overwrite``, which first removes every file of the old model (so that no stale
+    normalisation outlives it). Returns the training's ``ppo.json``
     (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
     spec, device = _learner_and_device(algo, device, device_mode)
     options = options or EnvOptions()
@@ -327,6 +328,8 @@ def train_ppo(
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
     _check_training_time(algo, timesteps, seeds, workers, device, max_hours, say, n_envs)
     out = Path(out)
+    if (out / CONFIG_FILE).is_file() or (out / "shards").is_dir():
+        raise ValueError(f"{out} holds a benchmark run (its {CONFIG_FILE} or shards/): choose another --out")
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
     if n_envs != params.get("n_envs", 8):
         job["n_envs"] = n_envs  # recorded only when it overrides the entry's

@@ -161,3 +161,19 @@ def test_a_training_estimated_beyond_max_hours_is_refused_before_anything_is_wri
               "--max-hours", str(23 / 3600), "--quiet"])  # fmt: skip
     assert "4 training(s) of 36,000 --timesteps of ppo would take about 24 s" in capsys.readouterr().err
     assert not out.exists()
+
+
+def test_a_folder_holding_a_benchmark_run_is_refused_before_anything_is_written(tmp_path, capsys):
+    """train-ppo wrote its model beside a run's config.json, shards and tables."""
+    pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
+    run = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-1-v1", "--policies", "random", "--trials", "2", "--steps", "2"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures", "--out", str(run)]) == 0
+    before = sorted(p.name for p in run.iterdir())
+    capsys.readouterr()
+    with pytest.raises(SystemExit) as exit_info:
+        main(["train-ppo", "--timesteps", "128", "--out", str(run), "--overwrite"])
+    assert exit_info.value.code == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and f"{run} holds a benchmark run (its config.json or shards/)" in err[0]
+    assert sorted(p.name for p in run.iterdir()) == before
