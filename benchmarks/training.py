@@ -309,10 +309,9 @@ def train_ppo(
     it is a minute or more, and refused beyond ``max_hours``.
 
     Everything is checked before anything is written: the scenario, the hyperparameter entry
-    (:func:`check_hyperparams`) and the folder, which is locked for the training. A folder that
-    holds a benchmark run is refused; one that already holds a model is refused unless
-    ``overwrite``, which first removes every file of the old model (so that no stale
-    normalisation outlives it). Returns the training's ``ppo.json``
+    (:func:`check_hyperparams`) and the folder, which is locked for the training: one of a
+    benchmark run is refused, one of a model unless ``overwrite``, which first removes every file
+    of the old model (so that no stale normalisation outlives it). Returns the training's ``ppo.json``
     (with ``seeds`` > 1: ``{"seeds": {S: ppo.json}, ...}``), with ``record``'s entries added."""
     spec, device = _learner_and_device(algo, device, device_mode)
     options = options or EnvOptions()
@@ -327,9 +326,7 @@ def train_ppo(
     n_envs = int(n_envs or params.get("n_envs", 8))
     timesteps = int(timesteps or params.get("n_timesteps", 100_000))
     _check_training_time(algo, timesteps, seeds, workers, device, max_hours, say, n_envs)
-    out = Path(out)
-    if (out / CONFIG_FILE).is_file() or (out / "shards").is_dir():
-        raise ValueError(f"{out} holds a benchmark run (its {CONFIG_FILE} or shards/): choose another --out")
+    out = _training_folder(out)
     job = training_job(sc, timesteps, algo, options, hyperparams, hyperparams_key, action)
     if n_envs != params.get("n_envs", 8):
         job["n_envs"] = n_envs  # recorded only when it overrides the entry's
@@ -558,6 +555,14 @@ def _train_one_seed(
 
 #: The files a trained model leaves in its folder.
 MODEL_FILES = (MODEL_FILE, WEIGHTS_FILE, NORMALIZATION_FILE, SB3_NORMALIZATION_FILE, META_FILE, CURVE_FIGURE)
+
+
+def _training_folder(out: str | Path) -> Path:
+    """``out`` as a path, refused where it holds a benchmark run (a model beside its files)."""
+    out = Path(out)
+    if (out / CONFIG_FILE).is_file() or (out / "shards").is_dir():
+        raise ValueError(f"{out} holds a benchmark run (its {CONFIG_FILE} or shards/): choose another --out")
+    return out
 
 
 def _clear_model(out: Path, overwrite: bool) -> None:
