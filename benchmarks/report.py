@@ -216,18 +216,12 @@ def format_cell(
 def paper_study_parameters(scenario: str) -> dict[str, dict[str, Any]]:
     """The agent parameters of the paper study of the env version ``scenario`` belongs to: a row
     stands beside the paper's numbers only with those (v1's MG-CRB-CL is BPSO's standard rule)."""
-    from mimo_radar_env import VERSIONS
-    from mimo_radar_env.envs.versions import SCENARIO_SETS
+    from mimo_radar_env.envs.versions import shipped_version
 
     from .settings import paper_study_params
 
-    for version in VERSIONS.values():
-        if scenario in version.paper_scenarios:
-            return paper_study_params(version.name)
-    for scenario_set in SCENARIO_SETS.values():
-        if scenario in scenario_set.paper_scenarios:
-            return paper_study_params(scenario_set.version)
-    return {}
+    version = shipped_version(scenario)
+    return {} if version is None else paper_study_params(version)
 
 
 def comparable_to_the_paper(summary: dict[str, Any]) -> bool:

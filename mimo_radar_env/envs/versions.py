@@ -204,11 +204,16 @@ def version_conflict(scenario: Any, version: str | None) -> VersionConflict | No
     return VersionConflict(other, scenario_set.name, None)
 
 
-def scenario_version(scenario: Any) -> str:
-    """The env version whose paper scenario, or scenario set, a shipped scenario *name* is;
-    :data:`DEFAULT_VERSION` for any other name, a file or a :class:`Scenario` object."""
+def shipped_version(scenario: Any) -> str | None:
+    """The env version whose paper scenario, or scenario set, a shipped scenario *name* is; None
+    for any other name, a file or a :class:`Scenario` object."""
     owner = _owner(scenario)
-    return DEFAULT_VERSION if owner is None else owner[0].name
+    return None if owner is None else owner[0].name
+
+
+def scenario_version(scenario: Any) -> str:
+    """:func:`shipped_version`, or :data:`DEFAULT_VERSION` where there is none."""
+    return shipped_version(scenario) or DEFAULT_VERSION
 
 
 def check_scenario_version(scenario: Any, version: str | None) -> None:
