@@ -8,10 +8,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mimo_radar_env import Scenario
+from mimo_radar_env.scenarios import MAX_HORIZON
 
 from .base import IndexPolicy, Observation
 from .costs import Needs
-from .parameters import check_parameter
+from .parameters import check_integer, check_parameter
 from .solvers import SuperArmSolver
 
 #: Index of an arm with no sample in the window: finite, larger than any SINR index.
@@ -161,9 +162,7 @@ class SlidingWindowUCB(IndexPolicy):
         solver_params: dict[str, Any] | None = None,
     ) -> None:
         super().__init__(scenario, seed, solver, solver_params)
-        check_parameter("window", window, 1)
-        if not float(window).is_integer():
-            raise ValueError(f"window must be a whole number of steps, got {window}")
+        check_integer("window", window, 1, MAX_HORIZON)  # a longer window never forgets a step
         check_parameter("beta", beta, 0.0)
         self.window, self.beta = int(window), beta
 

@@ -45,12 +45,10 @@ def positive_number(name: str, value: Any) -> float:
 
 
 def integer_in(name: str, value: Any, low: int, high: int | None, allowed: str) -> int:
-    """An integer in ``[low, high]`` (``high=None``: no upper bound); ``allowed`` explains the range."""
+    """An integer in ``[low, high]`` (``high=None``: no upper bound); ``allowed`` explains the range.
+    A float is refused even when integral (``2.0``), as Gymnasium refuses one for ``Discrete``."""
     if isinstance(value, bool) or not isinstance(value, int | np.integer):
-        if isinstance(value, float) and value.is_integer():
-            value = int(value)
-        else:
-            raise ScenarioError(f"{name} must be an integer, got {value!r}")
+        raise ScenarioError(f"{name} must be an integer, got {value!r}")
     value = int(value)
     if value < low or (high is not None and value > high):
         bound = f"between {low} and {high}" if high is not None else f">= {low}"

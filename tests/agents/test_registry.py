@@ -42,7 +42,8 @@ def test_registry_errors_list_what_exists():
         ("mg-crb-cl", {"beta": -1}, r"beta must be in \[0, inf\), got -1"),
         ("discounted-ucb", {"discount": 0.0}, r"discount must be in \(0, 1\], got 0.0"),
         ("discounted-thompson", {"prior_rate": 0}, r"prior_rate must be in \(0, inf\), got 0"),
-        ("sliding-window-ucb", {"window": 0}, r"window must be in \[1, inf\), got 0"),
+        ("sliding-window-ucb", {"window": 0}, r"window must be in \[1, 1,000,000\], got 0"),
+        ("sliding-window-ucb", {"window": 5.0}, r"window must be an integer in \[1, 1,000,000\], got 5.0"),
         ("epsilon-greedy", {"epsilon": 2}, r"epsilon must be in \[0, 1\], got 2"),
     ],
 )

@@ -165,3 +165,16 @@ def test_fuzzed_scenarios_are_refused_by_name_or_run_finite(changes):
         for key in ("sinr", "track", "track_pred", "track_pos_cov"):
             assert np.all(np.isfinite(obs[key])), key
         assert np.isfinite(info["optimal_reward"]).all() and np.isfinite(info["expected_reward"]).all()
+
+
+@pytest.mark.parametrize("field", ["horizon", "tx_per_step", "truth_seed"])
+def test_an_integral_float_is_not_taken_as_an_integer(field):
+    with pytest.raises(ScenarioError, match=rf"{field} must be an integer, got 1\.0"):
+        Scenario.from_dict(_layout(**{field: 1.0}))
+
+
+def test_make_refuses_a_float_horizon():
+    import gymnasium as gym
+
+    with pytest.raises(ScenarioError, match=r"horizon must be an integer, got 5\.0"):
+        gym.make("MimoRadarSelect-v1", horizon=5.0)
