@@ -315,6 +315,12 @@ def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) 
 def _probe(policy: str, sc: Scenario, params: dict[str, Any], seed: int, options: EnvOptions) -> agents.Agent:
     """The policy's agent, built and reset on a one-trial env of the run (a bad parameter, a
     missing model or a missing env option fails here)."""
+    for key in agents.agent_class(agents.split_policy(policy)[0]).needs.env_option_params:
+        if key in params and params[key] != getattr(options, key):
+            raise HarnessError(
+                f"policy {policy!r}: `agent_params` {policy}.{key}={params[key]!r} differs from the run's "
+                f"{key}={getattr(options, key)!r}; leave it out (the agent takes the run's)"
+            )
     try:
         agent = make_policy(policy, sc, params, seed=seed, options=options.to_dict())
         agents.Rollout(agent, agents.make_env(agent, 1, options, sc), seed=seed)

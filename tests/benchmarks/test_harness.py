@@ -189,6 +189,19 @@ def test_the_library_api_names_its_arguments_and_the_command_line_its_flags(kwar
     assert flag in caught.value.for_command_line()
 
 
+def test_an_agent_parameter_named_after_an_env_option_must_be_the_runs():
+    """tracking-ucb's ``fusion`` defaults to the run's; one given otherwise is refused in the
+    words of the API or of the command line (not with the Python fix the rollout suggests)."""
+    given = {"agent_params": {"tracking-ucb": {"fusion": "average"}}, "options": {"fusion": "centralized"}}
+    with pytest.raises(HarnessError) as caught:
+        make_config("paper-1-v1", ["tracking-ucb"], 6, steps=3, say=lambda message: None, **given)
+    said = "tracking-ucb.fusion='average' differs from the run's fusion='centralized'; leave it out"
+    assert str(caught.value) == f"policy 'tracking-ucb': agent_params {said} (the agent takes the run's)"
+    assert caught.value.for_command_line().startswith(f"policy 'tracking-ucb': --agent-param {said}")
+    given["agent_params"]["tracking-ucb"]["fusion"] = "centralized"  # the run's: taken
+    make_config("paper-1-v1", ["tracking-ucb"], 6, steps=3, say=lambda message: None, **given)
+
+
 def test_the_env_options_default_to_the_scenarios_version_and_a_mapping_goes_over_them():
     """A run of v1's paper scenario without options is v1's (as ``gym.make`` and the command line
     make it), not :class:`EnvOptions`' own defaults, which are v0's readings."""
