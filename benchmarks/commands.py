@@ -12,7 +12,7 @@ from mimo_radar_env.envs.device_forms import DEVICE_MODES
 
 from .cli import Command
 from .errors import BenchError
-from .settings import add_env_options, add_max_hours, env_options_from, integer
+from .settings import add_env_options, add_max_hours, env_options_from, folder, integer
 
 
 class TrainPPO(Command):
@@ -38,7 +38,7 @@ class TrainPPO(Command):
             default=None,
             help="environment steps to train for (default: n_timesteps of the hyperparameters)",
         )
-        parser.add_argument("--out", required=True, help="output directory for the model")
+        parser.add_argument("--out", required=True, type=folder, help="output directory for the model")
         cls.add_learner_arguments(parser)
         parser.add_argument("--seed", type=integer(0), default=0, help="training seed (default 0)")
         parser.add_argument(

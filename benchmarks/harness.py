@@ -26,6 +26,7 @@ import json
 import math
 import os
 import sys
+import tempfile
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
@@ -800,6 +801,21 @@ def prepare_output(out: Path, config: RunConfig) -> None:
         raise HarnessError(f"cannot use `out` {out}: {exc.strerror or exc}") from exc
 
 
+def output_folder(out: str | Path) -> Path:
+    """``out``, made where it is new; refused in one line where it is a file or cannot be made or
+    written into. A command whose outputs come at the end of its work calls it first, so that
+    nothing measured is lost to a bad ``out``."""
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise HarnessError(f"`out` {out} is a file, not a folder: choose a folder, new or a run's own")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        tempfile.TemporaryFile(dir=out).close()
+    except OSError as exc:
+        raise HarnessError(f"cannot write into `out` {out}: {exc.strerror or exc}") from exc
+    return out
+
+
 @contextlib.contextmanager
 def output_lock(out: Path) -> Iterator[None]:
     """Hold DIR/.lock for the run: a second run into the same DIR is refused, not interleaved.
@@ -807,10 +823,8 @@ def output_lock(out: Path) -> Iterator[None]:
     the lock file, and the folder, are removed again where this call made them."""
     made_folder = not out.exists()
     made_lock = not (out / LOCK_FILE).exists()
-    if out.exists() and not out.is_dir():
-        raise HarnessError(f"`out` {out} is a file, not a folder: choose a folder, new or a run's own")
+    output_folder(out)
     try:
-        out.mkdir(parents=True, exist_ok=True)
         handle = open(out / LOCK_FILE, "a+")  # held (and locked) for the whole run
     except OSError as exc:
         raise HarnessError(f"cannot write into `out` {out}: {exc.strerror or exc}") from exc

@@ -187,9 +187,15 @@ def integer(low: int, why: str = "", high: int = MAX_ARGUMENT) -> Callable[[str]
 
 def folder(text: str) -> str:
     """An argparse type: a folder to write into, named (an empty ``--out ''`` would write into the
-    current folder)."""
+    current folder), that is not a file and not under one."""
     if not text.strip():
         raise argparse.ArgumentTypeError(f"must name a folder, got {text!r}")
+    above = Path(text)
+    while not above.exists() and above != above.parent:
+        above = above.parent
+    if above.exists() and not above.is_dir():
+        where = "is a file" if above == Path(text) else f"is under the file {above}"
+        raise argparse.ArgumentTypeError(f"must be a folder, and {text!r} {where}")
     return text
 
 

@@ -33,6 +33,8 @@ from mimo_radar_env.core.superarm import random_super_arms, subset_masks
 
 from ..cli import Command
 from ..errors import BenchError
+from ..harness import output_folder
+from ..settings import folder
 from ..study import machine
 from ..uncertainty import estimate
 
@@ -457,7 +459,10 @@ class ModelFigures(Command):
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
         parser.add_argument(
-            "--out", default="docs/results/model", help="output folder (default docs/results/model)"
+            "--out",
+            type=folder,
+            default="docs/results/model",
+            help="output folder (default docs/results/model)",
         )
         parser.add_argument(
             "--only",
@@ -474,6 +479,7 @@ class ModelFigures(Command):
         )
         if names is not None:
             check_names(names)
+        output_folder(out)
         existing: dict[str, Any] = {}
         if names is not None and path.exists():
             try:
@@ -504,7 +510,6 @@ class ModelFigures(Command):
             "machine": before,
             "figures": {name: figures[name] for name in FIGURES if name in figures},
         }
-        out.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(record, indent=2) + "\n")
         print(f"wrote {path}")
         return 0

@@ -55,8 +55,9 @@ from typing import Any
 from agents.solvers.bpso import BPSO_RULES
 
 from ..cli import Command
+from ..harness import output_folder
 from ..precompile import paper_index
-from ..settings import default_workers, integer
+from ..settings import default_workers, folder, integer
 from . import env_throughput, policy_cost, solver_speed, tracker_speed
 
 SCENARIO = "paper-1-v1"
@@ -262,9 +263,8 @@ def format_table(results: dict[str, Any]) -> str:
 
 
 def main(out: str | Path, quick: bool = False, workers: int | None = None) -> dict[str, Any]:
+    out = output_folder(out)
     results = measure(quick, workers)
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     (out / "policy_cost.json").write_text(json.dumps(results.pop("policy_cost"), indent=1) + "\n")
     (out / "perf.json").write_text(json.dumps(results, indent=2))
     print(format_table(results))
@@ -281,7 +281,7 @@ class Perf(Command):
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
-        parser.add_argument("--out", required=True, help="output directory for perf.json")
+        parser.add_argument("--out", required=True, type=folder, help="output directory for perf.json")
         parser.add_argument("--quick", action="store_true", help="small sizes, a few minutes (CI smoke test)")
         parser.add_argument(
             "--workers",

@@ -44,6 +44,7 @@ from mimo_radar_env.scenarios.scenario import closest_approach
 from mimo_radar_env.tracking.information import channel_information
 
 from .. import verdicts
+from ..harness import output_folder
 from ..settings import integer, trial_count
 from ..study import Study, machine, write_timing
 from . import claims
@@ -217,7 +218,7 @@ def calibrate(
     ``run_scorecard(scenarios, folder, trials)`` runs the three paper studies of a layout into
     ``folder`` (resumably) and returns the judged claims.
     """
-    out.mkdir(parents=True, exist_ok=True)
+    output_folder(out)
     pool = candidates(count, seed)
     for c in pool:
         c.rejected = constraint_failure(c)

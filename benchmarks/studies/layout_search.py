@@ -278,7 +278,7 @@ class LayoutSearch(Study):
         )
         start, before = time.perf_counter(), machine()
         out = settings.out
-        out.mkdir(parents=True, exist_ok=True)
+        harness.output_folder(out)
         found = search(
             settings.seed,
             self.args.generations,

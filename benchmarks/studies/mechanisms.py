@@ -54,6 +54,7 @@ from mimo_radar_env.envs.mimo_radar_select import MimoRadarSelectVectorEnv
 from .. import uncertainty
 from ..cli import Command
 from ..errors import BenchError
+from ..harness import output_folder
 from ..report import paired_difference
 from ..settings import folder, integer, trial_count
 from ..study import machine, write_timing
@@ -258,6 +259,7 @@ class MechanismsStudy(Command):
         args = self.args
         args.out = Path(args.out)
         claims = _check_inputs(args)
+        output_folder(args.out)
         start, before = time.perf_counter(), machine()
         lead = {}
         for scenario in args.scenarios:
@@ -275,7 +277,6 @@ class MechanismsStudy(Command):
             "armse_summary": summarise(rows),
             "claims_file": str(args.claims),
         }
-        args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "mechanisms.json").write_text(json.dumps(result, indent=2))
         write_timing(args.out, self.name, time.perf_counter() - start, before)
         for scenario, entry in lead.items():
@@ -306,8 +307,8 @@ class MechanismsStudy(Command):
 
 def _check_inputs(args: Any) -> list[dict[str, Any]]:
     """The claims file read, after checking every input before anything is computed: the claims
-    file (JSON of a claims study), the summaries' folder, the scenarios (once each) and ``--out``
-    (a folder, or a path where one can be made)."""
+    file (JSON of a claims study), the summaries' folder and the scenarios (once each); ``--out``
+    is checked by its argparse type and made before the work (:func:`~benchmarks.harness.output_folder`)."""
     if len(set(args.scenarios)) != len(args.scenarios):
         raise BenchError(f"--scenarios lists a scenario twice: {args.scenarios}")
     try:
@@ -320,6 +321,4 @@ def _check_inputs(args: Any) -> list[dict[str, Any]]:
         )
     if not Path(args.summaries).is_dir():
         raise BenchError(f"--summaries {str(args.summaries)!r} is not a folder of a claims study's runs")
-    if args.out.exists() and not args.out.is_dir():
-        raise BenchError(f"--out {str(args.out)!r} exists and is not a folder")
     return claims

@@ -346,7 +346,7 @@ class RLStudy(Study):
                 device=self.settings.device,
                 device_mode=self.settings.device_mode,
             )
-        except RunInterrupted:
+        except (RunInterrupted, BenchError):  # a HarnessError keeps its flags for the command line
             raise
         except ValueError as exc:
             raise BenchError(str(exc)) from exc
@@ -399,7 +399,7 @@ class RLStudy(Study):
         import sys
         import time
 
-        from ..harness import HarnessError, duration
+        from ..harness import HarnessError, duration, output_folder
         from ..study import configure, execute, machine, write_timing
 
         start, load_before = time.perf_counter(), machine()
@@ -415,6 +415,7 @@ class RLStudy(Study):
                 f"the study's trainings would take about {duration(seconds)}, more than --max-hours "
                 f"{self.settings.max_hours:g}: use fewer --timesteps or seeds, or a larger --max-hours"
             )
+        output_folder(self.settings.out)
         print(
             f"mimo-radar-bench: the trainings still to do take about {duration(seconds)} (finished kept)",
             file=sys.stderr,

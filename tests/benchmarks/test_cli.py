@@ -4,6 +4,7 @@ nothing written."""
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -96,26 +97,6 @@ def test_an_unknown_argument_names_its_command_and_the_commands_help(capsys):
         "mimo-radar-bench demo: error: unrecognized arguments: --policy xyz "
         "(see 'mimo-radar-bench demo --help')"
     ]
-
-
-def test_an_unusable_out_is_one_line(tmp_path, capsys):
-    blocker = tmp_path / "file"
-    blocker.write_text("not a folder")
-    argv = ["run", "--scenario", "paper-1-v1", "--policies", "fix1", "--trials", "1", "--steps", "2"]
-    with pytest.raises(SystemExit) as exit_info:
-        main([*argv, "--out", str(blocker / "out"), "--quiet", "--no-figures"])
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "cannot write into --out" in err[0]
-    with pytest.raises(SystemExit) as exit_info:
-        main([*argv, "--out", str(blocker), "--quiet", "--no-figures"])
-    assert exit_info.value.code == 2
-    err = capsys.readouterr().err.strip().splitlines()
-    assert err == [
-        f"mimo-radar-bench: error: --out {blocker} is a file, not a folder: "
-        "choose a folder, new or a run's own"
-    ]
-    assert blocker.read_text() == "not a folder"
 
 
 def test_an_unreachable_ray_address_fails_within_seconds(tmp_path, capsys):
@@ -392,7 +373,7 @@ def test_env_option_combinations_are_refused_in_one_line_by_every_command(
             ["mechanisms", "--scenarios", "paper-1-v1", "paper-1-v1", "--out", "X"],
             "--scenarios lists a scenario twice",
         ),
-        (["mechanisms", "--out", "/etc/passwd"], "--out '/etc/passwd' exists and is not a folder"),
+        (["mechanisms", "--out", "/etc/passwd"], "must be a folder, and '/etc/passwd' is a file"),
         (["planning", "--rl", "/nonexistent", "--out", "X"], "--rl '/nonexistent' is not a folder"),
     ],
 )
@@ -406,6 +387,38 @@ def test_referenced_files_and_folders_are_checked_before_anything_runs(
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and message in err[0]
     assert list(tmp_path.iterdir()) == []  # nothing written
+
+
+OUT_COMMANDS = [
+    ["run", "--scenario", "paper-1-v1", "--policies", "ucb1", "--trials", "6", "--steps", "3"],
+    ["train-ppo", "--timesteps", "64"],
+    ["mechanisms", "--trials", "6"],
+    ["calibrate-layout", "--screen-trials", "6", "--candidates", "2", "--screen", "1", "--final", "1"],
+    ["search-layouts", "--trials", "6", "--generations", "1"],
+    ["model-figures"],
+    ["perf", "--quick"],
+    ["rl", "--trials", "6", "--ppo-seeds", "1", "--contrib-seeds", "1", "--timesteps", "64"],
+]
+
+
+@pytest.mark.parametrize("argv", OUT_COMMANDS, ids=lambda argv: argv[0])
+def test_an_out_that_cannot_be_a_folder_is_refused_before_any_work(argv, capsys, tmp_path, monkeypatch):
+    """A file, a path under a file, and a folder that cannot be made: one line each, before the
+    command measures anything (mechanisms, model-figures and perf wrote at the end of their
+    work; they and the layout studies ended in a traceback)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "file").write_text("x")
+    unmakeable = [] if not Path("/proc/self").is_dir() else [("/proc/x", "cannot write into --out /proc/x")]
+    for out, message in [
+        ("file", "argument --out: must be a folder, and 'file' is a file"),
+        ("file/run", "argument --out: must be a folder, and 'file/run' is under the file file"),
+        *unmakeable,
+    ]:
+        with pytest.raises(SystemExit) as exit_info:
+            main([*argv, "--out", out])
+        assert exit_info.value.code == 2
+        assert message in capsys.readouterr().err.strip().splitlines()[-1]
+        assert [p.name for p in tmp_path.iterdir()] == ["file"] and Path("file").read_text() == "x"
 
 
 def test_the_help_marks_commands_whose_module_is_not_installed(monkeypatch):
