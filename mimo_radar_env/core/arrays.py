@@ -510,6 +510,11 @@ def device_namespace(device: Any) -> NumpyNamespace | TorchNamespace:
         resolved = torch.device(device)
     except (RuntimeError, TypeError):
         raise ValueError(f"device must be None, 'cpu', 'cuda' or 'cuda:N', got {device!r}") from None
+    if resolved.type not in ("cpu", "cuda"):  # meta holds no values; mps and others lack float64 or tests
+        raise ValueError(
+            f"device must be None, 'cpu', 'cuda' or 'cuda:N', got {device!r} (torch's {resolved.type!r} "
+            "devices are not supported)"
+        )
     if resolved.type == "cuda":
         if not torch.cuda.is_available():
             raise ValueError(f"device={device!r}: torch sees no CUDA device here; use 'cpu' or None")

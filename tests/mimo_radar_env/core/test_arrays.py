@@ -86,7 +86,13 @@ def test_the_torch_take_along_axis_is_one_gather_and_refuses_a_negative_index():
 
 @pytest.mark.parametrize(
     ("device", "message"),
-    [("gpu", r"device must be None, 'cpu', 'cuda' or 'cuda:N', got 'gpu'"), ("cuda:7", "CUDA device")],
+    [
+        ("gpu", r"device must be None, 'cpu', 'cuda' or 'cuda:N', got 'gpu'"),
+        ("cuda:7", "CUDA device"),
+        # torch parses these, but meta tensors hold no values (the env stepped and returned them)
+        ("meta", r"got 'meta' \(torch's 'meta' devices are not supported\)"),
+        ("mps", r"got 'mps' \(torch's 'mps' devices are not supported\)"),
+    ],
 )
 def test_a_device_that_is_not_there_is_refused_in_one_line(device, message):
     if device == "cuda:7" and torch.cuda.device_count() > 7:  # pragma: no cover
