@@ -7,8 +7,8 @@ method:
 
 * **BCa** from :data:`BCA_MIN_TRIALS` to :data:`BCA_MAX_TRIALS` trials;
 * **percentile** below that (BCa's acceleration is a jackknife over trials, unreliable on a
-  few dozen of them, and BCa and the percentile interval at 95 % are both too narrow there; so
-  at the level of Hesterberg's expanded percentile interval, :func:`confidence_level`), above it (the
+  handful of them; there at the level of Hesterberg's expanded percentile interval,
+  :func:`confidence_level`, as one at 95 % is too narrow on a few trials), above it (the
   jackknife's ``n`` statistics of ``n - 1`` trials each would
   take ``n^2`` memory, 80 GB at 100,000 trials, and BCa's correction shrinks towards the
   percentile interval as trials grow; there resamples are also drawn in batches of at most
@@ -46,9 +46,7 @@ CONFIDENCE = 0.95
 MIN_INTERVAL_TRIALS = 6
 RESAMPLES = 2000
 BAND_RESAMPLES = 1000
-#: Below this many trials intervals are expanded percentile intervals, not BCa: at 25 normal
-#: trials BCa at 95 % covers significantly less than 95 % and the expanded interval does not
-#: (tests/benchmarks/test_uncertainty.py).
+#: Below this many trials intervals are percentile intervals, not BCa.
 BCA_MIN_TRIALS = 40
 #: Above this many trials too (a device's scorecards of 100,000 trials), with batched resamples.
 BCA_MAX_TRIALS = 20_000
@@ -138,7 +136,7 @@ def confidence_level(num_trials: int) -> float:
     :data:`BCA_MIN_TRIALS` on; below, that of Hesterberg's expanded percentile interval, whose
     ``z`` is Student's ``t`` with ``n - 1`` degrees of freedom times ``sqrt(n / (n - 1))`` (a
     percentile interval at 95 % is too narrow on a few trials: tests/benchmarks/test_uncertainty.py
-    measures both on 6 and 10 normal trials, and against BCa on 25)."""
+    measures both on 6 and 10 normal trials)."""
     from scipy import stats
 
     if num_trials >= BCA_MIN_TRIALS:
