@@ -47,7 +47,7 @@ MIN_INTERVAL_TRIALS = 6
 RESAMPLES = 2000
 BAND_RESAMPLES = 1000
 #: Below this many trials intervals are percentile intervals, not BCa.
-BCA_MIN_TRIALS = 40
+BCA_MIN_TRIALS = 20
 #: Above this many trials too (a device's scorecards of 100,000 trials), with batched resamples.
 BCA_MAX_TRIALS = 20_000
 #: The most trial weights one batch of resamples holds above BCA_MAX_TRIALS (160 MB of float64).
