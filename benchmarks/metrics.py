@@ -90,6 +90,17 @@ class TrialMetrics:
         # same resampled weights (the same object: uncertainty's weights are shared)
         self._averages: dict[tuple[int, int | None, int | None, int], list[tuple[NDArray, NDArray]]] = {}
 
+    def of_trials(self, index: NDArray[np.integer]) -> TrialMetrics:
+        """The metrics of the trials ``index`` (repeats allowed): a run of ``len(index)`` trials."""
+        fields = {
+            "trial_expected": self.expected,
+            "trial_optimal": self.optimal,
+            "trial_matches": self.matches,
+            "trial_squared_error": self.squared,
+            "trial_bound_squared": self.bound_squared,
+        }
+        return TrialMetrics({k: v[index] for k, v in fields.items() if v is not None}, self.channels)
+
     # ------------------------------------------------------------ weights
     def equal(self) -> NDArray[np.float64]:
         """The equal trial weights at which every reported value is evaluated."""

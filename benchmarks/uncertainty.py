@@ -369,13 +369,87 @@ def seed_coverage(
     return {"groups": groups, "repeats": repeats, "seed": seed, "method": SEED_METHOD, "coverage": rows}
 
 
-if __name__ == "__main__":  # python -m benchmarks.uncertainty OUT.json: the across-seed coverage
-    import json
-    import sys
+#: The metrics :func:`trial_coverage` measures: ARMSE (a root of a mean over trials at each step,
+#: biased low on few trials) beside the means over trials.
+COVERAGE_METRICS = ("armse", "asr", "final_regret", "mean_sinr_db")
 
-    record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
+
+def trial_coverage(
+    population: Mapping[str, TrialMetrics],
+    counts: tuple[int, ...] = (20, 50, 200),
+    repeats: int = 200,
+    seed: int = 0,
+) -> dict[str, Any]:
+    """How often the interval of a run of ``n`` trials contains the population's value, for each
+    of ``counts`` and each policy's :data:`COVERAGE_METRICS`: the population is a run's trials
+    (``population``, every policy on the same trials), each of ``repeats`` studies draws ``n`` of
+    them with replacement (the same draw for every policy) and judges its intervals as a run of
+    ``n`` trials would (:func:`estimates`). A metric constant over the drawn trials is left out
+    of that study's count."""
+    rng = np.random.default_rng(seed)
+    size = next(iter(population.values())).num_trials
+    truth = {
+        (p, k): float(m.scalar_metrics()[k](m.equal()))
+        for p, m in population.items()
+        for k in COVERAGE_METRICS
+    }
+    rows = []
+    for n in counts:
+        covered, judged = dict.fromkeys(truth, 0), dict.fromkeys(truth, 0)
+        for r in range(repeats):
+            drawn = rng.integers(0, size, n)
+            for policy, full in population.items():
+                metrics = full.of_trials(drawn).scalar_metrics()
+                found = estimates({k: metrics[k] for k in COVERAGE_METRICS}, n, seed=r)
+                for k, judged_k in found.items():
+                    if judged_k["method"] != METHODS["constant"]:
+                        judged[policy, k] += 1
+                        covered[policy, k] += judged_k["ci"][0] <= truth[policy, k] <= judged_k["ci"][1]
+        rows.append(
+            {
+                "trials": n,
+                "method": "BCa" if BCA_MIN_TRIALS <= n <= BCA_MAX_TRIALS else "percentile",
+                "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in truth if judged[p, k]},
+                "studies": {f"{p}.{k}": judged[p, k] for p, k in truth if judged[p, k]},
+            }
+        )
+    return {"population_trials": size, "repeats": repeats, "seed": seed, "rows": rows}
+
+
+def run_coverage(run: str, counts: tuple[int, ...], repeats: int) -> dict[str, Any]:
+    """:func:`trial_coverage` with the trials of the run in folder ``run`` as the population."""
+    import json
+    from pathlib import Path
+
+    from benchmarks.harness import RunConfig, load_per_trial
+    from benchmarks.report import trial_metrics
+
+    config = RunConfig(**json.loads((Path(run) / "config.json").read_text()))
+    population = trial_metrics(config, load_per_trial(Path(run), config))
+    about = {"scenario": config.scenario["name"], "steps": config.steps, "seed": config.seed}
+    about["fusion"] = config.env_options.get("fusion")
+    return {"run": about, **trial_coverage(population, counts, repeats)}
+
+
+if __name__ == "__main__":
+    # python -m benchmarks.uncertainty OUT.json: the across-seed coverage;
+    # python -m benchmarks.uncertainty --run DIR --counts 20,50 --repeats 200 OUT.json: the
+    # coverage of the intervals of runs of fewer trials, drawn from the run in DIR
+    import argparse
+    import json
+
+    parser = argparse.ArgumentParser(prog="python -m benchmarks.uncertainty")
+    parser.add_argument("out", nargs="?")
+    parser.add_argument("--run", default=None)
+    parser.add_argument("--counts", default="20,50,200")
+    parser.add_argument("--repeats", type=int, default=200)
+    args = parser.parse_args()
+    if args.run is None:
+        record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
+    else:
+        record = run_coverage(args.run, tuple(int(c) for c in args.counts.split(",")), args.repeats)
     text = json.dumps(record, indent=2) + "\n"
-    if len(sys.argv) > 1:
-        with open(sys.argv[1], "w") as handle:
+    if args.out:
+        with open(args.out, "w") as handle:
             handle.write(text)
     print(text, end="")

@@ -85,6 +85,20 @@ def test_weights_count_the_resampled_trials_and_batch():
     np.testing.assert_allclose(m.armse(batch), [float(m.armse(w)) for w in batch], rtol=1e-12)
 
 
+def test_the_metrics_of_some_trials_are_the_whole_runs_at_their_weights():
+    """``of_trials(index)`` is a run of the trials ``index`` (repeats allowed): each metric at its
+    equal weights is the whole run's at the weights that count them."""
+    m = _random_policy(np.random.default_rng(3))
+    index = np.array([4, 0, 4, 6, 2])
+    part = m.of_trials(index)
+    assert part.num_trials == 5 and part.tracked and part.bounded
+    weights = trial_weights(index, m.num_trials)
+    for name, metric in m.scalar_metrics().items():
+        assert float(part.scalar_metrics()[name](part.equal())) == pytest.approx(
+            float(metric(weights)), rel=1e-12
+        )
+
+
 def test_a_run_without_a_tracker_has_no_position_metrics():
     m = TrialMetrics(
         {
