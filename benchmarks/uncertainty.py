@@ -427,8 +427,10 @@ def run_coverage(run: str, counts: tuple[int, ...], repeats: int) -> dict[str, A
     config = RunConfig(**json.loads((Path(run) / "config.json").read_text()))
     population = trial_metrics(config, load_per_trial(Path(run), config))
     about = {"scenario": config.scenario["name"], "steps": config.steps, "seed": config.seed}
-    about["fusion"] = config.env_options.get("fusion")
-    return {"run": about, **trial_coverage(population, counts, repeats)}
+    about |= {"fusion": config.env_options.get("fusion"), "agent_params": config.agent_params}
+    command = "python -m benchmarks.uncertainty --run DIR --counts "
+    command += f"{','.join(map(str, counts))} --repeats {repeats}"
+    return {"command": command, "run": about, **trial_coverage(population, counts, repeats)}
 
 
 if __name__ == "__main__":

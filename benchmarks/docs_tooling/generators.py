@@ -1057,6 +1057,29 @@ def coverage_values(docs: Path) -> dict[str, str]:
     return table
 
 
+@values("trial-coverage")
+def trial_coverage_values(docs: Path) -> dict[str, str]:
+    """How often the intervals of runs of fewer trials cover the value of the run they are drawn
+    from (``python -m benchmarks.uncertainty --run DIR``, results/uncertainty/trial-coverage.json):
+    ``armse.N`` and ``means.N`` (ASR, final regret, mean SINR), the lowest and the highest rate
+    over the policies on N trials, each with its Wilson interval; ``population`` (its trials),
+    ``scenario`` and ``repeats``."""
+    record = read_json(docs, "uncertainty/trial-coverage.json")
+    table = {
+        "population": str(record["population_trials"]),
+        "scenario": record["run"]["scenario"],
+        "repeats": str(record["repeats"]),
+    }
+    for row in record["rows"]:
+        for key, names in (("armse", ("armse",)), ("means", ("asr", "final_regret", "mean_sinr_db"))):
+            rates = {n: r for n, r in row["coverage"].items() if n.rsplit(".", 1)[1] in names}
+            lowest, highest = min(rates, key=rates.__getitem__), max(rates, key=rates.__getitem__)
+            table[f"{key}.{row['trials']}"] = " to ".join(
+                _rate_with_interval(rates[n], row["studies"][n]) for n in (lowest, highest)
+            )
+    return table
+
+
 def _rate_with_interval(rate: float, trials: int, unit: str = " %") -> str:
     """A fraction of ``trials`` as a percentage with its 95 % Wilson interval (``model_figures.rate``);
     ``unit`` after the value (empty where the page writes the % after the interval)."""

@@ -295,3 +295,31 @@ def test_the_ray_table_gives_each_backends_serial_parts_where_every_run_recorded
         del run["before_first_task_s"], run["after_last_task_s"]
     (perf / "ray.json").write_text(json.dumps({"study": ["x"], "workers": 2, "runs": runs}))
     assert generators.ray_backend(tmp_path).splitlines()[0] == "| backend | wall of each run (s) | mean (s) |"
+
+
+def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_policies(tmp_path):
+    """ARMSE apart from the means; each rate with its Wilson interval over its own count of studies
+    (a metric constant over a study's trials is not counted)."""
+    from scipy import stats
+
+    from benchmarks.docs_tooling import generators
+
+    coverage = {"a.armse": 0.75, "b.armse": 0.9, "a.asr": 0.5, "a.final_regret": 0.95, "b.mean_sinr_db": 0.92}
+    studies = {name: 200 for name in coverage} | {"a.asr": 100}
+    record = {
+        "run": {"scenario": "paper-1-v1"},
+        "population_trials": 300,
+        "repeats": 200,
+        "rows": [{"trials": 20, "coverage": coverage, "studies": studies}],
+    }
+    (tmp_path / "results" / "uncertainty").mkdir(parents=True)
+    (tmp_path / "results" / "uncertainty" / "trial-coverage.json").write_text(json.dumps(record))
+    table = generators.trial_coverage_values(tmp_path)
+
+    def wilson(rate, n):
+        low, high = stats.binomtest(round(rate * n), n).proportion_ci(method="wilson")
+        return f"{100 * rate:.1f} % [{100 * low:.1f}, {100 * high:.1f}]"
+
+    assert table["armse.20"] == f"{wilson(0.75, 200)} to {wilson(0.9, 200)}"
+    assert table["means.20"] == f"{wilson(0.5, 100)} to {wilson(0.95, 200)}"
+    assert (table["population"], table["scenario"], table["repeats"]) == ("300", "paper-1-v1", "200")
