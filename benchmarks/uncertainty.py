@@ -439,17 +439,25 @@ if __name__ == "__main__":
     # coverage of the intervals of runs of fewer trials, drawn from the run in DIR
     import argparse
     import json
+    from pathlib import Path
+
+    from benchmarks.settings import integer, trial_count
+
+    def counts(text: str) -> tuple[int, ...]:
+        return tuple(trial_count(MIN_INTERVAL_TRIALS)(part) for part in text.split(","))
 
     parser = argparse.ArgumentParser(prog="python -m benchmarks.uncertainty")
-    parser.add_argument("out", nargs="?")
-    parser.add_argument("--run", default=None)
-    parser.add_argument("--counts", default="20,50,200")
-    parser.add_argument("--repeats", type=int, default=200)
+    parser.add_argument("out", nargs="?", help="the JSON to write (and print)")
+    parser.add_argument("--run", default=None, help="a run's folder: the coverage of runs drawn from it")
+    parser.add_argument("--counts", type=counts, default=(20, 50, 200), help="trials of the runs drawn")
+    parser.add_argument("--repeats", type=integer(1), default=200, help="runs drawn per count")
     args = parser.parse_args()
+    if args.run is not None and not (Path(args.run) / "config.json").is_file():
+        parser.error(f"--run {args.run!r} is not a run's folder (no config.json)")
     if args.run is None:
         record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
     else:
-        record = run_coverage(args.run, tuple(int(c) for c in args.counts.split(",")), args.repeats)
+        record = run_coverage(args.run, args.counts, args.repeats)
     text = json.dumps(record, indent=2) + "\n"
     if args.out:
         with open(args.out, "w") as handle:

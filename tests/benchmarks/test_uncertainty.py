@@ -372,3 +372,26 @@ def test_a_policys_intervals_are_the_same_bits_whatever_blas_threads_the_process
     assert json.dumps(one) == json.dumps(many)
     np.testing.assert_array_equal(band_one[0], band_many[0])
     np.testing.assert_array_equal(band_one[1], band_many[1])
+
+
+def test_the_coverage_of_a_runs_intervals_is_measured_from_its_folder(tmp_path):
+    """``python -m benchmarks.uncertainty --run DIR``: the studies are drawn from the run's own
+    trials, whose values they are judged against; a folder that is no run is one line."""
+    import subprocess
+    import sys
+
+    run = tmp_path / "run"
+    argv = ["run", "--scenario", "paper-3-v1", "--policies", "ucb1,fix1", "--trials", "8", "--steps", "5"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures", "--out", str(run)]) == 0
+    out = tmp_path / "coverage.json"
+    command = [sys.executable, "-m", "benchmarks.uncertainty", "--run", str(run), "--counts", "6,8"]
+    done = subprocess.run([*command, "--repeats", "3", str(out)], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    record = json.loads(out.read_text())
+    assert record["command"].endswith("--counts 6,8 --repeats 3") and record["population_trials"] == 8
+    assert record["run"]["scenario"] == "paper-3-v1" and [r["trials"] for r in record["rows"]] == [6, 8]
+    assert set(record["rows"][0]["coverage"]) <= {
+        f"{p}.{k}" for p in ("ucb1", "fix1") for k in uncertainty.COVERAGE_METRICS
+    }
+    refused = subprocess.run([*command[:3], "--run", str(tmp_path)], capture_output=True, text=True)
+    assert refused.returncode == 2 and refused.stderr.strip().splitlines()[-1].endswith("(no config.json)")
