@@ -385,13 +385,14 @@ def trial_coverage(
     (``population``, every policy on the same trials), each of ``repeats`` studies draws ``n`` of
     them with replacement (the same draw for every policy) and judges its intervals as a run of
     ``n`` trials would (:func:`estimates`). A metric constant over the drawn trials is left out
-    of that study's count."""
+    of that study's count, and ARMSE of a run without a tracker."""
     rng = np.random.default_rng(seed)
     size = next(iter(population.values())).num_trials
-    truth = {
+    truth = {  # ARMSE only where a tracker ran
         (p, k): float(m.scalar_metrics()[k](m.equal()))
         for p, m in population.items()
         for k in COVERAGE_METRICS
+        if k in m.scalar_metrics()
     }
     rows = []
     for n in counts:
@@ -400,7 +401,7 @@ def trial_coverage(
             drawn = rng.integers(0, size, n)
             for policy, full in population.items():
                 metrics = full.of_trials(drawn).scalar_metrics()
-                found = estimates({k: metrics[k] for k in COVERAGE_METRICS}, n, seed=r)
+                found = estimates({k: metrics[k] for p, k in truth if p == policy}, n, seed=r)
                 for k, judged_k in found.items():
                     if judged_k["method"] != METHODS["constant"]:
                         judged[policy, k] += 1
