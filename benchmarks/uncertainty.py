@@ -423,10 +423,11 @@ def run_coverage(run: str, counts: tuple[int, ...], repeats: int) -> dict[str, A
     from pathlib import Path
 
     from benchmarks.harness import RunConfig, load_per_trial
-    from benchmarks.report import trial_metrics
 
     config = RunConfig(**json.loads((Path(run) / "config.json").read_text()))
-    population = trial_metrics(config, load_per_trial(Path(run), config))
+    channels = config.scenario_object.num_channels_per_step
+    per_trial = load_per_trial(Path(run), config)
+    population = {policy: TrialMetrics(joined, channels) for policy, joined in per_trial.items()}
     about = {"scenario": config.scenario["name"], "steps": config.steps, "seed": config.seed}
     about |= {"fusion": config.env_options.get("fusion"), "agent_params": config.agent_params}
     command = "python -m benchmarks.uncertainty --run DIR --counts "
