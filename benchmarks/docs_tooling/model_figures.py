@@ -459,10 +459,7 @@ class ModelFigures(Command):
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser) -> None:
         parser.add_argument(
-            "--out",
-            type=folder,
-            default="docs/results/model",
-            help="output folder (default docs/results/model)",
+            "--out", type=folder, default="docs/results/model", help="output folder (default %(default)s)"
         )
         parser.add_argument(
             "--only",
