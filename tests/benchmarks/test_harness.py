@@ -377,3 +377,18 @@ def test_runs_that_are_not_a_config_and_a_folder_are_refused_before_a_folder_is_
         with pytest.raises(TypeError, match=r"runs must be a list of \(RunConfig, folder\) pairs"):
             run_many(runs, progress=False)
     assert not out.exists()
+
+
+def test_an_output_folder_is_made_or_refused_in_the_apis_words(tmp_path):
+    """``output_folder``, which every command calls before its work: a file, a path under a file,
+    or a folder that cannot be made is one HarnessError naming ``out`` (``--out`` on the command
+    line); a new folder is made and nothing is left in it."""
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(HarnessError) as caught:
+        harness.output_folder(tmp_path / "file")
+    assert str(caught.value).startswith(f"out {tmp_path / 'file'} is a file, not a folder")
+    assert caught.value.for_command_line().startswith("--out ")
+    with pytest.raises(HarnessError, match="cannot write into out .*file/run: Not a directory"):
+        harness.output_folder(tmp_path / "file" / "run")
+    made = harness.output_folder(tmp_path / "new" / "run")
+    assert made.is_dir() and list(made.iterdir()) == []
