@@ -177,7 +177,7 @@ LEGEND = (
     "arm, summed over the steps (eq13); mean SINR of the probed channels (dB)."
 )
 #: How a cell marks its interval's method (BCa is unmarked).
-METHOD_MARKS = {"percentile": "†", "constant over trials": "‡"}
+METHOD_MARKS = {"percentile": "†", "percentile, extended to the value": "†", "constant over trials": "‡"}
 METHOD_LEGEND = (
     "Marks: † a percentile interval, ‡ constant over trials (the interval is the value); unmarked: BCa."
 )
