@@ -113,10 +113,6 @@ def _on_one_blas_thread(function: Callable[..., Any]) -> Callable[..., Any]:
     return on_one_thread
 
 
-class IntervalError(ArithmeticError):
-    """A bootstrap interval excludes its own value by more than rounding."""
-
-
 #: The largest index array (elements) whose weights are kept: 2,000 resamples of 1,000 trials.
 SHARED_INDEX_ELEMENTS = 2_000_000
 #: The weights of the last few index arrays a bootstrap resampled (:func:`_shared_weights`).
@@ -222,8 +218,6 @@ def _interval(value: float, low: float, high: float, distribution: NDArray, meth
         method = "percentile"  # BCa undefined, or skewed past the value
         alpha = (1 - CONFIDENCE) / 2
         low, high = (float(q) for q in np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)]))
-    if not (np.isfinite(low) and np.isfinite(high)):
-        raise IntervalError(f"the {method} interval [{low}, {high}] of the value {value} is not finite")
     if max(low - value, value - high, 0.0) > ROUNDING * spread:
         method = "extended"  # the resamples lie to one side of the value: ARMSE on a few trials
     return {"estimate": value, "ci": [min(low, value), max(high, value)], "method": METHODS[method]}
