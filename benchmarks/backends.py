@@ -225,10 +225,18 @@ class WorkerPool(ProcessPoolExecutor):
         self.shutdown(wait=False)
 
     def terminate(self) -> None:
-        """Every worker killed at once, the queued tasks cancelled."""
+        """Every worker killed at once, the queued tasks cancelled.
+
+        A worker killed while it writes a result leaves part of it in the result pipe, and the
+        pool's manager thread (which the interpreter joins as it exits) would wait for the rest
+        forever: this process's end of the pipe is closed too, so once the workers have exited
+        the manager reads an end of file instead and stops."""
+        manager = self.manager or self._executor_manager_thread
         for process in [*self.workers, *(self._processes or {}).values()]:
             process.terminate()
         self.shutdown(wait=False, cancel_futures=True)
+        if manager is not None:
+            manager.result_queue._writer.close()
 
     def join(self) -> None:
         """Wait for every worker to exit."""

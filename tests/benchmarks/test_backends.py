@@ -3,6 +3,7 @@
 import multiprocessing
 import os
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -205,6 +206,39 @@ def test_a_terminated_worker_removes_its_named_semaphores():
             time.sleep(0.05)
         assert not _running(seen["pid"])
         assert not any(Path(f"/dev/shm/sem.{name.lstrip('/')}").exists() for name in seen["names"])
+
+
+def _half_a_result(marker):
+    """This worker's result begun in the result pipe and left there: a message's length and a
+    part of it, as a worker killed while it writes a large result leaves it."""
+    frame = sys._getframe()
+    while frame.f_code.co_name != "_process_worker":
+        frame = frame.f_back
+    results = frame.f_locals["result_queue"]
+    results._wlock.acquire()
+    os.write(results._writer.fileno(), struct.pack("!i", 1 << 20) + b"part of a result")
+    Path(marker).touch()
+    time.sleep(120)
+
+
+def test_a_worker_killed_while_writing_its_result_leaves_no_thread_waiting_for_the_rest(tmp_path):
+    """Ctrl-C while a worker writes a result: the pool's manager thread, which the interpreter
+    joins as it exits, had read the message's length and waited for the rest forever (an
+    interrupted CI run never exited)."""
+    marker = tmp_path / "writing"
+    with pytest.raises(KeyboardInterrupt), backends.worker_pool(1) as pool:
+        pool.submit(_half_a_result, str(marker))
+        pool.close()
+        end = time.monotonic() + 60
+        while not marker.exists() and time.monotonic() < end:
+            time.sleep(0.05)
+        assert marker.exists(), "the worker wrote nothing"
+        raise KeyboardInterrupt
+    pool.manager.join(20)
+    waiting = pool.manager.is_alive()
+    if waiting:
+        pool.manager.result_queue._writer.close()  # so that this test's process can exit
+    assert not waiting
 
 
 @pytest.mark.skipif(not Path("/dev/shm").is_dir(), reason="named semaphores as files of /dev/shm (Linux)")
