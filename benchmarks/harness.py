@@ -316,15 +316,11 @@ def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) 
 def _probe(policy: str, sc: Scenario, params: dict[str, Any], seed: int, options: EnvOptions) -> agents.Agent:
     """The policy's agent, built and reset on a one-trial env of the run (a bad parameter, a
     missing model or a missing env option fails here)."""
-    for key in agents.agent_class(agents.split_policy(policy)[0]).needs.env_option_params:
-        if key in params and params[key] != getattr(options, key):
-            raise HarnessError(
-                f"policy {policy!r}: `agent_params` {policy}.{key}={params[key]!r} differs from the run's "
-                f"{key}={getattr(options, key)!r}; leave it out (the agent takes the run's)"
-            )
     try:
         agent = make_policy(policy, sc, params, seed=seed, options=options.to_dict())
         agents.Rollout(agent, agents.make_env(agent, 1, options, sc), seed=seed)
+    except HarnessError as exc:  # its arguments kept marked for the command line
+        raise HarnessError(f"policy {policy!r}: {exc.args[0]}") from exc
     except (ValueError, TypeError, OSError) as exc:
         raise HarnessError(f"policy {policy!r}: {exc}") from exc
     return agent
@@ -708,14 +704,19 @@ def make_policy(
     options: dict[str, Any] | None = None,
 ) -> agents.Agent:
     """The agent of a policy entry ``NAME`` or ``NAME:ARGUMENT`` with its parameters; the
-    parameters it names after env options (``Agent.needs.env_option_params``) default to the
-    run's ``options``."""
+    parameters it names after env options (``Agent.needs.env_option_params``), left out, take
+    the run's ``options``, and given, must equal them (else the agent could not run on the run's
+    env)."""
     name, argument = agents.split_policy(policy)
-    from_env = {
-        key: options[key]
-        for key in agents.agent_class(name).needs.env_option_params
-        if options is not None and key not in params
-    }
+    from_env = {}
+    for key in agents.agent_class(name).needs.env_option_params if options is not None else ():
+        if key not in params:
+            from_env[key] = options[key]
+        elif params[key] != options[key]:
+            raise HarnessError(
+                f"`agent_params` {policy}.{key}={params[key]!r} differs from the run's "
+                f"{key}={options[key]!r}; leave it out (the agent takes the run's)"
+            )
     return agents.make_agent(name, scenario, seed=seed, **argument, **from_env, **params)
 
 

@@ -192,8 +192,10 @@ def test_the_harness_gives_it_the_runs_fusion_scale_and_observation():
     constant = make_policy("tracking-ucb", sc, {}, seed=0, options=options | {"measurement_quality": 0.5})
     assert constant.selector.measurement_quality == 0.5
     assert policy_env_options(agent, options) == {**options, "prediction_covariance": True}
-    given = make_policy("tracking-ucb", sc, {"fusion": "average"}, seed=0, options=options)
-    assert given.selector.fusion == "average"  # a parameter given wins over the run's option
+    same = make_policy("tracking-ucb", sc, {"fusion": "centralized"}, seed=0, options=options)
+    assert same.selector.fusion == "centralized"
+    with pytest.raises(ValueError, match=r"tracking-ucb.fusion='average' differs from the run's fusion="):
+        make_policy("tracking-ucb", sc, {"fusion": "average"}, seed=0, options=options)
     ucb = make_policy("ucb1", sc, {}, seed=0, options=options)
     assert policy_env_options(ucb, options) == options
 
