@@ -33,6 +33,7 @@ value.
 from __future__ import annotations
 
 import functools
+import time
 import warnings
 from collections.abc import Callable, Mapping
 from itertools import combinations
@@ -383,14 +384,17 @@ def trial_coverage(
     counts: tuple[int, ...] = (20, 50, 200),
     repeats: int = 200,
     seed: int = 0,
+    say: Callable[[str], None] = lambda line: None,
 ) -> dict[str, Any]:
     """How often the interval of a run of ``n`` trials contains the population's value, for each
     of ``counts`` and each policy's :data:`COVERAGE_METRICS`: the population is a run's trials
     (``population``, every policy on the same trials), each of ``repeats`` studies draws ``n`` of
-    them with replacement (the same draw for every policy) and judges its intervals as a run of
+    them with replacement (the same draw for every policy; each count's draws a stream of their
+    own, so a count's row does not depend on the others) and judges its intervals as a run of
     ``n`` trials would (:func:`estimates`). A metric constant over the drawn trials is left out
-    of that study's count, and ARMSE of a run without a tracker."""
-    rng = np.random.default_rng(seed)
+    of that study's count, and ARMSE of a run without a tracker. Each row's ``extended`` counts
+    the studies whose percentile interval was extended to its value. ``say`` gets a line as
+    each count is done."""
     size = next(iter(population.values())).num_trials
     truth = {  # ARMSE only where a tracker ran
         (p, k): float(m.scalar_metrics()[k](m.equal()))
@@ -400,7 +404,9 @@ def trial_coverage(
     }
     rows = []
     for n in counts:
-        covered, judged = dict.fromkeys(truth, 0), dict.fromkeys(truth, 0)
+        started = time.perf_counter()
+        rng = np.random.default_rng([seed, n])
+        covered, judged, extended = (dict.fromkeys(truth, 0) for _ in range(3))
         for r in range(repeats):
             drawn = rng.integers(0, size, n)
             for policy, full in population.items():
@@ -410,18 +416,25 @@ def trial_coverage(
                     if judged_k["method"] != METHODS["constant"]:
                         judged[policy, k] += 1
                         covered[policy, k] += judged_k["ci"][0] <= truth[policy, k] <= judged_k["ci"][1]
+                        extended[policy, k] += judged_k["method"] == METHODS["extended"]
+        kept = [(p, k) for p, k in truth if judged[p, k]]
         rows.append(
             {
                 "trials": n,
                 "method": "BCa" if BCA_MIN_TRIALS <= n <= BCA_MAX_TRIALS else "percentile",
-                "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in truth if judged[p, k]},
-                "studies": {f"{p}.{k}": judged[p, k] for p, k in truth if judged[p, k]},
+                "confidence_level": confidence_level(n),
+                "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in kept},
+                "studies": {f"{p}.{k}": judged[p, k] for p, k in kept},
+                "extended": {f"{p}.{k}": extended[p, k] for p, k in kept},
             }
         )
+        say(f"{n} trials: {repeats} studies in {time.perf_counter() - started:.0f} s")
     return {"population_trials": size, "repeats": repeats, "seed": seed, "rows": rows}
 
 
-def run_coverage(run: str, counts: tuple[int, ...], repeats: int) -> dict[str, Any]:
+def run_coverage(
+    run: str, counts: tuple[int, ...], repeats: int, say: Callable[[str], None] = lambda line: None
+) -> dict[str, Any]:
     """:func:`trial_coverage` with the trials of the run in folder ``run`` as the population."""
     import json
     from pathlib import Path
@@ -436,7 +449,7 @@ def run_coverage(run: str, counts: tuple[int, ...], repeats: int) -> dict[str, A
     about |= {"fusion": config.env_options.get("fusion"), "agent_params": config.agent_params}
     command = "python -m benchmarks.uncertainty --run DIR --counts "
     command += f"{','.join(map(str, counts))} --repeats {repeats}"
-    return {"command": command, "run": about, **trial_coverage(population, counts, repeats)}
+    return {"command": command, "run": about, **trial_coverage(population, counts, repeats, say=say)}
 
 
 if __name__ == "__main__":
@@ -445,6 +458,7 @@ if __name__ == "__main__":
     # coverage of the intervals of runs of fewer trials, drawn from the run in DIR
     import argparse
     import json
+    import sys
     from pathlib import Path
 
     from benchmarks.settings import integer, trial_count
@@ -463,7 +477,8 @@ if __name__ == "__main__":
     if args.run is None:
         record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
     else:
-        record = run_coverage(args.run, args.counts, args.repeats)
+        say = functools.partial(print, file=sys.stderr)
+        record = run_coverage(args.run, args.counts, args.repeats, say=say)
     text = json.dumps(record, indent=2) + "\n"
     if args.out:
         with open(args.out, "w") as handle:

@@ -1062,8 +1062,10 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
     """How often the intervals of runs of fewer trials cover the value of the run they are drawn
     from (``python -m benchmarks.uncertainty --run DIR``, results/uncertainty/trial-coverage.json):
     ``armse.N`` and ``means.N`` (ASR, final regret, mean SINR), the lowest and the highest rate
-    over the policies on N trials, each with its Wilson interval; ``population`` (its trials),
-    ``scenario`` and ``repeats``."""
+    over the policies on N trials, each with its Wilson interval; ``extended.N``, how many of
+    the ARMSE intervals on N trials were extended to their value, of how many; ``level.N``, the
+    bootstrap's confidence level on N trials; ``population`` (its trials), ``scenario`` and
+    ``repeats``."""
     record = read_json(docs, "uncertainty/trial-coverage.json")
     table = {
         "population": str(record["population_trials"]),
@@ -1077,6 +1079,10 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
             table[f"{key}.{row['trials']}"] = " to ".join(
                 _rate_with_interval(rates[n], row["studies"][n]) for n in (lowest, highest)
             )
+        armse = [n for n in row["coverage"] if n.endswith(".armse")]
+        extended, judged = (sum(row[field][n] for n in armse) for field in ("extended", "studies"))
+        table[f"extended.{row['trials']}"] = f"{extended:,} of {judged:,}"
+        table[f"level.{row['trials']}"] = f"{100 * row['confidence_level']:.1f} %"
     return table
 
 

@@ -60,22 +60,47 @@ def _policy(expected, squared, optimal=None):
 def test_the_coverage_of_intervals_on_fewer_trials_of_a_population():
     """trial_coverage draws studies of n of a population's trials: a sum over steps averaged over
     trials (final regret) is covered at 95 % on 50 trials, within the binomial test's tolerance;
-    ARMSE, a root of a mean over trials at each step, biased low on few trials, is covered
-    significantly less on 20 (docs/benchmark.md)."""
+    ARMSE, a root of a mean over trials at each step, biased low on few trials (here of
+    heavy-tailed errors), is covered significantly less on 20 (docs/benchmark.md). Each count's
+    row is drawn from a stream of its own: the same whatever the other counts."""
     rng = np.random.default_rng(4)
     n, t = 400, 40
     expected = rng.exponential(1.0, (n, t))
-    population = {
-        "a": _policy(expected, rng.exponential(4.0, (n, t, 1)), expected + rng.exponential(1.0, (n, t)))
-    }
-    record = uncertainty.trial_coverage(population, counts=(20, 50), repeats=300, seed=1)
+    squared = rng.lognormal(0.0, 1.5, (n, t, 1))
+    population = {"a": _policy(expected, squared, expected + rng.exponential(1.0, (n, t)))}
+    said = []
+    record = uncertainty.trial_coverage(population, counts=(20, 50), repeats=300, seed=1, say=said.append)
     assert record["population_trials"] == n and [row["trials"] for row in record["rows"]] == [20, 50]
+    assert [line.split(":")[0] for line in said] == ["20 trials", "50 trials"]
+    assert (
+        uncertainty.trial_coverage(population, counts=(50,), repeats=300, seed=1)["rows"]
+        == record["rows"][1:]
+    )
     few, more = record["rows"]
     assert few["studies"]["a.armse"] == 300 and few["method"] == "BCa"
     armse = round(few["coverage"]["a.armse"] * 300)
     assert stats.binomtest(armse, 300, 0.95, alternative="less").pvalue < 0.01, armse
     regret = round(more["coverage"]["a.final_regret"] * 300)
     assert stats.binomtest(regret, 300, 0.95).pvalue > 0.01, regret
+
+
+def test_the_coverage_counts_the_studies_whose_interval_was_extended(monkeypatch):
+    """Each row says how many studies' intervals were extended to their value (here every ARMSE
+    interval is marked so by a stand-in of ``estimates``)."""
+    rng = np.random.default_rng(0)
+    expected = rng.exponential(1.0, (30, 5))
+    population = {"a": _policy(expected, rng.exponential(1.0, (30, 5, 1)))}
+    judge = uncertainty.estimates
+
+    def marked(values, n, seed):
+        found = judge(values, n, seed=seed)
+        found["armse"]["method"] = uncertainty.METHODS["extended"]
+        return found
+
+    monkeypatch.setattr(uncertainty, "estimates", marked)
+    row = uncertainty.trial_coverage(population, counts=(6,), repeats=5)["rows"][0]
+    assert row["extended"] == {"a.armse": 5, "a.mean_sinr_db": 0}  # regret and ASR: constant here
+    assert row["confidence_level"] == uncertainty.confidence_level(6) > 0.95
 
 
 def test_an_interval_that_misses_its_value_by_more_than_rounding_is_extended_and_says_so():

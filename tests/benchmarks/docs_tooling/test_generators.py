@@ -310,7 +310,15 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
         "run": {"scenario": "paper-1-v1"},
         "population_trials": 300,
         "repeats": 200,
-        "rows": [{"trials": 20, "coverage": coverage, "studies": studies}],
+        "rows": [
+            {
+                "trials": 20,
+                "confidence_level": 0.95,
+                "coverage": coverage,
+                "studies": studies,
+                "extended": dict.fromkeys(coverage, 0) | {"a.armse": 3, "b.asr": 7},
+            }
+        ],
     }
     (tmp_path / "results" / "uncertainty").mkdir(parents=True)
     (tmp_path / "results" / "uncertainty" / "trial-coverage.json").write_text(json.dumps(record))
@@ -323,3 +331,4 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
     assert table["armse.20"] == f"{wilson(0.75, 200)} to {wilson(0.9, 200)}"
     assert table["means.20"] == f"{wilson(0.5, 100)} to {wilson(0.95, 200)}"
     assert (table["population"], table["scenario"], table["repeats"]) == ("300", "paper-1-v1", "200")
+    assert (table["extended.20"], table["level.20"]) == ("3 of 400", "95.0 %")  # ARMSE's only
