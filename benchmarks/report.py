@@ -249,6 +249,9 @@ def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "
     if intervals == "full":
         how = f"({summary.get('uncertainty')}). {METHOD_LEGEND}"
     how = f"Each cell: the value [its 95 % interval] {how}"
+    tracked = any(row.get("armse") is not None for row in summary["policies"].values())
+    if tracked and summary["trials"] < uncertainty.ARMSE_INTERVAL_TRIALS:
+        how += f" {uncertainty.FEW_TRIALS_ARMSE}"
     lines = [
         f"# {name}, fusion {summary['env_options']['fusion']}: {', '.join(summary['policies'])}",
         "",

@@ -61,6 +61,19 @@ def test_the_table_shows_the_summary_with_marks(small_run):
     assert report.METHOD_LEGEND in table
 
 
+def test_a_table_of_fewer_trials_than_armse_needs_says_its_armse_intervals_undercover(small_run):
+    """On fewer than 50 trials ARMSE's interval covers far less than 95 % (docs/benchmark.md):
+    a table with a tracker says so, one of 50 trials or without a tracker does not."""
+    from benchmarks import uncertainty
+
+    summary = json.loads((small_run / "summary.json").read_text())
+    assert uncertainty.FEW_TRIALS_ARMSE in (small_run / "table.md").read_text()  # 6 trials
+    assert uncertainty.FEW_TRIALS_ARMSE in report.table_markdown(summary, 2, intervals="short")
+    assert uncertainty.FEW_TRIALS_ARMSE not in report.table_markdown(summary | {"trials": 50}, 2)
+    untracked = {p: row | {"armse": None} for p, row in summary["policies"].items()}
+    assert uncertainty.FEW_TRIALS_ARMSE not in report.table_markdown(summary | {"policies": untracked}, 2)
+
+
 def test_the_run_output_explains_once_and_says_where_its_files_are(tmp_path, capsys):
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-1-v1", "--policies", "ucb1,random,fix1,best", "--trials", "6"]
