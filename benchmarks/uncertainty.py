@@ -91,9 +91,9 @@ NO_INTERVALS = (
 ARMSE_INTERVAL_TRIALS = 50
 #: What a table of fewer than ARMSE_INTERVAL_TRIALS trials with a tracker says of ARMSE's intervals.
 FEW_TRIALS_ARMSE = (
-    f"On fewer than {ARMSE_INTERVAL_TRIALS} trials ARMSE's interval covers the ARMSE of many trials far "
-    "less often than 95 % (a root of a mean over trials, it is biased low on a few trials; measured in "
-    "docs/benchmark.md, Uncertainty): compare policies' ARMSE on a few hundred trials."
+    f"On fewer than {ARMSE_INTERVAL_TRIALS} trials ARMSE's interval covered the ARMSE of many trials far "
+    "less often than 95 % where measured (docs/benchmark.md, Uncertainty: a root of a mean over trials, "
+    "it is biased low on a few trials): compare policies' ARMSE on a few hundred trials."
 )
 
 Metric = Callable[[NDArray[np.float64]], NDArray[np.float64]]

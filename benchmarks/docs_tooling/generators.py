@@ -1064,12 +1064,13 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
     ``armse.N`` and ``means.N`` (ASR, final regret, mean SINR), the lowest and the highest rate
     over the policies on N trials, each with its Wilson interval; ``extended.N``, how many of
     the ARMSE intervals on N trials were extended to their value, of how many; ``level.N``, the
-    bootstrap's confidence level on N trials; ``population`` (its trials), ``scenario`` and
-    ``repeats``."""
+    bootstrap's confidence level on N trials; ``population`` (its trials), ``scenario``,
+    ``fusion`` and ``repeats``."""
     record = read_json(docs, "uncertainty/trial-coverage.json")
     table = {
         "population": str(record["population_trials"]),
         "scenario": record["run"]["scenario"],
+        "fusion": record["run"]["fusion"],
         "repeats": str(record["repeats"]),
     }
     for row in record["rows"]:

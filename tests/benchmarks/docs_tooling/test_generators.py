@@ -307,7 +307,7 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
     coverage = {"a.armse": 0.75, "b.armse": 0.9, "a.asr": 0.5, "a.final_regret": 0.95, "b.mean_sinr_db": 0.92}
     studies = {name: 200 for name in coverage} | {"a.asr": 100}
     record = {
-        "run": {"scenario": "paper-1-v1"},
+        "run": {"scenario": "paper-1-v1", "fusion": "centralized"},
         "population_trials": 300,
         "repeats": 200,
         "rows": [
@@ -331,4 +331,5 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
     assert table["armse.20"] == f"{wilson(0.75, 200)} to {wilson(0.9, 200)}"
     assert table["means.20"] == f"{wilson(0.5, 100)} to {wilson(0.95, 200)}"
     assert (table["population"], table["scenario"], table["repeats"]) == ("300", "paper-1-v1", "200")
+    assert table["fusion"] == "centralized"
     assert (table["extended.20"], table["level.20"]) == ("3 of 400", "95.0 %")  # ARMSE's only
