@@ -94,6 +94,21 @@ def coded_values(text: str) -> list[str]:
     return found
 
 
+def comment_led_lines(text: str) -> list[int]:
+    """The lines of ``text`` (1-based, outside code fences) that open with an HTML comment followed
+    by text, such as a value span at a line's start. CommonMark reads such a line as a raw HTML
+    block: it ends the paragraph there and shows the line's Markdown as typed."""
+    found, fence = [], None
+    for number, line in enumerate(text.splitlines(), 1):
+        stripped = line.lstrip()
+        marker = stripped[:3]
+        if marker in ("```", ":::"):
+            fence = None if fence == marker else (fence or marker)
+        elif fence is None and re.match(r"<!--.*?-->\s*\S", stripped):
+            found.append(number)
+    return found
+
+
 def render(text: str, docs: Path) -> str:
     """``text`` with every generated block and value span filled from the artefacts; an unknown
     generator, value source or key is an error."""
@@ -120,7 +135,14 @@ def render(text: str, docs: Path) -> str:
         value = _read(lambda: VALUE_SOURCES[source](docs, key), f"the value {source} {key}")
         return match.group(1) + value + match.group(5)
 
-    return VALUE.sub(quote, BLOCK.sub(fill, text))
+    rendered = VALUE.sub(quote, BLOCK.sub(fill, text))
+    led = comment_led_lines(rendered)
+    if led:
+        raise BenchError(
+            f"line {led[0]} opens with an HTML comment followed by text, which CommonMark reads as raw HTML: "
+            "the paragraph breaks there and the line's Markdown shows as typed (start the line with a word)"
+        )
+    return rendered
 
 
 def _read(make: Callable[[], str], what: str) -> str:

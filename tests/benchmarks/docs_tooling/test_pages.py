@@ -2,6 +2,7 @@
 number, an unknown generator and a number with no artefact are caught."""
 
 import json
+import re
 import shutil
 from pathlib import Path
 
@@ -114,3 +115,57 @@ def test_a_value_span_anywhere_inside_a_code_span_is_found():
     assert coded_values(f"running {carried}, then `b` and {span} and `c`") == []
     assert coded_values(f"one ` here\n\nand {span} and ` there") == []  # two paragraphs: no pair
     assert coded_values("`<!-- value: <source> <key> -->...<!-- end value -->`") == []  # the syntax, shown
+
+
+LED_CASES = {
+    "a paragraph opened by a value": "<!-- value: a b -->1<!-- end value --> trials, one thread.\n",
+    "a paragraph's second line opened by a value": "On\n<!-- value: a b -->1<!-- end value --> trials.\n",
+    "a list item's second line": "- the rollout in\n  <!-- value: a b -->1<!-- end value --> of them\n",
+    "a word first": "Measured\non <!-- value: a b -->1<!-- end value --> trials.\n",
+    "a marker line alone": "<!-- generated: x -->\n| a |\n|---|\n<!-- end generated -->\n",
+    "inside a code fence": "```text\n<!-- value: a b -->1<!-- end value --> shown as code\n```\n",
+}
+
+
+@pytest.mark.parametrize("name", LED_CASES)
+def test_lines_led_by_a_comment_are_those_commonmark_makes_raw_html(name):
+    """markdown-it, the parser of the site's MyST, makes a line that opens with a comment followed by text
+    an HTML block of its own (the paragraph breaks and its Markdown shows as typed); the check finds exactly
+    those lines, and not a marker standing alone or a comment shown in code."""
+    from benchmarks.docs_tooling.pages import comment_led_lines
+
+    markdown_it = pytest.importorskip("markdown_it")
+    text = LED_CASES[name]
+    raw = [
+        token.map[0] + 1
+        for token in markdown_it.MarkdownIt("commonmark").parse(text)
+        if token.type == "html_block" and re.search(r"-->\s*\S", token.content.strip())
+    ]
+    assert comment_led_lines(text) == raw
+    assert bool(raw) == (name not in ("a word first", "a marker line alone", "inside a code fence"))
+
+
+def test_no_page_breaks_a_paragraph_at_a_value_and_a_page_that_does_fails(tmp_path, capsys):
+    """Every committed page, parsed by markdown-it, keeps its value spans inside paragraphs, list items and
+    tables; a page with a value at a line's start fails the check, naming the line."""
+    markdown_it = pytest.importorskip("markdown_it")
+    parser = markdown_it.MarkdownIt("commonmark")
+    for page in [*DOCS.glob("*.md"), DOCS.parent / "README.md"]:
+        raw = [
+            t.map[0] + 1
+            for t in parser.parse(page.read_text())
+            if t.type == "html_block" and "value:" in t.content
+        ]
+        assert raw == [], f"{page.name}: {raw}"
+    docs = tmp_path / "docs"
+    shutil.copytree(DOCS, docs, ignore=shutil.ignore_patterns("_build", "*.png"))
+    page = docs / "agents.md"
+    text = page.read_text()
+    opened = "finds the exact optimum\nin <!-- value:"
+    assert opened in text
+    page.write_text(text.replace(opened, "finds the exact optimum in\n<!-- value:"))
+    line = text[: text.index(opened)].count("\n") + 2
+    with pytest.raises(SystemExit) as exit:
+        main(["docs", "--docs", str(docs), "--check"])
+    assert exit.value.code == 2
+    assert f"agents.md: line {line} opens with an HTML comment followed by text" in capsys.readouterr().err
