@@ -91,7 +91,8 @@ class Scenario:
     Attributes
     ----------
     name : str
-        Label used in reports.
+        Label used in reports, and the folder a study writes the scenario's run into: 1 to 100
+        letters, digits, ``_``, ``-``, ``+`` or ``.`` (not first); ``"custom"`` when a file has none.
     tx_positions, rx_positions : arrays (M, 2), (N, 2)
         Station coordinates in metres.
     tx_per_step, rx_per_step : int
@@ -199,7 +200,7 @@ class Scenario:
 
     @classmethod
     def _validated(cls, data: dict[str, Any]) -> Scenario:
-        out: dict[str, Any] = {"name": str(data["name"]), "targets": data["targets"]}
+        out: dict[str, Any] = {"name": check.scenario_name(data["name"]), "targets": data["targets"]}
         out["tx_positions"] = check.positions("tx_positions", data["tx_positions"])
         out["rx_positions"] = check.positions("rx_positions", data["rx_positions"])
         for name in ("tx_positions", "rx_positions"):

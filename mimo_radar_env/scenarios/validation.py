@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from typing import Any
 
 import numpy as np
@@ -10,6 +11,20 @@ from numpy.typing import NDArray
 
 class ScenarioError(ValueError):
     """A scenario field is missing, unknown or out of its allowed range."""
+
+
+#: A scenario's name: the studies name a folder after it (``OUT/<name>``), so no separator, no dot first.
+SCENARIO_NAME = re.compile(r"[\w+-][\w.+-]{0,99}")
+
+
+def scenario_name(value: Any) -> str:
+    """``value`` if it is a name a folder can carry."""
+    if not isinstance(value, str) or not SCENARIO_NAME.fullmatch(value):
+        raise ScenarioError(
+            "name must be a string of 1 to 100 letters, digits, '_', '-', '+' or '.' (not first), as a "
+            f"study names a folder after it; got {value!r}"
+        )
+    return value
 
 
 def numeric_array(name: str, value: Any) -> NDArray[np.float64]:

@@ -194,3 +194,15 @@ def test_compare_claims_puts_scorecards_side_by_side(tmp_path, capsys):
     assert "| **holds** | | | 1 | 0 |" in table and "| **contradicted** | | | 0 | 1 |" in table
     with pytest.raises(SystemExit):
         main(["compare-claims", f"x={tmp_path / 'missing'}"])
+
+
+def test_each_scenario_runs_in_a_folder_of_its_name_inside_out(tmp_path):
+    """The paper study writes a scenario's run into OUT/<name>; scenario names are checked (test_validation)
+    so that this folder is always a child of OUT."""
+    scenarios = [load_scenario("paper-2-v1", name=name) for name in ("caf\xe9", "v1+jitter.2")]
+    runs = claims.paper_runs([*scenarios, "paper-1-v1"], tmp_path)
+    assert [(run.folder.parent, run.folder.name) for run in runs] == [
+        (tmp_path, "caf\xe9"),
+        (tmp_path, "v1+jitter.2"),
+        (tmp_path, "paper-1-v1"),
+    ]

@@ -1,6 +1,7 @@
 """Scenario validation at the edges: every bad field, file and fuzzed mutation refused by name, or
 run finite."""
 
+import re
 import time
 
 import numpy as np
@@ -178,3 +179,18 @@ def test_make_refuses_a_float_horizon():
 
     with pytest.raises(ScenarioError, match=r"horizon must be an integer, got 5\.0"):
         gym.make("MimoRadarSelect-v1", horizon=5.0)
+
+
+@pytest.mark.parametrize("name", ["", "../escape", "a/b", "a\\b", ".hidden", " padded", "x" * 101, 5, None])
+def test_a_name_no_folder_can_carry_is_refused(name):
+    """A study writes a scenario's run into OUT/<name> (claims.paper_runs): a name with a separator, a
+    leading dot, a space or nothing at all would put it elsewhere, and a non-string is not made one."""
+    with pytest.raises(
+        ScenarioError, match=f"name must be a string of 1 to 100 letters.*got {re.escape(repr(name))}"
+    ):
+        Scenario.from_dict({**PAPER, "name": name})
+
+
+@pytest.mark.parametrize("name", ["paper-1-v1-search5", "random-6x8-K2", "caf\xe9", "v1+jitter.2", "x" * 100])
+def test_names_of_letters_digits_and_marks_are_kept(name):
+    assert Scenario.from_dict({**PAPER, "name": name}).name == name
