@@ -20,7 +20,8 @@ def test_value_spans_are_filled_from_the_figures(tmp_path, capsys):
     record["figures"]["nees-imm"].update(value=3.5, ci=[3.4, 3.6])
     path.write_text(json.dumps(record))
     assert main(["docs", "--docs", str(docs), "--check"]) == 1
-    assert "+  <!-- value: model nees-imm -->3.50 [3.40, 3.60]<!-- end value -->" in capsys.readouterr().out
+    filled = "+  has <!-- value: model nees-imm -->3.50 [3.40, 3.60]<!-- end value -->"
+    assert filled in capsys.readouterr().out
     page = docs / "model.md"
     page.write_text(page.read_text() + "\n<!-- value: model no-such-figure -->1<!-- end value -->\n")
     with pytest.raises(SystemExit) as exit_info:
