@@ -202,7 +202,9 @@ class MimoRadarSelectEnv(HorizonSpec, gym.Env[dict[str, NDArray], NDArray[np.int
 
     def __init__(self, render_mode: str | None = None, **kwargs: Any) -> None:
         if render_mode is not None and render_mode not in self.metadata["render_modes"]:
-            raise ValueError(f"render_mode must be one of {self.metadata['render_modes']} or None")
+            raise ValueError(
+                f"render_mode must be one of {self.metadata['render_modes']} or None, got {render_mode!r}"
+            )
         _refuse_vector_keywords(kwargs)
         self.options, self.scenario = _resolve(kwargs)
         self.engine = RadarEngine(self.options, self.scenario, batch_size=1)

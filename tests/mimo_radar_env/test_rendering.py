@@ -29,3 +29,10 @@ def test_human_rendering_runs_headless_and_says_it_shows_nothing():
     assert env.unwrapped._figure is not None
     env.close()
     assert env.unwrapped._figure is None
+
+
+def test_an_unknown_render_mode_is_named_with_the_allowed_ones():
+    with pytest.raises(
+        ValueError, match=r"render_mode must be one of \['human', 'rgb_array'\] or None, got 'ansi'"
+    ):
+        gym.make("MimoRadarSelect-v1", render_mode="ansi")
