@@ -9,6 +9,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Mapping
+from contextvars import ContextVar
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,6 +19,9 @@ from numpy.typing import NDArray
 from ..core.motion import POSITION, nominal_trajectories, positions, transition_matrix
 from . import validation as check
 from .validation import ScenarioError
+
+#: Set while :meth:`Scenario._validated` builds a scenario from fields it has just checked.
+_CHECKED: ContextVar[bool] = ContextVar("_CHECKED", default=False)
 
 #: Longest episode a scenario may ask for (steps): the model keeps per-step arrays.
 MAX_HORIZON = 1_000_000
@@ -144,6 +148,15 @@ class Scenario:
     peak_sinr: float = 10.0
     truth_seed: int = 0
 
+    def __post_init__(self) -> None:
+        # A scenario built directly (``Scenario(...)``, ``dataclasses.replace``) is checked as
+        # ``from_dict`` checks one, and holds the fields it would hold.
+        if _CHECKED.get():
+            return
+        checked = Scenario.from_dict(self.to_dict())
+        for f in dataclasses.fields(self):
+            object.__setattr__(self, f.name, getattr(checked, f.name))
+
     def __eq__(self, other: object) -> bool:
         return NotImplemented if type(other) is not type(self) else not field_differences(self, other)
 
@@ -269,7 +282,11 @@ class Scenario:
                     raise ScenarioError(
                         f"targets[{k}].maneuvers overlap: [{a0}, {a1}) and one starting at {b0}"
                     )
-        scenario = cls(**out)
+        token = _CHECKED.set(True)
+        try:
+            scenario = cls(**out)
+        finally:
+            _CHECKED.reset(token)
         scenario._check_ranges()
         scenario._check_tracks()
         return scenario
@@ -382,26 +399,21 @@ class Scenario:
         """Plain, serialisable data (lists and numbers); ``from_dict`` inverts it."""
         return {
             "name": self.name,
-            "tx_positions": self.tx_positions.tolist(),
-            "rx_positions": self.rx_positions.tolist(),
+            "tx_positions": _plain(self.tx_positions),
+            "rx_positions": _plain(self.rx_positions),
             "tx_per_step": self.tx_per_step,
             "rx_per_step": self.rx_per_step,
-            "targets": [
-                {
-                    "initial_state": t.initial_state.tolist(),
-                    "initial_covariance": t.initial_covariance.tolist(),
-                    "maneuvers": [dataclasses.asdict(m) for m in t.maneuvers],
-                }
-                for t in self.targets
-            ],
-            "weights": self.weights.tolist(),
+            "targets": [_plain(t) for t in self.targets]
+            if isinstance(self.targets, list | tuple)
+            else self.targets,
+            "weights": _plain(self.weights),
             "horizon": self.horizon,
             "sample_time": self.sample_time,
             "process_noise": self.process_noise,
-            "tx_power": self.tx_power.tolist(),
+            "tx_power": _plain(self.tx_power),
             "noise_power": self.noise_power,
-            "interference_power": self.interference_power.tolist(),
-            "rcs": self.rcs.tolist(),
+            "interference_power": _plain(self.interference_power),
+            "rcs": _plain(self.rcs),
             "range_variance": self.range_variance,
             "azimuth_variance": self.azimuth_variance,
             "peak_sinr": self.peak_sinr,
@@ -409,10 +421,26 @@ class Scenario:
         }
 
 
+def _plain(value: Any) -> Any:
+    """``value`` as plain data for ``from_dict``: arrays as lists, targets and maneuvers as tables;
+    anything else as it is (``from_dict`` names what it cannot take)."""
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    if isinstance(value, Target):
+        maneuvers = value.maneuvers
+        return {
+            "initial_state": _plain(value.initial_state),
+            "initial_covariance": _plain(value.initial_covariance),
+            "maneuvers": [_plain(m) for m in maneuvers] if isinstance(maneuvers, list | tuple) else maneuvers,
+        }
+    if isinstance(value, Maneuver):
+        return dataclasses.asdict(value)
+    return value
+
+
 def parse_target(index: int, raw: Any) -> Target:
     where = f"targets[{index}]"
-    if isinstance(raw, Target):
-        return raw
+    raw = _plain(raw)  # a Target built directly is checked as its table would be
     if not isinstance(raw, Mapping):
         raise ScenarioError(f"{where} must be a table with keys {sorted(_TARGET_KEYS)}")
     unknown = sorted(set(raw) - _TARGET_KEYS)
@@ -438,9 +466,7 @@ def parse_target(index: int, raw: Any) -> Target:
     maneuvers = []
     for j, man in enumerate(raw_maneuvers):
         mwhere = f"{where}.maneuvers[{j}]"
-        if isinstance(man, Maneuver):
-            maneuvers.append(man)
-            continue
+        man = _plain(man)
         if not isinstance(man, Mapping) or set(man) != _MANEUVER_KEYS:
             raise ScenarioError(f"{mwhere} must be a table with exactly the keys {sorted(_MANEUVER_KEYS)}")
         rate = check.number(f"{mwhere}.turn_rate_deg", man["turn_rate_deg"])

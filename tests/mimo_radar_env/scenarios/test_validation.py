@@ -1,6 +1,8 @@
 """Scenario validation at the edges: every bad field, file and fuzzed mutation refused by name, or
 run finite."""
 
+import dataclasses
+import pickle
 import re
 import time
 
@@ -9,7 +11,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from mimo_radar_env import RadarModel, Scenario, ScenarioError, load_scenario
+from mimo_radar_env import Maneuver, RadarModel, Scenario, ScenarioError, Target, load_scenario
 from mimo_radar_env.core.geometry import MIN_RANGE
 from tests.helpers import vector_env
 
@@ -194,3 +196,49 @@ def test_a_name_no_folder_can_carry_is_refused(name):
 @pytest.mark.parametrize("name", ["paper-1-v1-search5", "random-6x8-K2", "caf\xe9", "v1+jitter.2", "x" * 100])
 def test_names_of_letters_digits_and_marks_are_kept(name):
     assert Scenario.from_dict({**PAPER, "name": name}).name == name
+
+
+@pytest.mark.parametrize(
+    "changes",
+    [
+        {"tx_per_step": 99},
+        {"horizon": -3},
+        {"sample_time": 0.0},
+        {"weights": [float("nan")]},
+        {"name": "../escape"},
+        {"tx_positions": [[0.0, 0.0]] * 4},
+        {"targets": [{"initial_state": [5, 100, 5], "initial_covariance": [20.0] * 4}]},
+        {
+            "targets": [
+                {
+                    "initial_state": [5, 100, 5, 100],
+                    "maneuvers": [{"turn_rate_deg": 0.0, "start": 1, "stop": 9}],
+                }
+            ]
+        },
+    ],
+)
+def test_a_scenario_built_directly_is_checked_as_from_dict_checks_it(changes):
+    """``Scenario(...)`` and ``dataclasses.replace`` refuse what ``from_dict`` refuses, with its message: a
+    scenario built so ran before with a zero sample time, coincident stations or NaN weights."""
+    with pytest.raises(ScenarioError) as expected:
+        Scenario.from_dict({**PAPER, **changes})
+    paper = Scenario.from_dict(PAPER)
+    fields = dict(changes)
+    if "targets" in fields:  # built directly, as the dataclasses
+        (raw,) = fields["targets"]
+        maneuvers = tuple(Maneuver(**m) for m in raw.get("maneuvers", []))
+        cov = np.diag(raw.get("initial_covariance", [20.0] * 4))
+        fields["targets"] = (Target(np.array(raw["initial_state"], float), cov, maneuvers),)
+    with pytest.raises(ScenarioError, match=re.escape(str(expected.value))):
+        dataclasses.replace(paper, **fields)
+    with pytest.raises(ScenarioError, match=re.escape(str(expected.value))):
+        Scenario(**{**{f.name: getattr(paper, f.name) for f in dataclasses.fields(paper)}, **fields})
+
+
+def test_a_scenario_built_directly_holds_what_from_dict_makes_of_its_fields():
+    paper = Scenario.from_dict(PAPER)
+    shorter = dataclasses.replace(paper, horizon=50, tx_power=2000.0, tx_positions=PAPER["tx_positions"])
+    assert shorter == Scenario.from_dict({**PAPER, "horizon": 50, "tx_power": 2000.0})
+    assert isinstance(shorter.tx_positions, np.ndarray) and shorter.tx_power.shape == (paper.num_tx,)
+    assert pickle.loads(pickle.dumps(shorter)) == shorter
