@@ -806,6 +806,8 @@ def output_folder(out: str | Path) -> Path:
     """``out``, made where it is new; refused in one line where it is a file or cannot be made or
     written into. A command whose outputs come at the end of its work calls it first, so that
     nothing measured is lost to a bad ``out``."""
+    if isinstance(out, str) and not out.strip():  # Path("") is the current folder
+        raise HarnessError(f"`out` must name a folder, got {out!r}")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise HarnessError(f"`out` {out} is a file, not a folder: choose a folder, new or a run's own")
@@ -1274,6 +1276,8 @@ def _checked_runs(runs: Any) -> tuple[list[RunConfig], list[Path]]:
             )
         if not isinstance(out, str | os.PathLike):
             raise TypeError(f"a run's out must be a folder's path, got {type(out).__name__}")
+        if isinstance(out, str) and not out.strip():  # Path("") is the current folder
+            raise HarnessError(f"`out` must name a folder, got {out!r}")
     return [config for config, _ in runs], [Path(out) for _, out in runs]
 
 

@@ -10,6 +10,7 @@ import time
 import numpy as np
 import pytest
 
+import benchmarks
 from benchmarks import harness
 from benchmarks.cli import main
 from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, shard_path
@@ -392,3 +393,23 @@ def test_an_output_folder_is_made_or_refused_in_the_apis_words(tmp_path):
         harness.output_folder(tmp_path / "file" / "run")
     made = harness.output_folder(tmp_path / "new" / "run")
     assert made.is_dir() and list(made.iterdir()) == []
+
+
+@pytest.mark.parametrize("empty", ["", "  "])
+def test_an_empty_out_is_refused_not_read_as_the_current_folder(tmp_path, monkeypatch, empty):
+    """``Path("")`` is the current folder: an empty ``out`` (an unset shell variable, say) is refused by
+    ``output_folder``, ``run``, ``run_many`` and ``benchmarks.run`` as the command line refuses
+    ``--out ''``, and nothing is written where the call was made."""
+    monkeypatch.chdir(tmp_path)
+    config = make_config("paper-1-v1", ["ucb1"], 2, 3)
+    calls = [
+        lambda: harness.output_folder(empty),
+        lambda: run(config, empty, progress=False),
+        lambda: run_many([(config, empty)], progress=False),
+        lambda: benchmarks.run("paper-1-v1", ["ucb1"], trials=2, steps=3, out=empty, progress=False),
+    ]
+    for call in calls:
+        with pytest.raises(HarnessError, match=f"out must name a folder, got {empty!r}") as caught:
+            call()
+        assert caught.value.for_command_line().startswith("--out must name a folder")
+    assert list(tmp_path.iterdir()) == []
