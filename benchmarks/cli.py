@@ -18,6 +18,7 @@ import argparse
 import importlib
 import importlib.util
 import os
+import signal
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -377,16 +378,40 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
 
         # the workers' imports, while the command checks and plans its runs
         start_fork_server(device=getattr(args, "device", None) is not None)
+    terminated: list[int] = []
+    previous = _stop_on_sigterm(terminated)
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
-        parser.exit(130, f"{PROG}: {exc}\n")
+        parser.exit(
+            143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n"
+        )
     except KeyboardInterrupt:
-        parser.exit(130, f"{PROG}: interrupted\n")
+        parser.exit(
+            143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n"
+        )
     except (BenchError, ScenarioError) as exc:
         message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
         parser.exit(2, f"{PROG}: error: {message}\n")
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+def _stop_on_sigterm(terminated: list[int]) -> Any:
+    """Stop the command on SIGTERM as on Ctrl-C (a batch scheduler's time limit, ``kill``, ``timeout``):
+    the finished tasks are saved and the command says how to resume. Appends the signal to
+    ``terminated``; the handler it replaced (None off the main thread, where none can be set)."""
+
+    def stop(signum: int, frame: Any) -> None:
+        terminated.append(signum)
+        raise KeyboardInterrupt
+
+    try:
+        return signal.signal(signal.SIGTERM, stop)
+    except ValueError:  # not the main thread
+        return None
 
 
 class _EarlyParser(argparse.ArgumentParser):

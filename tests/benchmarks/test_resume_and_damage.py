@@ -115,20 +115,25 @@ def _alive(pid):
 BIG_RUN = ["paper", "--scenario", "3", "--trials", "40", "--steps", "300", "--shard-size", "5"]
 
 
-def test_ctrl_c_stops_within_seconds_keeps_finished_shards_and_exits_130(tmp_path):
+@pytest.mark.parametrize(
+    ("stop", "code", "said"), [(signal.SIGINT, 130, ""), (signal.SIGTERM, 143, "terminated (SIGTERM), ")]
+)
+def test_ctrl_c_or_sigterm_stops_within_seconds_keeps_finished_shards_and_says_so(tmp_path, stop, code, said):
+    """Ctrl-C, and SIGTERM (a batch scheduler's time limit, which signals the whole group as Ctrl-C does),
+    stop the command in one line that says how to resume, the finished shards kept."""
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out), start_new_session=True)
     deadline = time.time() + 120
     while not list(out.rglob("shard_*.npz")) and time.time() < deadline:
         time.sleep(0.2)
     assert list(out.rglob("shard_*.npz")), "no shard was finished"
-    os.killpg(process.pid, signal.SIGINT)  # Ctrl-C reaches the whole process group
+    os.killpg(process.pid, stop)  # Ctrl-C reaches the whole process group
     start = time.time()
     _, err = process.communicate(timeout=60)
     assert time.time() - start < 10
-    assert process.returncode == 130
+    assert process.returncode == code
     lines = err.strip().splitlines()
-    assert len(lines) == 1 and "interrupted:" in lines[0] and "resume" in lines[0], err
+    assert len(lines) == 1 and f"{said}interrupted:" in lines[0] and "resume" in lines[0], err
     kept = len(list(out.rglob("shard_*.npz")))
     resumed = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--no-figures", "--out", str(out))
     out_text, err = resumed.communicate(timeout=600)
