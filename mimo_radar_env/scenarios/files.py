@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import tomllib
 from collections.abc import Mapping
 from importlib import resources
@@ -97,7 +98,8 @@ def _read_file(path: Path) -> dict[str, Any]:
     if not isinstance(data, Mapping):
         raise ScenarioError(f"scenario file {path} must hold a table of scenario keys")
     data = dict(data)
-    data.setdefault("name", path.stem)
+    if "name" not in data:  # named after the file, as far as a name may be (validation.SCENARIO_NAME)
+        data["name"] = re.sub(r"[^\w.+-]+", "-", path.stem).lstrip(".")[:100] or "custom"
     return data
 
 

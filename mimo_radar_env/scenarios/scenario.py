@@ -96,7 +96,8 @@ class Scenario:
     ----------
     name : str
         Label used in reports, and the folder a study writes the scenario's run into: 1 to 100
-        letters, digits, ``_``, ``-``, ``+`` or ``.`` (not first); ``"custom"`` when a file has none.
+        letters, digits, ``_``, ``-``, ``+`` or ``.`` (not first). Without one, ``from_dict`` names
+        the scenario ``"custom"`` and ``load_scenario`` after its file (other characters as ``-``).
     tx_positions, rx_positions : arrays (M, 2), (N, 2)
         Station coordinates in metres.
     tx_per_step, rx_per_step : int

@@ -3,7 +3,9 @@
 from pathlib import Path
 
 import gymnasium as gym
+import pytest
 
+import mimo_radar_env.scenarios
 from mimo_radar_env import Scenario, load_scenario
 
 
@@ -31,3 +33,14 @@ def test_round_trip_and_user_files(tmp_path: Path):
     env = gym.make("MimoRadarSelect-v0", scenario=str(toml_file))
     obs, _ = env.reset(seed=1)
     assert obs["sinr"].shape == (1, 3, 2)
+
+
+@pytest.mark.parametrize(
+    ("file", "name"),
+    [("my layout.toml", "my-layout"), ("v1+jitter.2.toml", "v1+jitter.2"), ("...toml", "custom")],
+)
+def test_a_file_without_a_name_is_named_after_the_file_as_far_as_a_name_may_be(tmp_path, file, name):
+    text = (Path(mimo_radar_env.scenarios.__file__).parent / "paper-1-v1.toml").read_text()
+    path = tmp_path / file
+    path.write_text("\n".join(line for line in text.splitlines() if not line.startswith("name =")))
+    assert load_scenario(path).name == name
