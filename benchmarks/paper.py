@@ -115,9 +115,8 @@ def run_policies(
         raise harness.HarnessError(str(exc)) from None
     shard = trials if device is not None else None
     config = harness.make_config(scenario, names, trials, steps, seed, shard, agent_params, options, workers)
-    folder = (
-        harness.output_folder(out) if out is not None else Path(tempfile.mkdtemp(prefix="mimo-radar-run-"))
-    )
-    harness.run_many([(config, folder)], workers, progress=progress, device=device, device_mode=device_mode)
+    given = out if out is not None else tempfile.mkdtemp(prefix="mimo-radar-run-")  # run_many checks it
+    harness.run_many([(config, given)], workers, progress=progress, device=device, device_mode=device_mode)
+    folder = Path(given)
     summary = report.write_outputs(config, None, folder, figures=figures)
     return {**summary, "table": (folder / "table.md").read_text(), "out": str(folder)}
