@@ -404,7 +404,13 @@ def _stop_on_sigterm(terminated: list[int]) -> Any:
     the finished tasks are saved and the command says how to resume. Appends the signal to
     ``terminated``; the handler it replaced (None off the main thread, where none can be set)."""
 
+    command = os.getpid()
+
     def stop(signum: int, frame: Any) -> None:
+        if os.getpid() != command:  # a process forked with this handler (a scipy pool's): ends as by default
+            signal.signal(signum, signal.SIG_DFL)
+            os.kill(os.getpid(), signum)
+            return
         terminated.append(signum)
         raise KeyboardInterrupt
 

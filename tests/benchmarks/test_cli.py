@@ -1,6 +1,7 @@
 """The command line on bad input: one line naming the input and what is allowed, exit 2,
 nothing written."""
 
+import os
 import subprocess
 import sys
 import time
@@ -485,3 +486,29 @@ def test_the_commands_that_run_tasks_are_those_with_a_backend():
         entry.load().add_arguments(parser)
         options = {option for action in parser._actions for option in action.option_strings}
         assert entry.runs_tasks == ("--backend" in options), entry.name
+
+
+def test_a_process_forked_during_a_command_ends_on_sigterm_as_by_default():
+    """A command stops on SIGTERM as on Ctrl-C; a process forked meanwhile with that handler (scipy's
+    differential evolution's pool, in search-layouts) ends on its pool's SIGTERM as by default: raising
+    KeyboardInterrupt there left a pool worker that its pool waited on forever."""
+    import multiprocessing
+    import signal
+
+    from benchmarks.cli import _stop_on_sigterm
+
+    terminated: list[int] = []
+    previous = _stop_on_sigterm(terminated)
+    try:
+        child = multiprocessing.get_context("fork").Process(target=time.sleep, args=(60,))
+        child.start()
+        time.sleep(0.5)
+        child.terminate()
+        child.join(10)
+        assert child.exitcode == -signal.SIGTERM and terminated == []
+        with pytest.raises(KeyboardInterrupt):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(1)
+        assert terminated == [signal.SIGTERM]
+    finally:
+        signal.signal(signal.SIGTERM, previous)
