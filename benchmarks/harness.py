@@ -806,9 +806,7 @@ def output_folder(out: str | Path) -> Path:
     """``out``, made where it is new; refused in one line where it is a file or cannot be made or
     written into. A command whose outputs come at the end of its work calls it first, so that
     nothing measured is lost to a bad ``out``."""
-    if isinstance(out, str) and not out.strip():  # Path("") is the current folder
-        raise HarnessError(f"`out` must name a folder, got {out!r}")
-    out = Path(out)
+    out = _folder_path(out)
     if out.exists() and not out.is_dir():
         raise HarnessError(f"`out` {out} is a file, not a folder: choose a folder, new or a run's own")
     try:
@@ -817,6 +815,13 @@ def output_folder(out: str | Path) -> Path:
     except OSError as exc:
         raise HarnessError(f"cannot write into `out` {out}: {exc.strerror or exc}") from exc
     return out
+
+
+def _folder_path(out: str | os.PathLike[str]) -> Path:
+    """``out`` as a path; an empty string (``Path("")`` is the current folder) refused."""
+    if isinstance(out, str) and not out.strip():
+        raise HarnessError(f"`out` must name a folder, got {out!r}")
+    return Path(out)
 
 
 @contextlib.contextmanager
@@ -1276,9 +1281,7 @@ def _checked_runs(runs: Any) -> tuple[list[RunConfig], list[Path]]:
             )
         if not isinstance(out, str | os.PathLike):
             raise TypeError(f"a run's out must be a folder's path, got {type(out).__name__}")
-        if isinstance(out, str) and not out.strip():  # Path("") is the current folder
-            raise HarnessError(f"`out` must name a folder, got {out!r}")
-    return [config for config, _ in runs], [Path(out) for _, out in runs]
+    return [config for config, _ in runs], [_folder_path(out) for _, out in runs]
 
 
 def _check_execution(

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import re
 import tomllib
 from collections.abc import Mapping
 from importlib import resources
@@ -12,7 +11,7 @@ from typing import Any
 import yaml
 
 from .scenario import Scenario
-from .validation import ScenarioError
+from .validation import ScenarioError, name_from
 
 #: Bounds that protect the machine from hostile scenario files.
 MAX_FILE_BYTES = 1 << 20
@@ -98,8 +97,7 @@ def _read_file(path: Path) -> dict[str, Any]:
     if not isinstance(data, Mapping):
         raise ScenarioError(f"scenario file {path} must hold a table of scenario keys")
     data = dict(data)
-    if "name" not in data:  # named after the file, as far as a name may be (validation.SCENARIO_NAME)
-        data["name"] = re.sub(r"[^\w.+-]+", "-", path.stem).lstrip(".")[:100] or "custom"
+    data.setdefault("name", name_from(path.stem))
     return data
 
 

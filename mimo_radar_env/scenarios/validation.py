@@ -15,6 +15,8 @@ class ScenarioError(ValueError):
 
 #: A scenario's name: the studies name a folder after it (``OUT/<name>``), so no separator, no dot first.
 SCENARIO_NAME = re.compile(r"[\w+-][\w.+-]{0,99}")
+#: What a name is not made of (SCENARIO_NAME's other characters).
+_NOT_IN_NAME = re.compile(r"[^\w.+-]+")
 
 
 def scenario_name(value: Any) -> str:
@@ -25,6 +27,12 @@ def scenario_name(value: Any) -> str:
             f"study names a folder after it; got {value!r}"
         )
     return value
+
+
+def name_from(text: str) -> str:
+    """``text`` (a file's stem) made a scenario name: other characters as ``-``, no dot first, at most
+    100 characters; ``"custom"`` where nothing is left."""
+    return _NOT_IN_NAME.sub("-", text).lstrip(".")[:100] or "custom"
 
 
 def numeric_array(name: str, value: Any) -> NDArray[np.float64]:
