@@ -177,10 +177,28 @@ LEGEND = (
     "arm, summed over the steps (eq13); mean SINR of the probed channels (dB)."
 )
 #: How a cell marks its interval's method (BCa is unmarked).
-METHOD_MARKS = {"percentile": "†", "percentile, extended to the value": "†", "constant over trials": "‡"}
-METHOD_LEGEND = (
-    "Marks: † a percentile interval, ‡ constant over trials (the interval is the value); unmarked: BCa."
-)
+METHOD_MARKS = {
+    "percentile": "†",
+    "percentile, extended to the value": "†",
+    "constant over trials": "‡",
+    "bias-corrected percentile": "§",
+    "bias-corrected percentile, extended to the value": "§",
+}
+
+
+def method_legend(trials: int) -> str:
+    """What the marks of a table of ``trials`` trials mean (:data:`METHOD_MARKS`)."""
+    marks = ["† a percentile interval"]
+    if trials < uncertainty.BIAS_CORRECTED_TRIALS:
+        marks.append(
+            "§ a bias-corrected percentile interval (a root or a logarithm of a mean over fewer than "
+            f"{uncertainty.BIAS_CORRECTED_TRIALS} trials, which is biased: ARMSE, the bound, mean SINR)"
+        )
+    marks.append("‡ constant over trials (the interval is the value)")
+    return f"Marks: {', '.join(marks)}; unmarked: BCa."
+
+
+METHOD_LEGEND = method_legend(uncertainty.BIAS_CORRECTED_TRIALS)
 
 
 def _number(value: float, fmt: str) -> str:
@@ -245,13 +263,8 @@ def table_markdown(summary: dict[str, Any], num_targets: int, intervals: str = "
     head += ["ASR (%)", "final regret", "mean SINR (dB)", *EXTRA_METRICS, "wall (s)"]
     if paper:
         head += ["paper ARMSE (m)", "paper ASR (%)"]
-    how = f"(how: table.md). {METHOD_LEGEND}"
-    if intervals == "full":
-        how = f"({summary.get('uncertainty')}). {METHOD_LEGEND}"
-    how = f"Each cell: the value [its 95 % interval] {how}"
-    tracked = any(row.get("armse") is not None for row in summary["policies"].values())
-    if tracked and summary["trials"] < uncertainty.ARMSE_INTERVAL_TRIALS:
-        how += f" {uncertainty.FEW_TRIALS_ARMSE}"
+    how = "(how: table.md)" if intervals != "full" else f"({summary.get('uncertainty')})"
+    how = f"Each cell: the value [its 95 % interval] {how}. {method_legend(summary['trials'])}"
     lines = [
         f"# {name}, fusion {summary['env_options']['fusion']}: {', '.join(summary['policies'])}",
         "",
