@@ -251,7 +251,8 @@ def jackknife_bias(metric: Metric, value: NDArray, num_trials: int) -> NDArray[n
     Zero for a mean, but for rounding."""
     kept = ~np.eye(num_trials, dtype=bool)
     index = np.broadcast_to(np.arange(num_trials), kept.shape)[kept].reshape(num_trials, -1)
-    return (num_trials - 1) * (metric(_shared_weights(index, num_trials)).mean(axis=0) - value)
+    with np.errstate(invalid="ignore", divide="ignore"):  # a trial left out may leave no value
+        return (num_trials - 1) * (metric(_shared_weights(index, num_trials)).mean(axis=0) - value)
 
 
 def _interval(
@@ -264,8 +265,9 @@ def _interval(
     spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
         return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
-    tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
-    if abs(bias) > NO_BIAS * spread:
+    with np.errstate(invalid="ignore"):  # resamples of infinite value
+        tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
+    if abs(bias) > NO_BIAS * spread:  # not where the bias or the spread is not finite
         method = "bias-corrected"  # centred on the value less the bias, not on the value plus it
         low, high = (float(q) - 2 * float(bias) for q in tails)
     elif method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high):

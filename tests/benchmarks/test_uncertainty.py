@@ -90,6 +90,18 @@ def test_the_jackknife_bias_is_that_of_leaving_out_each_trial_and_none_for_a_mea
     assert found[0] < -1e-4 and abs(found[1]) < 1e-14
 
 
+@pytest.mark.filterwarnings("error")
+def test_a_metric_with_no_value_once_a_trial_is_left_out_is_not_bias_corrected():
+    """A ratio whose denominator is one trial's alone has no value without that trial: its
+    jackknife bias is undefined, so its interval is not moved (it would be infinite), and no
+    warning is raised."""
+    n = 8
+    a, b = np.ones(n), np.where(np.arange(n) == n - 1, 1.0, 0.0)
+    found = uncertainty.estimate(lambda w: (w @ a) / (w @ b), n, seed=0)
+    assert found["estimate"] == 8.0 and not found["method"].startswith("bias-corrected")
+    assert not np.isfinite(uncertainty.jackknife_bias(lambda w: (w @ a) / (w @ b), 8.0, n))
+
+
 def _policy(expected, squared, optimal=None):
     n, t = expected.shape
     return uncertainty.TrialMetrics(
