@@ -247,8 +247,7 @@ def jackknife_bias(metric: Metric, value: NDArray, num_trials: int) -> NDArray[n
     """The jackknife's estimate of the bias of ``metric`` (``(n,) -> (..., metrics)``) over
     ``num_trials`` trials, whose value at equal weights is ``value``: ``n - 1`` times the mean of
     the ``n`` values with one trial left out, less the value (Quenouille's; Efron and Tibshirani
-    1993, ch. 11).
-    Zero for a mean, but for rounding."""
+    1993, ch. 11). Zero for a mean, but for rounding."""
     kept = ~np.eye(num_trials, dtype=bool)
     index = np.broadcast_to(np.arange(num_trials), kept.shape)[kept].reshape(num_trials, -1)
     with np.errstate(invalid="ignore", divide="ignore"):  # a trial left out may leave no value
@@ -265,14 +264,16 @@ def _interval(
     spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
         return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
-    with np.errstate(invalid="ignore"):  # resamples of infinite value
-        tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
-    if abs(bias) > NO_BIAS * spread:  # not where the bias or the spread is not finite
-        method = "bias-corrected"  # centred on the value less the bias, not on the value plus it
-        low, high = (float(q) - 2 * float(bias) for q in tails)
-    elif method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high):
-        method = "percentile"  # BCa undefined, or skewed past the value
-        low, high = (float(q) for q in tails)
+    corrected = abs(bias) > NO_BIAS * spread  # not where the bias or the spread is not finite
+    bca_failed = method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high)
+    if corrected or bca_failed:
+        # bias-corrected: centred on the value less the bias, not on the value plus it; else BCa is
+        # undefined, or skewed past the value, and the percentile interval stands in
+        method = "bias-corrected" if corrected else "percentile"
+        shift = 2 * float(bias) if corrected else 0.0
+        with np.errstate(invalid="ignore"):  # resamples of infinite value
+            tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
+        low, high = (float(q) - shift for q in tails)
     if max(low - value, value - high, 0.0) > ROUNDING * spread:
         method = "bias-corrected, extended" if method == "bias-corrected" else "extended"
     return {"estimate": value, "ci": [min(low, value), max(high, value)], "method": METHODS[method]}
