@@ -70,9 +70,10 @@ BATCH_WEIGHTS = 20_000_000
 #: miss that is floating-point rounding.
 ROUNDING = 1e-9
 #: Below this many trials a metric with a bias over trials gets the bias-corrected percentile
-#: interval (results/uncertainty/trial-coverage.json, docs/benchmark.md: it covered ARMSE better
-#: than BCa on 20 and 30 trials, a little better on 40, as well from 50). Not from 40: the
-#: committed screens (calibrate-layout, which chose v1's layout, and search-layouts) judge 40.
+#: interval: on 6 to 20 trials it covered ARMSE far more often than the percentile and BCa
+#: intervals did (results/uncertainty/trial-coverage.json now and at d2062b1), and in an ad hoc
+#: run more often than BCa on 30 trials and a little more on 40. Not from 40: the committed
+#: screens (calibrate-layout, which chose v1's layout, and search-layouts) judge 40.
 BIAS_CORRECTED_TRIALS = 40
 #: A jackknife bias under this fraction of the resamples' spread is none (a mean's is rounding).
 NO_BIAS = 1e-6
