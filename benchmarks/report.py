@@ -183,22 +183,28 @@ METHOD_MARKS = {
     "constant over trials": "‡",
     "bias-corrected percentile": "§",
     "bias-corrected percentile, extended to the value": "§",
+    "bootstrap-t": "¶",
+    "bootstrap-t, extended to the value": "¶",
 }
 
 
 def method_legend(trials: int) -> str:
     """What the marks of a table of ``trials`` trials mean (:data:`METHOD_MARKS`)."""
     marks = ["† a percentile interval"]
-    if trials < uncertainty.BIAS_CORRECTED_TRIALS:
+    if trials < uncertainty.FEW_TRIALS:
         marks.append(
             "§ a bias-corrected percentile interval (a root or a logarithm of a mean over fewer than "
-            f"{uncertainty.BIAS_CORRECTED_TRIALS} trials, which is biased: ARMSE, the bound, mean SINR)"
+            f"{uncertainty.FEW_TRIALS} trials, which is biased: ARMSE, the bound, mean SINR)"
+        )
+        marks.append(
+            f"¶ a bootstrap-t interval (a mean over fewer than {uncertainty.FEW_TRIALS} trials: ASR, "
+            "final regret)"
         )
     marks.append("‡ constant over trials (the interval is the value)")
     return f"Marks: {', '.join(marks)}; unmarked: BCa."
 
 
-METHOD_LEGEND = method_legend(uncertainty.BIAS_CORRECTED_TRIALS)
+METHOD_LEGEND = method_legend(uncertainty.FEW_TRIALS)
 
 
 def _number(value: float, fmt: str) -> str:

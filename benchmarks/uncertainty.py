@@ -14,14 +14,22 @@ method:
   percentile interval as trials grow; there resamples are also drawn in batches of at most
   :data:`BATCH_WEIGHTS` weights), where BCa is undefined, or where BCa's interval would exclude
   the value (a strongly skewed resampling distribution);
-* **bias-corrected percentile** on fewer than :data:`BIAS_CORRECTED_TRIALS` trials, for a metric
+* **bias-corrected percentile** on fewer than :data:`FEW_TRIALS` trials, for a metric
   with a bias over trials (a root or a logarithm of a mean: ARMSE, the bound, their ratio, mean
   SINR in dB): the percentile interval moved by twice the jackknife's estimate of the bias
   (:func:`jackknife_bias`), from around the resamples' centre (the value plus the bias) to
   around the value less the bias. ARMSE averages a root of a mean over trials at each of many
   steps: the bias stays while the spread averages down, so on a few trials its resamples lie
   below the value, and a percentile or BCa interval misses the ARMSE of many trials. A mean's
-  jackknife bias is zero but for rounding (:data:`NO_BIAS`): its interval is unchanged;
+  jackknife bias is zero but for rounding (:data:`NO_BIAS`);
+* **bootstrap-t** on fewer than :data:`FEW_TRIALS` trials, for a mean over trials (ASR, final
+  regret, their paired differences; any metric whose every resample is the mean of its trials'
+  own values, to rounding): each resample's ``t``, its distance from the value in its own
+  standard errors, gives the interval at 95 % (:func:`_bootstrap_t`). A mean of a few skewed
+  trials (a policy's final regret) is covered less often by percentile and BCa intervals, which
+  do not widen for the spread a few trials fail to show. Where a quantile of ``t`` is infinite
+  (resamples of trials of one value: a share of successes on a few trials) the percentile or
+  BCa interval stands in;
 * **constant**: a metric whose every resample gives the value (within floating-point
   rounding) is constant over trials, and its interval is the value itself (Best's zero regret,
   a fixed policy's regret under a shared truth).
@@ -30,13 +38,13 @@ Fewer than :data:`MIN_INTERVAL_TRIALS` trials give no interval. Each interval re
 method, and every interval contains its value: an end that misses the value is set to it,
 silently where the miss is rounding alone (``<= ROUNDING`` of the resamples' spread), and
 otherwise with the method ``percentile, extended to the value`` (or ``bias-corrected
-percentile, ...``). Such a miss is a statistic whose resamples lie to one side of it, or whose
-bias correction moved its interval past it: ARMSE of a few trials of heavy-tailed errors, a root
-of a mean over trials at each step (they raised before). Comparisons between two
-policies resample the *same* trials for both (paired), so the common truth and channel draws
-cancel. The per-step bands of the figures are the percentile bootstrap applied to each step's
-value, not bias-corrected: at one step a root's bias is a small part of its spread; it is the
-average over many steps that shrinks the spread and leaves the bias.
+percentile, ...``, ``bootstrap-t, ...``). Such a miss is a statistic whose resamples lie to one
+side of it, or whose bias correction moved its interval past it: ARMSE of a few trials of
+heavy-tailed errors, a root of a mean over trials at each step (they raised before).
+Comparisons between two policies resample the *same* trials for both (paired), so the common
+truth and channel draws cancel. The per-step bands of the figures are the percentile bootstrap
+applied to each step's value, not bias-corrected: at one step a root's bias is a small part of
+its spread; it is the average over many steps that shrinks the spread and leaves the bias.
 """
 
 from __future__ import annotations
@@ -70,11 +78,13 @@ BATCH_WEIGHTS = 20_000_000
 #: miss that is floating-point rounding.
 ROUNDING = 1e-9
 #: Below this many trials a metric with a bias over trials gets the bias-corrected percentile
-#: interval: on 6 to 20 trials it covered ARMSE far more often than the percentile and BCa
-#: intervals did (results/uncertainty/trial-coverage.json now and at d2062b1), and in an ad hoc
-#: run more often than BCa on 30 trials and a little more on 40. Not from 40: the committed
-#: screens (calibrate-layout, which chose v1's layout, and search-layouts) judge 40.
-BIAS_CORRECTED_TRIALS = 40
+#: interval, and a mean over trials the bootstrap-t. On 6 to 20 trials the first covered ARMSE far
+#: more often than the percentile and BCa intervals did (results/uncertainty/trial-coverage.json
+#: now and at d2062b1), and in an ad hoc run more often than BCa on 30 trials and a little more on
+#: 40; the second covers the means more often on 6 to 30 trials (that artefact now and at
+#: 49095d1). Not from 40: the committed screens (calibrate-layout, which chose v1's layout, and
+#: search-layouts) judge 40.
+FEW_TRIALS = 40
 #: A jackknife bias under this fraction of the resamples' spread is none (a mean's is rounding).
 NO_BIAS = 1e-6
 METHODS = {
@@ -83,10 +93,12 @@ METHODS = {
     "extended": "percentile, extended to the value",
     "bias-corrected": "bias-corrected percentile",
     "bias-corrected, extended": "bias-corrected percentile, extended to the value",
+    "bootstrap-t": "bootstrap-t",
+    "bootstrap-t, extended": "bootstrap-t, extended to the value",
     "constant": "constant over trials",
 }
 #: The methods of intervals extended to their value.
-EXTENDED = (METHODS["extended"], METHODS["bias-corrected, extended"])
+EXTENDED = (METHODS["extended"], METHODS["bias-corrected, extended"], METHODS["bootstrap-t, extended"])
 METHOD = (
     f"bootstrap over trials (scipy.stats.bootstrap, {RESAMPLES} resamples, {CONFIDENCE:.0%}): BCa from "
     f"{BCA_MIN_TRIALS} trials, percentile below or where BCa is undefined or would exclude the value "
@@ -100,11 +112,12 @@ EXPANDED = (
     f"below {BCA_MIN_TRIALS} trials the percentile interval's level is Hesterberg's expansion for "
     "a few trials (its z is Student's t with n - 1 degrees of freedom times sqrt(n / (n - 1)))"
 )
-#: How intervals below BIAS_CORRECTED_TRIALS are moved (:func:`jackknife_bias`).
-BIAS_CORRECTED = (
-    f"below {BIAS_CORRECTED_TRIALS} trials a metric with a bias over trials (ARMSE, the bound and their "
+#: How intervals below FEW_TRIALS are computed (:func:`jackknife_bias`, :func:`_bootstrap_t`).
+FEW = (
+    f"below {FEW_TRIALS} trials a metric with a bias over trials (ARMSE, the bound and their "
     "ratio, mean SINR in dB) has a bias-corrected percentile interval: the percentile interval moved "
-    "by twice its jackknife bias"
+    "by twice its jackknife bias; and a mean over trials (ASR, final regret, their paired "
+    "differences) a bootstrap-t interval at 95 %"
 )
 #: What a table of fewer than MIN_INTERVAL_TRIALS trials says in place of its intervals.
 NO_INTERVALS = (
@@ -118,10 +131,10 @@ Metric = Callable[[NDArray[np.float64]], NDArray[np.float64]]
 
 def method_of(num_trials: int) -> str:
     """How the intervals of a run of ``num_trials`` trials are computed (:data:`METHOD`, with
-    :data:`EXPANDED` below :data:`BCA_MIN_TRIALS` trials and :data:`BIAS_CORRECTED` below
-    :data:`BIAS_CORRECTED_TRIALS`)."""
+    :data:`EXPANDED` below :data:`BCA_MIN_TRIALS` trials and :data:`FEW` below
+    :data:`FEW_TRIALS`)."""
     parts = [METHOD, EXPANDED if num_trials < BCA_MIN_TRIALS else ""]
-    parts.append(BIAS_CORRECTED if num_trials < BIAS_CORRECTED_TRIALS else "")
+    parts.append(FEW if num_trials < FEW_TRIALS else "")
     return "; ".join(part for part in parts if part)
 
 
@@ -230,18 +243,69 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
         # contiguous after _bootstrap moves the axis back, so scipy sums them in the same order
         return np.moveaxis(np.stack([metrics[key](weights) for key in keys]), 0, -1)
 
+    few = num_trials < FEW_TRIALS
+    if few:  # each trial's own value, and the resamples' means and standard errors of them
+        with np.errstate(invalid="ignore", divide="ignore"):  # a trial alone may give no value
+            singles = stacked(np.eye(num_trials))  # (n, metrics)
+            finite = np.isfinite(singles).all(axis=0)
+            centred = np.where(finite, singles - np.array(values), 0.0)  # variances lose no digits
+        judged = stacked
+
+        def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
+            # a product per metric: the same bits whatever other metrics share the bootstrap
+            shifts = np.stack([weights @ column for column in centred.T])
+            squares = np.stack([weights @ column**2 for column in centred.T])
+            errors = np.sqrt(np.maximum(squares - shifts**2, 0.0) / (num_trials - 1))  # (metrics, ...)
+            means = shifts + np.array(values).reshape(-1, *[1] * (shifts.ndim - 1))
+            parts = (np.moveaxis(judged(weights), -1, 0), means, errors)  # contiguous, as judged's
+            return np.moveaxis(np.concatenate(parts), 0, -1)
+
     result = _bootstrap(stacked, num_trials, RESAMPLES, method, seed)
-    lows = np.atleast_1d(result.confidence_interval.low)
-    highs = np.atleast_1d(result.confidence_interval.high)
-    distributions = np.asarray(result.bootstrap_distribution, np.float64).reshape(len(keys), -1)
-    biases = np.zeros(len(keys))
-    if num_trials < BIAS_CORRECTED_TRIALS:
-        biases = jackknife_bias(stacked, np.array(values), num_trials)
+    count = len(keys)
+    lows = np.atleast_1d(result.confidence_interval.low)[:count]
+    highs = np.atleast_1d(result.confidence_interval.high)[:count]
+    distributions = np.asarray(result.bootstrap_distribution, np.float64).reshape(
+        count * (3 if few else 1), -1
+    )
+    biases = np.zeros(count)
+    studentized: list[tuple[float, float] | None] = [None] * count
+    if few:
+        biases = jackknife_bias(judged, np.array(values), num_trials)
+        means, errors = distributions[count : 2 * count], distributions[2 * count :]
+        for i in np.flatnonzero(finite):
+            studentized[i] = _bootstrap_t(values[i], distributions[i], means[i], errors[i], centred[:, i])
+        distributions = distributions[:count]
     alpha = (1 - confidence_level(num_trials)) / 2
     return {
-        key: _interval(values[i], (lows[i], highs[i]), distributions[i], alpha, method, biases[i])
+        key: _interval(
+            values[i], (lows[i], highs[i]), distributions[i], alpha, method, biases[i], studentized[i]
+        )
         for i, key in enumerate(keys)
     }
+
+
+def _bootstrap_t(
+    value: float, distribution: NDArray, means: NDArray, errors: NDArray, singles: NDArray
+) -> tuple[float, float] | None:
+    """The bootstrap-t (studentized) 95 % interval of a metric that is a mean over trials, or None
+    where it is not one or the interval is not finite. ``distribution``: the metric on each
+    resample; ``means`` and ``errors``: the mean of each resample's trials' own values
+    (``singles``, less the value) and its standard error. The metric is a mean over trials where
+    its every resample is that mean, to rounding. Each resample's ``t`` is its distance from the
+    value in its own standard errors; the interval is the value less the ``t`` quantiles times the
+    standard error of the trials (Efron and Tibshirani 1993, ch. 12.5). A resample of trials of
+    one value has an infinite ``t`` (one of 2000 on 6 trials in about a quarter of studies): it
+    is kept, and the interval is given up only where a quantile falls on such resamples."""
+    spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
+    if not np.isfinite(spread) or np.max(np.abs(distribution - means)) > ROUNDING * spread:
+        return None
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(errors > 0, (distribution - value) / errors, np.sign(distribution - value) * np.inf)
+        low_t, high_t = np.percentile(t, [100 * (1 - CONFIDENCE) / 2, 100 * (1 + CONFIDENCE) / 2])
+    if not (np.isfinite(low_t) and np.isfinite(high_t)):
+        return None
+    error = float(np.std(singles, ddof=1) / np.sqrt(len(singles)))
+    return value - float(high_t) * error, value - float(low_t) * error
 
 
 def jackknife_bias(metric: Metric, value: NDArray, num_trials: int) -> NDArray[np.float64]:
@@ -256,18 +320,27 @@ def jackknife_bias(metric: Metric, value: NDArray, num_trials: int) -> NDArray[n
 
 
 def _interval(
-    value: float, ci: tuple[float, float], distribution: NDArray, alpha: float, method: str, bias: float
+    value: float,
+    ci: tuple[float, float],
+    distribution: NDArray,
+    alpha: float,
+    method: str,
+    bias: float,
+    studentized: tuple[float, float] | None = None,
 ) -> dict[str, Any]:
     """One metric's estimate from its bootstrap (``ci`` by ``method``, the resamples'
-    ``distribution``, each tail ``alpha``) and its jackknife ``bias``: constant, bias-corrected
-    percentile, BCa, or percentile where BCa fails."""
+    ``distribution``, each tail ``alpha``), its jackknife ``bias`` and its ``studentized``
+    interval (a mean over few trials): constant, bootstrap-t, bias-corrected percentile, BCa, or
+    percentile where BCa fails."""
     low, high = (float(end) for end in ci)
     spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
         return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
     corrected = abs(bias) > NO_BIAS * spread  # not where the bias or the spread is not finite
     bca_failed = method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high)
-    if corrected or bca_failed:
+    if studentized is not None:
+        method, (low, high) = "bootstrap-t", studentized
+    elif corrected or bca_failed:
         # bias-corrected: centred on the value less the bias, not on the value plus it; else BCa is
         # undefined, or skewed past the value, and the percentile interval stands in
         method = "bias-corrected" if corrected else "percentile"
@@ -276,7 +349,7 @@ def _interval(
             tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
         low, high = (float(q) - shift for q in tails)
     if max(low - value, value - high, 0.0) > ROUNDING * spread:
-        method = "bias-corrected, extended" if method == "bias-corrected" else "extended"
+        method = f"{method}, extended" if method in ("bias-corrected", "bootstrap-t") else "extended"
     return {"estimate": value, "ci": [min(low, value), max(high, value)], "method": METHODS[method]}
 
 
@@ -449,7 +522,7 @@ def trial_coverage(
     own, so a count's row does not depend on the others) and judges its intervals as a run of
     ``n`` trials would (:func:`estimates`). A metric constant over the drawn trials is left out
     of that study's count, and ARMSE of a run without a tracker. Each row's ``extended`` counts
-    the studies whose percentile interval was extended to its value. ``say`` gets a line as
+    the studies whose interval was extended to its value. ``say`` gets a line as
     each count is done."""
     size = next(iter(population.values())).num_trials
     truth = {  # ARMSE only where a tracker ran

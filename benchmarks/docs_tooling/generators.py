@@ -1061,8 +1061,8 @@ def coverage_values(docs: Path) -> dict[str, str]:
 def trial_coverage_values(docs: Path) -> dict[str, str]:
     """How often the intervals of runs of fewer trials cover the value of the run they are drawn
     from (``python -m benchmarks.uncertainty --run DIR``, results/uncertainty/trial-coverage.json):
-    ``armse.N`` and ``means.N`` (ASR, final regret, mean SINR), the lowest and the highest rate
-    over the policies on N trials, each with its Wilson interval; ``extended.N``, how many of
+    ``armse.N``, ``means.N`` (ASR, final regret) and ``sinr.N`` (mean SINR), the lowest and the
+    highest rate over the policies on N trials, each with its Wilson interval; ``extended.N``, how many of
     the ARMSE intervals on N trials were extended to their value, of how many; ``level.N``, the
     bootstrap's confidence level on N trials; ``population`` (its trials), ``scenario``,
     ``fusion`` and ``repeats``."""
@@ -1074,7 +1074,11 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
         "repeats": str(record["repeats"]),
     }
     for row in record["rows"]:
-        for key, names in (("armse", ("armse",)), ("means", ("asr", "final_regret", "mean_sinr_db"))):
+        for key, names in (
+            ("armse", ("armse",)),
+            ("means", ("asr", "final_regret")),
+            ("sinr", ("mean_sinr_db",)),
+        ):
             rates = {n: r for n, r in row["coverage"].items() if n.rsplit(".", 1)[1] in names}
             lowest, highest = min(rates, key=rates.__getitem__), max(rates, key=rates.__getitem__)
             table[f"{key}.{row['trials']}"] = " to ".join(

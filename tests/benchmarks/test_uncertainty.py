@@ -27,9 +27,9 @@ def test_the_bootstrap_interval_covers_a_known_mean_at_its_nominal_rate():
 
 @pytest.mark.parametrize("trials", [6, 10])
 def test_on_a_few_trials_the_interval_covers_a_normal_mean_at_its_nominal_rate(trials):
-    """400 simulated studies of a few normal trials: the expanded percentile interval covers the
-    mean in 95 % of them, within the binomial test's tolerance, where the percentile interval at
-    95 % of the same resamples covers significantly less."""
+    """400 simulated studies of a few normal trials: the interval (a mean's: bootstrap-t) covers
+    the mean in 95 % of them, within the binomial test's tolerance, where the percentile interval
+    at 95 % of the same resamples covers significantly less."""
     rng = np.random.default_rng(trials)
     covered, plain, repetitions = 0, 0, 400
     for r in range(repetitions):
@@ -42,6 +42,32 @@ def test_on_a_few_trials_the_interval_covers_a_normal_mean_at_its_nominal_rate(t
         plain += resampled.low <= 2.0 <= resampled.high
     assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
     assert stats.binomtest(plain, repetitions, 0.95, alternative="less").pvalue < 0.01, plain
+
+
+@pytest.mark.parametrize("trials", [10, 20])
+def test_on_a_few_skewed_trials_the_bootstrap_t_covers_a_mean_at_its_nominal_rate(trials):
+    """400 simulated studies of a few exponential trials (skewed, as a policy's final regret is):
+    the bootstrap-t interval covers the mean in 95 % of them, within the binomial test's
+    tolerance, where the interval of the same resamples that a mean got before (percentile at
+    the expanded level below 20 trials, BCa from 20) covers significantly less."""
+    rng = np.random.default_rng(trials)
+    covered, before, repetitions = 0, 0, 400
+    for r in range(repetitions):
+        x = rng.exponential(1.0, size=trials)
+        judged = uncertainty.estimate(lambda w, x=x: w @ x, trials, seed=r)
+        assert judged["method"] == "bootstrap-t"
+        covered += judged["ci"][0] <= 1.0 <= judged["ci"][1]
+        resampled = stats.bootstrap(
+            (x,),
+            np.mean,
+            n_resamples=uncertainty.RESAMPLES,
+            method="BCa" if trials >= uncertainty.BCA_MIN_TRIALS else "percentile",
+            confidence_level=uncertainty.confidence_level(trials),
+            random_state=np.random.default_rng(r),
+        ).confidence_interval
+        before += resampled.low <= 1.0 <= resampled.high
+    assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
+    assert stats.binomtest(before, repetitions, 0.95, alternative="less").pvalue < 0.01, before
 
 
 @pytest.mark.parametrize("trials", [10, 30])
@@ -92,14 +118,17 @@ def test_the_jackknife_bias_is_that_of_leaving_out_each_trial_and_none_for_a_mea
 
 @pytest.mark.filterwarnings("error")
 def test_a_metric_with_no_value_once_a_trial_is_left_out_is_not_bias_corrected():
-    """A ratio whose denominator is one trial's alone has no value without that trial: its
-    jackknife bias is undefined, so its interval is not moved (it would be infinite), and no
-    warning is raised."""
+    """A ratio whose denominator is one trial's alone has no value without that trial (nor for
+    most trials alone): its jackknife bias is undefined, so its interval is not moved (it would
+    be infinite), it gets no bootstrap-t, and no warning is raised; nor for a mean with an
+    infinite trial."""
     n = 8
     a, b = np.ones(n), np.where(np.arange(n) == n - 1, 1.0, 0.0)
     found = uncertainty.estimate(lambda w: (w @ a) / (w @ b), n, seed=0)
-    assert found["estimate"] == 8.0 and not found["method"].startswith("bias-corrected")
+    assert found["estimate"] == 8.0 and found["method"] == "percentile"
     assert not np.isfinite(uncertainty.jackknife_bias(lambda w: (w @ a) / (w @ b), 8.0, n))
+    infinite = uncertainty.estimate(lambda w: w @ np.where(np.arange(n) == 0, np.inf, 1.0), n)
+    assert infinite["estimate"] == np.inf and not infinite["method"].startswith("bootstrap-t")
 
 
 def _policy(expected, squared, optimal=None):
@@ -227,7 +256,8 @@ def test_run_outputs_carry_intervals_that_hold_their_values(tmp_path):
         "expansion for a few trials (its z is Student's t with n - 1 degrees of freedom times "
         "sqrt(n / (n - 1))); below 40 trials a metric with a bias over trials (ARMSE, the bound and "
         "their ratio, mean SINR in dB) has a bias-corrected percentile interval: the percentile "
-        "interval moved by twice its jackknife bias"
+        "interval moved by twice its jackknife bias; and a mean over trials (ASR, final regret, "
+        "their paired differences) a bootstrap-t interval at 95 %"
     )
     assert uncertainty.method_of(40) == uncertainty.METHOD
     for row in summary["policies"].values():
@@ -265,7 +295,7 @@ def _every_estimate(summary):
             yield f"{pair} {key}", judged["estimate"], judged["ci"], judged["method"]
 
 
-@pytest.mark.parametrize("trials", [6, 10, 24])
+@pytest.mark.parametrize("trials", [6, 10, 24, 40])
 def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
     out = tmp_path / "run"
     argv = ["run", "--scenario", "paper-3-v1", "--policies", "mg-crb-cl,ucb1,best,fix1,random"]
@@ -276,10 +306,14 @@ def test_every_interval_of_a_run_contains_its_value(tmp_path, trials):
     for name, value, (low, high), method in _every_estimate(summary):
         assert low <= value <= high, (name, value, low, high, method)
         seen.add(method)
-    expected = {"percentile", "constant over trials"} if trials < uncertainty.BCA_MIN_TRIALS else {"BCa"}
-    assert expected <= seen, seen
-    if trials < uncertainty.BCA_MIN_TRIALS:
+    if trials < uncertainty.FEW_TRIALS:  # every metric is a mean over trials or biased
+        assert {"bootstrap-t", "bias-corrected percentile", "constant over trials"} <= seen, seen
         assert "BCa" not in seen
+    else:
+        assert {"BCa", "constant over trials"} <= seen and not {
+            "bootstrap-t",
+            "bias-corrected percentile",
+        } & seen
 
 
 @pytest.mark.parametrize("trials", [6, 7, 10, 19, 20, 50, 500])
@@ -305,10 +339,21 @@ def test_every_interval_contains_its_value_on_heavy_tailed_synthetic_policies(tr
             assert one["ci"][0] <= one["estimate"] <= one["ci"][1], (pair, name, one)
 
 
+def test_a_mean_of_few_trials_whose_resamples_often_have_no_spread_gets_the_percentile_interval():
+    """A share of successes over 6 trials, 5 of them successes: a third of the resamples are all
+    successes, with no spread and an infinite t, so the bootstrap-t's upper quantile is infinite
+    and the (expanded) percentile interval stands in; 3 successes of 6 give a bootstrap-t."""
+    for successes, method in ((5, "percentile"), (3, "bootstrap-t")):
+        x = (np.arange(6) < successes).astype(float)
+        judged = uncertainty.estimate(lambda w, x=x: w @ x, 6, seed=1)
+        assert judged["method"] == method and judged["ci"][0] <= judged["estimate"] <= judged["ci"][1]
+        assert np.isfinite(judged["ci"]).all()
+
+
 def test_the_estimate_is_the_metric_at_equal_weights_and_a_constant_has_a_point_interval():
     x = np.array([1.0, 2.0, 4.0, 8.0, 16.0, 32.0])
     judged = uncertainty.estimate(lambda w: w @ x, 6)
-    assert judged["estimate"] == x.mean() and judged["method"] == "percentile"
+    assert judged["estimate"] == x.mean() and judged["method"] == "bootstrap-t"
     constant = uncertainty.estimate(lambda w: w @ np.full(30, 7.0), 30)
     assert constant["estimate"] == pytest.approx(7.0, rel=1e-15)
     assert constant["ci"] == [constant["estimate"]] * 2 and constant["method"] == "constant over trials"
@@ -426,7 +471,8 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
     trials at the expanded level, BCa above at 95 %; a constant metric gets its point interval, a
     skewed one BCa's fallback), or below 40 trials for a biased metric (a ratio of means) the
     percentile interval of its resamples moved by twice its jackknife bias, computed here by
-    leaving out each trial in turn."""
+    leaving out each trial in turn, and for a mean the bootstrap-t interval, computed here from
+    scipy's resamples of the trials' values."""
     rng = np.random.default_rng(9)
     values = rng.exponential(1.0, (3, trials))
     values[2] = rng.lognormal(0.0, 3.0, trials)  # heavy tail: BCa may fall back to percentile
@@ -459,7 +505,7 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
         got = together[name]
         if name == "constant":
             assert got["ci"] == [2.0, 2.0] and got["method"] == "constant over trials"
-        elif name == "ratio" and trials < uncertainty.BIAS_CORRECTED_TRIALS:
+        elif name == "ratio" and trials < uncertainty.FEW_TRIALS:
             left_out = [
                 metric(np.where(np.arange(trials) == i, 0.0, 1 / (trials - 1))) for i in range(trials)
             ]
@@ -470,6 +516,28 @@ def test_several_metrics_from_one_bootstrap_are_one_scipy_bootstrap_each(trials)
                 [min(tails[0] - 2 * bias, got["estimate"]), max(tails[1] - 2 * bias, got["estimate"])],
                 rel=1e-12,
             )
+        elif name in ("mean", "skewed") and trials < uncertainty.FEW_TRIALS:
+            # the bootstrap-t: each resample's t = (mean - value) / (its sd / sqrt(n)), on the same
+            # resamples (scipy's, with the same seed), its 2.5 % and 97.5 % quantiles turned around
+            x = values[0 if name == "mean" else 2]
+
+            def resampled(statistic, x=x):
+                return stats.bootstrap(
+                    (x,),
+                    statistic,
+                    n_resamples=uncertainty.RESAMPLES,
+                    method="percentile",
+                    random_state=np.random.default_rng(3),
+                ).bootstrap_distribution
+
+            means = resampled(np.mean)
+            errors = resampled(lambda s, axis=-1: np.std(s, axis=axis, ddof=1)) / np.sqrt(trials)
+            assert means == pytest.approx(alone.bootstrap_distribution, rel=1e-12)
+            t_high, t_low = np.percentile((means - x.mean()) / errors, [97.5, 2.5])
+            error = np.std(x, ddof=1) / np.sqrt(trials)
+            low, high = x.mean() - t_high * error, x.mean() - t_low * error
+            assert got["method"].startswith("bootstrap-t")
+            assert got["ci"] == pytest.approx([min(low, x.mean()), max(high, x.mean())], rel=1e-9)
         elif got["method"] == method:
             ci = alone.confidence_interval
             assert got["ci"] == [min(ci.low, got["estimate"]), max(ci.high, got["estimate"])]

@@ -299,8 +299,9 @@ def test_the_ray_table_gives_each_backends_serial_parts_where_every_run_recorded
 
 
 def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_policies(tmp_path):
-    """ARMSE apart from the means; each rate with its Wilson interval over its own count of studies
-    (a metric constant over a study's trials is not counted)."""
+    """ARMSE, the means (ASR, final regret) and mean SINR apart; each rate with its Wilson
+    interval over its own count of studies (a metric constant over a study's trials is not
+    counted)."""
     from scipy import stats
 
     from benchmarks.docs_tooling import generators
@@ -331,6 +332,7 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
 
     assert table["armse.20"] == f"{wilson(0.75, 200)} to {wilson(0.9, 200)}"
     assert table["means.20"] == f"{wilson(0.5, 100)} to {wilson(0.95, 200)}"
+    assert table["sinr.20"] == f"{wilson(0.92, 200)} to {wilson(0.92, 200)}"
     assert (table["population"], table["scenario"], table["repeats"]) == ("300", "paper-1-v1", "200")
     assert table["fusion"] == "centralized"
     assert (table["extended.20"], table["level.20"]) == ("3 of 400", "95.0 %")  # ARMSE's only
