@@ -345,8 +345,11 @@ def _interval(
         # undefined, or skewed past the value, and the percentile interval stands in
         method = "bias-corrected" if corrected else "percentile"
         shift = 2 * float(bias) if corrected else 0.0
+        levels = [100 * alpha, 100 * (1 - alpha)]
         with np.errstate(invalid="ignore"):  # resamples of infinite value
-            tails = np.percentile(distribution, [100 * alpha, 100 * (1 - alpha)])
+            tails = np.percentile(distribution, levels)
+        if not np.isnan(distribution).any():  # a tail between two infinite resamples is infinite
+            tails = np.where(np.isnan(tails), np.percentile(distribution, levels, method="nearest"), tails)
         low, high = (float(q) - shift for q in tails)
     if max(low - value, value - high, 0.0) > ROUNDING * spread:
         method = f"{method}, extended" if method in ("bias-corrected", "bootstrap-t") else "extended"

@@ -339,6 +339,21 @@ def test_every_interval_contains_its_value_on_heavy_tailed_synthetic_policies(tr
             assert one["ci"][0] <= one["estimate"] <= one["ci"][1], (pair, name, one)
 
 
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("trials", [8, 25])
+def test_a_metric_infinite_on_many_resamples_has_an_infinite_end_not_nan(trials):
+    """A ratio whose denominator is one trial's alone is infinite on every resample that leaves
+    that trial out (about a third of them): the upper end of its interval is infinite. On 25
+    trials, where BCa is undefined and the percentile interval stands in, its upper tail lay
+    between two infinite resamples and was NaN."""
+    x = np.random.default_rng(0).exponential(1.0, trials)
+    b = np.where(np.arange(trials) == 0, 1.0, 0.0)
+    found = uncertainty.estimate(lambda w: (w @ x) / (w @ b), trials, seed=1)
+    low, high = found["ci"]
+    assert found["method"] == "percentile" and np.isfinite(low) and high == np.inf
+    assert low <= found["estimate"] <= high
+
+
 def test_a_mean_of_few_trials_whose_resamples_often_have_no_spread_gets_the_percentile_interval():
     """A share of successes over 6 trials, 5 of them successes: a third of the resamples are all
     successes, with no spread and an infinite t, so the bootstrap-t's upper quantile is infinite
