@@ -25,49 +25,37 @@ def test_the_bootstrap_interval_covers_a_known_mean_at_its_nominal_rate():
     assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
 
 
-@pytest.mark.parametrize("trials", [6, 10])
-def test_on_a_few_trials_the_interval_covers_a_normal_mean_at_its_nominal_rate(trials):
-    """400 simulated studies of a few normal trials: the interval (a mean's: bootstrap-t) covers
-    the mean in 95 % of them, within the binomial test's tolerance, where the percentile interval
-    at 95 % of the same resamples covers significantly less."""
+@pytest.mark.parametrize(
+    ("draw", "trials", "method", "level"),
+    [("normal", 6, "percentile", 0.95), ("normal", 10, "percentile", 0.95)]
+    + [("exponential", 10, "percentile", None), ("exponential", 20, "BCa", None)],
+)
+def test_on_a_few_trials_the_bootstrap_t_covers_a_mean_at_its_nominal_rate(draw, trials, method, level):
+    """400 simulated studies of a few normal trials (mean 2) or exponential ones (mean 1; skewed,
+    as a policy's final regret is): a mean's interval, the bootstrap-t, covers the mean in 95 % of
+    them, within the binomial test's tolerance, where an interval of the same resamples covers
+    significantly less: on normal trials the percentile interval at 95 %; on exponential ones the
+    interval a mean got before the bootstrap-t (percentile at the expanded level below 20
+    trials, BCa from 20)."""
     rng = np.random.default_rng(trials)
-    covered, plain, repetitions = 0, 0, 400
+    mean = 2.0 if draw == "normal" else 1.0
+    covered, other, repetitions = 0, 0, 400
     for r in range(repetitions):
-        x = rng.normal(2.0, 1.0, size=trials)
-        low, high = uncertainty.interval(lambda w, x=x: w @ x, trials, seed=r)
-        covered += low <= 2.0 <= high
-        resampled = stats.bootstrap(
-            (x,), np.mean, n_resamples=uncertainty.RESAMPLES, method="percentile", random_state=r
-        ).confidence_interval
-        plain += resampled.low <= 2.0 <= resampled.high
-    assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
-    assert stats.binomtest(plain, repetitions, 0.95, alternative="less").pvalue < 0.01, plain
-
-
-@pytest.mark.parametrize("trials", [10, 20])
-def test_on_a_few_skewed_trials_the_bootstrap_t_covers_a_mean_at_its_nominal_rate(trials):
-    """400 simulated studies of a few exponential trials (skewed, as a policy's final regret is):
-    the bootstrap-t interval covers the mean in 95 % of them, within the binomial test's
-    tolerance, where the interval of the same resamples that a mean got before (percentile at
-    the expanded level below 20 trials, BCa from 20) covers significantly less."""
-    rng = np.random.default_rng(trials)
-    covered, before, repetitions = 0, 0, 400
-    for r in range(repetitions):
-        x = rng.exponential(1.0, size=trials)
+        x = rng.normal(mean, 1.0, trials) if draw == "normal" else rng.exponential(mean, trials)
         judged = uncertainty.estimate(lambda w, x=x: w @ x, trials, seed=r)
         assert judged["method"] == "bootstrap-t"
-        covered += judged["ci"][0] <= 1.0 <= judged["ci"][1]
+        covered += judged["ci"][0] <= mean <= judged["ci"][1]
         resampled = stats.bootstrap(
             (x,),
             np.mean,
             n_resamples=uncertainty.RESAMPLES,
-            method="BCa" if trials >= uncertainty.BCA_MIN_TRIALS else "percentile",
-            confidence_level=uncertainty.confidence_level(trials),
+            method=method,
+            confidence_level=level or uncertainty.confidence_level(trials),
             random_state=np.random.default_rng(r),
         ).confidence_interval
-        before += resampled.low <= 1.0 <= resampled.high
+        other += resampled.low <= mean <= resampled.high
     assert stats.binomtest(covered, repetitions, 0.95).pvalue > 0.01, covered
-    assert stats.binomtest(before, repetitions, 0.95, alternative="less").pvalue < 0.01, before
+    assert stats.binomtest(other, repetitions, 0.95, alternative="less").pvalue < 0.01, other
 
 
 @pytest.mark.parametrize("trials", [10, 30])
