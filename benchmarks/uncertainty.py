@@ -119,6 +119,8 @@ FEW = (
     "by twice its jackknife bias; and a mean over trials (ASR, final regret, their paired "
     "differences) a bootstrap-t interval at 95 %"
 )
+#: The methods below FEW_TRIALS besides the percentile or BCa interval (a coverage row's `method`).
+FEW_METHODS = "; bias-corrected percentile for a metric with a bias; bootstrap-t for a mean"
 #: What a table of fewer than MIN_INTERVAL_TRIALS trials says in place of its intervals.
 NO_INTERVALS = (
     f"No intervals: a 95 % interval needs {MIN_INTERVAL_TRIALS} trials or more (a bootstrap interval "
@@ -553,7 +555,8 @@ def trial_coverage(
         rows.append(
             {
                 "trials": n,
-                "method": "BCa" if BCA_MIN_TRIALS <= n <= BCA_MAX_TRIALS else "percentile",
+                "method": ("BCa" if BCA_MIN_TRIALS <= n <= BCA_MAX_TRIALS else "percentile")
+                + (FEW_METHODS if n < FEW_TRIALS else ""),
                 "confidence_level": confidence_level(n),
                 "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in kept},
                 "studies": {f"{p}.{k}": judged[p, k] for p, k in kept},

@@ -153,7 +153,8 @@ def test_the_coverage_of_intervals_on_fewer_trials_of_a_population():
         == record["rows"][1:]
     )
     few, more = record["rows"]
-    assert few["studies"]["a.armse"] == 300 and few["method"] == "BCa"
+    assert few["studies"]["a.armse"] == 300 and few["method"] == "BCa" + uncertainty.FEW_METHODS
+    assert more["method"] == "BCa"
     armse = round(few["coverage"]["a.armse"] * 300)
     assert stats.binomtest(armse, 300, 0.95, alternative="less").pvalue < 0.01, armse
     regret = round(more["coverage"]["a.final_regret"] * 300)
