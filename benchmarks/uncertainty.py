@@ -182,6 +182,12 @@ def _shared_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
     return weights
 
 
+def _resampled_method(num_trials: int) -> str:
+    """scipy's method for an interval over ``num_trials`` trials: BCa from :data:`BCA_MIN_TRIALS`
+    to :data:`BCA_MAX_TRIALS` trials, percentile outside."""
+    return "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"
+
+
 def confidence_level(num_trials: int) -> float:
     """The bootstrap's confidence level for a 95 % interval over ``num_trials`` trials: 95 % from
     :data:`BCA_MIN_TRIALS` on; below, that of Hesterberg's expanded percentile interval, whose
@@ -238,7 +244,7 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
     if num_trials < MIN_INTERVAL_TRIALS:
         none = {"ci": None, "method": f"none (fewer than {MIN_INTERVAL_TRIALS} trials)"}
         return {key: {"estimate": v, **none} for key, v in zip(keys, values, strict=True)}
-    method = "BCa" if BCA_MIN_TRIALS <= num_trials <= BCA_MAX_TRIALS else "percentile"
+    method = _resampled_method(num_trials)
 
     def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
         # (..., metrics), a view of a contiguous (metrics, ...) array: each metric's resamples stay
@@ -246,11 +252,12 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
         return np.moveaxis(np.stack([metrics[key](weights) for key in keys]), 0, -1)
 
     few = num_trials < FEW_TRIALS
+    value_array = np.array(values)
     if few:  # each trial's own value, and the resamples' means and standard errors of them
         with np.errstate(invalid="ignore", divide="ignore"):  # a trial alone may give no value
             singles = stacked(np.eye(num_trials))  # (n, metrics)
             finite = np.isfinite(singles).all(axis=0)
-            centred = np.where(finite, singles - np.array(values), 0.0)  # variances lose no digits
+            centred = np.where(finite, singles - value_array, 0.0)  # variances lose no digits
         judged = stacked
 
         def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -258,7 +265,7 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
             shifts = np.stack([weights @ column for column in centred.T])
             squares = np.stack([weights @ column**2 for column in centred.T])
             errors = np.sqrt(np.maximum(squares - shifts**2, 0.0) / (num_trials - 1))  # (metrics, ...)
-            means = shifts + np.array(values).reshape(-1, *[1] * (shifts.ndim - 1))
+            means = shifts + value_array.reshape(-1, *[1] * (shifts.ndim - 1))
             parts = (np.moveaxis(judged(weights), -1, 0), means, errors)  # contiguous, as judged's
             return np.moveaxis(np.concatenate(parts), 0, -1)
 
@@ -270,35 +277,34 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
         count * (3 if few else 1), -1
     )
     biases = np.zeros(count)
-    studentized: list[tuple[float, float] | None] = [None] * count
+    students: list[tuple[NDArray, NDArray, NDArray] | None] = [None] * count
     if few:
-        biases = jackknife_bias(judged, np.array(values), num_trials)
+        biases = jackknife_bias(judged, value_array, num_trials)
         means, errors = distributions[count : 2 * count], distributions[2 * count :]
         for i in np.flatnonzero(finite):
-            studentized[i] = _bootstrap_t(values[i], distributions[i], means[i], errors[i], centred[:, i])
+            students[i] = (means[i], errors[i], centred[:, i])
         distributions = distributions[:count]
     alpha = (1 - confidence_level(num_trials)) / 2
     return {
         key: _interval(
-            values[i], (lows[i], highs[i]), distributions[i], alpha, method, biases[i], studentized[i]
+            values[i], (lows[i], highs[i]), distributions[i], alpha, method, biases[i], students[i]
         )
         for i, key in enumerate(keys)
     }
 
 
 def _bootstrap_t(
-    value: float, distribution: NDArray, means: NDArray, errors: NDArray, singles: NDArray
+    value: float, distribution: NDArray, spread: float, means: NDArray, errors: NDArray, singles: NDArray
 ) -> tuple[float, float] | None:
     """The bootstrap-t (studentized) 95 % interval of a metric that is a mean over trials, or None
     where it is not one or the interval is not finite. ``distribution``: the metric on each
-    resample; ``means`` and ``errors``: the mean of each resample's trials' own values
+    resample, ``spread`` their range; ``means`` and ``errors``: the mean of each resample's trials' own values
     (``singles``, less the value) and its standard error. The metric is a mean over trials where
     its every resample is that mean, to rounding. Each resample's ``t`` is its distance from the
     value in its own standard errors; the interval is the value less the ``t`` quantiles times the
     standard error of the trials (Efron and Tibshirani 1993, ch. 12.5). A resample of trials of
     one value has an infinite ``t`` (one of 2000 on 6 trials in about a quarter of studies): it
     is kept, and the interval is given up only where a quantile falls on such resamples."""
-    spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if not np.isfinite(spread) or np.max(np.abs(distribution - means)) > ROUNDING * spread:
         return None
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -328,16 +334,18 @@ def _interval(
     alpha: float,
     method: str,
     bias: float,
-    studentized: tuple[float, float] | None = None,
+    student: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> dict[str, Any]:
     """One metric's estimate from its bootstrap (``ci`` by ``method``, the resamples'
-    ``distribution``, each tail ``alpha``), its jackknife ``bias`` and its ``studentized``
-    interval (a mean over few trials): constant, bootstrap-t, bias-corrected percentile, BCa, or
-    percentile where BCa fails."""
+    ``distribution``, each tail ``alpha``), its jackknife ``bias`` and, on a few trials, its
+    resamples' means, standard errors and trials' own values (``student``, for
+    :func:`_bootstrap_t`): constant, bootstrap-t, bias-corrected percentile, BCa, or percentile
+    where BCa fails."""
     low, high = (float(end) for end in ci)
     spread = float(np.ptp(distribution)) if np.isfinite(distribution).all() else np.inf
     if spread <= ROUNDING * max(abs(value), np.finfo(float).tiny):
         return {"estimate": value, "ci": [value, value], "method": METHODS["constant"]}
+    studentized = None if student is None else _bootstrap_t(value, distribution, spread, *student)
     corrected = abs(bias) > NO_BIAS * spread  # not where the bias or the spread is not finite
     bca_failed = method == "BCa" and not (np.isfinite(low) and np.isfinite(high) and low <= value <= high)
     if studentized is not None:
@@ -555,8 +563,7 @@ def trial_coverage(
         rows.append(
             {
                 "trials": n,
-                "method": ("BCa" if BCA_MIN_TRIALS <= n <= BCA_MAX_TRIALS else "percentile")
-                + (FEW_METHODS if n < FEW_TRIALS else ""),
+                "method": _resampled_method(n) + (FEW_METHODS if n < FEW_TRIALS else ""),
                 "confidence_level": confidence_level(n),
                 "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in kept},
                 "studies": {f"{p}.{k}": judged[p, k] for p, k in kept},
