@@ -94,10 +94,6 @@ class Agent(ABC):
             raise TypeError(f"{type(self).__name__}() got unexpected keyword argument(s) {sorted(keywords)}")
         self.parameters = None if self.keyword_parameters is None else self.keyword_parameters(**keywords)
         self.scenario = load_scenario(scenario) if not isinstance(scenario, Scenario) else scenario
-        if seed is not None and (
-            isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0
-        ):
-            raise ValueError(f"seed must be None or an integer >= 0, got {seed!r}")
         self.random = TrialRandom(seed)
         self.num_tx = self.scenario.num_tx
         self.num_rx = self.scenario.num_rx

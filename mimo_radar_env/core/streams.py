@@ -103,6 +103,10 @@ def full_index(
     return xp.broadcast_to(index, (batch_size, *shape))
 
 
+#: The largest seed an agent takes: trial ``i`` draws from the key of ``seed + i`` in 64 bits,
+#: so below 2**63 no batch wraps onto the keys of small seeds.
+MAX_AGENT_SEED = 2**63 - 1
+
 #: Marsaglia-Tsang proposals drawn per Gamma variate in one batch (acceptance >= 95 % each);
 #: the rare variate with no accepted proposal is drawn by inverse CDF from its own uniform.
 GAMMA_PROPOSALS = 4
@@ -115,9 +119,16 @@ class TrialRandom:
     ----------
     seed : int, optional
         Trial ``i`` uses the key of ``seed + i``; ``None`` draws a fresh seed from the OS.
+        At most :data:`MAX_AGENT_SEED`.
     """
 
     def __init__(self, seed: int | None) -> None:
+        if seed is not None and (
+            isinstance(seed, bool | np.bool_)
+            or not isinstance(seed, int | np.integer)
+            or not 0 <= seed <= MAX_AGENT_SEED
+        ):
+            raise ValueError(f"seed must be None or an integer from 0 to 2**63 - 1, got {seed!r}")
         if seed is None:
             seed = int(np.random.SeedSequence().entropy % 2**62)
         self.seed = int(seed)

@@ -105,3 +105,19 @@ def test_keyword_parameters_are_declared_once_and_other_keywords_are_refused():
         Plain("paper-1-v1", beta=1.0)
     with pytest.raises(TypeError, match="unexpected keyword argument 'beta'"):  # its own signature
         FixedAgent("paper-1-v1", (0,), (0,), beta=1.0)
+
+
+@pytest.mark.parametrize("seed", [-1, 2**63, 2**64, 1.5, "3", True, np.bool_(True)])
+def test_an_agent_seed_outside_its_64_bit_keys_is_refused_by_name(seed):
+    """Trial i draws from the key of seed + i in 64 bits: a seed at 2**63 or more could wrap onto
+    small seeds' trials (2**64 - 1 + 1 is 0), and 2**64 once overflowed deep inside numpy."""
+    with pytest.raises(ValueError, match=r"seed must be None or an integer from 0 to 2\*\*63 - 1, got "):
+        agents.make_agent("epsilon-greedy", "paper-1-v1", seed=seed)
+
+
+def test_the_largest_agent_seed_draws_keys_apart_from_small_seeds():
+    largest = agents.make_agent("epsilon-greedy", "paper-1-v1", seed=2**63 - 1)
+    small = agents.make_agent("epsilon-greedy", "paper-1-v1", seed=0)
+    largest.random.reset(1000)
+    small.random.reset(1000)
+    assert len(np.unique(np.concatenate([largest.random.keys, small.random.keys]))) == 2000
