@@ -15,11 +15,14 @@ first (as rl-zoo3's ``--gym-packages`` does).
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib
 import importlib.util
 import os
 import signal
 import sys
+import threading
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -383,10 +386,12 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
+        _exit_within(INTERRUPTED_TEARDOWN_S, 143 if terminated else 130)
         parser.exit(
             143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n"
         )
     except KeyboardInterrupt:
+        _exit_within(INTERRUPTED_TEARDOWN_S, 143 if terminated else 130)
         parser.exit(
             143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n"
         )
@@ -397,6 +402,28 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
         if previous is not None:
             signal.signal(signal.SIGTERM, previous)
     return 0
+
+
+#: Seconds the interpreter's teardown may take after an interrupt (joining the pool's threads and
+#: processes, the finalizers), the finished tasks saved and the message written before it starts.
+INTERRUPTED_TEARDOWN_S = 5.0
+
+
+def _exit_within(seconds: float, code: int) -> None:
+    """Exit with ``code`` after ``seconds`` even where the teardown has not ended (a thread or
+    process that does not stop must not hold a stopped command), with one line saying so."""
+
+    def force() -> None:
+        time.sleep(seconds)
+        with contextlib.suppress(OSError, ValueError):
+            sys.stderr.write(
+                f"{PROG}: exited {seconds:g} s after the interrupt, without waiting for "
+                "what had not stopped\n"
+            )
+            sys.stderr.flush()
+        os._exit(code)
+
+    threading.Thread(target=force, daemon=True, name="teardown-limit").start()
 
 
 def _stop_on_sigterm(terminated: list[int]) -> Any:

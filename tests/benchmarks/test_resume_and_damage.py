@@ -141,6 +141,36 @@ def test_ctrl_c_or_sigterm_stops_within_seconds_keeps_finished_shards_and_says_s
     assert "not valid" not in out_text + err and kept >= 1
 
 
+def test_an_interrupted_command_exits_within_its_teardown_limit_when_a_thread_never_stops(tmp_path):
+    """After Ctrl-C the finished tasks are saved and the message written; a thread (or process)
+    that never stops then holds the exit for at most INTERRUPTED_TEARDOWN_S, and says so."""
+    from benchmarks.cli import INTERRUPTED_TEARDOWN_S
+
+    (tmp_path / "never_stops.py").write_text(
+        "import threading\n"
+        "threading.Thread(target=threading.Event().wait, name='never-stops').start()  # not a daemon\n"
+    )
+    out = tmp_path / "run"
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(tmp_path), str(ROOT)])}
+    args = ["--import", "never_stops", *BIG_RUN, "--workers", "2", "--quiet", "--out", str(out)]
+    process = _cli(*args, start_new_session=True, env=env)
+    deadline = time.time() + 120
+    while not list(out.rglob("shard_*.npz")) and time.time() < deadline:
+        time.sleep(0.2)
+    assert list(out.rglob("shard_*.npz")), "no shard was finished"
+    os.killpg(process.pid, signal.SIGINT)
+    start = time.time()
+    _, err = process.communicate(timeout=60)
+    assert INTERRUPTED_TEARDOWN_S <= time.time() - start < INTERRUPTED_TEARDOWN_S + 10
+    assert process.returncode == 130
+    lines = err.strip().splitlines()
+    assert len(lines) == 2 and "interrupted:" in lines[0] and "resume" in lines[0], err
+    forced = (
+        f"exited {INTERRUPTED_TEARDOWN_S:g} s after the interrupt, without waiting for what had not stopped"
+    )
+    assert lines[1] == f"mimo-radar-bench: {forced}"
+
+
 def test_workers_exit_when_their_parent_is_killed(tmp_path):
     out = tmp_path / "run"
     process = _cli(*BIG_RUN, "--workers", "2", "--quiet", "--out", str(out))
