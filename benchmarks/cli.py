@@ -340,6 +340,20 @@ def foreign_packages() -> list[str]:
     return foreign
 
 
+def program() -> None:
+    """The ``mimo-radar-bench`` program (and ``python -m benchmarks``): :func:`main`, where the
+    process's teardown after an interrupt (exit codes 130 and 143) is bounded by
+    :data:`INTERRUPTED_TEARDOWN_S`. :func:`main` called from Python (a test, a notebook) leaves
+    the caller's process alone."""
+    try:
+        code = main()
+    except SystemExit as exc:
+        if exc.code in INTERRUPTED_CODES:
+            _exit_within(INTERRUPTED_TEARDOWN_S, exc.code)
+        raise
+    raise SystemExit(code)
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     foreign = foreign_packages()
     if foreign:
@@ -386,12 +400,10 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     try:
         return args.command_class(args).main()
     except RunInterrupted as exc:
-        _exit_within(INTERRUPTED_TEARDOWN_S, 143 if terminated else 130)
         parser.exit(
             143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n"
         )
     except KeyboardInterrupt:
-        _exit_within(INTERRUPTED_TEARDOWN_S, 143 if terminated else 130)
         parser.exit(
             143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n"
         )
@@ -404,6 +416,8 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     return 0
 
 
+#: The exit codes of a command stopped by Ctrl-C (SIGINT) and by SIGTERM.
+INTERRUPTED_CODES = (130, 143)
 #: Seconds the interpreter's teardown may take after an interrupt (joining the pool's threads and
 #: processes, the finalizers), the finished tasks saved and the message written before it starts.
 INTERRUPTED_TEARDOWN_S = 5.0
