@@ -265,6 +265,47 @@ def worker_pool(workers: int, threads: int = 1, budget: Any = None) -> Iterator[
     pool.join()
 
 
+#: Seconds between two looks at a held Ctrl-C or SIGTERM while a run waits on its pool.
+SIGNAL_LOOK_S = 0.1
+
+
+@contextlib.contextmanager
+def signals_between_waits() -> Iterator[Callable[[], None]]:
+    """Ctrl-C and SIGTERM held while the block runs, and handled, by the handlers they had, where
+    it calls the function it is given: between two waits on a pool, never inside
+    ``concurrent.futures.wait``. A ``KeyboardInterrupt`` raised there, while it holds the
+    futures' locks, leaves one held; the pool's manager thread then waits on it, and the
+    interpreter, which joins that thread as it exits, waits forever. Off the main thread (where
+    no handler can be set), nothing is held."""
+    if threading.current_thread() is not threading.main_thread():
+        yield lambda: None
+        return
+    held: list[int] = []
+    handlers = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+
+    def hold(signum: int, frame: Any) -> None:
+        held.append(signum)
+
+    def handle() -> None:
+        while held:
+            signum = held.pop(0)
+            handler = handlers[signum]
+            if callable(handler):
+                handler(signum, None)
+            elif handler == signal.SIG_DFL:
+                signal.signal(signum, signal.SIG_DFL)
+                signal.raise_signal(signum)
+
+    for signum in handlers:
+        signal.signal(signum, hold)
+    try:
+        yield handle
+    finally:
+        for signum, handler in handlers.items():
+            signal.signal(signum, handler if handler is not None else signal.SIG_DFL)
+        handle()
+
+
 def run_processes(
     runner: Runner,
     todo: list[Task],
@@ -277,7 +318,7 @@ def run_processes(
     with ``share_tail`` (or where it returns true, asked once the tasks are submitted), the tasks
     still running take up the cores of those that ended (:func:`share_idle_cores`)."""
     budget = _CONTEXT.Array("i", max(1, len(todo)), lock=False)
-    with worker_pool(workers, threads, budget) as pool:
+    with worker_pool(workers, threads, budget) as pool, signals_between_waits() as handle_signals:
         pending = {
             pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)
         }
@@ -285,9 +326,10 @@ def run_processes(
         if callable(share_tail):
             share_tail = share_tail()
         while pending:
+            handle_signals()
             if share_tail:
                 share_idle_cores(budget, list(pending.values()), workers, threads)
-            done, _ = wait(pending, return_when=FIRST_COMPLETED)
+            done, _ = wait(pending, timeout=SIGNAL_LOOK_S, return_when=FIRST_COMPLETED)
             for future in sorted(done, key=pending.__getitem__):
                 finished(pending.pop(future), future.result())
 

@@ -241,6 +241,36 @@ def test_a_worker_killed_while_writing_its_result_leaves_no_thread_waiting_for_t
     assert not waiting
 
 
+def test_an_interrupt_inside_a_wait_on_the_pool_would_hold_the_exit_and_is_held_until_between_waits():
+    """A KeyboardInterrupt that leaves a future's lock held (raised inside concurrent.futures.wait)
+    stops the pool's manager thread, which the interpreter joins as it exits; under
+    signals_between_waits a Ctrl-C is raised only where the run asks, outside those locks."""
+    import signal
+
+    with pytest.raises(KeyboardInterrupt), backends.worker_pool(1) as pool:
+        futures = [pool.submit(time.sleep, 60) for _ in range(3)]
+        pool.close()
+        futures[1]._condition.acquire()  # as an interrupt inside wait()'s acquiring of the futures leaves it
+        raise KeyboardInterrupt
+    pool.manager.join(3)
+    assert pool.manager.is_alive()  # stuck on the held lock: the exit would wait forever
+    futures[1]._condition.release()
+    pool.manager.join(20)
+    assert not pool.manager.is_alive()
+
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        with backends.signals_between_waits() as handle:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.2)  # Python has run its handler by now: held, not raised
+            with pytest.raises(KeyboardInterrupt):
+                handle()
+            handle()  # handled once
+        assert signal.getsignal(signal.SIGINT) is signal.default_int_handler
+    finally:
+        signal.signal(signal.SIGINT, previous)
+
+
 @pytest.mark.skipif(not Path("/dev/shm").is_dir(), reason="named semaphores as files of /dev/shm (Linux)")
 def test_a_second_sigterm_during_a_workers_clean_up_leaves_no_semaphore_reported_leaked(tmp_path):
     """An interrupted run's workers get a second SIGTERM: the pool's manager thread terminates
