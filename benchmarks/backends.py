@@ -22,7 +22,7 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from typing import Any
 
 from .errors import BenchError
@@ -306,6 +306,25 @@ def signals_between_waits() -> Iterator[Callable[[], None]]:
         handle()
 
 
+def each_finished(
+    futures: dict[Future, Any],
+    on_finished: Callable[[Future], None],
+    before_wait: Callable[[], None] = lambda: None,
+) -> None:
+    """``on_finished(future)`` for each of ``futures`` as it finishes (those that finish together in
+    the dict's order), ``before_wait()`` before each wait on them; Ctrl-C and SIGTERM are taken
+    between waits (:func:`signals_between_waits`)."""
+    pending = dict(futures)
+    with signals_between_waits() as handle_signals:
+        while pending:
+            handle_signals()
+            before_wait()
+            done, _ = wait(pending, timeout=SIGNAL_LOOK_S, return_when=FIRST_COMPLETED)
+            for future in [future for future in pending if future in done]:
+                del pending[future]
+                on_finished(future)
+
+
 def run_processes(
     runner: Runner,
     todo: list[Task],
@@ -318,20 +337,21 @@ def run_processes(
     with ``share_tail`` (or where it returns true, asked once the tasks are submitted), the tasks
     still running take up the cores of those that ended (:func:`share_idle_cores`)."""
     budget = _CONTEXT.Array("i", max(1, len(todo)), lock=False)
-    with worker_pool(workers, threads, budget) as pool, signals_between_waits() as handle_signals:
+    with worker_pool(workers, threads, budget) as pool:
         pending = {
             pool.submit(budgeted_task, runner, number, *task): number for number, task in enumerate(todo)
         }
         pool.close()
-        if callable(share_tail):
-            share_tail = share_tail()
-        while pending:
-            handle_signals()
-            if share_tail:
+        sharing = share_tail() if callable(share_tail) else share_tail
+
+        def share() -> None:
+            if sharing:
                 share_idle_cores(budget, list(pending.values()), workers, threads)
-            done, _ = wait(pending, timeout=SIGNAL_LOOK_S, return_when=FIRST_COMPLETED)
-            for future in sorted(done, key=pending.__getitem__):
-                finished(pending.pop(future), future.result())
+
+        def save(future: Future) -> None:
+            finished(pending.pop(future), future.result())
+
+        each_finished(pending, save, share)
 
 
 #: What a gRPC server (a Ray cluster's GCS, a Ray Client server) sends first: an HTTP/2 SETTINGS

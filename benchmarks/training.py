@@ -511,9 +511,7 @@ def _train_todo(
             if progress:
                 print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
     elif todo:
-        import concurrent.futures
-
-        from .backends import worker_pool
+        from .backends import each_finished, worker_pool
 
         # the longest trainings first, so that the last ones to finish are short (results do not
         # depend on the order: each training is its own seeded run)
@@ -524,11 +522,14 @@ def _train_todo(
                 for job, out, seed in longest_first
             }
             pool.close()
-            for future in concurrent.futures.as_completed(futures):
+
+            def trained(future: Any) -> None:
                 done[futures[future]] = future.result()
                 if progress:
                     out, seed = futures[future]
                     print(f"train-ppo: {seed_folder(out, seed)} trained ({len(done)}/{total})")
+
+            each_finished(futures, trained)
 
 
 def _train_one_seed(

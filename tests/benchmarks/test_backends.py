@@ -241,28 +241,28 @@ def test_a_worker_killed_while_writing_its_result_leaves_no_thread_waiting_for_t
     assert not waiting
 
 
-def test_an_interrupt_inside_a_wait_on_the_pool_would_hold_the_exit_and_is_held_until_between_waits():
-    """A KeyboardInterrupt that leaves a future's lock held (raised inside concurrent.futures.wait)
-    stops the pool's manager thread, which the interpreter joins as it exits; under
-    signals_between_waits a Ctrl-C is raised only where the run asks, outside those locks."""
+def test_ctrl_c_during_a_run_on_workers_is_raised_between_waits_never_inside_them():
+    """A KeyboardInterrupt raised inside concurrent.futures.wait, while it holds the futures'
+    locks, can leave one held: the pool's manager thread then waits on it, and the interpreter,
+    which joins that thread as it exits, waits forever. A Ctrl-C during a run is held and raised
+    where the run asks: after the results in hand are saved."""
     import signal
 
-    with pytest.raises(KeyboardInterrupt), backends.worker_pool(1) as pool:
-        futures = [pool.submit(time.sleep, 60) for _ in range(3)]
-        pool.close()
-        futures[1]._condition.acquire()  # as an interrupt inside wait()'s acquiring of the futures leaves it
-        raise KeyboardInterrupt
-    pool.manager.join(3)
-    assert pool.manager.is_alive()  # stuck on the held lock: the exit would wait forever
-    futures[1]._condition.release()
-    pool.manager.join(20)
-    assert not pool.manager.is_alive()
-
     previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    saved = []
+
+    def finished(number, result):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.2)  # Python has run the handler by now: held, not raised
+        saved.append(number)
+
     try:
+        with pytest.raises(KeyboardInterrupt):
+            backends.run_processes(_pid, [(k,) for k in range(4)], finished, workers=1, share_tail=False)
+        assert saved and saved == list(range(len(saved)))  # every result being saved was saved whole
         with backends.signals_between_waits() as handle:
             os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(0.2)  # Python has run its handler by now: held, not raised
+            time.sleep(0.2)
             with pytest.raises(KeyboardInterrupt):
                 handle()
             handle()  # handled once
