@@ -342,7 +342,7 @@ def foreign_packages() -> list[str]:
 
 def program() -> None:
     """The ``mimo-radar-bench`` program (and ``python -m benchmarks``): :func:`main`, where the
-    process's teardown after an interrupt (exit codes 130 and 143) is bounded by
+    process's teardown after an interrupt (:data:`INTERRUPTED_CODES`) is bounded by
     :data:`INTERRUPTED_TEARDOWN_S`. :func:`main` called from Python (a test, a notebook) leaves
     the caller's process alone."""
     try:
@@ -401,11 +401,13 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
         return args.command_class(args).main()
     except RunInterrupted as exc:
         parser.exit(
-            143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n"
+            INTERRUPTED_CODES[bool(terminated)],
+            f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n",
         )
     except KeyboardInterrupt:
         parser.exit(
-            143 if terminated else 130, f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n"
+            INTERRUPTED_CODES[bool(terminated)],
+            f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n",
         )
     except (BenchError, ScenarioError) as exc:
         message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
@@ -416,7 +418,7 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
     return 0
 
 
-#: The exit codes of a command stopped by Ctrl-C (SIGINT) and by SIGTERM.
+#: The exit codes of a command stopped by Ctrl-C (SIGINT) and by SIGTERM, in that order.
 INTERRUPTED_CODES = (130, 143)
 #: Seconds the interpreter's teardown may take after an interrupt (joining the pool's threads and
 #: processes, the finalizers), the finished tasks saved and the message written before it starts.
