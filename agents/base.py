@@ -23,6 +23,7 @@ weights, the radar constants); only an oracle reads the truth, through
 from __future__ import annotations
 
 from abc import ABC, abstractmethod
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import numpy as np
@@ -122,14 +123,14 @@ class Agent(ABC):
         sc = self.scenario
         if tuple(batch["sinr"].shape[1:]) != (sc.num_targets, sc.num_tx, sc.num_rx):
             raise ValueError(
-                f"{self.name or type(self).__name__} was made for scenario {sc.name!r} (K={sc.num_targets} "
+                f"{self._label} was made for scenario {sc.name!r} (K={sc.num_targets} "
                 f"targets, M={sc.num_tx}, N={sc.num_rx}), and the observation's 'sinr' has shape "
                 f"{tuple(batch['sinr'].shape[1:])} per trial: make the agent with the env's scenario"
             )
         self._check_finite(batch)
         if self.xp.is_torch and not self.needs.device:
             raise ValueError(
-                f"{self.name or type(self).__name__} acts on numpy arrays only, and this observation is "
+                f"{self._label} acts on numpy arrays only, and this observation is "
                 f"torch's on {self.xp.device}: make its env with device=None (agents that run on a "
                 "device declare needs = Needs(device=True))"
             )
@@ -139,9 +140,7 @@ class Agent(ABC):
 
     def act(self, obs: Observation) -> NDArray[np.int8]:
         """The action for the coming step."""
-        if self.batch_size == 0:
-            raise RuntimeError(f"{type(self).__name__}.act() called before reset(obs)")
-        batch, batched = self._batch(obs)
+        batch, batched = self._episode_batch(obs, "act")
         self.t += 1
         actions = self._act(batch)
         return actions if batched else actions[0]
@@ -169,8 +168,14 @@ class Agent(ABC):
     def update(self, obs: Observation, reward: Any) -> None:
         """Learn from the observation and reward of the step just taken; ``ValueError`` naming
         the key of an observation entry (or the reward) that is not finite."""
-        batch, _ = self._batch(obs)
+        batch, _ = self._episode_batch(obs, "update")
+        shape = tuple(getattr(reward, "shape", np.shape(reward)))
         reward = self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,))
+        if reward.shape[0] != self.batch_size:
+            raise ValueError(
+                f"{self._label}: the reward must hold one value per trial ({self.batch_size}), "
+                f"got shape {shape}"
+            )
         self._check_finite({**batch, "reward": reward})
         self._update(batch, reward)
 
@@ -182,9 +187,7 @@ class Agent(ABC):
                 return
         for key, value in floats.items():
             if not bool(xp.all(xp.isfinite(value))):
-                raise ValueError(
-                    f"{self.name or type(self).__name__}: the {key!r} it was given is not finite"
-                )
+                raise ValueError(f"{self._label}: the {key!r} it was given is not finite")
 
     # ------------------------------------------------------- to implement
     def _reset(self, obs: Observation) -> None:
@@ -199,7 +202,28 @@ class Agent(ABC):
         return None
 
     # ------------------------------------------------------------ helpers
+    @property
+    def _label(self) -> str:
+        return self.name or type(self).__name__
+
+    def _episode_batch(self, obs: Observation, call: str) -> tuple[Observation, bool]:
+        """The batched observation of a step of the episode ``reset`` began: as many trials."""
+        if self.batch_size == 0:
+            raise RuntimeError(f"{type(self).__name__}.{call}() called before reset(obs)")
+        batch, batched = self._batch(obs)
+        size = batch["sinr"].shape[0]
+        if size != self.batch_size:
+            given = f"{size} trial(s)" if batched else "one trial (no trial axis)"
+            raise ValueError(
+                f"{self._label} was reset on {self.batch_size} trial(s), and this observation holds "
+                f"{given}: give it the observations of the env it was reset on"
+            )
+        return batch, batched
+
     def _batch(self, obs: Observation) -> tuple[Observation, bool]:
+        if not isinstance(obs, Mapping) or "sinr" not in obs:
+            keys = f"keys {sorted(obs)}" if isinstance(obs, Mapping) else type(obs).__name__
+            raise ValueError(f"{self._label} acts on the env's dict observation, with key 'sinr'; got {keys}")
         sinr = obs["sinr"] if namespace(obs["sinr"]).is_torch else np.asarray(obs["sinr"])
         if sinr.ndim == 3:
             return {key: np.asarray(value)[None] for key, value in obs.items()}, False

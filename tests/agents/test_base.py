@@ -1,6 +1,8 @@
 """Every registered agent acts validly through an episode on the single and the vector env, and
 refuses an env of another scenario and values that are not finite."""
 
+import re
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -81,6 +83,42 @@ def test_an_agent_refuses_an_env_of_another_scenario_and_what_is_not_finite(poli
     bad = {**obs, "sinr": np.where(obs["sinr"] > 0, math.inf, obs["sinr"])}
     with pytest.raises(ValueError, match="the 'sinr' it was given is not finite"):
         agent.update(bad, reward)
+
+
+@pytest.mark.parametrize("policy", ["ucb1", "mg-crb-cl", "fix1", "random"])
+def test_an_agent_refuses_observations_and_rewards_of_another_batch_than_its_reset(policy):
+    """Reset on 4 trials, it refuses 3, one unbatched trial, a reward of another length and a
+    mapping without the env's keys, in one line each; before, a policy that reads no state of
+    the trials acted on 4 and one that reads none of the reward learnt from 7 values."""
+    agent = agents.make_agent(policy, "paper-1-v1", seed=0)
+    four, three = agents.make_env(agent, 4), agents.make_env(agent, 3)
+    obs, _ = four.reset(seed=0)
+    other, _ = three.reset(seed=0)
+    with pytest.raises(ValueError, match=r"key 'sinr'; got keys \['x'\]"):
+        agent.reset({"x": obs["sinr"]})
+    with pytest.raises(RuntimeError, match=r"update\(\) called before reset"):
+        agent.update(obs, np.zeros(4))
+    agent.reset(obs)
+    with pytest.raises(ValueError, match=r"reset on 4 trial\(s\), and this observation holds 3 trial\(s\)"):
+        agent.act(other)
+    single = {key: value[0] for key, value in obs.items()}
+    with pytest.raises(ValueError, match=r"reset on 4 trial\(s\), and this observation holds one trial"):
+        agent.act(single)
+    obs, reward, *_ = four.step(agent.act(obs))
+    assert reward.shape == (4,)
+    for wrong in (np.zeros(7), 1.0, np.zeros((2, 2, 2))):
+        with pytest.raises(
+            ValueError, match=rf"one value per trial \(4\), got shape {re.escape(str(np.shape(wrong)))}"
+        ):
+            agent.update(obs, wrong)
+    with pytest.raises(ValueError, match=r"reset on 4 trial\(s\), and this observation holds 3 trial\(s\)"):
+        agent.update(other, reward[:3])
+    agent.update(obs, reward)  # the right ones still pass
+    single_env = gym.make("MimoRadarSelect-v1")
+    one, _ = single_env.reset(seed=0)
+    agent.reset(one)  # the single env: the batch of one, a scalar reward
+    one, scalar, *_ = single_env.step(agent.act(one))
+    agent.update(one, scalar)
 
 
 def test_keyword_parameters_are_declared_once_and_other_keywords_are_refused():
