@@ -118,6 +118,13 @@ class Rollout:
     env's reset."""
 
     def __init__(self, agent: base.Agent, env: Any, seed: int | None = None) -> None:
+        if not isinstance(getattr(getattr(env, "unwrapped", None), "scenario", None), Scenario):
+            raise TypeError(
+                "env must be a MimoRadarSelect env, single or vector (gym.make, agents.make_env, or "
+                f'gym.make_vec with vectorization_mode="vector_entry_point"), got {type(env).__name__}'
+            )
+        if not isinstance(agent, base.Agent):
+            raise TypeError(f"agent must be an agents.Agent (agents.make_agent), got {type(agent).__name__}")
         self.horizon = check_same_scenario(agent.scenario, env.unwrapped.scenario)
         check_env_options(agent, env.unwrapped.options)
         self.agent, self.env = agent, env

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import tomllib
 from collections.abc import Mapping
 from importlib import resources
@@ -109,6 +110,11 @@ def load_scenario(name_or_path: str | Path | Scenario, **overrides: Any) -> Scen
     """
     if isinstance(name_or_path, Scenario):
         return name_or_path.replace(**overrides) if overrides else name_or_path
+    if not isinstance(name_or_path, str | os.PathLike):
+        raise ScenarioError(
+            f"scenario must be a shipped scenario's name ({', '.join(available_scenarios())}), a path to "
+            f"a .toml/.yaml file or a Scenario, got {type(name_or_path).__name__} {name_or_path!r}"
+        )
     text = str(name_or_path)
     if text in available_scenarios():
         resource = resources.files(__package__) / f"{text}.toml"

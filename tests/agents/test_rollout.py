@@ -113,6 +113,17 @@ def test_a_rollout_refuses_an_agent_made_for_another_scenario():
     assert agents.Rollout(agent, short, seed=0).horizon == 700
 
 
+def test_a_rollout_refuses_what_is_not_an_env_of_this_project_or_an_agent():
+    """An object without the env's scenario was an AttributeError on ``env.unwrapped``."""
+    agent = agents.make_agent("ucb1", "paper-1-v1", seed=0)
+    sync = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="sync")
+    for env, kind in ((object(), "object"), (gym.make("CartPole-v1"), "TimeLimit"), (sync, "SyncVectorEnv")):
+        with pytest.raises(TypeError, match=rf'vectorization_mode="vector_entry_point"\), got {kind}$'):
+            agents.Rollout(agent, env, seed=0)
+    with pytest.raises(TypeError, match=r"agent must be an agents.Agent \(agents.make_agent\), got str$"):
+        agents.Rollout("ucb1", gym.make("MimoRadarSelect-v1"), seed=0)
+
+
 def test_a_rollout_ends_with_its_episode():
     """Past the horizon the vector env resets, and the agent would learn from the reset: the
     rollout refuses those steps before running any, and a step after the last raises."""

@@ -7,6 +7,7 @@ import pytest
 
 import mimo_radar_env.scenarios
 from mimo_radar_env import Scenario, load_scenario
+from mimo_radar_env.scenarios.validation import ScenarioError
 
 
 def test_round_trip_and_user_files(tmp_path: Path):
@@ -44,3 +45,14 @@ def test_a_file_without_a_name_is_named_after_the_file_as_far_as_a_name_may_be(t
     path = tmp_path / file
     path.write_text("\n".join(line for line in text.splitlines() if not line.startswith("name =")))
     assert load_scenario(path).name == name
+
+
+@pytest.mark.parametrize("given", [None, 3, b"paper-1-v1", ["paper-1-v1"]])
+def test_a_scenario_that_is_no_name_path_or_scenario_is_refused_by_its_type(given):
+    """It was read as ``str(given)``: "unknown scenario 'None'" for ``scenario=None``, as if
+    "None" were a name that could have existed."""
+    message = rf"a path to a \.toml/\.yaml file or a Scenario, got {type(given).__name__} "
+    with pytest.raises(ScenarioError, match=message):
+        load_scenario(given)
+    with pytest.raises(ScenarioError, match=message):
+        gym.make("MimoRadarSelect-v1", scenario=given)
