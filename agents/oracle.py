@@ -12,16 +12,32 @@ from mimo_radar_env import Scenario
 
 from .base import Agent, Observation
 from .costs import BOOKKEEPING, ORACLE_SEARCH, TRACKING_SEARCH, Needs
+from .rollout import check_same_scenario
 
 
-def oracle_env(env: Any, method: str) -> Any:
+def oracle_env(agent: Agent, env: Any, method: str) -> Any:
     """The MimoRadarSelect env (single or vector) behind ``env`` that has the truth-reading
-    ``method`` (``oracle_action``, ``tracking_oracle_action``, ``tracking_forecast``);
-    ``ValueError`` naming it otherwise."""
+    ``method`` (``oracle_action``, ``tracking_oracle_action``, ``tracking_forecast``), for
+    ``agent`` to read; ``ValueError`` naming it otherwise, or an env of another scenario than the
+    agent's. Records its number of trials, which the agent's reset must have
+    (:func:`check_attached`)."""
     target = env if hasattr(env, method) else getattr(env, "unwrapped", env)
     if not hasattr(target, method):
         raise ValueError(f"env must be a MimoRadarSelect env (it has {method}()), got {type(env).__name__}")
+    check_same_scenario(agent.scenario, target.scenario)
+    agent.oracle_trials = getattr(target, "num_envs", 1)
     return target
+
+
+def check_attached(agent: Agent, attached: bool, kind: str) -> None:
+    """At ``reset``: the oracle agent has an env to read, of as many trials as the observation."""
+    if not attached:
+        raise RuntimeError(f"the {kind} oracle needs the env: call agent.attach(env) first")
+    if agent.batch_size != agent.oracle_trials:
+        raise ValueError(
+            f"{agent.name} reads the truth of an env of {agent.oracle_trials} trial(s) and was reset on "
+            f"{agent.batch_size}: reset it on the observations of the env it is attached to"
+        )
 
 
 class BestAgent(Agent):
@@ -38,16 +54,16 @@ class BestAgent(Agent):
     def __init__(self, scenario: Scenario | str, seed: int | None = None, env: Any = None) -> None:
         super().__init__(scenario, seed)
         self._oracle: Callable[[], NDArray[np.int8]] | None = None
+        self.oracle_trials = 0  # the trials of the env it reads, set by attach
         if env is not None:
             self.attach(env)
 
     def attach(self, env: Any) -> None:
         """Read the optimal super arm from ``env.oracle_action()`` (single or vector env)."""
-        self._oracle = oracle_env(env, "oracle_action").oracle_action
+        self._oracle = oracle_env(self, env, "oracle_action").oracle_action
 
     def _reset(self, obs: Observation) -> None:
-        if self._oracle is None:
-            raise RuntimeError("the best oracle needs the env: call agent.attach(env) first")
+        check_attached(self, self._oracle is not None, "best")
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         assert self._oracle is not None
@@ -80,7 +96,7 @@ class BestTrackingAgent(BestAgent):
 
     def attach(self, env: Any) -> None:
         """Read the super arm from ``env.tracking_oracle_action()`` (single or vector env)."""
-        target = oracle_env(env, "tracking_oracle_action")
+        target = oracle_env(self, env, "tracking_oracle_action")
         if getattr(target, "options", None) is not None and not target.options.tracking:
             raise ValueError("best-tracking needs the tracker: the env was made with tracking=False")
         criterion = self.criterion

@@ -17,7 +17,7 @@ from mimo_radar_env.tracking.planning import PLAN_SEARCHES, Forecast, Planner
 
 from .base import Agent, Observation, ucb_bonus
 from .costs import BOOKKEEPING, PLAN, TRACKING_SEARCH, Needs
-from .oracle import oracle_env
+from .oracle import check_attached, oracle_env
 from .parameters import check_integer
 from .tracking import TrackingUCB
 
@@ -78,12 +78,13 @@ class PlanTrackingAgent(Agent):
         self._planner(DEFAULT_FUSION).check_horizon(horizon)
         self.planner: Planner | None = None
         self._forecast: Any = None
+        self.oracle_trials = 0  # the trials of the env it reads, set by attach
         if env is not None:
             self.attach(env)
 
     def attach(self, env: Any) -> None:
         """Plan on ``env.tracking_forecast`` (single or vector env), with the env's fusion."""
-        target = oracle_env(env, "tracking_forecast")
+        target = oracle_env(self, env, "tracking_forecast")
         self.planner = self._planner(target.options.fusion)
         self._forecast = target.tracking_forecast
 
@@ -95,8 +96,7 @@ class PlanTrackingAgent(Agent):
         )  # fmt: skip
 
     def _reset(self, obs: Observation) -> None:
-        if self.planner is None:
-            raise RuntimeError("the planning oracle needs the env: call agent.attach(env) first")
+        check_attached(self, self.planner is not None, "planning")
 
     def _act(self, obs: Observation) -> NDArray[np.int8]:
         assert self.planner is not None
