@@ -43,6 +43,7 @@ from agents.solvers import compiled_kernels as solver_kernels
 from mimo_radar_env import EnvOptions, Scenario, ScenarioError, load_scenario
 from mimo_radar_env.core import compiled
 from mimo_radar_env.core.compiled import uncached
+from mimo_radar_env.core.streams import MAX_AGENT_SEED
 from mimo_radar_env.envs.cost import (
     machine_memory,
     memory_parts,
@@ -180,7 +181,7 @@ def make_config(
         sc = load_scenario(scenario)
     except ScenarioError as exc:
         raise HarnessError(str(exc)) from exc
-    options = _check_options(options, scenario)
+    options = check_options(options, scenario_version(scenario))  # v1's for a scenario of no version
     _check_max_hours(max_hours)
     _check_counts(("workers", workers, 1), ("parallel", 1 if parallel is None else parallel, 1))
     parallel = parallel or workers
@@ -243,6 +244,11 @@ def _shard_sizes(
 def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_size: int | None) -> int:
     """Refuses a count that is not a whole number in its range; the run's steps."""
     _check_counts(("trials", trials, 1), ("seed", seed, 0))
+    if seed + trials - 1 > MAX_AGENT_SEED:  # trial i's agent is seeded seed + i (TrialRandom)
+        raise HarnessError(
+            f"`seed` must be at most 2**63 - {trials} for {trials} trials (trial i is seeded seed + i, "
+            f"and agents' seeds are at most 2**63 - 1), got {seed}"
+        )
     if shard_size is not None:
         _check_counts(("shard_size", shard_size, 1))
     steps = sc.horizon if steps is None else steps
@@ -251,10 +257,10 @@ def _check_sizes(sc: Scenario, trials: int, steps: int | None, seed: int, shard_
     return steps
 
 
-def _check_options(options: EnvOptions | Mapping[str, Any] | None, scenario: Any) -> EnvOptions:
+def check_options(options: EnvOptions | Mapping[str, Any] | None, version: str) -> EnvOptions:
     """The run's env options: ``options`` as it is, or a mapping of options over the defaults of
-    the env version ``scenario`` is a paper scenario of (v1's for any other), or those defaults
-    (an unknown option is a ``TypeError``, as in :class:`~mimo_radar_env.EnvOptions`)."""
+    env ``version``, or those defaults (an unknown option is a ``TypeError``, as in
+    :class:`~mimo_radar_env.EnvOptions`)."""
     if isinstance(options, EnvOptions):
         return options
     if options is not None and not isinstance(options, Mapping):
@@ -262,7 +268,7 @@ def _check_options(options: EnvOptions | Mapping[str, Any] | None, scenario: Any
             f"`options` must be an EnvOptions or a mapping of env options, got {type(options).__name__}"
         )
     try:
-        return env_version(scenario_version(scenario)).options(**(options or {}))
+        return env_version(version).options(**(options or {}))
     except ValueError as exc:
         raise HarnessError(f"`options`: {exc}") from None
 
@@ -290,6 +296,11 @@ def _check_policies(policies: Sequence[str], params: dict[str, dict[str, Any]]) 
         raise HarnessError("give at least one policy")
     if len(set(policies)) != len(policies):
         raise HarnessError(f"policies are listed twice: {list(policies)}")
+    if not isinstance(params, Mapping) or not all(isinstance(v, Mapping) for v in params.values()):
+        raise HarnessError(
+            "`agent_params` must map policy names to mappings of their parameters, e.g. "
+            f"{{'ucb1': {{'beta': 1.0}}}}, got {params!r}"
+        )
     for policy, values in params.items():
         if "seed" in values:
             raise HarnessError(

@@ -100,15 +100,15 @@ def run_policies(
     the step in form ``device_mode`` (:func:`benchmarks.harness.run_many`)."""
     from . import report
 
+    for flag, value in (("progress", progress), ("figures", figures)):
+        if not isinstance(value, bool):
+            raise harness.HarnessError(f"`{flag}` must be True or False, got {value!r}")
     # a string is refused by make_config, naming it (not read as a list of one-letter names)
     names = policies if isinstance(policies, str) else [harness.policy_name(p, workers) for p in policies]
     if not isinstance(options, EnvOptions):
         if version not in VERSIONS:
             raise harness.HarnessError(f"`version` must be one of {sorted(VERSIONS)}, got {version!r}")
-        try:
-            options = VERSIONS[version].options(**(options or {}))
-        except ValueError as exc:
-            raise harness.HarnessError(f"`options`: {exc}") from None
+        options = harness.check_options(options, version)
     try:
         check_scenario_version(scenario, version)
     except ValueError as exc:

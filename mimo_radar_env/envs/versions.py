@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import Any
 
-from .options import EnvOptions
+from .options import EnvOptions, option_names
 
 
 def _frozen(mapping: Mapping[str, Any]) -> Mapping[str, Any]:
@@ -63,7 +63,14 @@ class EnvVersion:
         return self.paper_scenarios[0]
 
     def options(self, **overrides: Any) -> EnvOptions:
-        """The version's options, some overridden."""
+        """The version's options, some overridden; an unknown option is a ``TypeError`` naming
+        the options there are."""
+        unknown = sorted(set(overrides) - set(option_names()))
+        if unknown:
+            raise TypeError(
+                f"env options got an unexpected keyword argument {unknown[0]!r}; env options are "
+                f"{list(option_names())}"
+            )
         return EnvOptions(**{**self.option_defaults, **overrides})
 
     def paper_scenario(self, number: int) -> str:

@@ -360,6 +360,17 @@ def test_each_policys_shard_size_is_checked_like_one_for_all():
         )
 
 
+def test_the_largest_seed_a_run_takes_runs_every_shard_and_one_more_is_refused(tmp_path):
+    """Trial i's agent is seeded seed + i, at most 2**63 - 1: the run's seed was checked only
+    for >= 0, so a seed near the top was taken, wrote its folder and failed in its second shard."""
+    top = 2**63 - 4
+    config = make_config("paper-1-v1", ["ucb1"], 4, 2, seed=top, shard_size=2, say=lambda _: None)
+    joined = run(config, tmp_path / "top", progress=False)
+    assert joined is not None and joined["ucb1"]["trial_expected"].shape == (4, 2)
+    with pytest.raises(HarnessError, match=r"`?seed`? must be at most 2\*\*63 - 4 for 4 trials"):
+        make_config("paper-1-v1", ["ucb1"], 4, 2, seed=top + 1, shard_size=2, say=lambda _: None)
+
+
 def test_policies_given_as_one_string_are_refused_not_read_letter_by_letter():
     with pytest.raises(HarnessError, match=r"policies must be a list of policy names, got the string 'ucb1'"):
         make_config("paper-1-v1", "ucb1", trials=2, say=lambda message: None)

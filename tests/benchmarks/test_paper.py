@@ -2,6 +2,7 @@
 
 import csv
 import json
+import re
 
 import numpy as np
 import pytest
@@ -87,16 +88,46 @@ def test_paper_subcommand_writes_every_output(tmp_path, capsys):
         ({"options": {"fusion": "x"}}, "options: fusion must be one of ['average', 'centralized'], got 'x'"),
         ({"version": "v3"}, "version must be one of ['v0', 'v1'], got 'v3'"),
         ({"scenario": "paper-1"}, "scenario 'paper-1' is MimoRadarSelect-v0's paper Scenario 1"),
+        ({"options": [("fusion", "average")]}, "options must be an EnvOptions or a mapping of env options"),
+        ({"agent_params": {"fix1": 3}}, "agent_params must map policy names to mappings of their parameters"),
+        ({"progress": "yes"}, "progress must be True or False, got 'yes'"),
+        ({"figures": 2}, "figures must be True or False, got 2"),
+        ({"seed": 2**63 - 1}, "seed must be at most 2**63 - 2 for 2 trials"),
     ],
 )
 def test_benchmarks_run_refuses_in_one_line_naming_its_argument(tmp_path, kwargs, message):
     """``benchmarks.run`` (the run command as a Python call): a string of policies is not read as
-    one-letter names, and a bad option is a HarnessError as make_config's are."""
+    one-letter names, and a bad option is a HarnessError as make_config's are. Before, options
+    not a mapping and agent_params of a number failed inside Python's ``**`` and ``in``, a flag of
+    another type was read by its truth, and a seed whose trials' seeds pass 2**63 - 1 was taken
+    and failed in its second shard."""
     from benchmarks.harness import HarnessError
     from benchmarks.paper import run_policies
 
-    given = {"scenario": "paper-1-v1", "policies": ["fix1"], "trials": 2, "steps": 3, **kwargs}
+    given = {
+        "scenario": "paper-1-v1",
+        "policies": ["fix1"],
+        "trials": 2,
+        "steps": 3,
+        "progress": False,
+        **kwargs,
+    }
     with pytest.raises(HarnessError) as caught:
-        run_policies(**given, out=tmp_path / "out", progress=False)
+        run_policies(**given, out=tmp_path / "out")
     assert str(caught.value).startswith(message)
     assert not (tmp_path / "out").exists()
+
+
+def test_an_unknown_env_option_is_a_type_error_naming_the_options_there_are(tmp_path):
+    """As in Gymnasium, an unknown keyword is a TypeError; it was EnvOptions.__init__'s own."""
+    from benchmarks.paper import run_policies
+    from mimo_radar_env import env_version
+    from mimo_radar_env.envs.options import option_names
+
+    listed = re.escape(str(list(option_names())))
+    unknown = rf"env options got an unexpected keyword argument 'foo'; env options are {listed}$"
+    with pytest.raises(TypeError, match=unknown):
+        env_version("v1").options(foo=1)
+    with pytest.raises(TypeError, match=r"unexpected keyword argument 'foo'; env options are \["):
+        run_policies("paper-1-v1", ["fix1"], trials=2, steps=3, options={"foo": 1}, out=tmp_path / "o")
+    assert not (tmp_path / "o").exists()
