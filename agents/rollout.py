@@ -57,6 +57,9 @@ def make_env(
     ``None`` on numpy. Another version's paper scenario by name is refused, as ``gym.make``
     refuses it (its Scenario object is the explicit way to run it under ``version``)."""
     check_scenario_version(scenario, version)
+    if options is not None and not isinstance(options, EnvOptions | Mapping):
+        given = type(options).__name__
+        raise TypeError(f"options must be an EnvOptions or a mapping of env options, got {given}")
     if not isinstance(options, EnvOptions):
         options = env_version(version).options(**(options or {}))
     return MimoRadarSelectVectorEnv(

@@ -113,7 +113,7 @@ def test_a_rollout_refuses_an_agent_made_for_another_scenario():
     assert agents.Rollout(agent, short, seed=0).horizon == 700
 
 
-def test_a_rollout_refuses_what_is_not_an_env_of_this_project_or_an_agent():
+def test_a_rollout_refuses_what_is_not_an_env_of_this_project_or_an_agent_and_make_env_bad_options():
     """An object without the env's scenario was an AttributeError on ``env.unwrapped``."""
     agent = agents.make_agent("ucb1", "paper-1-v1", seed=0)
     sync = gym.make_vec("MimoRadarSelect-v1", num_envs=2, vectorization_mode="sync")
@@ -122,6 +122,8 @@ def test_a_rollout_refuses_what_is_not_an_env_of_this_project_or_an_agent():
             agents.Rollout(agent, env, seed=0)
     with pytest.raises(TypeError, match=r"agent must be an agents.Agent \(agents.make_agent\), got str$"):
         agents.Rollout("ucb1", gym.make("MimoRadarSelect-v1"), seed=0)
+    with pytest.raises(TypeError, match=r"must be an EnvOptions or a mapping of env options, got list$"):
+        agents.make_env(agent, 2, [("fusion", "average")])  # was a TypeError of Python's ** operator
 
 
 def test_a_rollout_ends_with_its_episode():
