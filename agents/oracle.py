@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from typing import Any
 
@@ -99,5 +100,4 @@ class BestTrackingAgent(BestAgent):
         target = oracle_env(self, env, "tracking_oracle_action")
         if getattr(target, "options", None) is not None and not target.options.tracking:
             raise ValueError("best-tracking needs the tracker: the env was made with tracking=False")
-        criterion = self.criterion
-        self._oracle = lambda: target.tracking_oracle_action(criterion)
+        self._oracle = functools.partial(target.tracking_oracle_action, self.criterion)  # pickles

@@ -159,3 +159,18 @@ def test_the_largest_agent_seed_draws_keys_apart_from_small_seeds():
     largest.random.reset(1000)
     small.random.reset(1000)
     assert len(np.unique(np.concatenate([largest.random.keys, small.random.keys]))) == 2000
+
+
+def test_every_agent_pickles_in_mid_episode_and_its_copy_acts_as_it_does():
+    """For a user's process pool or Ray: best-tracking's attached oracle was a lambda, which
+    pickle refuses. An oracle's copy carries a copy of its env, at the same step."""
+    import pickle
+
+    learned = {"ppo", "maskable-ppo", "recurrent-ppo", "torch-ppo"}  # need a trained model
+    for name in sorted(set(agents.available_agents()) - learned - {"fixed"}):
+        agent = agents.make_agent(name, "paper-1-v1", seed=1)
+        episode = agents.Rollout(agent, agents.make_env(agent, 3), seed=0)
+        for _ in episode.run(3):
+            pass
+        copy = pickle.loads(pickle.dumps(agent))
+        np.testing.assert_array_equal(copy.act(episode.obs), agent.act(episode.obs), err_msg=name)
