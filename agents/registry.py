@@ -54,6 +54,8 @@ class AgentSpec:
 
 
 _REGISTRY: dict[str, AgentSpec] = {}
+#: The names this package registers (set below): each keeps its meaning in every process.
+_SHIPPED: frozenset[str] = frozenset()
 
 
 def register_agent(
@@ -65,7 +67,18 @@ def register_agent(
     **preset: Any,
 ) -> None:
     """Register an agent class (with preset parameters) under ``name``; ``NAME:ARGUMENT`` sets
-    its parameter ``argument`` to ``argument_type(ARGUMENT)``."""
+    its parameter ``argument`` to ``argument_type(ARGUMENT)``. A name of your own may be
+    registered again (the last class wins: a notebook's cell run twice); a shipped agent's name
+    is refused, as an installed package's entry point of that name is skipped."""
+    if not (isinstance(cls, type) and issubclass(cls, Agent)):
+        raise TypeError(f"register_agent: cls must be a subclass of agents.Agent, got {cls!r}")
+    if not isinstance(name, str) or not name.strip() or "," in name:
+        raise ValueError(f"register_agent: name must be a non-empty string without commas, got {name!r}")
+    if name in _SHIPPED:
+        raise ValueError(
+            f"register_agent: {name!r} is a shipped agent and keeps its meaning; register yours under "
+            "another name"
+        )
     _REGISTRY[name] = AgentSpec(cls, preset, summary, argument, argument_type)
 
 
@@ -133,6 +146,7 @@ for _name, (_tx, _rx) in PAPER_FIXED.items():
         tx=_tx,
         rx=_rx,
     )
+_SHIPPED = frozenset(_REGISTRY)
 
 
 #: The entry-point group through which installed packages add agents by name.

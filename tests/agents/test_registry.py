@@ -50,3 +50,37 @@ def test_registry_errors_list_what_exists():
 def test_bad_agent_parameters_are_named(name, params, message):
     with pytest.raises(ValueError, match=message):
         agents.make_agent(name, PAPER, **params)
+
+
+def test_register_agent_refuses_what_is_no_agent_class_and_keeps_the_shipped_names():
+    """It took any object (make_agent then failed, or called it) and replaced a shipped agent for
+    the whole process: ``register_agent("ucb1", Mine)`` would have benchmarked Mine as UCB1. A
+    name of one's own may be registered again, the last class winning (a notebook cell run twice)."""
+    from agents.registry import _REGISTRY, _SHIPPED
+    from agents.ucb import UCB1
+
+    for cls in (3, dict, UCB1(load_scenario("paper-1-v1"))):
+        with pytest.raises(TypeError, match=r"cls must be a subclass of agents\.Agent, got "):
+            agents.register_agent("mine", cls)
+    for name in ("", " ", "a,b", 3):
+        with pytest.raises(ValueError, match="name must be a non-empty string without commas"):
+            agents.register_agent(name, UCB1)
+    assert {"mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "fix2", "best"} <= _SHIPPED
+    for shipped in sorted(_SHIPPED):
+        with pytest.raises(ValueError, match=f"'{shipped}' is a shipped agent and keeps its meaning"):
+            agents.register_agent(shipped, UCB1)
+    assert isinstance(agents.make_agent("ucb1", "paper-1-v1"), UCB1)
+    assert "mine" not in agents.available_agents()
+
+    class Mine(UCB1):
+        pass
+
+    class Again(UCB1):
+        pass
+
+    try:
+        agents.register_agent("mine", Mine)
+        agents.register_agent("mine", Again)
+        assert type(agents.make_agent("mine", "paper-1-v1")) is Again
+    finally:
+        _REGISTRY.pop("mine", None)
