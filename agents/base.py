@@ -169,15 +169,14 @@ class Agent(ABC):
         """Learn from the observation and reward of the step just taken; ``ValueError`` naming
         the key of an observation entry (or the reward) that is not finite."""
         batch, _ = self._episode_batch(obs, "update")
-        shape = tuple(getattr(reward, "shape", np.shape(reward)))
-        reward = self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,))
-        if reward.shape[0] != self.batch_size:
+        values = self.xp.reshape(self.xp.asarray(reward, dtype=np.float64), (-1,))
+        if values.shape[0] != self.batch_size:
             raise ValueError(
                 f"{self._label}: the reward must hold one value per trial ({self.batch_size}), "
-                f"got shape {shape}"
+                f"got shape {tuple(np.shape(reward))}"
             )
-        self._check_finite({**batch, "reward": reward})
-        self._update(batch, reward)
+        self._check_finite({**batch, "reward": values})
+        self._update(batch, values)
 
     def _check_finite(self, entries: Observation) -> None:
         xp = self.xp
