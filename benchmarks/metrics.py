@@ -44,6 +44,25 @@ def register_metric(name: str, function: Callable[[TrialMetrics, NDArray], NDArr
     EXTRA_METRICS[name] = function
 
 
+class OfMean:
+    """A metric that is a strictly increasing function of a mean over trials: ``outer(mean(w))``
+    (mean SINR in dB, a logarithm of the mean SINR). It is evaluated as any metric; on a few trials
+    :func:`benchmarks.uncertainty.estimates` gives it the interval of ``mean`` mapped through
+    ``outer``, as the bootstrap-t of a mean is not a bootstrap of the metric's own resamples."""
+
+    def __init__(self, mean: Callable[[NDArray], NDArray], outer: Callable[[NDArray], NDArray]) -> None:
+        self.mean = mean
+        self.outer = outer
+
+    def __call__(self, w: NDArray) -> NDArray:
+        return self.outer(self.mean(w))
+
+
+def decibels(ratio: NDArray) -> NDArray:
+    """``10 log10(ratio)``."""
+    return 10.0 * np.log10(ratio)
+
+
 def trial_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
     """Resampled trial indices ``(..., n)`` as weights ``(..., num_trials)`` that sum to 1
     (``arange(num_trials)`` gives the equal weights of the estimate)."""
@@ -113,11 +132,15 @@ class TrialMetrics:
     # ------------------------------------------------------------ SINR and regret
     def sinr_db_curve(self, w: NDArray) -> NDArray:
         """Average SINR (dB) at each step: ``10 log10(mean over trials of mu_t / (Ms Ns))``, (..., T)."""
-        return 10.0 * np.log10(w @ self.expected / self.channels)
+        return decibels(w @ self.expected / self.channels)
+
+    def mean_sinr(self, w: NDArray, window: Window = None) -> NDArray:
+        """The mean over trials and the window's steps of ``mu_t / (Ms Ns)`` (linear)."""
+        return w @ self.expected[:, self._span(window)].mean(axis=1) / self.channels
 
     def mean_sinr_db(self, w: NDArray, window: Window = None) -> NDArray:
-        """``10 log10`` of the mean over trials and the window's steps of ``mu_t / (Ms Ns)``."""
-        return 10.0 * np.log10(w @ self.expected[:, self._span(window)].mean(axis=1) / self.channels)
+        """:meth:`mean_sinr` in dB."""
+        return decibels(self.mean_sinr(w, window))
 
     def regret_curve(self, w: NDArray) -> NDArray:
         """Cumulative regret ``sum_{s <= t} (mu*_s - mu_s)``, mean over trials (eq13), (..., T)."""
@@ -197,7 +220,8 @@ class TrialMetrics:
         """The table's metrics, ``{name: w -> value}`` (ARMSE only with a tracker; the bound and
         ARMSE / bound only where the bound was recorded), then the registered ones
         (:func:`register_metric`)."""
-        metrics = {"asr": self.asr, "final_regret": self.final_regret, "mean_sinr_db": self.mean_sinr_db}
+        metrics = {"asr": self.asr, "final_regret": self.final_regret}
+        metrics["mean_sinr_db"] = OfMean(self.mean_sinr, decibels)
         if self.tracked:
             metrics["armse"] = self.armse
         if self.bounded:

@@ -193,12 +193,13 @@ def method_legend(trials: int) -> str:
     marks = ["† a percentile interval"]
     if trials < uncertainty.FEW_TRIALS:
         marks.append(
-            "§ a bias-corrected percentile interval (a root or a logarithm of a mean over fewer than "
-            f"{uncertainty.FEW_TRIALS} trials, which is biased: ARMSE, the bound, mean SINR)"
+            "§ a bias-corrected percentile interval (a root of a mean, or a difference of logarithms "
+            f"of means, over fewer than {uncertainty.FEW_TRIALS} trials, which is biased: ARMSE, the "
+            "bound, Δ mean SINR)"
         )
         marks.append(
             f"¶ a bootstrap-t interval (a mean over fewer than {uncertainty.FEW_TRIALS} trials: ASR, "
-            "final regret)"
+            "final regret; mean SINR, whose dB are those of its mean's interval)"
         )
     marks.append("‡ constant over trials (the interval is the value)")
     return f"Marks: {', '.join(marks)}; unmarked: BCa."

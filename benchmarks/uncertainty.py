@@ -15,17 +15,20 @@ method:
   :data:`BATCH_WEIGHTS` weights), where BCa is undefined, or where BCa's interval would exclude
   the value (a strongly skewed resampling distribution);
 * **bias-corrected percentile** on fewer than :data:`FEW_TRIALS` trials, for a metric
-  with a bias over trials (a root or a logarithm of a mean: ARMSE, the bound, their ratio, mean
-  SINR in dB): the percentile interval moved by twice the jackknife's estimate of the bias
-  (:func:`jackknife_bias`), from around the resamples' centre (the value plus the bias) to
-  around the value less the bias. ARMSE averages a root of a mean over trials at each of many
-  steps: the bias stays while the spread averages down, so on a few trials its resamples lie
-  below the value, and a percentile or BCa interval misses the ARMSE of many trials. A mean's
-  jackknife bias is zero but for rounding (:data:`NO_BIAS`);
+  with a bias over trials (a root of a mean: ARMSE, the bound, their ratio; a difference of
+  logarithms of means: paired differences of mean SINR in dB): the percentile interval moved by
+  twice the jackknife's estimate of the bias (:func:`jackknife_bias`), from around the
+  resamples' centre (the value plus the bias) to around the value less the bias. ARMSE averages a
+  root of a mean over trials at each of many steps: the bias stays while the spread averages
+  down, so on a few trials its resamples lie below the value, and a percentile or BCa interval
+  misses the ARMSE of many trials. A mean's jackknife bias is zero but for rounding
+  (:data:`NO_BIAS`);
 * **bootstrap-t** on fewer than :data:`FEW_TRIALS` trials, for a mean over trials (ASR, final
   regret, their paired differences; any metric whose every resample is the mean of its trials'
   own values, to rounding): each resample's ``t``, its distance from the value in its own
-  standard errors, gives the interval at 95 % (:func:`_bootstrap_t`). A mean of a few skewed
+  standard errors, gives the interval at 95 % (:func:`_bootstrap_t`). An increasing function of
+  a mean (:class:`~benchmarks.metrics.OfMean`: mean SINR in dB) gets its mean's bootstrap-t
+  interval mapped through the function (:func:`_through_means`). A mean of a few skewed
   trials (a policy's final regret) is covered less often by percentile and BCa intervals, which
   do not widen for the spread a few trials fail to show. Where a quantile of ``t`` is infinite
   (resamples of trials of one value: a share of successes on a few trials) the percentile or
@@ -59,7 +62,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from benchmarks.metrics import REMEMBERED_WEIGHTS, TrialMetrics, trial_weights
+from benchmarks.metrics import REMEMBERED_WEIGHTS, OfMean, TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
 #: The fewest trials a 95 % interval is given on. A bootstrap interval lies within the range of
@@ -115,12 +118,16 @@ EXPANDED = (
 #: How intervals below FEW_TRIALS are computed (:func:`jackknife_bias`, :func:`_bootstrap_t`).
 FEW = (
     f"below {FEW_TRIALS} trials a metric with a bias over trials (ARMSE, the bound and their "
-    "ratio, mean SINR in dB) has a bias-corrected percentile interval: the percentile interval moved "
-    "by twice its jackknife bias; and a mean over trials (ASR, final regret, their paired "
-    "differences) a bootstrap-t interval at 95 %"
+    "ratio, differences of mean SINR in dB) has a bias-corrected percentile interval: the percentile "
+    "interval moved by twice its jackknife bias; and a mean over trials (ASR, final regret, their "
+    "paired differences) a bootstrap-t interval at 95 %, and mean SINR in dB the bootstrap-t "
+    "interval of the mean SINR, in dB"
 )
 #: The methods below FEW_TRIALS besides the percentile or BCa interval (a coverage row's `method`).
-FEW_METHODS = "; bias-corrected percentile for a metric with a bias; bootstrap-t for a mean"
+FEW_METHODS = (
+    "; bias-corrected percentile for a metric with a bias; bootstrap-t for a mean, and for mean SINR in "
+    "dB its mean's"
+)
 #: What a table of fewer than MIN_INTERVAL_TRIALS trials says in place of its intervals.
 NO_INTERVALS = (
     f"No intervals: a 95 % interval needs {MIN_INTERVAL_TRIALS} trials or more (a bootstrap interval "
@@ -239,6 +246,8 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
     keys = list(metrics)
     if not keys:
         return {}
+    if num_trials < FEW_TRIALS and any(isinstance(metric, OfMean) for metric in metrics.values()):
+        return _through_means(metrics, num_trials, seed)
     equal = _shared_weights(np.arange(num_trials), num_trials)
     values = [float(metrics[key](equal)) for key in keys]
     if num_trials < MIN_INTERVAL_TRIALS:
@@ -291,6 +300,37 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
         )
         for i, key in enumerate(keys)
     }
+
+
+def _through_means(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> dict[Any, dict[str, Any]]:
+    """:func:`estimates` on fewer than :data:`FEW_TRIALS` trials of metrics some of which are
+    :class:`~benchmarks.metrics.OfMean`: each of those is judged beside its mean, and where the
+    mean gets the bootstrap-t its interval is the mean's mapped through ``outer`` (increasing, so
+    it holds the value). Elsewhere (a constant mean, an infinite ``t`` quantile, an end ``outer``
+    does not map) it keeps its own. The other metrics' intervals are those they get alone."""
+    means = {(OfMean, key): metric.mean for key, metric in metrics.items() if isinstance(metric, OfMean)}
+    judged = estimates(
+        {**{key: _plain(metric) for key, metric in metrics.items()}, **means}, num_trials, seed
+    )
+    out = {key: judged[key] for key in metrics}
+    for (_, key), mean in ((k, judged[k]) for k in means):
+        if not mean["method"].startswith(METHODS["bootstrap-t"]):
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            low, high = (float(metrics[key].outer(np.float64(end))) for end in mean["ci"])
+        if not (np.isnan(low) or np.isnan(high)):
+            value = out[key]["estimate"]
+            out[key] = {
+                "estimate": value,
+                "ci": [min(low, value), max(high, value)],
+                "method": mean["method"],
+            }
+    return out
+
+
+def _plain(metric: Metric) -> Metric:
+    """``metric`` as a plain function of the weights (an :class:`OfMean` judged as any metric)."""
+    return (lambda w: metric(w)) if isinstance(metric, OfMean) else metric
 
 
 def _bootstrap_t(
