@@ -277,6 +277,7 @@ class AgentParameterError(TypeError, ValueError):
 
 
 def _spec(name: str) -> AgentSpec:
+    _check_name(name)
     if name not in _REGISTRY:
         load_plugins()
     if name not in _REGISTRY and _is_reference(name):
@@ -289,10 +290,22 @@ def _spec(name: str) -> AgentSpec:
     return _REGISTRY[name]
 
 
+def _check_name(name: Any) -> None:
+    """An agent is named by a str: TypeError naming what was given instead."""
+    if isinstance(name, str):
+        return
+    if isinstance(name, type):
+        given = f"the class {name.__name__} (make it by calling it: {name.__name__}(scenario, seed=...))"
+    else:
+        given = f"{type(name).__name__} {name!r}"
+    raise TypeError(f"an agent's name must be a str, a registered name or module:Class, got {given}")
+
+
 def split_policy(policy: str) -> tuple[str, dict[str, Any]]:
     """``"ppo:runs/a/model.zip"`` -> ``("ppo", {"path": "runs/a/model.zip"})``,
     ``"tracking-ucb:0.5"`` -> ``("tracking-ucb", {"sinr_weight": 0.5})``;
     ``"ucb1"`` -> ``("ucb1", {})``."""
+    _check_name(policy)
     name, sep, argument = policy.partition(":")
     if name not in _REGISTRY and _is_reference(policy):
         load_plugins()

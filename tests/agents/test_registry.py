@@ -36,6 +36,33 @@ def test_registry_errors_list_what_exists():
 
 
 @pytest.mark.parametrize(
+    ("name", "message"),
+    [
+        (None, "got NoneType None"),
+        (3, "got int 3"),
+        (
+            agents.agent_class("ucb1"),
+            r"got the class UCB1 \(make it by calling it: UCB1\(scenario, seed=...\)\)",
+        ),
+    ],
+)
+def test_an_agent_named_by_anything_but_a_str_is_a_type_error_saying_what_was_given(name, message):
+    """make_agent, agent_parameters and split_policy take a name: anything else is one TypeError
+    naming it (None read ``.partition`` of it, an AttributeError), a class with how to make it."""
+    for call in (
+        lambda: agents.make_agent(name, PAPER),
+        lambda: agents.agent_parameters(name),
+        lambda: agents.split_policy(name),
+    ):
+        with pytest.raises(
+            TypeError, match=r"an agent's name must be a str, a registered name or module:Class, "
+        ):
+            call()
+        with pytest.raises(TypeError, match=message):
+            call()
+
+
+@pytest.mark.parametrize(
     ("name", "params", "message"),
     [
         ("mg-crb-cl", {"alpha": 1.5}, r"alpha must be in \[0, 1\], got 1.5"),
