@@ -342,4 +342,6 @@ def make_agent(name: str, scenario: Scenario | str, **params: Any) -> Agent:
     missing = sorted(set(required_parameters(name)) - set(params))
     if missing:
         raise AgentParameterError(f"agent {name!r} needs the parameter(s) {missing}")
-    return spec.cls(scenario, **spec.preset, **params)
+    agent = spec.cls(scenario, **spec.preset, **params)
+    agent.name = name  # its messages name it as it was made: fix1, not its class's "fixed"
+    return agent

@@ -111,3 +111,14 @@ def test_register_agent_refuses_what_is_no_agent_class_and_keeps_the_shipped_nam
         assert type(agents.make_agent("mine", "paper-1-v1")) is Again
     finally:
         _REGISTRY.pop("mine", None)
+
+
+@pytest.mark.parametrize("name", ["fix1", "plan-tracking-mcts", "ucb1"])
+def test_a_made_agent_is_named_as_it_was_made_in_its_messages(name):
+    """A preset of a shared class (fix1 of the fixed agent, plan-tracking-mcts of plan-tracking)
+    names itself as made: its errors said "fixed"."""
+    agent = agents.make_agent(name, PAPER, seed=0)
+    assert agent.name == name
+    obs = agents.Rollout(agent, agents.make_env(agent, 3), seed=0).obs  # reset, the oracle attached
+    with pytest.raises(ValueError, match=rf"^{name} was reset on 3 trial\(s\), and this observation holds 2"):
+        agent.act({key: value[:2] for key, value in obs.items()})
