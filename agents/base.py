@@ -205,6 +205,11 @@ class Agent(ABC):
     def _label(self) -> str:
         return self.name or type(self).__name__
 
+    def __repr__(self) -> str:
+        made = f"{type(self).__name__} {self._label!r} on {self.scenario.name!r}, seed {self.random.seed}"
+        episode = f"reset on {self.batch_size} trial(s), step {self.t}" if self.batch_size else "not reset"
+        return f"<{made}, {episode}>"
+
     def _episode_batch(self, obs: Observation, call: str) -> tuple[Observation, bool]:
         """The batched observation of a step of the episode ``reset`` began: as many trials."""
         if self.batch_size == 0:

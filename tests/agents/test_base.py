@@ -174,3 +174,13 @@ def test_every_agent_pickles_in_mid_episode_and_its_copy_acts_as_it_does():
             pass
         copy = pickle.loads(pickle.dumps(agent))
         np.testing.assert_array_equal(copy.act(episode.obs), agent.act(episode.obs), err_msg=name)
+
+
+def test_an_agents_repr_names_it_its_scenario_seed_and_episode():
+    """``repr(agent)`` says what a notebook needs to tell agents apart: its class and name, the
+    scenario it was made for, its seed, and how many trials it was reset on and its step."""
+    agent = agents.make_agent("fix1", "paper-1-v1", seed=3)
+    assert repr(agent) == "<FixedAgent 'fix1' on 'paper-1-v1', seed 3, not reset>"
+    episode = agents.Rollout(agent, agents.make_env(agent, 4), seed=0)
+    episode.step()
+    assert repr(agent) == "<FixedAgent 'fix1' on 'paper-1-v1', seed 3, reset on 4 trial(s), step 1>"
