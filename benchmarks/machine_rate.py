@@ -1,5 +1,5 @@
 """How fast this machine runs the project's step, against the developers' machine: the factor the
-time estimates (:func:`benchmarks.harness.estimate_seconds`) are scaled by.
+time estimates (:func:`benchmarks.resources.estimate_seconds`) are scaled by.
 
 ``mimo-radar-bench compile`` times :func:`workload_seconds` (the v1 env step with its tracker and
 bound, :data:`TRIALS` trials of a random policy, :data:`STEPS` steps after a warm-up, in this

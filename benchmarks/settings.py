@@ -23,7 +23,7 @@ from mimo_radar_env.envs.options import option_choices, option_help, option_name
 from mimo_radar_env.envs.versions import version_conflict
 
 from .errors import BenchError
-from .harness import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
+from .resources import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
 
 DEFAULT_TRIALS = 500
 #: The most Monte-Carlo trials a study takes (a million trials of the paper study take days).
@@ -63,11 +63,11 @@ class Settings:
         Monte-Carlo trials, steps per episode (None: the scenario's horizon) and the base seed
         (trial ``i`` uses ``seed + i``).
     shard_size : int or None
-        Trials per shard (None: :func:`benchmarks.harness.auto_shard_size` for the workers and
+        Trials per shard (None: :func:`benchmarks.resources.auto_shard_size` for the workers and
         policies).
     workers, threads, backend, address
         The cores the local workers use, the compute threads of each worker process (None: chosen
-        from the policies' declared costs, :func:`benchmarks.harness.choose_threads`),
+        from the policies' declared costs, :func:`benchmarks.resources.choose_threads`),
         ``"local"`` or ``"ray"``, and the Ray cluster's address.
     progress, figures : bool
         A progress bar; the PNG figures.

@@ -30,7 +30,8 @@ from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.extras import require
 from mimo_radar_env.wrappers.flat import action_form
 
-from .harness import CONFIG_FILE, HarnessError, RunInterrupted, check_device, duration, output_lock
+from .harness import CONFIG_FILE, HarnessError, RunInterrupted, check_device, output_lock
+from .resources import duration
 from .training_log import CURVE_FIGURE, CURVE_FILE, META_FILE, LearningCurve
 
 _NOT_FOR_PPO = {"n_envs", "n_timesteps", "normalize"}

@@ -930,7 +930,7 @@ def rl_values(docs: Path, folder: str = "rl") -> dict[str, str]:
     ``sweep.T.difference`` (m), ``sweep.T.trained`` (T rounded up to whole rollouts, as trained),
     ``sweep.T.steps-per-trial``, and against best-tracking
     ``sweep.T.best-tracking`` (better, worse, same) with its ``.difference`` (m)."""
-    from ..harness import duration
+    from ..resources import duration
 
     judged = read_json(docs, f"{folder}/rl.json")
     timing = read_json(docs, f"{folder}/timing.json")
@@ -2083,7 +2083,7 @@ def planning_values(docs: Path) -> dict[str, str]:
     difference (m); per centralised study N, ``bound.N.best`` the best policy, ``bound.N.ratio``
     its ARMSE over the best achievable bound and ``bound.N.within`` (within or not shown within
     ``bound-margin`` %)."""
-    from ..harness import duration
+    from ..resources import duration
 
     runs = read_json(docs, "planning/planning.json")
     timing = read_json(docs, "planning/timing.json")

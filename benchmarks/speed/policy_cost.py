@@ -14,7 +14,7 @@ in one more step (traced apart: tracing slows a small batch's step several times
 beside the memory the env and the policy declare per trial (``memory_parts``,
 ``agents.costs.memory_per_trial``): the ratio ``measured / declared`` is at most 1 when the
 declarations are upper estimates. Beside the time, the time the harness estimates from the
-declared operations (``benchmarks.harness.estimate_seconds`` for one shard of that many trials).
+declared operations (``benchmarks.resources.estimate_seconds`` for one shard of that many trials).
 The smallest trial count shows the per-step overhead, the larger one each trial's own work.
 Index policies use the exact solver where the smaller side has at most 200,000 subsets and
 ``alternating`` beyond (at 64 x 64).
@@ -39,7 +39,7 @@ from mimo_radar_env.core.compiled import with_threads
 from mimo_radar_env.core.superarm import is_exact_affordable
 from mimo_radar_env.envs.cost import memory_parts
 
-from ..harness import estimate_seconds
+from ..resources import estimate_seconds
 
 #: (M, N, Ms, Ns) of the layouts measured.
 LAYOUTS = ((4, 6, 2, 3), (16, 16, 4, 4), (64, 64, 4, 4))

@@ -47,7 +47,7 @@ from typing import Any
 
 import numpy as np
 
-from ..harness import makespan
+from ..resources import makespan
 from ..study import machine
 from . import t_interval, write_json
 
@@ -133,7 +133,8 @@ def _with_sizes(payload: dict[str, Any], sizes: int | dict[str, int] | None) -> 
 def queue_order(out: Path, sizes: int | dict[str, int] | None = None) -> list[tuple[str, str, int, int]]:
     """The harness's order of a study's tasks (run after run, the longest declared cost first),
     as (run, policy, shard, trials), with the runs' shard sizes replaced by ``sizes``."""
-    from ..harness import RunConfig, longest_first
+    from ..harness import RunConfig
+    from ..resources import longest_first
 
     order = []
     for config_file in sorted(out.glob("*/config.json")):
@@ -170,8 +171,9 @@ def predict(
     """The model's wall time for ``workers`` workers (module docstring), under each schedule:
     ``"uniform"``, every policy's trials in the same number of shards (:func:`auto_shard_size`,
     the harness's default before the cost-aware one), and ``"by cost"``, the harness's shard
-    sizes (:func:`benchmarks.harness.planned_shard_sizes`)."""
-    from ..harness import RunConfig, auto_shard_size, planned_shard_sizes
+    sizes (:func:`benchmarks.resources.planned_shard_sizes`)."""
+    from ..harness import RunConfig
+    from ..resources import auto_shard_size, planned_shard_sizes
 
     payload = json.loads(next(out.glob("*/config.json")).read_text())
     policies = payload["policies"]

@@ -9,7 +9,7 @@ user does, twice, each into a fresh folder, with ``--workers`` all the cores: wi
 without (the harness chooses the threads from the declared costs and says so). From the shards
 it reads the task's compute seconds, and checks that both runs wrote the same numbers, bit for
 bit. Beside the measured speed-up of the task it gives the one the harness predicted
-(:func:`benchmarks.harness.choose_threads`).
+(:func:`benchmarks.resources.choose_threads`).
 
 It also gives the harness's choice, by the declared costs alone (nothing run), for the v1
 claims study's scenario 1 (the strong-scaling study) at 2 to 16 cores, with the shards the
@@ -57,7 +57,8 @@ def shard_fields(out: Path) -> dict[str, np.ndarray]:
 def predicted(out: Path, workers: int) -> dict[str, float]:
     """The harness's choice for the run's tasks on ``workers`` cores: its threads and its
     predicted speed-up of the run over one thread per worker."""
-    from ..harness import RunConfig, choose_threads, longest_first
+    from ..harness import RunConfig
+    from ..resources import choose_threads, longest_first
 
     config = RunConfig(**json.loads((out / "config.json").read_text()))
     todo = [(0, policy, shard) for policy, shard in longest_first(config, config.tasks())]
@@ -106,7 +107,8 @@ def plans(cores: tuple[int, ...] = (2, 4, 8, 16)) -> list[dict[str, Any]]:
     machine's speed where ``compile`` measured it; the threads chosen do not depend on it)."""
     from mimo_radar_env import VERSIONS
 
-    from ..harness import PAPER_POLICIES, choose_threads, longest_first, make_config
+    from ..harness import PAPER_POLICIES, make_config
+    from ..resources import choose_threads, longest_first
     from ..settings import paper_study_params
 
     rows = []

@@ -34,7 +34,7 @@ from scipy.optimize import differential_evolution
 
 from mimo_radar_env import RadarModel, Scenario, load_scenario
 
-from .. import harness
+from .. import harness, resources
 from ..errors import BenchError
 from ..settings import integer
 from ..study import Study, configure, machine, write_timing
@@ -255,7 +255,7 @@ class LayoutSearch(Study):
         seconds = layouts * per_layout / settings.workers
         if cards:
             runs = claims.paper_runs(v1_layout().scenarios(), settings.out / "v1")
-            per_card = sum(harness.run_seconds(c, settings.workers) for c in configure(runs, settings))
+            per_card = sum(resources.run_seconds(c, settings.workers) for c in configure(runs, settings))
             seconds += cards * per_card
         return seconds
 
@@ -269,7 +269,7 @@ class LayoutSearch(Study):
             )
         cards = len(set(ranks)) + (0 if self.args.no_v1_scorecard else 1)
         seconds = self.estimate_seconds(cards)
-        harness.check_time(
+        resources.check_time(
             seconds,
             f"the search and its {cards} scorecard(s)",
             "mg-crb-cl" if cards else "the search",

@@ -399,7 +399,8 @@ class RLStudy(Study):
         import sys
         import time
 
-        from ..harness import HarnessError, duration, output_folder
+        from ..harness import HarnessError, output_folder
+        from ..resources import duration
         from ..study import configure, execute, machine, write_timing
 
         start, load_before = time.perf_counter(), machine()

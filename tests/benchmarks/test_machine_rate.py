@@ -5,7 +5,7 @@ import json
 
 import pytest
 
-from benchmarks import harness, machine_rate
+from benchmarks import machine_rate, resources
 from mimo_radar_env import EnvOptions, load_scenario
 
 
@@ -18,19 +18,19 @@ def rate_file(tmp_path, monkeypatch):
 
 def _estimate() -> float:
     sc = load_scenario("paper-1-v1")
-    return harness.estimate_seconds(sc, EnvOptions(), {"ucb1": 1e-5}, trials=100, steps=50, shard_size=50)
+    return resources.estimate_seconds(sc, EnvOptions(), {"ucb1": 1e-5}, trials=100, steps=50, shard_size=50)
 
 
 def test_a_kept_factor_scales_every_estimate_and_says_so(rate_file):
     assert machine_rate.factor() is None  # none kept yet: the developers' speed
-    before, said = _estimate(), harness.estimated_where()
+    before, said = _estimate(), resources.estimated_where()
     assert "like the developers'" in said
     rate_file.parent.mkdir(parents=True)
     seconds = 2.5 * machine_rate.REFERENCE_SECONDS
     rate_file.write_text(json.dumps({"factor": 2.5, "seconds": seconds}))
     assert machine_rate.factor() == pytest.approx(2.5)
     assert _estimate() == pytest.approx(2.5 * before)
-    assert "on this machine" in harness.estimated_where()
+    assert "on this machine" in resources.estimated_where()
 
 
 def test_a_kept_time_is_read_against_todays_reference(rate_file, monkeypatch):

@@ -6,7 +6,8 @@ import pytest
 
 import agents
 from benchmarks import harness
-from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many, task_seconds
+from benchmarks.harness import HarnessError, load_per_trial, make_config, run, run_many
+from benchmarks.resources import task_seconds
 from mimo_radar_env.envs.cost import seconds_per_trial_step
 
 

@@ -126,7 +126,8 @@ def test_the_study_written_in_the_docs_runs_as_written(tmp_path):
 def test_without_a_shard_size_the_trials_are_split_over_the_workers_and_a_resumed_run_keeps_its_own(
     tmp_path,
 ):
-    from benchmarks.harness import MAX_AUTO_SHARD_SIZE, auto_shard_size, make_config, run
+    from benchmarks.harness import make_config, run
+    from benchmarks.resources import MAX_AUTO_SHARD_SIZE, auto_shard_size
 
     # one policy: the trials split evenly over the tasks at once, capped, never below one
     assert [auto_shard_size(t, w) for t, w in ((500, 2), (20, 2), (7, 2), (3, 8), (10_000, 2))] == [

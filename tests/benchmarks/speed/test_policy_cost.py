@@ -4,7 +4,7 @@ declaration, and the ratios it reports."""
 import pytest
 
 import agents
-from benchmarks.harness import STEP_OVERHEAD_SECONDS
+from benchmarks.resources import STEP_OVERHEAD_SECONDS
 from benchmarks.speed import policy_cost
 from mimo_radar_env import random_scenario
 from mimo_radar_env.envs.cost import seconds_per_trial_step
