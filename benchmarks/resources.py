@@ -112,6 +112,33 @@ def step_seconds(cost: StepCost, trials: int, threads: int = 1) -> float:
     return fixed + (per_trial - threaded) * trials + threaded * spread
 
 
+def estimate_seconds(
+    scenario: Scenario,
+    options: EnvOptions,
+    agent_trial_seconds: dict[str, float],
+    trials: int,
+    steps: int,
+    shard_size: int | Mapping[str, int],
+    parallel: int = 1,
+    agent_seconds: dict[str, float] | None = None,
+) -> float:
+    """A run's wall time, roughly: every (policy, shard) task takes, per step,
+    :data:`STEP_OVERHEAD_SECONDS` and the policy's own fixed time
+    (:func:`agents.costs.seconds_per_step`, ``agent_seconds``) plus each trial's share (the
+    env's, :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step`, and the policy's,
+    :func:`agents.costs.seconds_per_trial_step`, ``agent_trial_seconds``);
+    ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
+    machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`).
+    ``shard_size`` is every policy's, or each policy's (a mapping)."""
+    costs = step_costs(scenario, options, agent_trial_seconds, agent_seconds)
+    sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(costs, shard_size)
+    shards = {policy: -(-trials // sizes[policy]) for policy in costs}
+    total = sum(
+        steps * (shards[p] * fixed + trials * per_trial) for p, (fixed, per_trial, _) in costs.items()
+    )
+    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, sum(shards.values())))
+
+
 def auto_shard_size(trials: int, parallel: int, policies: int = 1) -> int:
     """The shard size when none is given: each policy's trials cut into the fewest shards that
     make the run's tasks a multiple of the ``parallel`` tasks that run at once
@@ -214,33 +241,6 @@ def fit_shard_size(
         )
         return fits
     return shard_size
-
-
-def estimate_seconds(
-    scenario: Scenario,
-    options: EnvOptions,
-    agent_trial_seconds: dict[str, float],
-    trials: int,
-    steps: int,
-    shard_size: int | Mapping[str, int],
-    parallel: int = 1,
-    agent_seconds: dict[str, float] | None = None,
-) -> float:
-    """A run's wall time, roughly: every (policy, shard) task takes, per step,
-    :data:`STEP_OVERHEAD_SECONDS` and the policy's own fixed time
-    (:func:`agents.costs.seconds_per_step`, ``agent_seconds``) plus each trial's share (the
-    env's, :func:`~mimo_radar_env.envs.cost.seconds_per_trial_step`, and the policy's,
-    :func:`agents.costs.seconds_per_trial_step`, ``agent_trial_seconds``);
-    ``parallel`` tasks run at once; all of it at the developers' machine's speed, scaled by this
-    machine's where ``mimo-radar-bench compile`` measured it (:func:`benchmarks.machine_rate.factor`).
-    ``shard_size`` is every policy's, or each policy's (a mapping)."""
-    costs = step_costs(scenario, options, agent_trial_seconds, agent_seconds)
-    sizes = shard_size if isinstance(shard_size, Mapping) else dict.fromkeys(costs, shard_size)
-    shards = {policy: -(-trials // sizes[policy]) for policy in costs}
-    total = sum(
-        steps * (shards[p] * fixed + trials * per_trial) for p, (fixed, per_trial, _) in costs.items()
-    )
-    return total * (machine_rate.factor() or 1.0) / max(1, min(parallel, sum(shards.values())))
 
 
 def task_seconds(config: RunConfig, threads: int = 1) -> dict[tuple[str, int], float]:
