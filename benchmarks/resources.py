@@ -199,8 +199,8 @@ def plan_shard_sizes(
 
 
 def planned_shard_sizes(config: RunConfig, parallel: int) -> dict[str, int]:
-    """The shard sizes :func:`make_config` plans for ``config``'s run with ``parallel`` tasks at
-    once (without ``shard_size``, before the memory check)."""
+    """The shard sizes :func:`~benchmarks.harness.make_config` plans for ``config``'s run with
+    ``parallel`` tasks at once (without ``shard_size``, before the memory check)."""
     return plan_shard_sizes(config.step_costs, config.trials, parallel)
 
 
@@ -214,8 +214,8 @@ def fit_shard_size(
 ) -> int:
     """The largest shard size, at most ``shard_size``, whose ``workers`` concurrent tasks fit
     in :data:`MEMORY_FRACTION` of the machine's memory (each task: the env's memory for its
-    trials plus its policy's per trial, :meth:`agents.Agent.memory_per_trial`). Says when it
-    lowers the shard size; raises :class:`HarnessError` with the estimate when one trial is
+    trials plus its policy's per trial, :func:`agents.costs.memory_per_trial`). Says when it
+    lowers the shard size; raises :class:`~benchmarks.errors.HarnessError` with the estimate when one trial is
     already too much."""
     available = machine_memory() if available is None else available
     if available is None:  # pragma: no cover - not POSIX
@@ -308,8 +308,8 @@ def check_time(
     seconds: float, where: str, slowest: str, max_hours: float | None, say: Callable[[str], None] = print
 ) -> None:
     """Says a run's estimated time ``seconds`` (:func:`estimate_seconds`; ``where`` describes the
-    run) when it is a minute or more; raises :class:`HarnessError` with the estimate and what to
-    change when it exceeds ``max_hours`` (``None``: no limit)."""
+    run) when it is a minute or more; raises :class:`~benchmarks.errors.HarnessError` with the
+    estimate and what to change when it exceeds ``max_hours`` (``None``: no limit)."""
     if max_hours is not None and seconds > 3600 * max_hours:
         raise HarnessError(
             f"{where} would take about {duration(seconds)} (the slowest policy: {slowest!r}), more than "
