@@ -2,7 +2,7 @@
 
 The paper's layout figure is missing. This search looks for a layout, inside the paper's
 100 km x 100 km region, that satisfies the hard constraints of the paper's text and under which
-the most claims of :mod:`benchmarks.claims` hold. It is a calibration against the paper's
+the most claims of :mod:`benchmarks.studies.claims` hold. It is a calibration against the paper's
 text, not the paper's layout. Three stages, each cheaper per candidate than the next:
 
 1. **Constraints and noise-free screen** (every candidate, milliseconds each): inside the

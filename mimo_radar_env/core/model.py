@@ -1,6 +1,6 @@
 """The radar model of a scenario: every constant the simulation needs, computed once.
 
-:class:`RadarModel` turns a :class:`~mimo_radar_env.scenario.Scenario` into
+:class:`RadarModel` turns a :class:`~mimo_radar_env.scenarios.scenario.Scenario` into
 arrays: station positions, the per-channel SINR gain including the scenario
 constant ``C`` (docs/model.md, section 4), the per-target minimum SINR of eq32, the maneuver
 transition matrices and the noise-free nominal trajectories.
