@@ -1,6 +1,7 @@
 """Every cross-reference of the packages' docstrings to a project name (``:func:`agents.make_env```,
 ``:class:`~mimo_radar_env.Scenario```...) names something that exists: the site renders a missing
-one as plain text without a warning, so a module moved or renamed left its old name behind."""
+one as plain text without a warning, so a module moved or renamed left its old name behind. So
+does every dotted project name the docs' pages and the README quote as code."""
 
 import importlib
 import inspect
@@ -14,6 +15,9 @@ PACKAGES = ("mimo_radar_env", "agents", "benchmarks")
 ROLE = re.compile(r":(?:func|meth|class|data|attr|mod|exc):`~?((?:" + "|".join(PACKAGES) + r")\.[\w.]+)`")
 #: Modules that import an optional dependency on import (tested where it is installed).
 OPTIONAL = ("mimo_radar_env.torchrl_env",)
+#: Dotted names the pages quote that are no Python names.
+NOT_NAMES = {"mimo_radar_env.agents": "the entry-point group of agents of installed packages"}
+CODE = re.compile(r"`((?:" + "|".join(PACKAGES) + r")\.[\w.]+)(?:\([^`]*\))?`")
 
 
 def _targets() -> dict[str, list[str]]:
@@ -22,6 +26,14 @@ def _targets() -> dict[str, list[str]]:
         for path in sorted((ROOT / package).rglob("*.py")):
             for match in ROLE.finditer(path.read_text()):
                 found.setdefault(match.group(1).rstrip("."), []).append(str(path.relative_to(ROOT)))
+    return found
+
+
+def _quoted() -> dict[str, list[str]]:
+    found: dict[str, list[str]] = {}
+    for path in [*sorted((ROOT / "docs").glob("*.md")), ROOT / "README.md"]:
+        for match in CODE.finditer(path.read_text()):
+            found.setdefault(match.group(1).rstrip("."), []).append(str(path.relative_to(ROOT)))
     return found
 
 
@@ -54,3 +66,10 @@ def test_the_rule_finds_what_exists_and_what_does_not():
 @pytest.mark.parametrize("target", sorted(t for t in _targets() if not t.startswith(OPTIONAL)))
 def test_every_docstring_link_to_the_project_names_what_exists(target):
     assert _resolves(target), f"{target} (in {sorted(set(_targets()[target]))}) names nothing that exists"
+
+
+@pytest.mark.parametrize(
+    "name", sorted(n for n in _quoted() if not n.startswith(OPTIONAL) and n not in NOT_NAMES)
+)
+def test_every_project_name_the_docs_quote_exists(name):
+    assert _resolves(name), f"{name} (in {sorted(set(_quoted()[name]))}) names nothing that exists"
