@@ -243,11 +243,17 @@ def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> 
     """:func:`estimate` of each of ``metrics``, by key, from one bootstrap of all of them: the
     same numbers as one call each (every call resamples the trials with ``seed``, and scipy
     treats each output of a vector-valued statistic on its own), drawn and set up once."""
+    if num_trials < FEW_TRIALS and any(isinstance(metric, OfMean) for metric in metrics.values()):
+        return _through_means(metrics, num_trials, seed)
+    return _bootstrapped(metrics, num_trials, seed)
+
+
+def _bootstrapped(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> dict[Any, dict[str, Any]]:
+    """:func:`estimates`, each metric judged on its own resamples (an
+    :class:`~benchmarks.metrics.OfMean` as any metric)."""
     keys = list(metrics)
     if not keys:
         return {}
-    if num_trials < FEW_TRIALS and any(isinstance(metric, OfMean) for metric in metrics.values()):
-        return _through_means(metrics, num_trials, seed)
     equal = _shared_weights(np.arange(num_trials), num_trials)
     values = [float(metrics[key](equal)) for key in keys]
     if num_trials < MIN_INTERVAL_TRIALS:
@@ -309,9 +315,7 @@ def _through_means(metrics: Mapping[Any, Metric], num_trials: int, seed: int) ->
     it holds the value). Elsewhere (a constant mean, an infinite ``t`` quantile, an end ``outer``
     does not map) it keeps its own. The other metrics' intervals are those they get alone."""
     means = {(OfMean, key): metric.mean for key, metric in metrics.items() if isinstance(metric, OfMean)}
-    judged = estimates(
-        {**{key: _plain(metric) for key, metric in metrics.items()}, **means}, num_trials, seed
-    )
+    judged = _bootstrapped({**metrics, **means}, num_trials, seed)
     out = {key: judged[key] for key in metrics}
     for (_, key), mean in ((k, judged[k]) for k in means):
         if not mean["method"].startswith(METHODS["bootstrap-t"]):
@@ -326,11 +330,6 @@ def _through_means(metrics: Mapping[Any, Metric], num_trials: int, seed: int) ->
                 "method": mean["method"],
             }
     return out
-
-
-def _plain(metric: Metric) -> Metric:
-    """``metric`` as a plain function of the weights (an :class:`OfMean` judged as any metric)."""
-    return (lambda w: metric(w)) if isinstance(metric, OfMean) else metric
 
 
 def _bootstrap_t(
