@@ -20,21 +20,18 @@ NOT_NAMES = {"mimo_radar_env.agents": "the entry-point group of agents of instal
 CODE = re.compile(r"`((?:" + "|".join(PACKAGES) + r")\.[\w.]+)(?:\([^`]*\))?`")
 
 
-def _targets() -> dict[str, list[str]]:
+def _found(pattern: re.Pattern[str], paths: list[Path]) -> dict[str, list[str]]:
+    """Each project name ``pattern`` finds in ``paths``, with the files it stands in."""
     found: dict[str, list[str]] = {}
-    for package in PACKAGES:
-        for path in sorted((ROOT / package).rglob("*.py")):
-            for match in ROLE.finditer(path.read_text()):
-                found.setdefault(match.group(1).rstrip("."), []).append(str(path.relative_to(ROOT)))
-    return found
-
-
-def _quoted() -> dict[str, list[str]]:
-    found: dict[str, list[str]] = {}
-    for path in [*sorted((ROOT / "docs").glob("*.md")), ROOT / "README.md"]:
-        for match in CODE.finditer(path.read_text()):
+    for path in paths:
+        for match in pattern.finditer(path.read_text()):
             found.setdefault(match.group(1).rstrip("."), []).append(str(path.relative_to(ROOT)))
     return found
+
+
+#: The docstrings' link targets, and the names the pages quote as code.
+TARGETS = _found(ROLE, [path for package in PACKAGES for path in sorted((ROOT / package).rglob("*.py"))])
+QUOTED = _found(CODE, [*sorted((ROOT / "docs").glob("*.md")), ROOT / "README.md"])
 
 
 def _resolves(target: str) -> bool:
@@ -63,13 +60,13 @@ def test_the_rule_finds_what_exists_and_what_does_not():
     assert not _resolves("benchmarks.claims") and not _resolves("agents.Agent.memory_per_trial")
 
 
-@pytest.mark.parametrize("target", sorted(t for t in _targets() if not t.startswith(OPTIONAL)))
+@pytest.mark.parametrize("target", sorted(t for t in TARGETS if not t.startswith(OPTIONAL)))
 def test_every_docstring_link_to_the_project_names_what_exists(target):
-    assert _resolves(target), f"{target} (in {sorted(set(_targets()[target]))}) names nothing that exists"
+    assert _resolves(target), f"{target} (in {sorted(set(TARGETS[target]))}) names nothing that exists"
 
 
 @pytest.mark.parametrize(
-    "name", sorted(n for n in _quoted() if not n.startswith(OPTIONAL) and n not in NOT_NAMES)
+    "name", sorted(n for n in QUOTED if not n.startswith(OPTIONAL) and n not in NOT_NAMES)
 )
 def test_every_project_name_the_docs_quote_exists(name):
-    assert _resolves(name), f"{name} (in {sorted(set(_quoted()[name]))}) names nothing that exists"
+    assert _resolves(name), f"{name} (in {sorted(set(QUOTED[name]))}) names nothing that exists"
