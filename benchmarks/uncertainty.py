@@ -55,7 +55,7 @@ from __future__ import annotations
 import functools
 import time
 import warnings
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from itertools import combinations
 from typing import Any
 
@@ -436,13 +436,20 @@ def policy_estimates(metrics: TrialMetrics, seed: int = 0) -> dict[str, Any]:
     return out
 
 
-def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
-    """``{"A - B": {metric: {"estimate", "ci", "method"}}}`` for every pair of policies, paired on
-    trials."""
+#: The metrics policies are compared on in pairs (:func:`paired_differences`), and whose
+#: coverage :func:`trial_coverage` measures: ARMSE (a root of a mean over trials at each step,
+#: biased low on few trials) beside the means over trials.
+COVERAGE_METRICS = ("armse", "asr", "final_regret", "mean_sinr_db")
+
+
+def difference_metrics(all_metrics: Mapping[str, TrialMetrics]) -> dict[tuple[str, str], Metric]:
+    """``{("A - B", metric): difference}`` for every pair of policies and every metric of
+    :data:`COVERAGE_METRICS` both report: the paired difference of the two metrics on the same
+    trial weights."""
     differences: dict[tuple[str, str], Metric] = {}
     for a, b in combinations(all_metrics, 2):
         fa_all, fb_all = all_metrics[a].scalar_metrics(), all_metrics[b].scalar_metrics()
-        for name in ("armse", "asr", "final_regret", "mean_sinr_db"):
+        for name in COVERAGE_METRICS:
             if name not in fa_all or name not in fb_all:
                 continue
 
@@ -450,6 +457,13 @@ def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -
                 return fa(w) - fb(w)
 
             differences[f"{a} - {b}", name] = difference
+    return differences
+
+
+def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
+    """``{"A - B": {metric: {"estimate", "ci", "method"}}}`` for every pair of policies, paired on
+    trials."""
+    differences = difference_metrics(all_metrics)
     out: dict[str, dict[str, dict]] = {f"{a} - {b}": {} for a, b in combinations(all_metrics, 2)}
     if not differences:
         return out
@@ -555,11 +569,6 @@ def seed_coverage(
     return {"groups": groups, "repeats": repeats, "seed": seed, "method": SEED_METHOD, "coverage": rows}
 
 
-#: The metrics :func:`trial_coverage` measures: ARMSE (a root of a mean over trials at each step,
-#: biased low on few trials) beside the means over trials.
-COVERAGE_METRICS = ("armse", "asr", "final_regret", "mean_sinr_db")
-
-
 def trial_coverage(
     population: Mapping[str, TrialMetrics],
     counts: tuple[int, ...] = (20, 50, 200),
@@ -568,14 +577,16 @@ def trial_coverage(
     say: Callable[[str], None] = lambda line: None,
 ) -> dict[str, Any]:
     """How often the interval of a run of ``n`` trials contains the population's value, for each
-    of ``counts`` and each policy's :data:`COVERAGE_METRICS`: the population is a run's trials
-    (``population``, every policy on the same trials), each of ``repeats`` studies draws ``n`` of
-    them with replacement (the same draw for every policy; each count's draws a stream of their
-    own, so a count's row does not depend on the others) and judges its intervals as a run of
-    ``n`` trials would (:func:`estimates`). A metric constant over the drawn trials is left out
-    of that study's count, and ARMSE of a run without a tracker. Each row's ``extended`` counts
-    the studies whose interval was extended to its value. ``say`` gets a line as
-    each count is done."""
+    of ``counts``, each policy's :data:`COVERAGE_METRICS` and each pair's paired differences of
+    them (:func:`paired_differences`): the population is a run's trials (``population``, every
+    policy on the same trials), each of ``repeats`` studies draws ``n`` of them with replacement
+    (the same draw for every policy; each count's draws a stream of their own, so a count's row
+    does not depend on the others) and judges its intervals as a run of ``n`` trials would
+    (:func:`estimates`). A metric constant over the drawn trials is left out of that study's
+    count, and ARMSE of a run without a tracker. Each row's ``extended`` counts the studies
+    whose interval was extended to its value; its ``differences`` holds the same three counts
+    for the paired differences, keyed ``"A - B.metric"``. ``say`` gets a line as each count is
+    done."""
     size = next(iter(population.values())).num_trials
     truth = {  # ARMSE only where a tracker ran
         (p, k): float(m.scalar_metrics()[k](m.equal()))
@@ -583,34 +594,55 @@ def trial_coverage(
         for k in COVERAGE_METRICS
         if k in m.scalar_metrics()
     }
+    equal = next(iter(population.values())).equal()
+    truth_of_differences = {key: float(d(equal)) for key, d in difference_metrics(population).items()}
     rows = []
     for n in counts:
         started = time.perf_counter()
         rng = np.random.default_rng([seed, n])
-        covered, judged, extended = (dict.fromkeys(truth, 0) for _ in range(3))
+        counted = {key: [0, 0, 0] for key in (*truth, *truth_of_differences)}  # judged, covered, extended
         for r in range(repeats):
             drawn = rng.integers(0, size, n)
-            for policy, full in population.items():
-                metrics = full.of_trials(drawn).scalar_metrics()
+            runs = {policy: full.of_trials(drawn) for policy, full in population.items()}
+            for policy, run in runs.items():
+                metrics = run.scalar_metrics()
                 found = estimates({k: metrics[k] for p, k in truth if p == policy}, n, seed=r)
-                for k, judged_k in found.items():
-                    if judged_k["method"] != METHODS["constant"]:
-                        judged[policy, k] += 1
-                        covered[policy, k] += judged_k["ci"][0] <= truth[policy, k] <= judged_k["ci"][1]
-                        extended[policy, k] += judged_k["method"] in EXTENDED
-        kept = [(p, k) for p, k in truth if judged[p, k]]
+                _tally(counted, {(policy, k): judged for k, judged in found.items()}, truth)
+            _tally(counted, estimates(difference_metrics(runs), n, seed=r), truth_of_differences)
         rows.append(
             {
                 "trials": n,
                 "method": _resampled_method(n) + (FEW_METHODS if n < FEW_TRIALS else ""),
                 "confidence_level": confidence_level(n),
-                "coverage": {f"{p}.{k}": covered[p, k] / judged[p, k] for p, k in kept},
-                "studies": {f"{p}.{k}": judged[p, k] for p, k in kept},
-                "extended": {f"{p}.{k}": extended[p, k] for p, k in kept},
+                **_rates(counted, truth),
+                "differences": _rates(counted, truth_of_differences),
             }
         )
         say(f"{n} trials: {repeats} studies in {time.perf_counter() - started:.0f} s")
     return {"population_trials": size, "repeats": repeats, "seed": seed, "rows": rows}
+
+
+def _tally(
+    counted: dict[tuple[str, str], list[int]], found: Mapping[tuple[str, str], dict], truth: Mapping
+) -> None:
+    """Counts each interval of ``found`` that is not a constant's: judged, covering its ``truth``,
+    extended."""
+    for key, judged in found.items():
+        if judged["method"] != METHODS["constant"]:
+            counted[key][0] += 1
+            counted[key][1] += judged["ci"][0] <= truth[key] <= judged["ci"][1]
+            counted[key][2] += judged["method"] in EXTENDED
+
+
+def _rates(counted: dict[tuple[str, str], list[int]], keys: Iterable[tuple[str, str]]) -> dict[str, dict]:
+    """A row's ``coverage``, ``studies`` and ``extended``, keyed ``"policy.metric"``, of the
+    ``keys`` judged at least once."""
+    kept = {key: f"{key[0]}.{key[1]}" for key in keys if counted[key][0]}
+    return {
+        "coverage": {name: counted[key][1] / counted[key][0] for key, name in kept.items()},
+        "studies": {name: counted[key][0] for key, name in kept.items()},
+        "extended": {name: counted[key][2] for key, name in kept.items()},
+    }
 
 
 def run_coverage(

@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from .. import verdicts
+from .. import uncertainty, verdicts
 from ..errors import BenchError
 from ..report import (
     METHOD_LEGEND,
@@ -1062,7 +1062,12 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
     """How often the intervals of runs of fewer trials cover the value of the run they are drawn
     from (``python -m benchmarks.uncertainty --run DIR``, results/uncertainty/trial-coverage.json):
     ``armse.N``, ``means.N`` (ASR, final regret) and ``sinr.N`` (mean SINR), the lowest and the
-    highest rate over the policies on N trials, each with its Wilson interval; ``extended.N``, how many of
+    highest rate over the policies on N trials, each with its Wilson interval, and
+    ``pairs.armse.N``, ``pairs.means.N`` and ``pairs.sinr.N`` the same over the pairs' paired
+    differences (``pairs``, how many pairs; ``pairs.gap``, in points, how far the pairs' lowest
+    rate in a column is at most below the policies' from :data:`~benchmarks.uncertainty.FEW_TRIALS`
+    trials on; ``pairs.few``, below it, in how many columns and counts the pairs' lowest rate is
+    below the policies', and the largest such gap); ``extended.N``, how many of
     the ARMSE intervals on N trials were extended to their value, of how many; ``level.N``, the
     bootstrap's confidence level on N trials; ``population`` (its trials), ``scenario``,
     ``fusion`` and ``repeats``."""
@@ -1073,21 +1078,41 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
         "fusion": record["run"]["fusion"],
         "repeats": str(record["repeats"]),
     }
+    # how far each column's lowest rate of a pair is below a policy's, from FEW_TRIALS on and below
+    gaps: list[tuple[float, str, int]] = []
+    few_gaps: list[tuple[float, str, int]] = []
     for row in record["rows"]:
-        for key, names in (
-            ("armse", ("armse",)),
-            ("means", ("asr", "final_regret")),
-            ("sinr", ("mean_sinr_db",)),
-        ):
-            rates = {n: r for n, r in row["coverage"].items() if n.rsplit(".", 1)[1] in names}
-            lowest, highest = min(rates, key=rates.__getitem__), max(rates, key=rates.__getitem__)
-            table[f"{key}.{row['trials']}"] = " to ".join(
-                _rate_with_interval(rates[n], row["studies"][n]) for n in (lowest, highest)
-            )
+        lowest_of = {}
+        for prefix, counts in (("", row), ("pairs.", row["differences"])):
+            for key, names in (
+                ("armse", ("armse",)),
+                ("means", ("asr", "final_regret")),
+                ("sinr", ("mean_sinr_db",)),
+            ):
+                rates = {n: r for n, r in counts["coverage"].items() if n.rsplit(".", 1)[1] in names}
+                lowest, highest = min(rates, key=rates.__getitem__), max(rates, key=rates.__getitem__)
+                table[f"{prefix}{key}.{row['trials']}"] = " to ".join(
+                    _rate_with_interval(rates[n], counts["studies"][n]) for n in (lowest, highest)
+                )
+                lowest_of[prefix, key] = round(100 * rates[lowest], 1)  # as printed
+        for key in ("armse", "means", "sinr"):
+            gap = lowest_of["", key] - lowest_of["pairs.", key]
+            (gaps if row["trials"] >= uncertainty.FEW_TRIALS else few_gaps).append((gap, key, row["trials"]))
         armse = [n for n in row["coverage"] if n.endswith(".armse")]
         extended, judged = (sum(row[field][n] for n in armse) for field in ("extended", "studies"))
         table[f"extended.{row['trials']}"] = f"{extended:,} of {judged:,}"
         table[f"level.{row['trials']}"] = f"{100 * row['confidence_level']:.1f} %"
+    table["pairs"] = str(len({n.rsplit(".", 1)[0] for n in record["rows"][0]["differences"]["coverage"]}))
+    if gaps:
+        table["pairs.gap"] = f"{max(gaps)[0]:.1f}"
+    if few_gaps:
+        gap, key, trials = max(few_gaps)
+        lower = sum(g > 0 for g, _, _ in few_gaps)
+        column = {"armse": "Δ ARMSE's", "means": "Δ ASR's or Δ final regret's", "sinr": "Δ mean SINR's"}[key]
+        table["pairs.few"] = (
+            f"in {lower} of the {len(few_gaps)} columns and counts, by up to {gap:.1f} points "
+            f"({column} on {trials} trials)"
+        )
     return table
 
 

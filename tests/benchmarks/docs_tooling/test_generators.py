@@ -299,9 +299,9 @@ def test_the_ray_table_gives_each_backends_serial_parts_where_every_run_recorded
 
 
 def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_policies(tmp_path):
-    """ARMSE, the means (ASR, final regret) and mean SINR apart; each rate with its Wilson
-    interval over its own count of studies (a metric constant over a study's trials is not
-    counted)."""
+    """ARMSE, the means (ASR, final regret) and mean SINR apart, for the policies and for the
+    pairs' differences; each rate with its Wilson interval over its own count of studies (a
+    metric constant over a study's trials is not counted)."""
     from scipy import stats
 
     from benchmarks.docs_tooling import generators
@@ -319,12 +319,38 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
                 "coverage": coverage,
                 "studies": studies,
                 "extended": dict.fromkeys(coverage, 0) | {"a.armse": 3, "b.asr": 7},
+                "differences": {
+                    "coverage": {
+                        "a - b.armse": 0.8,
+                        "a - c.armse": 0.97,
+                        "a - b.asr": 0.9,
+                        "b - c.mean_sinr_db": 0.5,
+                    },
+                    "studies": {
+                        "a - b.armse": 200,
+                        "a - c.armse": 100,
+                        "a - b.asr": 50,
+                        "b - c.mean_sinr_db": 10,
+                    },
+                    "extended": {"a - b.armse": 9, "a - c.armse": 0, "a - b.asr": 0, "b - c.mean_sinr_db": 0},
+                },
             }
         ],
     }
     (tmp_path / "results" / "uncertainty").mkdir(parents=True)
-    (tmp_path / "results" / "uncertainty" / "trial-coverage.json").write_text(json.dumps(record))
+    path = tmp_path / "results" / "uncertainty" / "trial-coverage.json"
+    path.write_text(json.dumps(record))
+    assert "pairs.gap" not in generators.trial_coverage_values(tmp_path)  # no row of 40 trials or more
+    many = json.loads(json.dumps(record["rows"][0])) | {"trials": 40}
+    many["differences"]["coverage"] |= {"a - c.armse": 0.7, "a - b.asr": 0.45, "b - c.mean_sinr_db": 0.9}
+    record["rows"].append(many)  # the pairs' lowest: 0.05 below the policies' for ARMSE and the means
+    path.write_text(json.dumps(record))
     table = generators.trial_coverage_values(tmp_path)
+    assert (table["pairs"], table["pairs.gap"]) == ("3", "5.0")
+    assert (
+        table["pairs.few"]
+        == "in 1 of the 3 columns and counts, by up to 42.0 points (Δ mean SINR's on 20 trials)"
+    )
 
     def wilson(rate, n):
         low, high = stats.binomtest(round(rate * n), n).proportion_ci(method="wilson")
@@ -333,6 +359,9 @@ def test_the_trial_coverage_values_are_the_lowest_and_highest_rate_over_the_poli
     assert table["armse.20"] == f"{wilson(0.75, 200)} to {wilson(0.9, 200)}"
     assert table["means.20"] == f"{wilson(0.5, 100)} to {wilson(0.95, 200)}"
     assert table["sinr.20"] == f"{wilson(0.92, 200)} to {wilson(0.92, 200)}"
+    assert table["pairs.armse.20"] == f"{wilson(0.8, 200)} to {wilson(0.97, 100)}"
+    assert table["pairs.means.20"] == f"{wilson(0.9, 50)} to {wilson(0.9, 50)}"
+    assert table["pairs.sinr.20"] == f"{wilson(0.5, 10)} to {wilson(0.5, 10)}"
     assert (table["population"], table["scenario"], table["repeats"]) == ("300", "paper-1-v1", "200")
     assert table["fusion"] == "centralized"
     assert (table["extended.20"], table["level.20"]) == ("3 of 400", "95.0 %")  # ARMSE's only
