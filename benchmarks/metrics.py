@@ -48,19 +48,47 @@ class OfMean:
     """A metric that is a strictly increasing function of a mean over trials: ``outer(mean(w))``
     (mean SINR in dB, a logarithm of the mean SINR). It is evaluated as any metric; on a few trials
     :func:`benchmarks.uncertainty.estimates` gives it the interval of ``mean`` mapped through
-    ``outer``, as the bootstrap-t of a mean is not a bootstrap of the metric's own resamples."""
+    ``outer``, as the bootstrap-t of a mean is not a bootstrap of the metric's own resamples.
+    ``slope``, the derivative of ``outer`` where given, studentizes the paired differences of two
+    such metrics (:class:`DifferenceOfMeans`)."""
 
-    def __init__(self, mean: Callable[[NDArray], NDArray], outer: Callable[[NDArray], NDArray]) -> None:
+    def __init__(
+        self,
+        mean: Callable[[NDArray], NDArray],
+        outer: Callable[[NDArray], NDArray],
+        slope: Callable[[NDArray], NDArray] | None = None,
+    ) -> None:
         self.mean = mean
         self.outer = outer
+        self.slope = slope
 
     def __call__(self, w: NDArray) -> NDArray:
         return self.outer(self.mean(w))
 
 
+class DifferenceOfMeans:
+    """``a(w) - b(w)`` of two :class:`OfMean` metrics with slopes, paired on the same trials (a
+    difference of mean SINRs in dB). On a few trials :func:`benchmarks.uncertainty.estimates`
+    gives it a bootstrap-t interval whose standard error is the delta method's: that of the mean
+    of each trial's ``a.slope(mean_a) x_a - b.slope(mean_b) x_b``, on every resample."""
+
+    def __init__(self, a: OfMean, b: OfMean) -> None:
+        if a.slope is None or b.slope is None:
+            raise ValueError("a DifferenceOfMeans needs two OfMean metrics with a slope")
+        self.a, self.b = a, b
+
+    def __call__(self, w: NDArray) -> NDArray:
+        return self.a(w) - self.b(w)
+
+
 def decibels(ratio: NDArray) -> NDArray:
     """``10 log10(ratio)``."""
     return 10.0 * np.log10(ratio)
+
+
+def decibels_slope(ratio: NDArray) -> NDArray:
+    """The derivative of :func:`decibels`: ``10 / (ln 10 ratio)``."""
+    return 10.0 / (np.log(10.0) * ratio)
 
 
 def trial_weights(index: NDArray, num_trials: int) -> NDArray[np.float64]:
@@ -221,7 +249,7 @@ class TrialMetrics:
         ARMSE / bound only where the bound was recorded), then the registered ones
         (:func:`register_metric`)."""
         metrics = {"asr": self.asr, "final_regret": self.final_regret}
-        metrics["mean_sinr_db"] = OfMean(self.mean_sinr, decibels)
+        metrics["mean_sinr_db"] = OfMean(self.mean_sinr, decibels, decibels_slope)
         if self.tracked:
             metrics["armse"] = self.armse
         if self.bounded:

@@ -193,13 +193,13 @@ def method_legend(trials: int) -> str:
     marks = ["† a percentile interval"]
     if trials < uncertainty.FEW_TRIALS:
         marks.append(
-            "§ a bias-corrected percentile interval (a root of a mean, or a difference of logarithms "
-            f"of means, over fewer than {uncertainty.FEW_TRIALS} trials, which is biased: ARMSE, the "
-            "bound, Δ mean SINR)"
+            "§ a bias-corrected percentile interval (a root of a mean over fewer than "
+            f"{uncertainty.FEW_TRIALS} trials, which is biased: ARMSE, the bound)"
         )
         marks.append(
             f"¶ a bootstrap-t interval (a mean over fewer than {uncertainty.FEW_TRIALS} trials: ASR, "
-            "final regret; mean SINR, whose dB are those of its mean's interval)"
+            "final regret; mean SINR, whose dB are those of its mean's interval; Δ mean SINR, with "
+            "the delta method's standard errors)"
         )
     marks.append("‡ constant over trials (the interval is the value)")
     return f"Marks: {', '.join(marks)}; unmarked: BCa."

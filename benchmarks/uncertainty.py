@@ -15,8 +15,7 @@ method:
   :data:`BATCH_WEIGHTS` weights), where BCa is undefined, or where BCa's interval would exclude
   the value (a strongly skewed resampling distribution);
 * **bias-corrected percentile** on fewer than :data:`FEW_TRIALS` trials, for a metric
-  with a bias over trials (a root of a mean: ARMSE, the bound, their ratio; a difference of
-  logarithms of means: paired differences of mean SINR in dB): the percentile interval moved by
+  with a bias over trials (a root of a mean: ARMSE, the bound, their ratio): the percentile interval moved by
   twice the jackknife's estimate of the bias (:func:`jackknife_bias`), from around the
   resamples' centre (the value plus the bias) to around the value less the bias. ARMSE averages a
   root of a mean over trials at each of many steps: the bias stays while the spread averages
@@ -28,7 +27,10 @@ method:
   own values, to rounding): each resample's ``t``, its distance from the value in its own
   standard errors, gives the interval at 95 % (:func:`_bootstrap_t`). An increasing function of
   a mean (:class:`~benchmarks.metrics.OfMean`: mean SINR in dB) gets its mean's bootstrap-t
-  interval mapped through the function (:func:`_through_means`). A mean of a few skewed
+  interval mapped through the function (:func:`_through_means`), and a paired difference of two
+  such functions with slopes (:class:`~benchmarks.metrics.DifferenceOfMeans`: a difference of
+  mean SINRs in dB) a bootstrap-t whose standard errors are the delta method's
+  (:class:`_DeltaMethod`). A mean of a few skewed
   trials (a policy's final regret) is covered less often by percentile and BCa intervals, which
   do not widen for the spread a few trials fail to show. Where a quantile of ``t`` is infinite
   (resamples of trials of one value: a share of successes on a few trials) the percentile or
@@ -62,7 +64,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from benchmarks.metrics import REMEMBERED_WEIGHTS, OfMean, TrialMetrics, trial_weights
+from benchmarks.metrics import REMEMBERED_WEIGHTS, DifferenceOfMeans, OfMean, TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
 #: The fewest trials a 95 % interval is given on. A bootstrap interval lies within the range of
@@ -118,15 +120,16 @@ EXPANDED = (
 #: How intervals below FEW_TRIALS are computed (:func:`jackknife_bias`, :func:`_bootstrap_t`).
 FEW = (
     f"below {FEW_TRIALS} trials a metric with a bias over trials (ARMSE, the bound and their "
-    "ratio, differences of mean SINR in dB) has a bias-corrected percentile interval: the percentile "
+    "ratio) has a bias-corrected percentile interval: the percentile "
     "interval moved by twice its jackknife bias; and a mean over trials (ASR, final regret, their "
-    "paired differences) a bootstrap-t interval at 95 %, and mean SINR in dB the bootstrap-t "
-    "interval of the mean SINR, in dB"
+    "paired differences) a bootstrap-t interval at 95 %, mean SINR in dB the bootstrap-t "
+    "interval of the mean SINR, in dB, and a paired difference of mean SINRs in dB a bootstrap-t "
+    "interval with the delta method's standard errors"
 )
 #: The methods below FEW_TRIALS besides the percentile or BCa interval (a coverage row's `method`).
 FEW_METHODS = (
-    "; bias-corrected percentile for a metric with a bias; bootstrap-t for a mean, and for mean SINR in "
-    "dB its mean's"
+    "; bias-corrected percentile for a metric with a bias; bootstrap-t for a mean, for mean SINR in "
+    "dB its mean's, and for a difference of mean SINRs in dB the delta method's"
 )
 #: What a table of fewer than MIN_INTERVAL_TRIALS trials says in place of its intervals.
 NO_INTERVALS = (
@@ -271,6 +274,13 @@ def _bootstrapped(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> 
     if few:  # each trial's own value, and the resamples' means and standard errors of them
         with np.errstate(invalid="ignore", divide="ignore"):  # a trial alone may give no value
             singles = stacked(np.eye(num_trials))  # (n, metrics)
+            delta = {
+                i: _DeltaMethod(metric, num_trials)
+                for i, metric in enumerate(metrics[key] for key in keys)
+                if isinstance(metric, DifferenceOfMeans)
+            }
+            for i, d in delta.items():  # a trial's own value: its term of the delta method's mean
+                singles[:, i] = d.linearized + value_array[i]
             finite = np.isfinite(singles).all(axis=0)
             centred = np.where(finite, singles - value_array, 0.0)  # variances lose no digits
         judged = stacked
@@ -281,7 +291,10 @@ def _bootstrapped(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> 
             squares = np.stack([weights @ column**2 for column in centred.T])
             errors = np.sqrt(np.maximum(squares - shifts**2, 0.0) / (num_trials - 1))  # (metrics, ...)
             means = shifts + value_array.reshape(-1, *[1] * (shifts.ndim - 1))
-            parts = (np.moveaxis(judged(weights), -1, 0), means, errors)  # contiguous, as judged's
+            values_at = np.moveaxis(judged(weights), -1, 0)
+            for i, d in delta.items():  # studentized by the delta method, resample by resample
+                means[i], errors[i] = values_at[i], d.error(weights)
+            parts = (values_at, means, errors)  # contiguous, as judged's
             return np.moveaxis(np.concatenate(parts), 0, -1)
 
     result = _bootstrap(stacked, num_trials, RESAMPLES, method, seed)
@@ -306,6 +319,33 @@ def _bootstrapped(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> 
         )
         for i, key in enumerate(keys)
     }
+
+
+class _DeltaMethod:
+    """The delta method's standard error of a :class:`~benchmarks.metrics.DifferenceOfMeans`
+    ``g(mean_a) - h(mean_b)`` over ``num_trials`` trials: that of the mean of each trial's
+    ``g'(mean_a) x_a - h'(mean_b) x_b`` (``linearized``: at the equal weights, less its mean), with
+    the slopes at the means of the weights given (:meth:`error`)."""
+
+    def __init__(self, metric: DifferenceOfMeans, num_trials: int) -> None:
+        self.metric, self.num_trials = metric, num_trials
+        eye = np.eye(num_trials)
+        self.trials = [np.asarray(m.mean(eye), np.float64) for m in (metric.a, metric.b)]  # x_a, x_b
+        self.means = [float(x.mean()) for x in self.trials]
+        self.centred = [x - m for x, m in zip(self.trials, self.means, strict=True)]
+        slope_a, slope_b = metric.a.slope(self.means[0]), metric.b.slope(self.means[1])
+        self.linearized = slope_a * self.centred[0] - slope_b * self.centred[1]
+
+    def error(self, weights: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The standard error at each resample's trial ``weights`` (..., n)."""
+        (ca, cb), (ma, mb) = self.centred, self.means
+        shift_a, shift_b = weights @ ca, weights @ cb
+        var_a = weights @ ca**2 - shift_a**2
+        var_b = weights @ cb**2 - shift_b**2
+        covariance = weights @ (ca * cb) - shift_a * shift_b
+        slope_a, slope_b = self.metric.a.slope(ma + shift_a), self.metric.b.slope(mb + shift_b)
+        variance = slope_a**2 * var_a + slope_b**2 * var_b - 2 * slope_a * slope_b * covariance
+        return np.sqrt(np.maximum(variance, 0.0) / (self.num_trials - 1))
 
 
 def _through_means(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> dict[Any, dict[str, Any]]:
@@ -456,7 +496,9 @@ def difference_metrics(all_metrics: Mapping[str, TrialMetrics]) -> dict[tuple[st
             def difference(w: NDArray, fa: Metric = fa_all[name], fb: Metric = fb_all[name]) -> NDArray:
                 return fa(w) - fb(w)
 
-            differences[f"{a} - {b}", name] = difference
+            fa, fb = fa_all[name], fb_all[name]
+            slopes = all(isinstance(f, OfMean) and f.slope is not None for f in (fa, fb))
+            differences[f"{a} - {b}", name] = DifferenceOfMeans(fa, fb) if slopes else difference
     return differences
 
 
