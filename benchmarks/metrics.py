@@ -73,8 +73,13 @@ class DifferenceOfMeans:
     of each trial's ``a.slope(mean_a) x_a - b.slope(mean_b) x_b``, on every resample."""
 
     def __init__(self, a: OfMean, b: OfMean) -> None:
-        if a.slope is None or b.slope is None:
-            raise ValueError("a DifferenceOfMeans needs two OfMean metrics with a slope")
+        for name, metric in (("a", a), ("b", b)):
+            if not isinstance(metric, OfMean):
+                raise TypeError(f"DifferenceOfMeans's {name} must be an OfMean, got {type(metric).__name__}")
+            if metric.slope is None:
+                raise ValueError(
+                    f"DifferenceOfMeans's {name} must be an OfMean with a slope (the derivative of its outer)"
+                )
         self.a, self.b = a, b
 
     def __call__(self, w: NDArray) -> NDArray:

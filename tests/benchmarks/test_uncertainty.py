@@ -106,6 +106,14 @@ def test_on_a_few_trials_a_difference_of_logarithms_of_means_is_covered_by_the_d
     assert stats.binomtest(before, repetitions, 0.95, alternative="less").pvalue < 0.01, before
 
 
+def test_a_difference_of_means_is_made_of_two_functions_of_means_with_slopes():
+    x = np.ones(5)
+    with pytest.raises(TypeError, match="DifferenceOfMeans's b must be an OfMean, got function"):
+        DifferenceOfMeans(_log_of_mean(x), lambda w: w @ x)
+    with pytest.raises(ValueError, match="DifferenceOfMeans's a must be an OfMean with a slope"):
+        DifferenceOfMeans(OfMean(lambda w: w @ x, np.log), _log_of_mean(x))
+
+
 @pytest.mark.parametrize("trials", [10, 30, 60])
 def test_a_difference_of_logarithms_of_means_is_studentized_on_scipys_own_resamples(trials):
     """Below 40 trials the interval of ``log(mean x) - log(mean y)`` on paired trials is the
