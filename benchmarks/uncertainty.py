@@ -330,9 +330,9 @@ class _DeltaMethod:
     def __init__(self, metric: DifferenceOfMeans, num_trials: int) -> None:
         self.metric, self.num_trials = metric, num_trials
         eye = np.eye(num_trials)
-        self.trials = [np.asarray(m.mean(eye), np.float64) for m in (metric.a, metric.b)]  # x_a, x_b
-        self.means = [float(x.mean()) for x in self.trials]
-        self.centred = [x - m for x, m in zip(self.trials, self.means, strict=True)]
+        trials = [np.asarray(m.mean(eye), np.float64) for m in (metric.a, metric.b)]  # x_a, x_b
+        self.means = [float(x.mean()) for x in trials]
+        self.centred = [x - m for x, m in zip(trials, self.means, strict=True)]
         slope_a, slope_b = metric.a.slope(self.means[0]), metric.b.slope(self.means[1])
         self.linearized = slope_a * self.centred[0] - slope_b * self.centred[1]
 
@@ -492,14 +492,16 @@ def difference_metrics(all_metrics: Mapping[str, TrialMetrics]) -> dict[tuple[st
         for name in COVERAGE_METRICS:
             if name not in fa_all or name not in fb_all:
                 continue
-
-            def difference(w: NDArray, fa: Metric = fa_all[name], fb: Metric = fb_all[name]) -> NDArray:
-                return fa(w) - fb(w)
-
             fa, fb = fa_all[name], fb_all[name]
-            slopes = all(isinstance(f, OfMean) and f.slope is not None for f in (fa, fb))
-            differences[f"{a} - {b}", name] = DifferenceOfMeans(fa, fb) if slopes else difference
+            if all(isinstance(f, OfMean) and f.slope is not None for f in (fa, fb)):
+                differences[f"{a} - {b}", name] = DifferenceOfMeans(fa, fb)
+            else:
+                differences[f"{a} - {b}", name] = functools.partial(_difference, fa, fb)
     return differences
+
+
+def _difference(fa: Metric, fb: Metric, w: NDArray) -> NDArray:
+    return fa(w) - fb(w)
 
 
 def paired_differences(all_metrics: Mapping[str, TrialMetrics], seed: int = 0) -> dict[str, dict[str, dict]]:
