@@ -221,7 +221,8 @@ def _bootstrap(metric: Metric, num_trials: int, resamples: int, method: str, see
         return np.moveaxis(value, -1, 0) if value.ndim > np.ndim(index) - 1 else value
 
     batch = None if num_trials <= BCA_MAX_TRIALS else max(1, BATCH_WEIGHTS // num_trials)
-    with np.errstate(invalid="ignore", divide="ignore"), warnings.catch_warnings():
+    # over: scipy's standard error of the resamples, which is not read, of values near the float limit
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"), warnings.catch_warnings():
         warnings.simplefilter("ignore", stats.DegenerateDataWarning)
         return stats.bootstrap(
             (np.arange(num_trials),),
@@ -283,14 +284,18 @@ def _bootstrapped(metrics: Mapping[Any, Metric], num_trials: int, seed: int) -> 
                 singles[:, i] = d.linearized + value_array[i]
             finite = np.isfinite(singles).all(axis=0)
             centred = np.where(finite, singles - value_array, 0.0)  # variances lose no digits
+        scales = _power_of_two_scale(centred)  # squares of values near 1e300 neither overflow
+        scaled = centred / scales
         judged = stacked
 
         def stacked(weights: NDArray[np.float64]) -> NDArray[np.float64]:
             # a product per metric: the same bits whatever other metrics share the bootstrap
-            shifts = np.stack([weights @ column for column in centred.T])
-            squares = np.stack([weights @ column**2 for column in centred.T])
+            shifts = np.stack([weights @ column for column in scaled.T])
+            squares = np.stack([weights @ column**2 for column in scaled.T])
             errors = np.sqrt(np.maximum(squares - shifts**2, 0.0) / (num_trials - 1))  # (metrics, ...)
-            means = shifts + value_array.reshape(-1, *[1] * (shifts.ndim - 1))
+            column_of = (-1, *[1] * (shifts.ndim - 1))
+            errors, shifts = errors * scales.reshape(column_of), shifts * scales.reshape(column_of)
+            means = shifts + value_array.reshape(column_of)
             values_at = np.moveaxis(judged(weights), -1, 0)
             for i, d in delta.items():  # studentized by the delta method, resample by resample
                 means[i], errors[i] = values_at[i], d.error(weights)
@@ -391,8 +396,16 @@ def _bootstrap_t(
         low_t, high_t = np.percentile(t, [100 * (1 - CONFIDENCE) / 2, 100 * (1 + CONFIDENCE) / 2])
     if not (np.isfinite(low_t) and np.isfinite(high_t)):
         return None
-    error = float(np.std(singles, ddof=1) / np.sqrt(len(singles)))
+    scale = _power_of_two_scale(singles)
+    error = float(np.std(singles / scale, ddof=1) * scale / np.sqrt(len(singles)))
     return value - float(high_t) * error, value - float(low_t) * error
+
+
+def _power_of_two_scale(values: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Per column of ``values`` (n, ...) (or for a vector), the power of two at its largest
+    magnitude, 1 where it is 0: dividing by it keeps every bit (the variances of values far from
+    1 are then the same bits as those of values near it, scaled) while their squares stay finite."""
+    return np.ldexp(1.0, np.frexp(np.max(np.abs(values), axis=0))[1])
 
 
 def jackknife_bias(metric: Metric, value: NDArray, num_trials: int) -> NDArray[np.float64]:

@@ -79,6 +79,33 @@ def test_on_a_few_trials_a_logarithm_of_a_mean_is_covered_through_its_means_boot
     assert stats.binomtest(before, repetitions, 0.95, alternative="less").pvalue < 0.01, before
 
 
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize("trials", [10, 30, 60])
+def test_a_means_interval_near_the_float_limits_is_the_same_interval_scaled(trials):
+    """Trials of values near 1e270 or 1e-270 (a power of two times those of 1) get, with no
+    warning, the interval of the values of 1 scaled, bit for bit, below 40 trials (the bootstrap-t's
+    variances are taken of values scaled to 1); from 40, BCa's sums of cubes overflow inside scipy
+    and the percentile interval of the same resamples stands in, scaled too."""
+    x = np.random.default_rng(trials).exponential(1.0, trials)
+    plain = uncertainty.estimate(lambda w: w @ x, trials, seed=2)
+    for exponent in (900, -900):
+        values = np.ldexp(x, exponent)
+        scaled = uncertainty.estimate(lambda w, values=values: w @ values, trials, seed=2)
+        ci = [np.ldexp(end, -exponent) for end in scaled["ci"]]
+        if trials < uncertainty.FEW_TRIALS:
+            assert scaled["method"] == plain["method"] == "bootstrap-t" and ci == plain["ci"]
+        else:
+            assert scaled["method"] == "percentile" and ci[0] <= np.mean(x) <= ci[1]
+            alone = stats.bootstrap(
+                (x,),
+                np.mean,
+                n_resamples=uncertainty.RESAMPLES,
+                method="percentile",
+                random_state=np.random.default_rng(2),
+            ).confidence_interval
+            assert ci == pytest.approx([alone.low, alone.high], rel=1e-12)
+
+
 def _log_of_mean(x):
     return OfMean(lambda w: w @ x, np.log, np.reciprocal)
 
