@@ -12,7 +12,8 @@ from mimo_radar_env.envs.device_forms import DEVICE_MODES
 
 from .cli import Command
 from .errors import BenchError
-from .settings import add_env_options, add_max_hours, env_options_from, folder, integer
+from .outputs import folder
+from .settings import add_env_options, add_max_hours, env_options_from, integer
 
 
 class TrainPPO(Command):

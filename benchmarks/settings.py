@@ -23,6 +23,7 @@ from mimo_radar_env.envs.options import option_choices, option_help, option_name
 from mimo_radar_env.envs.versions import version_conflict
 
 from .errors import BenchError
+from .outputs import folder
 from .resources import DEFAULT_MAX_HOURS, MAX_AUTO_SHARD_SIZE
 
 DEFAULT_TRIALS = 500
@@ -183,20 +184,6 @@ def integer(low: int, why: str = "", high: int = MAX_ARGUMENT) -> Callable[[str]
 
     parse.__name__ = f"integer >= {low}"
     return parse
-
-
-def folder(text: str) -> str:
-    """An argparse type: a folder to write into, named (an empty ``--out ''`` would write into the
-    current folder), that is not a file and not under one."""
-    if not text.strip():
-        raise argparse.ArgumentTypeError(f"must name a folder, got {text!r}")
-    above = Path(text)
-    while not above.exists() and above != above.parent:
-        above = above.parent
-    if above.exists() and not above.is_dir():
-        where = "is a file" if above == Path(text) else f"is under the file {above}"
-        raise argparse.ArgumentTypeError(f"must be a folder, and {text!r} {where}")
-    return text
 
 
 def hours(text: str) -> float | None:

@@ -731,26 +731,30 @@ if __name__ == "__main__":
     import sys
     from pathlib import Path
 
+    from benchmarks.outputs import output_file, write_json
     from benchmarks.settings import integer, trial_count
 
     def counts(text: str) -> tuple[int, ...]:
         return tuple(trial_count(MIN_INTERVAL_TRIALS)(part) for part in text.split(","))
 
     parser = argparse.ArgumentParser(prog="python -m benchmarks.uncertainty")
-    parser.add_argument("out", nargs="?", help="the JSON to write (and print)")
+    parser.add_argument("out", nargs="?", type=output_file, help="the JSON to write (and print)")
     parser.add_argument("--run", default=None, help="a run's folder: the coverage of runs drawn from it")
-    parser.add_argument("--counts", type=counts, default=(20, 50, 200), help="trials of the runs drawn")
-    parser.add_argument("--repeats", type=integer(1), default=200, help="runs drawn per count")
+    parser.add_argument(
+        "--counts", type=counts, default=None, help="trials of the runs drawn (default 20,50,200)"
+    )
+    parser.add_argument("--repeats", type=integer(1), default=None, help="runs drawn per count (default 200)")
     args = parser.parse_args()
     if args.run is not None and not (Path(args.run) / "config.json").is_file():
         parser.error(f"--run {args.run!r} is not a run's folder (no config.json)")
+    if args.run is None and (args.counts is not None or args.repeats is not None):
+        parser.error(
+            "--counts and --repeats are the drawn runs' and need --run (without it: the across-seed coverage)"
+        )
     if args.run is None:
         record = {"one_group": seed_coverage(groups=1), "three_groups": seed_coverage(groups=3)}
     else:
         say = functools.partial(print, file=sys.stderr)
-        record = run_coverage(args.run, args.counts, args.repeats, say=say)
-    text = json.dumps(record, indent=2) + "\n"
-    if args.out:
-        with open(args.out, "w") as handle:
-            handle.write(text)
-    print(text, end="")
+        record = run_coverage(args.run, args.counts or (20, 50, 200), args.repeats or 200, say=say)
+    write_json(args.out, record)
+    print(json.dumps(record, indent=2))

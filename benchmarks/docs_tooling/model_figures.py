@@ -34,7 +34,7 @@ from mimo_radar_env.core.superarm import random_super_arms, subset_masks
 from ..cli import Command
 from ..errors import BenchError
 from ..harness import output_folder
-from ..settings import folder
+from ..outputs import folder
 from ..study import machine
 from ..uncertainty import estimate
 

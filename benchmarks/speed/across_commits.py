@@ -28,6 +28,8 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from ..outputs import output_file, write_json
+
 
 def _checkout(repo: Path, commit: str, where: Path) -> None:
     subprocess.run(
@@ -112,7 +114,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         "--warmup", type=int, default=0, help="runs per commit first, not recorded (default 0)"
     )
     parser.add_argument("--repo", default=".", help="the git checkout (default: here)")
-    parser.add_argument("--json", default=None, help="also write the result to this file")
+    parser.add_argument("--json", type=output_file, default=None, help="also write the result to this file")
     args = parser.parse_args(argv[: argv.index("--")] if "--" in argv else argv)
     if not command:
         parser.error("give the benchmark command after '--'")
@@ -127,7 +129,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
         f"{first} / {second} = {result['ratio']:.2f} (medians of {args.repeats}, interleaved)"
     )
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=2) + "\n")
+        write_json(args.json, result)
     return result
 
 

@@ -45,7 +45,7 @@ from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.envs.engine import RadarEngine
 
-from . import write_json
+from ..outputs import output_file, write_json
 
 SCENARIO = "paper-1-v1"
 SIZES = (500, 5_000, 50_000, 500_000, 1_000_000)
@@ -458,7 +458,9 @@ def _parser() -> argparse.ArgumentParser:
         default=",".join(FUSIONS),
         help="the fusions of the equality and speed parts, comma-separated (default %(default)s)",
     )
-    parser.add_argument("--json", type=Path, default=None, help="written after every row, as the run goes")
+    parser.add_argument(
+        "--json", type=output_file, default=None, help="written after every row, as the run goes"
+    )
     parser.add_argument(
         "--compare-studies",
         nargs=2,

@@ -19,7 +19,6 @@ issue's target: at most 1.5 along the README's), and the compile step's time.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
 import statistics
@@ -29,6 +28,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+from ..outputs import output_file, write_json
 
 #: The largest first-run / second-run ratio the performance issue accepts.
 TARGET = 1.5
@@ -97,7 +98,9 @@ def measure(repeats: int = 3, args: tuple[str, ...] = QUICKSTART) -> dict[str, A
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeats", type=int, default=3, help="pairs of runs, each from an empty cache")
-    parser.add_argument("--json", default=None, help="also write the figures and the machine to this file")
+    parser.add_argument(
+        "--json", type=output_file, default=None, help="also write the figures and the machine to this file"
+    )
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error(f"--repeats must be at least 1, got {args.repeats}")
@@ -114,7 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         f"{result['median_ratio']:.2f}, largest {result['max_ratio']:.2f}"
     )
     if args.json:
-        Path(args.json).write_text(json.dumps(result, indent=2))
+        write_json(args.json, result, end="")
     return 0
 
 

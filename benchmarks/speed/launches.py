@@ -26,12 +26,11 @@ import tempfile
 import time
 import warnings
 from collections.abc import Iterator
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from . import write_json
+from ..outputs import output_file, write_json
 
 POLICIES = ("mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "random", "best", "best-tracking", "tracking-ucb")
 SCENARIO = "paper-1-v1"
@@ -237,7 +236,7 @@ def main(argv: list[str] | None = None) -> None:
         help="also count the calls of the env's step compiled by torch.compile (minutes: it compiles)",
     )
     parser.add_argument("--compiled-device", default="cpu", help="where --compiled compiles (default cpu)")
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     if not args.compiled:
         return count(args)

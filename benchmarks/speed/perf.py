@@ -56,8 +56,9 @@ from agents.solvers.bpso import BPSO_RULES
 
 from ..cli import Command
 from ..harness import output_folder
+from ..outputs import folder
 from ..precompile import paper_index
-from ..settings import default_workers, folder, integer
+from ..settings import default_workers, integer
 from . import env_throughput, policy_cost, solver_speed, tracker_speed
 
 SCENARIO = "paper-1-v1"

@@ -12,14 +12,14 @@ best-tracking's (the planning issue's target: at most 10 at H = 10).
 from __future__ import annotations
 
 import argparse
-import json
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 import agents
 from mimo_radar_env import VERSIONS
+
+from ..outputs import output_file, write_json
 
 #: (policy, parameters) measured against best-tracking.
 PLANNERS = (
@@ -60,7 +60,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=5)
-    parser.add_argument("--json", default=None, help="also write the figures and the machine to this file")
+    parser.add_argument(
+        "--json", type=output_file, default=None, help="also write the figures and the machine to this file"
+    )
     args = parser.parse_args()
     from ..study import machine
 
@@ -81,7 +83,7 @@ def main() -> None:
             "target_ratio": TARGET_RATIO,
             "figures": ratios,
         }
-        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+        write_json(args.json, record, indent=1)
 
 
 if __name__ == "__main__":

@@ -24,11 +24,9 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import json
 import time
 import tracemalloc
 from collections.abc import Sequence
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -39,6 +37,7 @@ from mimo_radar_env.core.compiled import with_threads
 from mimo_radar_env.core.superarm import is_exact_affordable
 from mimo_radar_env.envs.cost import memory_parts
 
+from ..outputs import output_file, write_json
 from ..resources import estimate_seconds
 
 #: (M, N, Ms, Ns) of the layouts measured.
@@ -182,7 +181,7 @@ def main() -> None:
         "--trials", type=_counts, default=TRIALS, help="trial counts, comma-separated (default 4,50)"
     )
     parser.add_argument("--steps", type=int, default=5)
-    parser.add_argument("--json", default=None, help="write the rows to this file")
+    parser.add_argument("--json", type=output_file, default=None, help="write the rows to this file")
     args = parser.parse_args()
     start = time.perf_counter()
     rows = measure(args.trials, args.steps)
@@ -194,7 +193,7 @@ def main() -> None:
     )
     if args.json:
         result = record(rows, args.trials, args.steps, time.perf_counter() - start)
-        Path(args.json).write_text(json.dumps(result, indent=1) + "\n")
+        write_json(args.json, result, indent=1)
 
 
 if __name__ == "__main__":

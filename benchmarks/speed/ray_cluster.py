@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from ..outputs import output_file, write_json
 from ..study import machine
-from . import write_json
 from .strong_scaling import STUDY, read_tasks, run_study, serial_parts
 
 BACKENDS = {"local": (), "ray": ("--backend", "ray", "--address", "auto")}
@@ -114,7 +114,7 @@ def alternating_arguments(doc: str, repeats: int, argv: list[str] | None) -> arg
     parser.add_argument(
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
     )
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     return parser.parse_args(argv)
 
 

@@ -23,6 +23,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ..outputs import output_file, write_json
+
 #: The pages whose Python blocks are recipes.
 PAGES = ("clients.md", "ppo.md")
 #: Libraries whose recipes run in their own environment, not in the project's.
@@ -113,7 +115,7 @@ def measure(progress: Any = print, known: list[dict[str, Any]] | None = None) ->
 
 def main() -> None:
     parser = argparse.ArgumentParser(description="what each Python recipe of the docs costs, run alone")
-    parser.add_argument("--json", default=None, help="write the rows to this file")
+    parser.add_argument("--json", type=output_file, default=None, help="write the rows to this file")
     parser.add_argument(
         "--changed",
         action="store_true",
@@ -126,7 +128,7 @@ def main() -> None:
     rows = measure(known=known)
     if args.json:
         record = {"command": "python -m benchmarks.speed.recipes", "machine": machine(), "rows": rows}
-        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+        write_json(args.json, record, indent=1)
 
 
 if __name__ == "__main__":

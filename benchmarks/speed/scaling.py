@@ -12,7 +12,6 @@ milliseconds per step, microseconds per trial-step, and the peak of numpy alloca
 from __future__ import annotations
 
 import argparse
-import json
 import time
 import tracemalloc
 from typing import Any
@@ -22,6 +21,8 @@ import numpy as np
 import agents
 from mimo_radar_env import VERSIONS, random_scenario
 from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
+
+from ..outputs import output_file, write_json
 
 
 def measure(
@@ -85,7 +86,9 @@ def fitted_growth(rows: dict[str, list[dict[str, Any]]]) -> dict[str, float]:
 def main() -> None:
     parser = argparse.ArgumentParser(description="cost per step against M*N, K and trials")
     parser.add_argument("--steps", type=int, default=10)
-    parser.add_argument("--json", default=None, help="also write the rows to this JSON file")
+    parser.add_argument(
+        "--json", type=output_file, default=None, help="also write the rows to this JSON file"
+    )
     args = parser.parse_args()
     rows = {}
     for title, grid in GRID.items():
@@ -102,8 +105,7 @@ def main() -> None:
     for name, slope in fitted_growth(rows).items():
         print(f"  {name}: {slope:.2f}")
     if args.json:
-        with open(args.json, "w") as handle:
-            json.dump(rows, handle, indent=2)
+        write_json(args.json, rows, end="")
 
 
 if __name__ == "__main__":

@@ -27,9 +27,9 @@ from mimo_radar_env.core.arrays import NUMPY
 from mimo_radar_env.core.compiled import HAVE_NUMBA, numba
 from mimo_radar_env.core.streams import TrialRandom
 
+from ..outputs import write_json
 from ..precompile import paper_index
 from ..study import machine
-from . import write_json
 
 
 def _time(solver, index, repeats: int) -> tuple[float, tuple]:

@@ -17,9 +17,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
-import json
 import time
-from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -29,6 +27,8 @@ from mimo_radar_env import VERSIONS, MimoRadarSelectVectorEnv, load_scenario
 from mimo_radar_env.core.superarm import random_super_arms, search_operations
 from mimo_radar_env.envs import engine as engine_module
 from mimo_radar_env.envs.cost import operations_per_trial_step
+
+from ..outputs import output_file, write_json
 
 SCENARIO = "paper-1-v1"
 #: An assumed sustained float64 rate of an accelerator (operations per second: a data-centre
@@ -142,7 +142,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--trials", type=int, default=500)
     parser.add_argument("--steps", type=int, default=40)
-    parser.add_argument("--json", default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args()
     from ..study import machine
 
@@ -158,7 +158,7 @@ def main() -> None:
             + (f"  {rate:.2e} ops/s" if rate else "")
         )
     if args.json:
-        Path(args.json).write_text(json.dumps(record, indent=1) + "\n")
+        write_json(args.json, record, indent=1)
 
 
 if __name__ == "__main__":

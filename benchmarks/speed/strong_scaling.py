@@ -47,9 +47,10 @@ from typing import Any
 
 import numpy as np
 
+from ..outputs import output_file, write_json
 from ..resources import makespan
 from ..study import machine
-from . import t_interval, write_json
+from . import t_interval
 
 #: The study measured by default: the v1 claims study's scenario 1, whole episodes.
 STUDY = ("claims", "--scenarios", "1", "--trials", "500")
@@ -322,7 +323,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--no-model", action="store_true", help="measure only (the model's probes take minutes)"
     )
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     if args.repeats < 1:
         parser.error(f"--repeats must be 1 or more, got {args.repeats}")

@@ -19,8 +19,8 @@ from __future__ import annotations
 import subprocess
 import sys
 
+from ..outputs import write_json
 from ..study import machine
-from . import write_json
 from .ray_cluster import CLI, Variant, alternate, alternating_arguments
 
 

@@ -31,8 +31,8 @@ from typing import Any
 
 import numpy as np
 
+from ..outputs import output_file, write_json
 from ..study import machine
-from . import write_json
 
 #: The run measured: one policy's trials in one task.
 RUN = ("run", "--scenario", "paper-1-v1", "--policies", "mg-crb-cl", "--trials", "500", "--shard-size", "500")
@@ -142,7 +142,7 @@ def measure(workers: int) -> dict[str, Any]:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="cores (default: all)")
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     print(f"threads inside a task: mimo-radar-bench {' '.join(RUN)}, {args.workers} cores")
     result = measure(args.workers)

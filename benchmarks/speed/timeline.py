@@ -29,7 +29,7 @@ from pathlib import Path
 from types import FrameType
 from typing import Any
 
-from . import write_json
+from ..outputs import output_file, write_json
 
 #: The folders whose frames are the project's.
 PROJECT = tuple(
@@ -168,7 +168,7 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     )
     parser.add_argument("--interval", type=float, default=0.01, help="seconds between samples (default 0.01)")
     parser.add_argument("--min-span", type=float, default=0.1, help="shortest span printed (s, default 0.1)")
-    parser.add_argument("--json", type=Path, default=None, help="also write the timeline here")
+    parser.add_argument("--json", type=output_file, default=None, help="also write the timeline here")
     args = parser.parse_args(argv[:split])
     if not args.interval > 0:
         parser.error(f"--interval must be above 0, got {args.interval}")

@@ -25,9 +25,9 @@ from typing import Any
 from mimo_radar_env import EnvOptions, load_scenario
 from mimo_radar_env.envs.device_forms import DEVICE_MODES, check_device_mode
 
+from ..outputs import output_file, write_json
 from ..training import algorithm_kwargs, load_hyperparams, normalize_kwargs
 from ..training_log import LearningCurve
-from . import write_json
 
 SCENARIO = "paper-1-v1"
 SIZES = (8, 512, 4096)
@@ -204,7 +204,7 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
     parser.add_argument("--n-steps", type=int, default=64)
-    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     sizes = tuple(int(s) for s in args.sizes.split(","))
     cpu_sizes = tuple(int(s) for s in args.cpu_sizes.split(",") if s)

@@ -55,8 +55,9 @@ from .. import uncertainty
 from ..cli import Command
 from ..errors import BenchError
 from ..harness import output_folder
+from ..outputs import folder
 from ..report import paired_difference
-from ..settings import folder, integer, trial_count
+from ..settings import integer, trial_count
 from ..study import machine, write_timing
 
 #: Swerling-I samples per channel of the sampling oracles.
