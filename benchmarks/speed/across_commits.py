@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 
 def _checkout(repo: Path, commit: str, where: Path) -> None:
@@ -109,19 +110,15 @@ def main(argv: Sequence[str] | None = None) -> dict[str, Any]:
     parser.add_argument("first", help="the earlier commit")
     parser.add_argument("second", nargs="?", default="HEAD", help="the later commit (default HEAD)")
     parser.add_argument("--key", required=True, help="the number to take from the command's JSON line")
-    parser.add_argument("--repeats", type=int, default=3, help="runs per commit (default 3)")
+    parser.add_argument("--repeats", type=integer(1), default=3, help="runs per commit (default 3)")
     parser.add_argument(
-        "--warmup", type=int, default=0, help="runs per commit first, not recorded (default 0)"
+        "--warmup", type=integer(0), default=0, help="runs per commit first, not recorded (default 0)"
     )
     parser.add_argument("--repo", default=".", help="the git checkout (default: here)")
     parser.add_argument("--json", type=output_file, default=None, help="also write the result to this file")
     args = parser.parse_args(argv[: argv.index("--")] if "--" in argv else argv)
     if not command:
         parser.error("give the benchmark command after '--'")
-    if args.repeats < 1:
-        parser.error(f"--repeats must be at least 1, got {args.repeats}")
-    if args.warmup < 0:
-        parser.error(f"--warmup must be 0 or more, got {args.warmup}")
     result = compare(args.repo, (args.first, args.second), command, args.key, args.repeats, args.warmup)
     first, second = result["medians"]
     print(

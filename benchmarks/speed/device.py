@@ -46,6 +46,7 @@ from mimo_radar_env.envs.device_forms import check_device_mode
 from mimo_radar_env.envs.engine import RadarEngine
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 SCENARIO = "paper-1-v1"
 SIZES = (500, 5_000, 50_000, 500_000, 1_000_000)
@@ -428,8 +429,8 @@ def _parser() -> argparse.ArgumentParser:
     parser.add_argument(
         "--sizes", default=",".join(str(s) for s in SIZES), help="trial counts B, comma-separated"
     )
-    parser.add_argument("--equality-trials", type=int, default=64)
-    parser.add_argument("--equality-steps", type=int, default=None, help="default: whole episodes")
+    parser.add_argument("--equality-trials", type=integer(1), default=64)
+    parser.add_argument("--equality-steps", type=integer(1), default=None, help="default: whole episodes")
     parser.add_argument("--max-step-seconds", type=float, default=2.0)
     parser.add_argument("--target-seconds", type=float, default=2.0, help="timed seconds per row")
     parser.add_argument("--skip-equality", action="store_true")
@@ -451,7 +452,7 @@ def _parser() -> argparse.ArgumentParser:
         help="trial counts B of the compiled form, each compiled anew (default %(default)s)",
     )
     parser.add_argument(
-        "--form-equality-steps", type=int, default=50, help="steps of the traced forms' equality"
+        "--form-equality-steps", type=integer(1), default=50, help="steps of the traced forms' equality"
     )
     parser.add_argument(
         "--fusions",

@@ -24,6 +24,8 @@ from mimo_radar_env.core.superarm import random_super_arms
 from mimo_radar_env.envs import engine as engine_module
 from mimo_radar_env.tracking import bound
 
+from ..settings import integer
+
 
 def measure(
     scenario: str,
@@ -137,8 +139,8 @@ def main() -> None:
     parser.add_argument(
         "--env-version", default=DEFAULT_VERSION, help="the env id's version (default %(default)s)"
     )
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--steps", type=int, default=200)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--steps", type=integer(1), default=200)
     args = parser.parse_args()
     print(f"vector env, {args.scenario}, {args.trials} trials, {args.steps} steps, random valid actions")
     for label, tracking, fusion, compiled in (

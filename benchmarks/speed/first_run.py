@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 #: The largest first-run / second-run ratio the performance issue accepts.
 TARGET = 1.5
@@ -97,13 +98,13 @@ def measure(repeats: int = 3, args: tuple[str, ...] = QUICKSTART) -> dict[str, A
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeats", type=int, default=3, help="pairs of runs, each from an empty cache")
+    parser.add_argument(
+        "--repeats", type=integer(1), default=3, help="pairs of runs, each from an empty cache"
+    )
     parser.add_argument(
         "--json", type=output_file, default=None, help="also write the figures and the machine to this file"
     )
     args = parser.parse_args(argv)
-    if args.repeats < 1:
-        parser.error(f"--repeats must be at least 1, got {args.repeats}")
     result = measure(args.repeats)
     for i, pair in enumerate(result["repeats"], start=1):
         print(

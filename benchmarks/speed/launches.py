@@ -31,6 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 POLICIES = ("mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "random", "best", "best-tracking", "tracking-ucb")
 SCENARIO = "paper-1-v1"
@@ -227,8 +228,8 @@ def _compiled_line(row: dict[str, Any]) -> str:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--steps", type=int, default=3, help="steps counted per policy")
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--steps", type=integer(1), default=3, help="steps counted per policy")
     parser.add_argument("--policies", default=",".join(POLICIES))
     parser.add_argument(
         "--compiled",

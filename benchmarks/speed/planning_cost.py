@@ -20,6 +20,7 @@ import agents
 from mimo_radar_env import VERSIONS
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 #: (policy, parameters) measured against best-tracking.
 PLANNERS = (
@@ -58,8 +59,8 @@ TARGET_RATIO = 10.0
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--steps", type=int, default=5)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--steps", type=integer(1), default=5)
     parser.add_argument(
         "--json", type=output_file, default=None, help="also write the figures and the machine to this file"
     )

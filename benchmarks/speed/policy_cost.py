@@ -39,6 +39,7 @@ from mimo_radar_env.envs.cost import memory_parts
 
 from ..outputs import output_file, write_json
 from ..resources import estimate_seconds
+from ..settings import integer
 
 #: (M, N, Ms, Ns) of the layouts measured.
 LAYOUTS = ((4, 6, 2, 3), (16, 16, 4, 4), (64, 64, 4, 4))
@@ -180,7 +181,7 @@ def main() -> None:
     parser.add_argument(
         "--trials", type=_counts, default=TRIALS, help="trial counts, comma-separated (default 4,50)"
     )
-    parser.add_argument("--steps", type=int, default=5)
+    parser.add_argument("--steps", type=integer(1), default=5)
     parser.add_argument("--json", type=output_file, default=None, help="write the rows to this file")
     args = parser.parse_args()
     start = time.perf_counter()

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 from ..study import machine
 from .strong_scaling import STUDY, read_tasks, run_study, serial_parts
 
@@ -109,8 +110,12 @@ def alternating_arguments(doc: str, repeats: int, argv: list[str] | None) -> arg
     """The command line of a benchmark of alternating runs (:func:`alternate`): ``--workers``,
     ``--repeats`` (default ``repeats``), ``--study`` and ``--json``."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="workers (default: cores)")
-    parser.add_argument("--repeats", type=int, default=repeats, help="runs of each variant, alternating")
+    parser.add_argument(
+        "--workers", type=integer(1), default=os.cpu_count() or 1, help="workers (default: cores)"
+    )
+    parser.add_argument(
+        "--repeats", type=integer(1), default=repeats, help="runs of each variant, alternating"
+    )
     parser.add_argument(
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
     )

@@ -23,6 +23,7 @@ from mimo_radar_env import VERSIONS, random_scenario
 from mimo_radar_env.core.superarm import AUTO_EXACT_SUBSETS, is_exact_affordable
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 
 def measure(
@@ -85,7 +86,7 @@ def fitted_growth(rows: dict[str, list[dict[str, Any]]]) -> dict[str, float]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description="cost per step against M*N, K and trials")
-    parser.add_argument("--steps", type=int, default=10)
+    parser.add_argument("--steps", type=integer(1), default=10)
     parser.add_argument(
         "--json", type=output_file, default=None, help="also write the rows to this JSON file"
     )

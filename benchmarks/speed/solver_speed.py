@@ -29,6 +29,7 @@ from mimo_radar_env.core.streams import TrialRandom
 
 from ..outputs import write_json
 from ..precompile import paper_index
+from ..settings import integer
 from ..study import machine
 
 
@@ -133,8 +134,8 @@ def measure(trials: int = 500, repeats: int = 5) -> dict[str, float]:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description="super-arm solver speed and optimality")
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--repeats", type=integer(1), default=5)
     parser.add_argument("--json", action="store_true", help="end with the figures as one JSON line")
     parser.add_argument(
         "--write", type=Path, default=None, help="also write the figures and the machine here"

@@ -29,6 +29,7 @@ from mimo_radar_env.envs import engine as engine_module
 from mimo_radar_env.envs.cost import operations_per_trial_step
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 
 SCENARIO = "paper-1-v1"
 #: An assumed sustained float64 rate of an accelerator (operations per second: a data-centre
@@ -140,8 +141,8 @@ def _rate(operations: float | None, seconds: float, trials: int) -> dict[str, fl
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--steps", type=int, default=40)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--steps", type=integer(1), default=40)
     parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args()
     from ..study import machine

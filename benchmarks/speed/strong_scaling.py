@@ -49,6 +49,7 @@ import numpy as np
 
 from ..outputs import output_file, write_json
 from ..resources import makespan
+from ..settings import integer
 from ..study import machine
 from . import t_interval
 
@@ -310,7 +311,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--predict", default="4,8,16", help="worker counts the model predicts")
     parser.add_argument(
         "--model-from",
-        type=int,
+        type=integer(1),
         default=None,
         help="the measured count the model starts from (default: the most)",
     )
@@ -318,15 +319,13 @@ def main(argv: list[str] | None = None) -> None:
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
     )
     parser.add_argument(
-        "--repeats", type=int, default=1, help="runs of each worker count, alternately (default 1)"
+        "--repeats", type=integer(1), default=1, help="runs of each worker count, alternately (default 1)"
     )
     parser.add_argument(
         "--no-model", action="store_true", help="measure only (the model's probes take minutes)"
     )
     parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
-    if args.repeats < 1:
-        parser.error(f"--repeats must be 1 or more, got {args.repeats}")
     counts = [int(w) for w in args.workers.split(",")]
     predictions = [int(w) for w in args.predict.split(",") if w]
     study = tuple(args.study.split())

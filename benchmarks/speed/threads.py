@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 from ..study import machine
 
 #: The run measured: one policy's trials in one task.
@@ -141,7 +142,9 @@ def measure(workers: int) -> dict[str, Any]:
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--workers", type=int, default=os.cpu_count() or 1, help="cores (default: all)")
+    parser.add_argument(
+        "--workers", type=integer(1), default=os.cpu_count() or 1, help="cores (default: all)"
+    )
     parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     print(f"threads inside a task: mimo-radar-bench {' '.join(RUN)}, {args.workers} cores")

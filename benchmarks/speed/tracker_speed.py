@@ -25,6 +25,8 @@ from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.tracking import IMMUKFTracker, markov_matrix
 from mimo_radar_env.tracking.imm_ukf import DEFAULT_TURN_RATES_DEG
 
+from ..settings import integer
+
 
 def _record_inputs(trials: int, steps: int, seed: int = 0):
     """Measurements of a fixed 2x3 selection on paper-1, for ``steps`` steps."""
@@ -136,9 +138,9 @@ def measure(trials: int = 500, steps: int = 20, reference_trials: int = 10) -> d
 
 def main() -> None:
     parser = argparse.ArgumentParser(description="Batched IMM-UKF vs a filterpy loop")
-    parser.add_argument("--trials", type=int, default=500)
-    parser.add_argument("--steps", type=int, default=20)
-    parser.add_argument("--reference-trials", type=int, default=10)
+    parser.add_argument("--trials", type=integer(1), default=500)
+    parser.add_argument("--steps", type=integer(1), default=20)
+    parser.add_argument("--reference-trials", type=integer(1), default=10)
     args = parser.parse_args()
     result = measure(args.trials, args.steps, args.reference_trials)
     print(f"IMM-UKF (3 models), paper-1, 6 channels, average fusion, {args.steps} steps")

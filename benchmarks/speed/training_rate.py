@@ -26,6 +26,7 @@ from mimo_radar_env import EnvOptions, load_scenario
 from mimo_radar_env.envs.device_forms import DEVICE_MODES, check_device_mode
 
 from ..outputs import output_file, write_json
+from ..settings import integer
 from ..training import algorithm_kwargs, load_hyperparams, normalize_kwargs
 from ..training_log import LearningCurve
 
@@ -202,8 +203,8 @@ def main(argv: list[str] | None = None) -> None:
         help="trainings at once on --device, each in a process of its own, comma-separated "
         "(default 1); each count beyond one is a row of their steps over the span of their timed windows",
     )
-    parser.add_argument("--rollouts", type=int, default=3, help="rollouts per row, the first untimed")
-    parser.add_argument("--n-steps", type=int, default=64)
+    parser.add_argument("--rollouts", type=integer(2), default=3, help="rollouts per row, the first untimed")
+    parser.add_argument("--n-steps", type=integer(1), default=64)
     parser.add_argument("--json", type=output_file, default=None)
     args = parser.parse_args(argv)
     sizes = tuple(int(s) for s in args.sizes.split(","))

@@ -22,4 +22,4 @@ def test_first_run_refuses_no_repeats(capsys):
 
     with pytest.raises(SystemExit):
         first_run.main(["--repeats", "0"])
-    assert "--repeats must be at least 1" in capsys.readouterr().err
+    assert "argument --repeats: must be an integer >= 1, got 0" in capsys.readouterr().err

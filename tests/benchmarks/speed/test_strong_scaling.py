@@ -95,3 +95,17 @@ def test_the_output_ends_with_the_last_counts_figures_as_one_json_line(monkeypat
     strong_scaling.main(["--workers", "1,2", "--predict", ""])
     last = capsys.readouterr().out.strip().splitlines()[-1]
     assert json.loads(last) == {key: rows[1][key] for key in figures}
+
+
+@pytest.mark.parametrize(
+    ("argv", "message"),
+    [
+        (["--repeats", "0"], "argument --repeats: must be an integer >= 1, got 0"),
+        (["--model-from", "x"], "argument --model-from: must be an integer >= 1, got 'x'"),
+        (["--json", "."], "argument --json: must be a file, and '.' is a folder"),
+    ],
+)
+def test_bad_arguments_are_refused_in_one_line_before_any_run(argv, message, capsys):
+    with pytest.raises(SystemExit):
+        strong_scaling.main(argv)
+    assert capsys.readouterr().err.strip().splitlines()[-1].endswith(message)
