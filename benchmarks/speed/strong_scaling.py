@@ -310,10 +310,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--workers", default="1,2", help="worker counts measured, comma-separated")
     parser.add_argument("--predict", default="4,8,16", help="worker counts the model predicts")
     parser.add_argument(
-        "--model-from",
-        type=integer(1),
-        default=None,
-        help="the measured count the model starts from (default: the most)",
+        "--model-from", type=integer(1), help="count the model starts from (default: the most)"
     )
     parser.add_argument(
         "--study", default=" ".join(STUDY), help="the study's arguments (default %(default)r)"
