@@ -653,19 +653,19 @@ def trial_coverage(
     }
     equal = next(iter(population.values())).equal()
     truth_of_differences = {key: float(d(equal)) for key, d in difference_metrics(population).items()}
+    truths = truth | truth_of_differences
     rows = []
     for n in counts:
         started = time.perf_counter()
         rng = np.random.default_rng([seed, n])
-        counted = {key: [0, 0, 0] for key in (*truth, *truth_of_differences)}  # judged, covered, extended
+        counted = {key: [0, 0, 0] for key in truths}  # judged, covered, extended
         for r in range(repeats):
             drawn = rng.integers(0, size, n)
             runs = {policy: full.of_trials(drawn) for policy, full in population.items()}
-            for policy, run in runs.items():
-                metrics = run.scalar_metrics()
-                found = estimates({k: metrics[k] for p, k in truth if p == policy}, n, seed=r)
-                _tally(counted, {(policy, k): judged for k, judged in found.items()}, truth)
-            _tally(counted, estimates(difference_metrics(runs), n, seed=r), truth_of_differences)
+            metrics = {(p, k): runs[p].scalar_metrics()[k] for p, k in truth} | difference_metrics(runs)
+            # one bootstrap of them all: each metric's numbers are those it gets alone (estimates),
+            # and a policy's ARMSE on a resample is computed once for it and its differences
+            _tally(counted, estimates(metrics, n, seed=r), truths)
         rows.append(
             {
                 "trials": n,
