@@ -1057,6 +1057,14 @@ def coverage_values(docs: Path) -> dict[str, str]:
     return table
 
 
+#: The coverage tables' columns: the metrics each holds, and its paired differences' name.
+_COVERAGE_COLUMNS = {
+    "armse": (("armse",), "Δ ARMSE's"),
+    "means": (("asr", "final_regret"), "Δ ASR's or Δ final regret's"),
+    "sinr": (("mean_sinr_db",), "Δ mean SINR's"),
+}
+
+
 @values("trial-coverage")
 def trial_coverage_values(docs: Path) -> dict[str, str]:
     """How often the intervals of runs of fewer trials cover the value of the run they are drawn
@@ -1084,18 +1092,14 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
     for row in record["rows"]:
         lowest_of = {}
         for prefix, counts in (("", row), ("pairs.", row["differences"])):
-            for key, names in (
-                ("armse", ("armse",)),
-                ("means", ("asr", "final_regret")),
-                ("sinr", ("mean_sinr_db",)),
-            ):
+            for key, (names, _) in _COVERAGE_COLUMNS.items():
                 rates = {n: r for n, r in counts["coverage"].items() if n.rsplit(".", 1)[1] in names}
                 lowest, highest = min(rates, key=rates.__getitem__), max(rates, key=rates.__getitem__)
                 table[f"{prefix}{key}.{row['trials']}"] = " to ".join(
                     _rate_with_interval(rates[n], counts["studies"][n]) for n in (lowest, highest)
                 )
                 lowest_of[prefix, key] = round(100 * rates[lowest], 1)  # as printed
-        for key in ("armse", "means", "sinr"):
+        for key in _COVERAGE_COLUMNS:
             gap = lowest_of["", key] - lowest_of["pairs.", key]
             (gaps if row["trials"] >= uncertainty.FEW_TRIALS else few_gaps).append((gap, key, row["trials"]))
         armse = [n for n in row["coverage"] if n.endswith(".armse")]
@@ -1108,10 +1112,9 @@ def trial_coverage_values(docs: Path) -> dict[str, str]:
     if few_gaps:
         gap, key, trials = max(few_gaps)
         lower = sum(g > 0 for g, _, _ in few_gaps)
-        column = {"armse": "Δ ARMSE's", "means": "Δ ASR's or Δ final regret's", "sinr": "Δ mean SINR's"}[key]
         table["pairs.few"] = (
             f"in {lower} of the {len(few_gaps)} columns and counts, by up to {gap:.1f} points "
-            f"({column} on {trials} trials)"
+            f"({_COVERAGE_COLUMNS[key][1]} on {trials} trials)"
         )
     return table
 
