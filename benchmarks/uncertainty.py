@@ -337,18 +337,22 @@ class _DeltaMethod:
         eye = np.eye(num_trials)
         trials = [np.asarray(m.mean(eye), np.float64) for m in (metric.a, metric.b)]  # x_a, x_b
         self.means = [float(x.mean()) for x in trials]
-        self.centred = [x - m for x, m in zip(trials, self.means, strict=True)]
+        centred = [x - m for x, m in zip(trials, self.means, strict=True)]
         slope_a, slope_b = metric.a.slope(self.means[0]), metric.b.slope(self.means[1])
-        self.linearized = slope_a * self.centred[0] - slope_b * self.centred[1]
+        self.linearized = slope_a * centred[0] - slope_b * centred[1]
+        # moments of values scaled to 1, as _bootstrapped takes them: the same bits, and finite
+        self.scales = [float(_power_of_two_scale(c)) for c in centred]
+        self.scaled = [c / scale for c, scale in zip(centred, self.scales, strict=True)]
 
     def error(self, weights: NDArray[np.float64]) -> NDArray[np.float64]:
         """The standard error at each resample's trial ``weights`` (..., n)."""
-        (ca, cb), (ma, mb) = self.centred, self.means
+        (ca, cb), (ma, mb), (sa, sb) = self.scaled, self.means, self.scales
         shift_a, shift_b = weights @ ca, weights @ cb
         var_a = weights @ ca**2 - shift_a**2
         var_b = weights @ cb**2 - shift_b**2
         covariance = weights @ (ca * cb) - shift_a * shift_b
-        slope_a, slope_b = self.metric.a.slope(ma + shift_a), self.metric.b.slope(mb + shift_b)
+        slope_a = self.metric.a.slope(ma + shift_a * sa) * sa
+        slope_b = self.metric.b.slope(mb + shift_b * sb) * sb
         variance = slope_a**2 * var_a + slope_b**2 * var_b - 2 * slope_a * slope_b * covariance
         return np.sqrt(np.maximum(variance, 0.0) / (self.num_trials - 1))
 

@@ -133,6 +133,20 @@ def test_on_a_few_trials_a_difference_of_logarithms_of_means_is_covered_by_the_d
     assert stats.binomtest(before, repetitions, 0.95, alternative="less").pvalue < 0.01, before
 
 
+@pytest.mark.filterwarnings("error")
+def test_a_difference_of_logarithms_of_means_near_the_float_limits_has_the_interval_of_values_near_1():
+    """The delta method's moments are taken of values scaled to 1 too: trials near 2^900 or 2^-900
+    give, with no warning, the interval of the same trials near 1 (the logs differ by rounding)."""
+    rng = np.random.default_rng(3)
+    x, y = rng.exponential(1.0, 12), rng.exponential(2.0, 12)
+    plain = uncertainty.estimate(DifferenceOfMeans(_log_of_mean(x), _log_of_mean(y)), 12, seed=1)
+    for exponent in (900, -900):
+        a, b = np.ldexp(x, exponent), np.ldexp(y, exponent)
+        far = uncertainty.estimate(DifferenceOfMeans(_log_of_mean(a), _log_of_mean(b)), 12, seed=1)
+        assert far["method"] == plain["method"] == "bootstrap-t"
+        assert far["ci"] == pytest.approx(plain["ci"], rel=1e-9)
+
+
 def test_a_difference_of_means_is_made_of_two_functions_of_means_with_slopes():
     x = np.ones(5)
     with pytest.raises(TypeError, match="DifferenceOfMeans's b must be an OfMean, got function"):
