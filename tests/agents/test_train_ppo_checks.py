@@ -60,6 +60,7 @@ def test_a_bad_hyperparameter_file_is_one_line_and_writes_nothing(extra, message
 
 @pytest.mark.parametrize("kind", ["missing", "folder", "binary"])
 def test_a_hyperparameter_file_that_cannot_be_read_is_named_in_one_line(kind, tmp_path, capsys):
+    pytest.importorskip("stable_baselines3", reason="train-ppo needs the rl extra")
     path = tmp_path / "hp.yml"
     if kind == "folder":
         path.mkdir()
@@ -96,6 +97,7 @@ def test_the_folder_is_locked_and_an_old_model_is_replaced_only_when_asked(tmp_p
 def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, monkeypatch, capsys):
     """Ctrl-C during a several-seed training: the finished seeds stay, and the command says how
     many and how to resume (exit 130), as an interrupted benchmark run does."""
+    pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
     from benchmarks import training
 
     trained = []
@@ -125,6 +127,7 @@ def test_a_training_estimated_beyond_max_hours_is_refused_before_anything_is_wri
     """train-ppo estimates its trainings (timesteps at each learner's rate, seeds --workers at a
     time) and refuses beyond --max-hours in one line, as the studies do; below, it says the
     estimate when it is a minute or more."""
+    pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
     from benchmarks.training import TRAINING_STEPS_PER_S, estimate_training_seconds
 
     assert estimate_training_seconds("recurrent-ppo", 1280) == pytest.approx(1.0)

@@ -151,6 +151,9 @@ def test_a_bad_agent_parameter_is_refused_before_anything_is_written(
     params = {"fixed": ["fixed.tx=[0, 1]", "fixed.rx=[0, 1, 2]"]}.get(agent, [])
     params = [p for p in params if not p.startswith(f"{agent}.{parameter}=")]
     learned = agent in agents.learned_agents()
+    if learned:
+        for module in ("stable_baselines3", "sb3_contrib", "torch"):
+            pytest.importorskip(module, reason="the learned agents need the rl extra")
     policy = f"{agent}:/nonexistent/model.zip" if learned else agent
     argv = ["run", "--scenario", "paper-1-v1", "--policies", policy, "--out", str(out), "--quiet"]
     if not learned:
