@@ -1,5 +1,8 @@
 """Helpers shared by the tests."""
 
+import re
+from pathlib import Path
+
 import numpy as np
 
 from mimo_radar_env import random_scenario
@@ -89,3 +92,9 @@ class StandInGraph:
         else:
             torch.utils._pytree.tree_map(lambda old, new: old.copy_(new), self.outputs, fresh)
         return self.outputs
+
+
+def readme_demo_table() -> str:
+    """The table the README shows ``mimo-radar-bench demo`` printing."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text()
+    return re.search(r"mimo-radar-bench demo\n```\n.*?```text\n(.*?)```", text, re.DOTALL).group(1).strip()

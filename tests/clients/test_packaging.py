@@ -5,6 +5,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers import readme_demo_table
+
 ROOT = Path(__file__).resolve().parents[2]
 
 
@@ -23,6 +25,17 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
     assert "torchrl: GymEnv('MimoRadarSelectFlat-v1') checked and rolled out" in result.stdout
     assert "torchrl: MimoRadarSelectTorchRLEnv checked and rolled out" in result.stdout
     assert result.stdout.count("torchrl: the docs' recipe clients.md-") == 3
+
+
+@pytest.mark.slow
+def test_the_lowest_declared_versions_run_the_demo_and_the_env_and_agents_tests():
+    """Every core dependency and numba at pyproject.toml's lower bound, in a new venv (~3 min)."""
+    result = subprocess.run(
+        ["bash", str(ROOT / ".ci" / "lowest-check")], capture_output=True, text=True, timeout=1800
+    )
+    assert result.returncode == 0, result.stdout[-4000:] + result.stderr[-4000:]
+    assert readme_demo_table() in result.stdout
+    assert "lowest check: the demo and the env's and agents' tests ran on " in result.stdout
 
 
 def test_the_hyperparameters_are_package_data():

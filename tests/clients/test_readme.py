@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from tests.helpers import readme_demo_table
+
 README = Path(__file__).resolve().parents[2] / "README.md"
 BLOCKS = re.findall(r"```python\n(.*?)```", README.read_text(), re.DOTALL)
 
@@ -33,8 +35,6 @@ def test_every_block_runs_in_order(tmp_path):
 
 
 def test_the_demo_prints_what_the_readme_shows(tmp_path):
-    text = README.read_text()
-    shown = re.search(r"mimo-radar-bench demo\n```\n.*?```text\n(.*?)```", text, re.DOTALL).group(1)
     result = subprocess.run(
         [sys.executable, "-m", "benchmarks", "demo"],
         cwd=tmp_path,
@@ -43,4 +43,4 @@ def test_the_demo_prints_what_the_readme_shows(tmp_path):
         timeout=600,
     )
     assert result.returncode == 0, result.stderr[-2000:]
-    assert result.stdout.strip() == shown.strip()
+    assert result.stdout.strip() == readme_demo_table()
