@@ -425,18 +425,23 @@ def _resolve_auto_address() -> str:
         from ray._private import services
     except ImportError:  # pragma: no cover - a Ray without the helper: let ray.init resolve it
         return "auto"
+    not_a_cluster = ValueError(
+        f"--address auto: RAY_ADDRESS={os.environ.get('RAY_ADDRESS')!r} is not a Ray cluster's address: "
+        f"set it to the cluster's HOST:PORT ({_CLUSTER_PORT}), or give --address"
+    )
     try:
-        return str(services.canonicalize_bootstrap_address("auto"))
+        address = str(services.canonicalize_bootstrap_address("auto"))
     except ConnectionError:
         raise ValueError(
             "--address auto: no Ray cluster is running on this machine and RAY_ADDRESS is not set; start "
             "one with 'ray start --head', give its HOST:PORT, or leave --address out to start a local Ray"
         ) from None
     except ValueError:  # RAY_ADDRESS that Ray cannot read as a cluster's address
-        raise ValueError(
-            f"--address auto: RAY_ADDRESS={os.environ.get('RAY_ADDRESS')!r} is not a Ray cluster's address: "
-            f"set it to the cluster's HOST:PORT ({_CLUSTER_PORT}), or give --address"
-        ) from None
+        raise not_a_cluster from None
+    scheme = address.rpartition("://")[0]
+    if scheme not in ("", "ray"):  # a web address in RAY_ADDRESS, which older Ray passes on (2.40 did)
+        raise not_a_cluster
+    return address
 
 
 def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
