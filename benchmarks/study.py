@@ -109,6 +109,11 @@ def configure(runs: Sequence[Run], settings: Settings) -> list[harness.RunConfig
 Prepare = Callable[[harness.RunConfig, str, Any], None]
 
 
+def load_statistics() -> None:
+    """What a study's intervals import (scipy's statistics), loaded in a thread of its own."""
+    importlib.import_module("scipy.stats")
+
+
 def execute(
     runs: Sequence[Run], settings: Settings, keep_metrics: bool = False, prepare: Prepare | None = None
 ) -> dict[Hashable, Finished]:
@@ -122,8 +127,13 @@ def execute(
     from . import report, uncertainty
 
     # scipy's statistics, which the first interval needs, load in this process while the workers
-    # start on the tasks rather than before the first task or after the last
-    threading.Thread(target=importlib.import_module, args=("scipy.stats",), daemon=True).start()
+    # start on the tasks rather than before the first task or after the last; every interval
+    # waits for them: it holds BLAS to one thread through threadpoolctl, which walks the loaded
+    # libraries under the dynamic loader's lock and, beside this thread loading one of scipy's
+    # while it holds the GIL, would wait for it forever (the intervals of a policy whose tasks
+    # ended first hung a run so)
+    loading = threading.Thread(target=load_statistics, daemon=True, name="load-statistics")
+    loading.start()
 
     written: dict[int, Finished] = {}
     # each policy's metrics and intervals, computed as soon as its last shard is saved (while the
@@ -131,6 +141,7 @@ def execute(
     early: dict[int, dict[str, tuple[Any, dict[str, Any]]]] = {}
 
     def policy_done(number: int, policy: str, joined: dict[str, Any]) -> None:
+        loading.join()
         metrics = report.policy_metrics(configs[number], joined)
         early.setdefault(number, {})[policy] = (
             metrics,
@@ -140,6 +151,7 @@ def execute(
             prepare(configs[number], policy, metrics)
 
     def write(number: int, per_trial: dict[str, dict[str, Any]]) -> None:
+        loading.join()
         run, config = runs[number], configs[number]
         given = early.pop(number, {})
         metrics = {

@@ -217,3 +217,32 @@ def test_the_machine_record_counts_physical_cores_apart_from_hardware_threads(tm
     quota.write_text("max 100000\n")
     assert _processor(str(cpuinfo), str(quota))["cpu_quota_cores"] is None
     assert _processor(str(tmp_path / "none"), str(quota)) == {}
+
+
+def test_no_interval_is_computed_while_scipy_loads_in_the_studys_thread(tmp_path, monkeypatch):
+    """The intervals hold BLAS to one thread through threadpoolctl, which walks the loaded
+    libraries under the dynamic loader's lock: beside a thread loading scipy's extensions with the
+    GIL held, that deadlocked (a policy whose tasks ended before scipy had loaded hung its run).
+    Here scipy's load lasts until an interval is asked for, or 2 s: every interval waits for it."""
+    import threading
+
+    from benchmarks import study, uncertainty
+
+    asked, loaded, early = threading.Event(), threading.Event(), []
+
+    def slow_load():
+        asked.wait(timeout=2)
+        loaded.set()
+
+    real = uncertainty.policy_estimates
+
+    def policy_estimates(*args, **kwargs):
+        early.append(not loaded.is_set())
+        asked.set()
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(study, "load_statistics", slow_load)
+    monkeypatch.setattr(uncertainty, "policy_estimates", policy_estimates)
+    argv = ["--import", "tests.benchmarks.toy_study", "toy", "--out", str(tmp_path / "toy"), "--steps", "5"]
+    assert main([*argv, "--workers", "1", "--quiet", "--no-figures"]) == 0
+    assert early and not any(early)
