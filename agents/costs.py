@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from types import MappingProxyType
 from typing import TYPE_CHECKING, Any
 
+from mimo_radar_env.core.compiled import HAVE_NUMBA
 from mimo_radar_env.core.superarm import search_operations, search_seconds, super_arm_count
 from mimo_radar_env.tracking.selection import selection_memory_per_trial, selection_operations_per_trial
 
@@ -90,8 +91,9 @@ class Cost:
         return self.operations_per_trial_step(agent) * self.seconds_per_operation
 
     def is_threaded(self, agent: Agent) -> bool:
-        """Whether ``agent``'s work of this part is :attr:`threaded`."""
-        return self.threaded
+        """Whether ``agent``'s work of this part is :attr:`threaded` (without numba no kernel
+        is compiled, and its numpy path runs on one thread)."""
+        return self.threaded and HAVE_NUMBA
 
 
 def _channels(agent: Agent) -> int:
