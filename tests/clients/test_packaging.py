@@ -30,7 +30,7 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
 @pytest.mark.slow
 def test_the_lowest_declared_versions_run_the_demo_and_their_tests():
     """Every core dependency, numba, the rl extra's learners and Ray at pyproject.toml's lower
-    bound, in a new venv (~6 min)."""
+    bound, in a new venv (~7 min)."""
     result = subprocess.run(
         ["bash", str(ROOT / ".ci" / "lowest-check")], capture_output=True, text=True, timeout=1800
     )
