@@ -23,6 +23,7 @@ holds v1's layout and section 1's reconstruction jittered (``calibration.candida
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 import time
@@ -35,6 +36,7 @@ from scipy.optimize import differential_evolution
 from mimo_radar_env import RadarModel, Scenario, load_scenario
 
 from .. import harness, resources
+from ..backends import worker_pool
 from ..errors import BenchError
 from ..settings import integer
 from ..study import Study, configure, machine, write_timing
@@ -143,19 +145,24 @@ def search(
     )
     generation_best: list[float] = []
     t0 = time.perf_counter()
-    result = differential_evolution(
-        objective,
-        bounds=[(0.0, calibration.REGION_M / 1e3)] * DIMENSIONS,
-        args=(scale,),
-        maxiter=generations,
-        init=np.clip(start, 0.0, calibration.REGION_M / 1e3),
-        seed=int(rng.integers(2**31)),
-        polish=False,
-        tol=0.0,
-        workers=workers,
-        updating="deferred",
-        callback=lambda intermediate_result: generation_best.append(float(intermediate_result.fun)),
-    )
+    with contextlib.ExitStack() as stack:
+        # the project's worker processes, not scipy's own pool: that pool's workers are forked from
+        # this process with the command's SIGTERM handler, and its terminate() at the search's end
+        # waited for one of them for good (a hung test run in CI)
+        pool = stack.enter_context(worker_pool(workers)) if workers > 1 else None
+        result = differential_evolution(
+            objective,
+            bounds=[(0.0, calibration.REGION_M / 1e3)] * DIMENSIONS,
+            args=(scale,),
+            maxiter=generations,
+            init=np.clip(start, 0.0, calibration.REGION_M / 1e3),
+            seed=int(rng.integers(2**31)),
+            polish=False,
+            tol=0.0,
+            workers=1 if pool is None else pool.map,
+            updating="deferred",
+            callback=lambda intermediate_result: generation_best.append(float(intermediate_result.fun)),
+        )
     wall = time.perf_counter() - t0
     order = np.argsort(result.population_energies, kind="stable")
     ranked = [
