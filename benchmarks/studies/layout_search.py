@@ -145,11 +145,10 @@ def search(
     )
     generation_best: list[float] = []
     t0 = time.perf_counter()
-    with contextlib.ExitStack() as stack:
-        # the project's worker processes, not scipy's own pool: that pool's workers are forked from
-        # this process with the command's SIGTERM handler, and its terminate() at the search's end
-        # waited for one of them for good (a hung test run in CI)
-        pool = stack.enter_context(worker_pool(workers)) if workers > 1 else None
+    # the project's worker processes, not scipy's own pool: that pool's workers are forked from
+    # this process with the command's SIGTERM handler, and its terminate() at the search's end
+    # waited for one of them for good (a hung test run in CI)
+    with worker_pool(workers) if workers > 1 else contextlib.nullcontext() as pool:
         result = differential_evolution(
             objective,
             bounds=[(0.0, calibration.REGION_M / 1e3)] * DIMENSIONS,
