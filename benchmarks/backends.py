@@ -93,6 +93,25 @@ ONE_BLAS_THREAD = {name: "1" for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", 
 _CONTEXT = _ForkServerContext() if sys.platform.startswith("linux") else _SpawnContext()
 
 
+@contextlib.contextmanager
+def one_blas_thread() -> Iterator[None]:
+    """BLAS (numpy's matrix products and inverses) held to one thread in this block (or call,
+    as a decorator), in the calling thread, as every worker process has it
+    (:data:`ONE_BLAS_THREAD`). A product's or an inverse's last bits may depend on how many
+    threads share it (numpy 1.26's OpenBLAS 0.3.23 inverts matrices of 8 rows or more so), so
+    every task and every interval runs on one: the same numbers in this process, in a worker, on
+    Ray and on any count of cores; and the statistics a study's parent computes while its
+    workers hold the cores start no BLAS thread per core among them. Calls from several threads
+    at once may see each other's limit (the harness and the studies make them from one).
+    threadpoolctl walks the loaded libraries under the dynamic loader's lock: no other thread
+    may be importing an extension module meanwhile (:func:`benchmarks.study.execute` keeps to
+    that)."""
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1, user_api="blas"):
+        yield
+
+
 def start_fork_server(device: bool = False) -> None:
     """Start the fork server now, where the workers come from one: it imports (and loads) what a
     task needs while this process goes on (parsing, checking and planning a run), so the workers
@@ -202,8 +221,10 @@ def share_idle_cores(budget: Any, unfinished: list[int], workers: int, threads: 
 
 
 def run_inline(runner: Runner, todo: list[Task], finished: Finished) -> None:
-    for number, task in enumerate(todo):
-        finished(number, runner(*task))
+    """The tasks in this process, one after the other, on one BLAS thread as in a worker."""
+    with one_blas_thread():
+        for number, task in enumerate(todo):
+            finished(number, runner(*task))
 
 
 class WorkerPool(ProcessPoolExecutor):
@@ -446,9 +467,10 @@ def _resolve_auto_address() -> str:
 
 def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
     """``runner(*task)`` on ``threads`` compute threads (a Ray task: its worker process serves
-    tasks of any thread count)."""
+    tasks of any thread count) and one BLAS thread, as a local worker's."""
     pin_threads(threads)
-    return runner(*task)
+    with one_blas_thread():
+        return runner(*task)
 
 
 def run_ray(

@@ -894,6 +894,12 @@ def _say_resumed(configs: Sequence[RunConfig], folders: Sequence[Path], left: Se
             tqdm.write(f"resumed: {total - todo} of {total} tasks already done in {folder}", file=sys.stderr)
 
 
+def in_this_process(backend: str, workers: int) -> bool:
+    """Whether a run's tasks run in the calling process (one local worker), not in worker
+    processes or on Ray."""
+    return backend == "local" and workers == 1
+
+
 def _dispatch(
     tasks: list[backends.Task],
     finished: backends.Finished,
@@ -915,7 +921,7 @@ def _dispatch(
     ``on_device`` step on a device, so the tail's cores are not shared among them."""
     if backend == "ray":
         backends.run_ray(run_task, tasks, finished, address, threads or 1, started=starting)
-    elif workers == 1:
+    elif in_this_process(backend, workers):
         starting()
         with compiled.with_threads(threads):
             backends.run_inline(run_task, tasks, finished)
@@ -942,7 +948,7 @@ def _threads_for(
     count in this process); one for tasks ``on_device`` (their steps run there, not on the
     threads the declared costs count); else :func:`choose_threads`, said where it is more than
     one."""
-    if threads is not None or (workers == 1 and backend == "local") or not todo:
+    if threads is not None or in_this_process(backend, workers) or not todo:
         return threads
     if on_device:
         return 1

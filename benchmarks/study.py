@@ -128,12 +128,15 @@ def execute(
 
     # scipy's statistics, which the first interval needs, load in this process while the workers
     # start on the tasks rather than before the first task or after the last; every interval
-    # waits for them: it holds BLAS to one thread through threadpoolctl, which walks the loaded
-    # libraries under the dynamic loader's lock and, beside this thread loading one of scipy's
-    # while it holds the GIL, would wait for it forever (the intervals of a policy whose tasks
-    # ended first hung a run so)
+    # waits for them, and so do tasks run in this process: they hold BLAS to one thread
+    # (backends.one_blas_thread) through threadpoolctl, which walks the loaded libraries under
+    # the dynamic loader's lock and, beside this thread loading one of scipy's while it holds
+    # the GIL, would wait for it forever (the intervals of a policy whose tasks ended first hung
+    # a run so)
     loading = threading.Thread(target=load_statistics, daemon=True, name="load-statistics")
     loading.start()
+    if harness.in_this_process(settings.backend, settings.workers):
+        loading.join()
 
     written: dict[int, Finished] = {}
     # each policy's metrics and intervals, computed as soon as its last shard is saved (while the

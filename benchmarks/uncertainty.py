@@ -64,6 +64,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from benchmarks.backends import one_blas_thread
 from benchmarks.metrics import REMEMBERED_WEIGHTS, DifferenceOfMeans, OfMean, TrialMetrics, trial_weights
 
 CONFIDENCE = 0.95
@@ -150,25 +151,6 @@ def method_of(num_trials: int) -> str:
     return "; ".join(part for part in parts if part)
 
 
-def _on_one_blas_thread(function: Callable[..., Any]) -> Callable[..., Any]:
-    """``function`` with BLAS (numpy's matrix products: the metrics of resampled trials) held to
-    one thread. A product's last bits depend on how many threads share it, so this makes a
-    report's numbers the same bits on any count of cores; and while a study's workers hold the
-    cores, the statistics its parent computes as each policy ends do not start a BLAS thread per
-    core among them. The limit is set and given back around each call, in the calling thread:
-    calls from several threads at once may see each other's (the harness and the studies make
-    them from one)."""
-
-    @functools.wraps(function)
-    def on_one_thread(*args: Any, **kwargs: Any) -> Any:
-        from threadpoolctl import threadpool_limits
-
-        with threadpool_limits(limits=1, user_api="blas"):
-            return function(*args, **kwargs)
-
-    return on_one_thread
-
-
 #: The largest index array (elements) whose weights are kept: 2,000 resamples of 1,000 trials.
 SHARED_INDEX_ELEMENTS = 2_000_000
 #: The weights of the last few index arrays a bootstrap resampled (:func:`_shared_weights`).
@@ -242,7 +224,7 @@ def estimate(metric: Metric, num_trials: int, seed: int = 0) -> dict[str, Any]:
     return estimates({"": metric}, num_trials, seed)[""]
 
 
-@_on_one_blas_thread
+@one_blas_thread()
 def estimates(metrics: Mapping[Any, Metric], num_trials: int, seed: int = 0) -> dict[Any, dict[str, Any]]:
     """:func:`estimate` of each of ``metrics``, by key, from one bootstrap of all of them: the
     same numbers as one call each (every call resamples the trials with ``seed``, and scipy
@@ -468,7 +450,7 @@ def interval(metric: Metric, num_trials: int, seed: int = 0) -> tuple[float, flo
     return (float("nan"), float("nan")) if ci is None else (ci[0], ci[1])
 
 
-@_on_one_blas_thread
+@one_blas_thread()
 def band(curve: Metric, num_trials: int, seed: int = 0) -> tuple[NDArray, NDArray]:
     """Per-step 95 % band (percentile bootstrap) of a curve ``curve(w) -> (..., T)``; NaN on fewer
     than :data:`MIN_INTERVAL_TRIALS` trials."""

@@ -30,6 +30,30 @@ def test_local_workers_give_the_numbers_of_one_process(tmp_path, monkeypatch, co
             np.testing.assert_array_equal(one[policy][key], two[policy][key])
 
 
+def test_every_task_runs_on_one_blas_thread_in_this_process_and_on_ray(monkeypatch):
+    """As in a worker process: where BLAS has two threads around the call, the task sees one
+    (numpy 1.26's OpenBLAS inverts 8 x 8 matrices with bits that depend on its threads: a run on
+    one worker then differed from a run on two under centralised fusion), and has two again
+    after it."""
+    threadpoolctl = pytest.importorskip("threadpoolctl")
+
+    def blas_threads() -> set[int]:
+        return {pool["num_threads"] for pool in threadpoolctl.threadpool_info() if pool["user_api"] == "blas"}
+
+    seen = []
+    for name in backends.ONE_BLAS_THREAD:  # threaded_task (a Ray task) pins them for later imports
+        monkeypatch.setenv(name, "2")
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        if blas_threads() != {2}:
+            pytest.skip(f"BLAS cannot be given two threads here: {blas_threads()}")
+        backends.run_inline(
+            lambda *task: seen.append(blas_threads()), [({}, "p", 0), ({}, "p", 1)], lambda *_: None
+        )
+        backends.threaded_task(lambda *task: seen.append(blas_threads()), 1, {}, "p", 0)
+        assert blas_threads() == {2}
+    assert seen == [{1}, {1}, {1}]
+
+
 def test_threads_inside_a_task_give_the_numbers_of_one_thread(tmp_path, capsys):
     """Two-thread worker processes (their kernels' twins over threads, two chunks of trials a
     task) against this process on one thread; chosen, then said, for a run of one task."""
