@@ -97,7 +97,9 @@ def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") ->
     ``steps`` steps after two (the first acts from the reset's observation)."""
     import agents
 
-    agent = agents.make_agent(policy, SCENARIO, seed=0)
+    # an agent that names the env's fusion (tracking-ucb's estimator) is made with the env's
+    own = {"fusion": fusion} if "fusion" in agents.agent_class(policy).needs.env_option_params else {}
+    agent = agents.make_agent(policy, SCENARIO, seed=0, **own)
     env = agents.make_env(agent, trials, {"fusion": fusion}, device="cpu")
     episode = agents.Rollout(agent, env, seed=0)
     for _ in range(2):

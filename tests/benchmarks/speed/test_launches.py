@@ -48,6 +48,16 @@ def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone(monkeypatch)
     assert plain["env_step"] == row["env_step"] > 1000  # the same env, whatever acts on it
 
 
+def test_an_agent_that_names_the_fusion_is_counted_on_each_fusions_env():
+    """tracking-ucb's estimator takes the env's fusion: under centralised fusion its row was
+    refused (an agent made for average fusion on a centralised env)."""
+    rows = {
+        fusion: launches.policy_row("tracking-ucb", 4, 1, fusion) for fusion in ("average", "centralized")
+    }
+    assert rows["average"]["env_step"] != rows["centralized"]["env_step"]
+    assert all(row["act"] > 0 for row in rows.values())
+
+
 @pytest.mark.filterwarnings("ignore:`torch.jit.script_method` is deprecated:DeprecationWarning")
 def test_the_compiled_code_calls_are_its_generated_loops_and_its_library_kernels():
     """A pointwise chain before a matrix product fuses into one generated loop, the product calls
