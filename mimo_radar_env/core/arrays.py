@@ -221,7 +221,6 @@ class TorchNamespace:
             "abs",
             "isfinite",
             "hypot",
-            "einsum",
             "swapaxes",
             "moveaxis",
             "broadcast_to",
@@ -345,6 +344,46 @@ class TorchNamespace:
 
     def trace(self, a: Any, axis1: int = 0, axis2: int = 1) -> Any:
         return self.torch.diagonal(a, dim1=axis1, dim2=axis2).sum(-1)
+
+    # ------------------------------------------------------------ products
+    def einsum(self, subscripts: str, *operands: Any) -> Any:
+        """numpy's ``einsum``. Where the operands broadcast over every index hold at most
+        :data:`ELEMENTWISE_FACTOR` times the elements of the largest operand or of the result,
+        their product summed over the indices left out: elementwise kernels, which
+        ``torch.compile`` fuses with their neighbours (torch's own einsum calls a batched matrix
+        product, whose library kernels are slow for millions of tiny matrices on a GPU). Else
+        torch's ``einsum``."""
+        plan = _einsum_plan(subscripts, tuple(operand.ndim for operand in operands))
+        if plan is not None:
+            letters, axes, summed = plan
+            sizes: dict[str, int] = {}
+            for operand, own in zip(operands, axes, strict=True):
+                for letter, axis in own.items():
+                    sizes[letter] = max(sizes.get(letter, 1), operand.shape[axis])
+            result = math.prod(sizes[letter] for letter in letters[: len(letters) - len(summed)])
+            largest = max(result, *(operand.numel() for operand in operands))
+            if math.prod(sizes.values()) <= ELEMENTWISE_FACTOR * largest:
+                product = None
+                for operand, own in zip(operands, axes, strict=True):
+                    view = operand.permute([own[letter] for letter in letters if letter in own])
+                    view = view.reshape(
+                        [operand.shape[own[letter]] if letter in own else 1 for letter in letters]
+                    )
+                    product = view if product is None else product * view
+                return product.sum(dim=summed) if summed else product
+        return self.torch.einsum(subscripts, *operands)
+
+    def matmul(self, a: Any, b: Any) -> Any:
+        """numpy's ``matmul`` (``a @ b``): for a batch of matrices, or a vector, as :meth:`einsum`
+        computes it (their broadcast product summed over the inner dimension, within its
+        :data:`ELEMENTWISE_FACTOR`); two matrices alone, one library product (torch's)."""
+        if a.ndim == 2 and b.ndim == 2:
+            return self.torch.matmul(a, b)
+        if b.ndim == 1:
+            return self.einsum("...k,k->...", a, b)
+        if a.ndim == 1:
+            return self.einsum("k,...kn->...n", a, b)
+        return self.einsum("...mk,...kn->...mn", a, b)
 
     # ------------------------------------------------------------ reductions
     def sum(self, a: Any, axis: Any = None, keepdims: bool = False) -> Any:
@@ -480,6 +519,43 @@ TORCH_DTYPES = {
     np.dtype(np.int8): lambda torch: torch.int8,
     np.dtype(np.bool_): lambda torch: torch.bool,
 }
+
+
+#: How many times the elements of its largest operand (or result) the broadcast product of an
+#: ``einsum`` or batched ``matmul`` may hold for :class:`TorchNamespace` to compute it
+#: elementwise (the engine's are at most 9: a centralised update's innovation covariance over 9
+#: sigma points); larger ones go to torch's matrix products.
+ELEMENTWISE_FACTOR = 16
+
+
+@functools.lru_cache(maxsize=256)
+def _einsum_plan(
+    subscripts: str, ndims: tuple[int, ...]
+) -> tuple[str, tuple[dict[str, int], ...], tuple[int, ...]] | None:
+    """How :meth:`TorchNamespace.einsum` broadcasts ``subscripts`` over operands of ``ndims``
+    axes: every index in order (the output's, then those summed over; an ellipsis's axes named
+    by characters no subscript uses), each operand's axis of each of its indices, and the
+    positions summed over. None for what it leaves to torch: no ``->``, an index twice in one
+    operand (a diagonal), or subscripts that do not fit the operands."""
+    inputs, arrow, output = subscripts.replace(" ", "").partition("->")
+    terms = inputs.split(",")
+    if not arrow or len(terms) != len(ndims):
+        return None
+    named = [ndim - len(term.replace("...", "")) for term, ndim in zip(terms, ndims, strict=True)]
+    ellipsis = "".join(chr(0x100 + d) for d in range(max(named, default=0)))
+    terms = [
+        term.replace("...", ellipsis[len(ellipsis) - count :] if count > 0 else "")
+        for term, count in zip(terms, named, strict=True)
+    ]
+    output = output.replace("...", ellipsis)
+    if any(len(set(term)) != len(term) or len(term) != ndim for term, ndim in zip(terms, ndims, strict=True)):
+        return None
+    if len(set(output)) != len(output) or not set(output) <= set("".join(terms)):
+        return None
+    summed = dict.fromkeys(letter for term in terms for letter in term if letter not in output)
+    letters = output + "".join(summed)
+    axes = tuple({letter: term.index(letter) for letter in term} for term in terms)
+    return letters, axes, tuple(range(len(output), len(letters)))
 
 
 @functools.lru_cache(maxsize=64)

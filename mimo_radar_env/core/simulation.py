@@ -164,7 +164,7 @@ class RadarSimulation:
         noise = self._process_std * self.streams.normal(
             Stream.PROCESS_NOISE, t, full_index(self.batch_size, (model.num_targets, 2), xp)
         )
-        return xp.einsum("kij,bkj->bki", F, state) + noise @ model.noise_gain.T
+        return xp.einsum("kij,bkj->bki", F, state) + xp.matmul(noise, model.noise_gain.T)
 
     def future_states(self, horizon: int) -> NDArray[np.float64]:
         """The true states at steps ``t + 1 .. t + horizon`` (B, H, K, 4), without advancing:

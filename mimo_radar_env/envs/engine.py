@@ -401,7 +401,7 @@ class RadarEngine:
         xp = self.xp
         before = position_determinant(self.tracker.prior_covariance)
         after = position_determinant(self.tracker.covariance)
-        return xp.log(before / after) @ self.model.weights
+        return xp.matmul(xp.log(before / after), self.model.weights)
 
     def _tracker_variance(self, channels: ChannelObservations) -> NDArray:
         """The measurement variances (B, K, C, 2) the tracker uses, per ``filter_noise``."""

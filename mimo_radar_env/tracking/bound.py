@@ -44,7 +44,9 @@ def bound_step(
         )
         if healthy:
             return out
-    prior, _ = repair_covariance(transition @ covariance @ xp.swapaxes(transition, -1, -2) + process_cov)
+    prior, _ = repair_covariance(
+        xp.matmul(xp.matmul(transition, covariance), xp.swapaxes(transition, -1, -2)) + process_cov
+    )
     information = xp.linalg.inv(prior)
     information[..., POSITION, POSITION] += measured
     return repair_covariance(xp.linalg.inv(information))[0]

@@ -69,7 +69,7 @@ def predict(
     """Exact linear prediction of each model: ``F_r x``, ``F_r P F_r' + Q`` (transitions (R, n, n))."""
     xp = namespace(means)
     pred_means = xp.einsum("rij,bkrj->bkri", transitions, means)
-    pred_covs = transitions @ covs @ xp.swapaxes(transitions, -1, -2)
+    pred_covs = xp.matmul(xp.matmul(transitions, covs), xp.swapaxes(transitions, -1, -2))
     return pred_means, symmetrize(pred_covs + process_cov)
 
 

@@ -165,7 +165,7 @@ class IMMUKFTracker:
         chol, repaired = robust_cholesky(scale * covs)
         self.repairs = self.repairs + repaired.reshape(self.batch_size, -1).sum(axis=1)
         if not deferring() and repaired.any():  # deferred: a failed factor fails the step's checks
-            rebuilt = chol @ self.xp.swapaxes(chol, -1, -2) / scale
+            rebuilt = self.xp.matmul(chol, self.xp.swapaxes(chol, -1, -2)) / scale
             covs = self.xp.where(repaired[..., None, None], rebuilt, covs)
         return Prior(means, covs, log_c, sigma_points(means, chol), self.wm, self.wc)
 

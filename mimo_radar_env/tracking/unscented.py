@@ -327,20 +327,22 @@ def unscented_update(
     dx = sigmas - prior_mean[..., None, :]
     weighted_dz = dz * wc[:, None]
     d = dz.shape[-1]
-    cross_cov = xp.swapaxes(dx, -1, -2) @ weighted_dz
+    cross_cov = xp.matmul(xp.swapaxes(dx, -1, -2), weighted_dz)
     residual = measurement_residual(measurement, z_pred)
     if d >= WOODBURY_MIN_DIMENSION and xp.all(wc != 0):
         gain, mahalanobis, logdet = _woodbury(dz, wc, noise_variance, cross_cov, residual)
     else:
-        innovation_cov = xp.swapaxes(weighted_dz, -1, -2) @ dz
+        innovation_cov = xp.matmul(xp.swapaxes(weighted_dz, -1, -2), dz)
         diag = xp.arange(d)
         innovation_cov[..., diag, diag] += noise_variance
         innovation_inv, logdet = _inverse_and_logdet(innovation_cov)
-        gain = cross_cov @ innovation_inv
-        mahalanobis = (residual[..., None, :] @ innovation_inv @ residual[..., None])[..., 0, 0]
-    mean = prior_mean + (gain @ residual[..., None])[..., 0]
+        gain = xp.matmul(cross_cov, innovation_inv)
+        mahalanobis = xp.matmul(xp.matmul(residual[..., None, :], innovation_inv), residual[..., None])[
+            ..., 0, 0
+        ]
+    mean = prior_mean + xp.matmul(gain, residual[..., None])[..., 0]
     # K S K' = K Pxz' (as K S = Pxz); symmetric up to rounding: callers symmetrise what they keep
-    cov = prior_cov - gain @ xp.swapaxes(cross_cov, -1, -2) if with_covariance else None
+    cov = prior_cov - xp.matmul(gain, xp.swapaxes(cross_cov, -1, -2)) if with_covariance else None
     log_likelihood = -0.5 * (mahalanobis + logdet + d * _LOG_2PI)
     return UpdateResult(mean, cov, log_likelihood, gain, cross_cov)
 
@@ -366,14 +368,16 @@ def _woodbury(
     xp = namespace(dz)
     inv_noise = 1.0 / noise_variance  # (..., d)
     scaled = dz * inv_noise[..., None, :]  # dz R^-1, (..., S, d)
-    inner = scaled @ xp.swapaxes(dz, -1, -2)  # (..., S, S)
+    inner = xp.matmul(scaled, xp.swapaxes(dz, -1, -2))  # (..., S, S)
     points = xp.arange(wc.shape[0])
     inner[..., points, points] += 1.0 / wc
     inner_inv, inner_logdet = _inverse_and_logdet(inner, allow_indefinite=True)
     # K = Pxz R^-1 - (Pxz R^-1 dz') M^-1 (dz R^-1)
     cross_scaled = cross_cov * inv_noise[..., None, :]  # (..., n, d)
-    gain = cross_scaled - ((cross_scaled @ xp.swapaxes(dz, -1, -2)) @ inner_inv) @ scaled
-    projected = (scaled @ residual[..., None])[..., 0]  # dz R^-1 r, (..., S)
+    gain = cross_scaled - xp.matmul(
+        xp.matmul(xp.matmul(cross_scaled, xp.swapaxes(dz, -1, -2)), inner_inv), scaled
+    )
+    projected = xp.matmul(scaled, residual[..., None])[..., 0]  # dz R^-1 r, (..., S)
     mahalanobis = xp.einsum("...d,...d->...", residual * inv_noise, residual) - xp.einsum(
         "...s,...st,...t->...", projected, inner_inv, projected
     )

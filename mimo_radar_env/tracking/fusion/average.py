@@ -145,14 +145,14 @@ def average_channels(
         return xp.moveaxis(a, 2, -2).reshape(B, K, R, n, C * d)
 
     folded_cross_t = xp.swapaxes(fold(cross_cov), -1, -2)
-    model_covs = symmetrize(prior_covs - (fold(gain) @ folded_cross_t) / C)
+    model_covs = symmetrize(prior_covs - xp.matmul(fold(gain), folded_cross_t) / C)
     weights = probs / C  # each channel's combined estimate enters the mean with 1/C
     channel_mean = xp.einsum("bkcr,bkcri->bkci", probs, means)
     spread = (means - channel_mean[..., None, :]).reshape(B, K, C * R, n)
     weighted_spread = spread * weights.reshape(B, K, C * R, 1)
     covariance = xp.einsum("bkr,bkrij->bkij", weights.sum(axis=2), prior_covs)
-    covariance -= (fold(gain * weights[..., None, None]) @ folded_cross_t).sum(axis=2)
-    covariance += xp.swapaxes(weighted_spread, -1, -2) @ spread
+    covariance -= xp.matmul(fold(gain * weights[..., None, None]), folded_cross_t).sum(axis=2)
+    covariance += xp.matmul(xp.swapaxes(weighted_spread, -1, -2), spread)
     return means.mean(axis=2), model_covs, channel_mean.mean(axis=2), symmetrize(covariance)
 
 

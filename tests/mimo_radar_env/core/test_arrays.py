@@ -62,6 +62,88 @@ def test_the_torch_namespace_computes_what_numpy_does():
         np.testing.assert_allclose(CPU.to_numpy(got), expected, rtol=rtol, atol=0, err_msg=name)
 
 
+#: Every einsum the engine, the tracker and the agents write, with operands of their shapes.
+EINSUMS = [
+    ("k,bkc->b", [(3,), (5, 3, 6)]),
+    ("bkij,bkid->bkjd", [(5, 2, 3, 3), (5, 2, 3, 4)]),
+    ("bkij,bkjide->bkjde", [(5, 2, 3, 3), (5, 2, 3, 3, 4, 4)]),
+    ("rij,bkrj->bkri", [(3, 4, 4), (5, 2, 3, 4)]),
+    ("...r,...ri->...i", [(5, 2, 3), (5, 2, 3, 4)]),
+    ("...r,...ri->...i", [(3,), (5, 2, 3, 4)]),  # an ellipsis that is empty in one operand
+    ("...ij,...j,...kj->...ik", [(5, 2, 4, 4), (5, 2, 4), (5, 2, 4, 4)]),
+    ("s,...sd->...d", [(9,), (5, 2, 3, 9, 6)]),
+    ("...d,...d->...", [(5, 2, 3, 12), (5, 2, 3, 12)]),
+    ("...s,...st,...t->...", [(5, 3, 9), (5, 3, 9, 9), (5, 3, 9)]),
+    ("kij,bkj->bki", [(2, 4, 4), (5, 2, 4)]),
+    ("...ji,...jk->...ik", [(5, 2, 6, 2, 2), (5, 2, 6, 2, 2)]),
+    ("bamn,bkmnij->bkaij", [(5, 7, 4, 6), (5, 2, 4, 6, 2, 2)]),
+    ("...m,...mn,...n->...", [(5, 8), (5, 8, 8), (5, 8)]),
+]
+
+
+def _library_products(function, *args):
+    """``function(*args)`` and how many matrix products of a library (bmm, mm) it called."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    called = []
+
+    class Products(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            if func.__name__.split(".")[0] in ("bmm", "mm", "addmm", "baddbmm", "matmul"):
+                called.append(func.__name__)
+            return func(*args, **(kwargs or {}))
+
+    with Products():
+        result = function(*args)
+    return result, len(called)
+
+
+@pytest.mark.parametrize(("subscripts", "shapes"), EINSUMS, ids=[s for s, _ in EINSUMS])
+def test_the_torch_einsum_is_numpys_as_elementwise_products(subscripts, shapes):
+    """numpy's einsum to round-off, computed as broadcast products summed (no library matrix
+    product: torch's einsum calls a batched one for these)."""
+    rng = np.random.default_rng(0)
+    operands = [rng.normal(size=shape) for shape in shapes]
+    ours, products = _library_products(CPU.einsum, subscripts, *map(torch.as_tensor, operands))
+    np.testing.assert_allclose(ours.numpy(), np.einsum(subscripts, *operands), rtol=1e-13, atol=1e-13)
+    assert products == 0
+    _, theirs = _library_products(torch.einsum, subscripts, *map(torch.as_tensor, operands))
+    assert theirs > 0  # what the elementwise form replaces
+
+
+def test_a_large_contraction_or_a_diagonal_goes_to_torchs_einsum():
+    """A product whose broadcast would hold more than ELEMENTWISE_FACTOR times its largest operand
+    (a 64 x 64 matrix product: 64 times) calls torch's matrix product; a repeated index (a
+    diagonal, which the broadcast cannot express) is torch's einsum too; both numpy's numbers."""
+    from mimo_radar_env.core.arrays import ELEMENTWISE_FACTOR
+
+    rng = np.random.default_rng(1)
+    a, b = rng.normal(size=(3, 64, 64)), rng.normal(size=(3, 64, 64))
+    assert 64 > ELEMENTWISE_FACTOR
+    ours, products = _library_products(CPU.einsum, "bij,bjk->bik", torch.as_tensor(a), torch.as_tensor(b))
+    np.testing.assert_allclose(ours.numpy(), a @ b, rtol=1e-12)
+    assert products == 1
+    ours, products = _library_products(CPU.matmul, torch.as_tensor(a), torch.as_tensor(b))
+    np.testing.assert_allclose(ours.numpy(), a @ b, rtol=1e-12)
+    assert products == 1
+    diagonal = CPU.einsum("bii->bi", torch.as_tensor(a))
+    np.testing.assert_array_equal(diagonal.numpy(), np.einsum("bii->bi", a))
+
+
+@pytest.mark.parametrize(
+    ("a", "b", "products"),
+    [((5, 3, 4, 9), (5, 3, 9, 2), 0), ((5, 3, 4), (4,), 0), ((4,), (5, 4, 2), 0), ((6, 4), (4, 600), 1)],
+)
+def test_the_torch_matmul_is_elementwise_for_batches_and_one_library_product_for_two_matrices(a, b, products):
+    """numpy's ``a @ b``: a batch of small matrices (or a vector) as broadcast products summed;
+    two matrices alone (the exact oracle's one product over every trial) torch's matmul."""
+    rng = np.random.default_rng(2)
+    a, b = rng.normal(size=a), rng.normal(size=b)
+    ours, called = _library_products(CPU.matmul, torch.as_tensor(a), torch.as_tensor(b))
+    np.testing.assert_allclose(ours.numpy(), a @ b, rtol=1e-13, atol=1e-13)
+    assert called == products
+
+
 def test_the_torch_take_along_axis_is_one_gather_and_refuses_a_negative_index():
     """Where the index has the array's shape off the axis, one operation (torch's
     ``take_along_dim`` is two: it wraps every index first); a negative index, which numpy wraps,
