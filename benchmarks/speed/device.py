@@ -2,7 +2,7 @@
 
 Run: ``python -m benchmarks.speed.device [--device cuda] [--sizes 500,5000,...] [--json FILE]``.
 
-Two parts, in one run:
+Its parts, in one run:
 
 * **equality** (:func:`episode_differences`): whole episodes of ``MimoRadarSelect-v1`` and
   ``-v0``, both fusions, played on the numpy engine and on the torch engine with the same keys
@@ -10,6 +10,8 @@ Two parts, in one run:
   that probes nothing every fifth step); the largest relative difference of every observation,
   reward and ``info`` entry (truth, tracks, bounds) over the episode, for each torch precision
   of ``--precisions`` (float32 is not the same numbers: its rows measure how far it is);
+* **profile** (:func:`profile_row`, with ``--profile-sizes``): where the eager step's time goes
+  on ``--device`` at those trial counts, by torch operation (its kernels' time on CUDA);
 * **speed** (:func:`measure`): trial-steps per second of the whole v1 step (simulation,
   IMM-UKF tracker, position bound, the oracle's search, observation and ``info``) for each
   fusion and each trial count B, on numpy + numba pinned to one core, on torch on the CPU and
@@ -259,6 +261,13 @@ def _synchronizer(device: Any) -> Callable[[], None]:
     return lambda: None
 
 
+def _random_actions(engine: RadarEngine, count: int) -> list[Any]:
+    """``count`` actions of random valid super arms for every trial of ``engine``, on its device."""
+    sc, rng = engine.scenario, np.random.default_rng(0)
+    draw = (engine.batch_size, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step)
+    return [engine.xp.asarray(random_super_arms(rng, *draw)) for _ in range(count)]
+
+
 def measure(
     fusion: str,
     trials: int,
@@ -275,13 +284,7 @@ def measure(
     actions drawn beforehand (not timed). ``engine``: one of these made before, reset again (a
     traced form keeps its trace)."""
     engine = engine or _engine("v1", fusion, trials, device, scenario, mode)
-    xp = engine.xp
-    sc = engine.scenario
-    rng = np.random.default_rng(0)
-    actions = [
-        xp.asarray(random_super_arms(rng, trials, sc.num_tx, sc.num_rx, sc.tx_per_step, sc.rx_per_step))
-        for _ in range(min(steps + 1, 8))
-    ]
+    actions = _random_actions(engine, min(steps + 1, 8))
     sync = _synchronizer(device)
     cuda = _is_cuda(device)
     if cuda:
@@ -315,6 +318,51 @@ def measure(
     if cuda:
         row["peak_device_memory_gib"] = torch.cuda.max_memory_allocated() / 2**30
     return row
+
+
+def profile_row(
+    fusion: str, trials: int, device: Any, keys: np.ndarray, steps: int = 3, top: int = 25
+) -> dict[str, Any]:
+    """Where the eager v1 step's time goes on ``device``: torch's profiler over ``steps`` steps
+    (after one untimed) of ``trials`` trials, each torch operation's calls and milliseconds per
+    step (its own kernels' time on CUDA, its own time on the CPU), the ``top`` costliest, with
+    their sum over every operation and the step's wall time."""
+    from torch.profiler import ProfilerActivity, profile
+
+    engine = _engine("v1", fusion, trials, device)
+    actions = _random_actions(engine, steps + 1)
+    sync = _synchronizer(device)
+    engine.reset_from_keys(keys[:trials])
+    engine.step(actions[0])
+    sync()
+    cuda = _is_cuda(device)
+    activities = [ProfilerActivity.CPU, *([ProfilerActivity.CUDA] if cuda else [])]
+    with profile(activities=activities) as profiler:
+        start = time.perf_counter()
+        for action in actions[1:]:
+            engine.step(action)
+        sync()
+        wall = time.perf_counter() - start
+    own_time = "self_device_time_total" if cuda else "self_cpu_time_total"  # microseconds
+    ops = [
+        {
+            "op": event.key,
+            "calls_per_step": event.count / steps,
+            "ms_per_step": getattr(event, own_time) / steps * 1e-3,
+        }
+        for event in profiler.key_averages()
+        if event.key.startswith("aten::")
+    ]
+    ops.sort(key=lambda row: -row["ms_per_step"])
+    return {
+        "fusion": fusion,
+        "trials": trials,
+        "steps": steps,
+        "time": "device kernels" if cuda else "cpu",
+        "ms_per_step": sum(row["ms_per_step"] for row in ops),
+        "wall_ms_per_step": wall / steps * 1e3,
+        "ops": ops[:top],
+    }
 
 
 def speed_rows(
@@ -460,6 +508,12 @@ def _parser() -> argparse.ArgumentParser:
         help="the fusions of the equality and speed parts, comma-separated (default %(default)s)",
     )
     parser.add_argument(
+        "--profile-sizes",
+        default="",
+        help="trial counts B at which to profile the eager step on --device, each fusion: where its "
+        "time goes, by torch operation (default: none)",
+    )
+    parser.add_argument(
         "--json", type=output_file, default=None, help="written after every row, as the run goes"
     )
     parser.add_argument(
@@ -494,6 +548,7 @@ def main(argv: list[str] | None = None) -> None:
         "tolerance": TOLERANCE,
         "equality": [],
         "speed": [],
+        "profile": [],
     }
     modes = tuple(args.modes.split(","))
     precisions = tuple(args.precisions.split(","))
@@ -522,6 +577,10 @@ def main(argv: list[str] | None = None) -> None:
                 ),
             )
         )
+    if args.profile_sizes:  # before the speed rows, whose compiled form may take the time left
+        sizes = [int(b) for b in args.profile_sizes.split(",")]
+        keys = _keys(max(sizes))
+        parts.append(("profile", (profile_row(f, b, device, keys) for b in sizes for f in fusions)))
     if not args.skip_speed:
         parts.append(("speed", _speed(args, device, modes, precisions, fusions)))
     for part, rows in parts:

@@ -5,7 +5,9 @@ Run: ``python -m benchmarks.speed.launches [--trials 500] [--json FILE]``.
 On a GPU most operations launch a kernel (views and other operations on a tensor's shape launch
 none), and at the paper's 500 trials a launch costs more than its arithmetic, so these counts say
 where eager torch code is launch-bound there. They are counts of the code's calls, the same on any
-device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees every operation.
+device, so they are counted on the CPU, with a ``TorchDispatchMode`` that sees every operation,
+and with small matrix products computed as on a GPU (``elementwise_products``: broadcast
+products summed, where the CPU calls torch's).
 Operations inside a :class:`~mimo_radar_env.envs.device_forms.GraphReplay` (BPSO's iterations)
 are counted apart, run as they are captured: on CUDA they replay as one graph. ``--compiled``
 also counts the calls of the env's step as ``torch.compile`` (inductor) writes it on this
@@ -29,6 +31,8 @@ from collections.abc import Iterator
 from typing import Any
 
 import numpy as np
+
+from mimo_radar_env.core.arrays import elementwise_products
 
 from ..outputs import output_file, write_json
 from ..settings import integer
@@ -92,6 +96,7 @@ def counting() -> Iterator[dict[str, int]]:
         CompiledFunction.__call__ = compiled_call  # type: ignore[method-assign]
 
 
+@elementwise_products(True)  # the products as a GPU computes them
 def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") -> dict[str, Any]:
     """The operations of ``policy``'s act, its update and the env's step, per step, averaged over
     ``steps`` steps after two (the first acts from the reset's observation)."""
@@ -143,16 +148,19 @@ def total_calls(codes: list[str]) -> dict[str, int]:
 #: A new process's first compiled step (seconds, printed last), inductor's caches as this one's.
 FIRST_STEP = """
 import time, gymnasium as gym, mimo_radar_env
+from mimo_radar_env.core.arrays import elementwise_products
 env = gym.make_vec("MimoRadarSelect-v1", num_envs={trials}, vectorization_mode="vector_entry_point",
                    scenario="{scenario}", fusion="{fusion}", device="{device}", device_mode="compiled")
-env.reset(seed=0)
-action = env.oracle_action()
-start = time.perf_counter()
-env.step(action)
-print(time.perf_counter() - start)
+with elementwise_products(True):
+    env.reset(seed=0)
+    action = env.oracle_action()
+    start = time.perf_counter()
+    env.step(action)
+    print(time.perf_counter() - start)
 """
 
 
+@elementwise_products(True)  # the products as a GPU computes them
 def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any]:
     """The calls of the v1 env's step compiled (``device_mode="compiled"``) on ``device``, as
     inductor writes it there (C++ loops on the CPU, Triton kernels on CUDA), and the operations
@@ -194,6 +202,7 @@ def compiled_row(trials: int, fusion: str, device: str = "cpu") -> dict[str, Any
             "new_process_s": new_process_s}  # fmt: skip
 
 
+@elementwise_products(True)  # the products as a GPU computes them
 def compiled_act_row(trials: int, device: str = "cpu") -> dict[str, Any]:
     """MG-CRB-CL's act in the compiled form (``use_device_mode("compiled")``: each of BPSO's
     iterations compiled) on ``device``: the calls of an iteration's code as inductor writes it

@@ -143,6 +143,23 @@ def float_precision(precision: str) -> Iterator[None]:
         _PRECISION.reset(token)
 
 
+_ELEMENTWISE: contextvars.ContextVar[bool | None] = contextvars.ContextVar("elementwise", default=None)
+
+
+@contextlib.contextmanager
+def elementwise_products(elementwise: bool) -> Iterator[None]:
+    """Inside the block, a :class:`TorchNamespace` on any device computes einsums and batched
+    matrix products as broadcast products summed (``True``) or with torch's library products
+    (``False``). Outside, it does the first on CUDA only: on the CPU torch's library products
+    make the eager step the faster (docs/performance.md, "Operations per step"); tests and the
+    operation counts run the GPU's choice on the CPU through it."""
+    token = _ELEMENTWISE.set(elementwise)
+    try:
+        yield
+    finally:
+        _ELEMENTWISE.reset(token)
+
+
 def check_precision(precision: Any, device: Any) -> None:
     """Refuses, in one line, a precision not in :data:`PRECISIONS`, or ``float32`` on numpy
     (``device=None``)."""
@@ -346,15 +363,22 @@ class TorchNamespace:
         return self.torch.diagonal(a, dim1=axis1, dim2=axis2).sum(-1)
 
     # ------------------------------------------------------------ products
+    @property
+    def elementwise(self) -> bool:
+        """Whether :meth:`einsum` and :meth:`matmul` compute elementwise: on CUDA, unless
+        :func:`elementwise_products` says otherwise."""
+        chosen = _ELEMENTWISE.get()
+        return self.device.type == "cuda" if chosen is None else chosen
+
     def einsum(self, subscripts: str, *operands: Any) -> Any:
-        """numpy's ``einsum``. Where the operands broadcast over every index hold at most
-        :data:`ELEMENTWISE_FACTOR` times the elements of the largest operand or of the result,
-        their product summed over the indices left out: elementwise kernels, which
-        ``torch.compile`` fuses with their neighbours (torch's own einsum calls a batched matrix
-        product, whose library kernels are slow for millions of tiny matrices on a GPU). Else
-        torch's ``einsum``."""
+        """numpy's ``einsum``. Where :attr:`elementwise` and the operands broadcast over every
+        index hold at most :data:`ELEMENTWISE_FACTOR` times the elements of the largest operand
+        or of the result, their product summed over the indices left out: elementwise kernels,
+        which ``torch.compile`` fuses with their neighbours (torch's own einsum calls a batched
+        matrix product, whose library kernels are slow for millions of tiny matrices on a GPU).
+        Else torch's ``einsum``."""
         plan = _einsum_plan(subscripts, tuple(operand.ndim for operand in operands))
-        if plan is not None:
+        if plan is not None and self.elementwise:
             letters, axes, summed = plan
             sizes: dict[str, int] = {}
             for operand, own in zip(operands, axes, strict=True):
@@ -374,10 +398,11 @@ class TorchNamespace:
         return self.torch.einsum(subscripts, *operands)
 
     def matmul(self, a: Any, b: Any) -> Any:
-        """numpy's ``matmul`` (``a @ b``): for a batch of matrices, or a vector, as :meth:`einsum`
-        computes it (their broadcast product summed over the inner dimension, within its
-        :data:`ELEMENTWISE_FACTOR`); two matrices alone, one library product (torch's)."""
-        if a.ndim == 2 and b.ndim == 2:
+        """numpy's ``matmul`` (``a @ b``): where :attr:`elementwise`, for a batch of matrices or a
+        vector, as :meth:`einsum` computes it (their broadcast product summed over the inner
+        dimension, within its :data:`ELEMENTWISE_FACTOR`); else, and for two matrices alone, one
+        library product (torch's)."""
+        if (a.ndim == 2 and b.ndim == 2) or not self.elementwise:
             return self.torch.matmul(a, b)
         if b.ndim == 1:
             return self.einsum("...k,k->...", a, b)

@@ -112,3 +112,38 @@ def test_rows_stop_growing_linearly_on_a_cpu_and_after_a_slow_step_on_a_gpu(monk
     rows = list(device_bench.speed_rows("b", device, tuple(seconds), None, 1.9, 1.0, fusions=("average",)))
     assert [r["trials"] for r in rows if "skipped" not in r] == measured
     assert [r["skipped"] for r in rows if "skipped" in r] == (["too slow"] if device is None else [])
+
+
+def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_path):
+    """The profile's calls of a library kernel in a step are those a dispatch mode counts in the
+    same step, and its times add up to no more than the step's wall time (on the CPU)."""
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    path = tmp_path / "device.json"
+    arguments = ["--device", "cpu", "--skip-equality", "--skip-speed", "--fusions", "centralized"]
+    device_bench.main([*arguments, "--profile-sizes", "8", "--json", str(path)])
+    (row,) = json.loads(path.read_text())["profile"]
+    assert (row["fusion"], row["trials"], row["time"]) == ("centralized", 8, "cpu")
+    assert 0 < sum(op["ms_per_step"] for op in row["ops"]) <= row["ms_per_step"] <= row["wall_ms_per_step"]
+
+    keys = device_bench._keys(8)
+    one = device_bench.profile_row("centralized", 8, "cpu", keys, steps=1, top=10_000)
+    engine = device_bench._engine("v1", "centralized", 8, "cpu")
+    engine.reset_from_keys(keys)
+    first, second = device_bench._random_actions(engine, 2)  # the actions the profile played
+    engine.step(first)
+    calls: dict[str, int] = {}
+
+    class Calls(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            name = "aten::" + func.__name__.split(".")[0]
+            calls[name] = calls.get(name, 0) + 1
+            return func(*args, **(kwargs or {}))
+
+    with Calls():
+        engine.step(second)
+    profiled = {op["op"]: op["calls_per_step"] for op in one["ops"]}
+    # (the profiler also records composite operations and their parts, where a dispatch mode sees
+    # the parts alone: compared here are library kernels called directly)
+    for name in ("aten::linalg_cholesky_ex", "aten::sort"):
+        assert profiled[name] == calls[name] >= 1, name

@@ -8,7 +8,7 @@ import pytest
 
 torch = pytest.importorskip("torch")
 
-from mimo_radar_env.core.arrays import NUMPY, device_namespace, namespace  # noqa: E402
+from mimo_radar_env.core.arrays import NUMPY, device_namespace, elementwise_products, namespace  # noqa: E402
 from tests.helpers import vector_env  # noqa: E402
 
 CPU = device_namespace("cpu")
@@ -93,9 +93,34 @@ def _library_products(function, *args):
                 called.append(func.__name__)
             return func(*args, **(kwargs or {}))
 
-    with Products():
+    with Products(), elementwise_products(True):  # as on CUDA
         result = function(*args)
     return result, len(called)
+
+
+def test_products_are_elementwise_on_cuda_and_torchs_on_the_cpu_unless_asked():
+    from mimo_radar_env.core.arrays import TorchNamespace
+
+    assert TorchNamespace("cuda").elementwise and not CPU.elementwise
+    a = torch.ones(5, 3, 4, 4, dtype=torch.float64)
+    with elementwise_products(True):
+        assert CPU.elementwise
+        with elementwise_products(False):
+            assert not TorchNamespace("cuda").elementwise
+    assert not CPU.elementwise
+    from torch.utils._python_dispatch import TorchDispatchMode
+
+    called = []
+
+    class Products(TorchDispatchMode):
+        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
+            called.append(func.__name__.split(".")[0])
+            return func(*args, **(kwargs or {}))
+
+    with Products():
+        CPU.matmul(a, a)
+        CPU.einsum("bkij,bkjl->bkil", a, a)
+    assert called.count("bmm") == 2  # torch's own on the CPU
 
 
 @pytest.mark.parametrize(("subscripts", "shapes"), EINSUMS, ids=[s for s, _ in EINSUMS])
