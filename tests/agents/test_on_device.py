@@ -58,6 +58,17 @@ def test_an_agent_selects_the_same_super_arms_on_torch(policy, params, steps):
     )
 
 
+@pytest.mark.parametrize("policy", ["mg-crb-cl", "best", "best-tracking", "tracking-ucb"])
+def test_an_agent_selects_the_same_super_arms_with_the_products_a_gpu_computes(policy):
+    """The small matrix products and einsums as broadcast products summed (CUDA's way), on
+    the policies whose criteria or tracks go through them."""
+    from mimo_radar_env.core.arrays import elementwise_products
+
+    with elementwise_products(True):
+        on_torch = _actions(policy, {}, 15, DEVICE)
+    np.testing.assert_array_equal(on_torch, _actions(policy, {}, 15, None))
+
+
 def test_the_tracking_oracle_on_torch_under_centralized_fusion():
     np.testing.assert_array_equal(
         _actions("best-tracking", {}, 10, DEVICE, "centralized"),
