@@ -98,7 +98,7 @@ def one_blas_thread() -> Iterator[None]:
     """BLAS (numpy's matrix products and inverses) held to one thread in this block (or call,
     as a decorator), in the calling thread, as every worker process has it
     (:data:`ONE_BLAS_THREAD`). A product's or an inverse's last bits may depend on how many
-    threads share it (numpy 1.26's OpenBLAS 0.3.23 inverts matrices of 8 rows or more so), so
+    threads share it (numpy 1.26's OpenBLAS 0.3.23 inverts matrices of 8, 9 and 16 rows so), so
     every task and every interval runs on one: the same numbers in this process, in a worker, on
     Ray and on any count of cores; and the statistics a study's parent computes while its
     workers hold the cores start no BLAS thread per core among them. Calls from several threads

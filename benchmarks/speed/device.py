@@ -471,6 +471,13 @@ def equality_rows(
         yield row
 
 
+def _trial_counts(text: str) -> str:
+    """``--profile-sizes``: positive trial counts, comma-separated (or nothing)."""
+    if text and not all(part.isdigit() and int(part) > 0 for part in text.split(",")):
+        raise argparse.ArgumentTypeError(f"must be positive trial counts, comma-separated, got {text!r}")
+    return text
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--device", default="cuda", help="the torch device (default %(default)s)")
@@ -509,6 +516,7 @@ def _parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--profile-sizes",
+        type=_trial_counts,
         default="",
         help="trial counts B at which to profile the eager step on --device, each fusion: where its "
         "time goes, by torch operation (default: none)",

@@ -123,6 +123,10 @@ def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_p
     arguments = ["--device", "cpu", "--skip-equality", "--skip-speed", "--fusions", "centralized"]
     device_bench.main([*arguments, "--profile-sizes", "8", "--json", str(path)])
     (row,) = json.loads(path.read_text())["profile"]
+    for bad in ("5,x", "0", "8,"):
+        with pytest.raises(SystemExit):  # argparse's one line, before anything runs
+            device_bench.main([*arguments, "--profile-sizes", bad, "--json", str(tmp_path / "bad.json")])
+    assert not (tmp_path / "bad.json").exists()
     assert (row["fusion"], row["trials"], row["time"]) == ("centralized", 8, "cpu")
     assert 0 < sum(op["ms_per_step"] for op in row["ops"]) <= row["ms_per_step"] <= row["wall_ms_per_step"]
 
