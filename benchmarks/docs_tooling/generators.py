@@ -1524,14 +1524,23 @@ def device_value(docs: Path, key: str) -> str:
 
 LAUNCHES_FILE = "perf/launches.json"
 #: The counts of a row of results/perf/launches.json, in its table's order.
-LAUNCH_COUNTS = ("act", "act_replayed", "act_dispatches_on_cuda", "update", "env_step")
+LAUNCH_COUNTS = (
+    "act",
+    "act_replayed",
+    "act_dispatches_on_cuda",
+    "update",
+    "env_step",
+    "env_step_bytes_per_trial",
+    "env_step_bandwidth_bound",
+)
 
 
 @generator("device-launches")
 def device_launches(docs: Path) -> str:
     """``python -m benchmarks.speed.launches``: torch operations per step of each policy's act
     (those in a replayed graph apart, and the dispatches left on CUDA), its update and the env's
-    eager step, per fusion."""
+    eager step, with the bytes that step moves per trial and the rate an H200's bandwidth allows
+    it, per fusion."""
     head = [
         "policy",
         "fusion",
@@ -1540,9 +1549,12 @@ def device_launches(docs: Path) -> str:
         "dispatches per act on CUDA (a graph's replay one)",
         "operations per update",
         "operations per env step (eager)",
+        "bytes an env step reads and writes, per trial",
+        "trial-steps/s an H200's bandwidth allows it",
     ]
     rows = [
-        [r["policy"], r["fusion"], *(f"{r[c]:,.0f}" for c in LAUNCH_COUNTS)]
+        [r["policy"], r["fusion"], *(f"{r[c]:,.0f}" for c in LAUNCH_COUNTS[:-1])]
+        + [f"{r['env_step_bandwidth_bound'] / 1e6:.1f} M"]
         for r in read_json(docs, LAUNCHES_FILE)["rows"]
     ]
     return markdown_table(head, rows)
@@ -1554,8 +1566,9 @@ COMPILED_ACT = ("act", "act_replayed", "compiled_calls", "fused", "library", "co
 
 @value_source("launches")
 def launches_value(docs: Path, key: str) -> str:
-    """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of ``act``,
-    ``act_replayed``, ``act_dispatches_on_cuda``, ``update``, ``env_step``), ``trials``, or the
+    """A count of results/perf/launches.json: ``FIELD.POLICY.FUSION`` (FIELD one of
+    :data:`LAUNCH_COUNTS`: the operations, and the eager step's bytes per trial and the rate an
+    H200's bandwidth allows it), ``trials``, or the
     calls of the step compiled on the CPU, ``compiled.fused.FUSION`` and ``compiled.library.FUSION``,
     with the same env's eager operations, ``compiled.eager.FUSION``, and the seconds of the
     compiled env's first step, of a second one's and of a new process's,

@@ -39,6 +39,16 @@ from ..settings import integer
 
 POLICIES = ("mg-crb-cl", "ucb1", "epsilon-greedy", "fix1", "random", "best", "best-tracking", "tracking-ucb")
 SCENARIO = "paper-1-v1"
+#: An NVIDIA H200's memory bandwidth, bytes per second (NVIDIA's figure: 4.8 TB/s): the step's
+#: bytes per trial bound how many trial-steps a second its eager or graph form can run there.
+H200_BYTES_PER_S = 4.8e12
+
+
+def _tensor_bytes(tree: Any) -> int:
+    import torch
+
+    leaves = torch.utils._pytree.tree_leaves(tree)
+    return sum(leaf.numel() * leaf.element_size() for leaf in leaves if isinstance(leaf, torch.Tensor))
 
 
 @contextlib.contextmanager
@@ -46,21 +56,26 @@ def counting() -> Iterator[dict[str, int]]:
     """Counts the torch operations run in the block: ``"total"``, and ``"replayed"`` those inside
     a :class:`GraphReplay` call; ``"compiled"``, the calls of a compiled function
     (:class:`~mimo_radar_env.envs.device_forms.CompiledFunction`), whose own operations are
-    inductor's code (:func:`code_calls` counts them), not counted here."""
+    inductor's code (:func:`code_calls` counts them), not counted here; and ``"bytes"``, what
+    the operations that are not views read and write: their tensor arguments and results, each
+    at its size (what an unfused kernel moves through memory once its arrays outgrow the caches)."""
     from torch.utils._python_dispatch import TorchDispatchMode
 
     from mimo_radar_env.envs.device_forms import CompiledFunction, GraphReplay
 
-    counts = {"total": 0, "replayed": 0, "compiled": 0}
+    counts = {"total": 0, "replayed": 0, "compiled": 0, "bytes": 0}
     inside = [False]
     compiled = [False]
 
     class Count(TorchDispatchMode):
         def __torch_dispatch__(self, func: Any, types: Any, args: Any = (), kwargs: Any = None) -> Any:
+            out = func(*args, **(kwargs or {}))
             if not compiled[0]:
                 counts["total"] += 1
                 counts["replayed"] += inside[0]
-            return func(*args, **(kwargs or {}))
+                if not func.is_view:
+                    counts["bytes"] += _tensor_bytes((args, kwargs)) + _tensor_bytes(out)
+            return out
 
     compiled_call = CompiledFunction.__call__
 
@@ -109,7 +124,7 @@ def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") ->
     episode = agents.Rollout(agent, env, seed=0)
     for _ in range(2):
         episode.step()
-    totals = {"act": 0, "act_replayed": 0, "update": 0, "env_step": 0}
+    totals = {"act": 0, "act_replayed": 0, "update": 0, "env_step": 0, "env_step_bytes": 0}
     for _ in range(steps):
         with counting() as act:
             action = agent.act(episode.obs)
@@ -122,8 +137,12 @@ def policy_row(policy: str, trials: int, steps: int, fusion: str = "average") ->
         totals["act_replayed"] += act["replayed"]
         totals["update"] += update["total"]
         totals["env_step"] += step["total"]
+        totals["env_step_bytes"] += step["bytes"]
     row: dict[str, Any] = {"policy": policy, "fusion": fusion, "trials": trials, "steps": steps}
-    row |= {key: value / steps for key, value in totals.items()}
+    row |= {key: value / steps for key, value in totals.items() if key != "env_step_bytes"}
+    # the eager step's memory traffic per trial, and the rate an H200's bandwidth allows it
+    row["env_step_bytes_per_trial"] = totals["env_step_bytes"] / steps / trials
+    row["env_step_bandwidth_bound"] = H200_BYTES_PER_S / row["env_step_bytes_per_trial"]
     # on CUDA a replayed graph is one dispatch (its replay) in place of its operations
     row["act_dispatches_on_cuda"] = row["act"] - row["act_replayed"] + (row["act_replayed"] > 0)
     return row
@@ -271,7 +290,9 @@ def count(args: argparse.Namespace) -> None:
             rows.append(row)
             print(
                 f"{fusion:12s} {policy:16s} act {row['act']:9,.0f} ops ({row['act_replayed']:,.0f} in a "
-                f"replayed graph), update {row['update']:5,.0f}, env step {row['env_step']:6,.0f}",
+                f"replayed graph), update {row['update']:5,.0f}, env step {row['env_step']:6,.0f} "
+                f"({row['env_step_bytes_per_trial']:,.0f} bytes a trial: an H200's bandwidth allows "
+                f"{row['env_step_bandwidth_bound'] / 1e6:.1f} M trial-steps/s)",
                 flush=True,
             )
     result = {"scenario": SCENARIO, "torch": torch.__version__, "numpy": np.__version__, "rows": rows}

@@ -19,10 +19,12 @@ def test_counting_sees_every_operation_and_those_of_a_replayed_function_apart():
         c = a + b  # one operation
         d = twice(c)  # one, inside the replay
         (d - a).sum()  # two
-    assert counts == {"total": 4, "replayed": 1, "compiled": 0}
+        c.view(1, 3).expand(2, 3)  # views: counted, moving no bytes
+    # float32: a + b reads 12 + 12 bytes and writes 12, d = 2c 12 + 12, d - a 36, its sum 12 + 4
+    assert counts == {"total": 6, "replayed": 1, "compiled": 0, "bytes": 36 + 24 + 36 + 16}
     with launches.counting() as counts:
         pass
-    assert counts == {"total": 0, "replayed": 0, "compiled": 0}
+    assert counts == {"total": 0, "replayed": 0, "compiled": 0, "bytes": 0}
 
 
 def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone(monkeypatch):
@@ -46,6 +48,8 @@ def test_mg_crb_cls_row_counts_bpsos_iterations_as_they_count_alone(monkeypatch)
     plain = launches.policy_row("ucb1", 6, 1)
     assert plain["act_replayed"] == 0 and plain["act_dispatches_on_cuda"] == plain["act"] > 0
     assert plain["env_step"] == row["env_step"] > 1000  # the same env, whatever acts on it
+    assert plain["env_step_bytes_per_trial"] == row["env_step_bytes_per_trial"] > 0
+    assert plain["env_step_bandwidth_bound"] == launches.H200_BYTES_PER_S / plain["env_step_bytes_per_trial"]
 
 
 def test_an_agent_that_names_the_fusion_is_counted_on_each_fusions_env():
