@@ -153,6 +153,8 @@ def elementwise_products(elementwise: bool) -> Iterator[None]:
     (``False``). Outside, it does the first on CUDA only: on the CPU torch's library products
     make the eager step the faster (docs/performance.md, "Operations per step"); tests and the
     operation counts run the GPU's choice on the CPU through it."""
+    if not isinstance(elementwise, bool):
+        raise TypeError(f"elementwise_products takes True or False, got {elementwise!r}")
     token = _ELEMENTWISE.set(elementwise)
     try:
         yield

@@ -108,6 +108,10 @@ def test_products_are_elementwise_on_cuda_and_torchs_on_the_cpu_unless_asked():
         with elementwise_products(False):
             assert not TorchNamespace("cuda").elementwise
     assert not CPU.elementwise
+    for bad in ("yes", 1, None):
+        with pytest.raises(TypeError, match="elementwise_products takes True or False, got"):
+            with elementwise_products(bad):
+                pass
     from torch.utils._python_dispatch import TorchDispatchMode
 
     called = []
