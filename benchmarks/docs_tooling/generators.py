@@ -1506,6 +1506,7 @@ def device_value(docs: Path, key: str) -> str:
                 and r["backend"].startswith(prefix)
                 and r.get("mode", "eager") == mode
                 and r.get("precision", "float64") == precision
+                and "products" not in r  # a row timed with another's products (--library-products)
                 and r["fusion"] == fusion
                 and r["trials"] == int(trials)
             ):

@@ -17,7 +17,9 @@ Its parts, in one run:
   fusion and each trial count B, on numpy + numba pinned to one core, on torch on the CPU and
   on torch on ``--device`` in each form of ``--modes`` (eager, one CUDA graph per step,
   ``torch.compile``: :mod:`mimo_radar_env.envs.device_forms`) and each precision, with the
-  device's peak memory and the first step's seconds (tracing, capture, compilation) per row. A
+  device's peak memory and the first step's seconds (tracing, capture, compilation) per row
+  (``--library-products FORMS``: those forms timed again with torch's batched matrix products,
+  where the device computes its small products elementwise: ``elementwise_products``). A
   row stops growing B once a step takes longer than ``--max-step-seconds`` or the device runs
   out of memory. The equality part also plays each traced form against numpy.
 
@@ -40,11 +42,11 @@ from typing import Any
 import numpy as np
 
 from mimo_radar_env import VERSIONS, load_scenario
-from mimo_radar_env.core.arrays import PRECISIONS, check_precision, namespace
+from mimo_radar_env.core.arrays import PRECISIONS, check_precision, elementwise_products, namespace
 from mimo_radar_env.core.compiled import with_threads
 from mimo_radar_env.core.streams import keys_from_generator
 from mimo_radar_env.core.superarm import random_super_arms
-from mimo_radar_env.envs.device_forms import check_device_mode
+from mimo_radar_env.envs.device_forms import DEVICE_MODES, check_device_mode
 from mimo_radar_env.envs.engine import RadarEngine
 
 from ..outputs import output_file, write_json
@@ -471,6 +473,15 @@ def equality_rows(
         yield row
 
 
+def _device_modes(text: str) -> str:
+    """``--library-products``: forms of the step, comma-separated (or nothing)."""
+    if text and not set(text.split(",")) <= set(DEVICE_MODES):
+        raise argparse.ArgumentTypeError(
+            f"must be forms of the step ({', '.join(DEVICE_MODES)}), got {text!r}"
+        )
+    return text
+
+
 def _trial_counts(text: str) -> str:
     """``--profile-sizes``: positive trial counts, comma-separated (or nothing)."""
     if text and not all(part.isdigit() and int(part) > 0 for part in text.split(",")):
@@ -513,6 +524,13 @@ def _parser() -> argparse.ArgumentParser:
         "--fusions",
         default=",".join(FUSIONS),
         help="the fusions of the equality and speed parts, comma-separated (default %(default)s)",
+    )
+    parser.add_argument(
+        "--library-products",
+        type=_device_modes,
+        default="",
+        help="forms of the step on --device also timed with torch's library matrix products (the "
+        "CPU's choice) in place of the device's elementwise ones, comma-separated (default: none)",
     )
     parser.add_argument(
         "--profile-sizes",
@@ -613,19 +631,31 @@ def _speed(
 
     sizes = tuple(int(s) for s in args.sizes.split(","))
     keys = _keys(max(sizes))
-    backends = [("numpy + numba, 1 core", None, "eager", sizes, "float64")]
-    backends.append((f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes, "float64"))
+    # (label, device, form, sizes, precision, products: None the device's own, "library" torch's)
+    backends = [("numpy + numba, 1 core", None, "eager", sizes, "float64", None)]
+    backends.append(
+        (f"torch cpu ({torch.get_num_threads()} threads)", "cpu", "eager", sizes, "float64", None)
+    )
     if device != "cpu":
         compiled_sizes = tuple(int(b) for b in args.compiled_sizes.split(","))
+        library = args.library_products.split(",") if args.library_products else []
         for precision in precisions:
             label = "" if precision == "float64" else f" {precision}"
             for mode in modes:
                 row_sizes = compiled_sizes if mode == "compiled" else sizes
-                backends.append((f"torch {device} {mode}{label}", device, mode, row_sizes, precision))
-    for backend, where, mode, row_sizes, precision in backends:
-        context = one_core() if where is None else contextlib.nullcontext()
+                backends.append((f"torch {device} {mode}{label}", device, mode, row_sizes, precision, None))
+                if mode in library:
+                    backend = f"torch {device} {mode}{label} library products"
+                    backends.append((backend, device, mode, row_sizes, precision, "library"))
+    for backend, where, mode, row_sizes, precision, products in backends:
+        if where is None:
+            context: contextlib.AbstractContextManager[None] = one_core()
+        elif products == "library":  # as before a1f9dbd: torch's batched matrix products
+            context = elementwise_products(False)
+        else:
+            context = contextlib.nullcontext()
         with context:
-            yield from speed_rows(
+            for row in speed_rows(
                 backend,
                 where,
                 row_sizes,
@@ -635,7 +665,8 @@ def _speed(
                 mode,
                 precision,
                 fusions,
-            )
+            ):
+                yield row | ({"products": products} if products else {})
 
 
 if __name__ == "__main__":

@@ -151,3 +151,30 @@ def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_p
     # the parts alone: compared here are library kernels called directly)
     for name in ("aten::linalg_cholesky_ex", "aten::sort"):
         assert profiled[name] == calls[name] >= 1, name
+
+
+def test_the_forms_asked_are_also_timed_with_torchs_library_products(monkeypatch):
+    """``--library-products graph``: the graph form's rows again, labelled and marked, with
+    torch's batched matrix products (the CPU's choice) where the device computes elementwise;
+    the other forms once. A bad form is refused in argparse's one line."""
+    import argparse
+
+    import torch
+
+    from mimo_radar_env.core.arrays import TorchNamespace
+
+    def rows(backend, where, sizes, *rest):
+        yield {"backend": backend, "elementwise": TorchNamespace("cuda").elementwise}
+
+    monkeypatch.setattr(device_bench, "speed_rows", rows)
+    monkeypatch.setattr(torch, "get_num_threads", lambda: 2)
+    args = argparse.Namespace(sizes="500", compiled_sizes="500", library_products="graph",
+                              max_step_seconds=1.0, target_seconds=1.0)  # fmt: skip
+    made = list(device_bench._speed(args, "cuda:0", ("eager", "graph"), ("float64",)))
+    assert made[2:] == [
+        {"backend": "torch cuda:0 eager", "elementwise": True},
+        {"backend": "torch cuda:0 graph", "elementwise": True},
+        {"backend": "torch cuda:0 graph library products", "elementwise": False, "products": "library"},
+    ]
+    with pytest.raises(SystemExit):
+        device_bench.main(["--device", "cpu", "--library-products", "graph,jit"])
