@@ -114,7 +114,7 @@ def test_rows_stop_growing_linearly_on_a_cpu_and_after_a_slow_step_on_a_gpu(monk
     assert [r["skipped"] for r in rows if "skipped" in r] == (["too slow"] if device is None else [])
 
 
-def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_path):
+def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_path, capsys):
     """The profile's calls of a library kernel in a step are those a dispatch mode counts in the
     same step, and its times add up to no more than the step's wall time (on the CPU)."""
     from torch.utils._python_dispatch import TorchDispatchMode
@@ -126,6 +126,9 @@ def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_p
     for bad in ("5,x", "0", "8,"):
         with pytest.raises(SystemExit):  # argparse's one line, before anything runs
             device_bench.main([*arguments, "--profile-sizes", bad, "--json", str(tmp_path / "bad.json")])
+        assert f"--profile-sizes: must be positive trial counts, comma-separated, got {bad!r}" in (
+            capsys.readouterr().err
+        )
     assert not (tmp_path / "bad.json").exists()
     assert (row["fusion"], row["trials"], row["time"]) == ("centralized", 8, "cpu")
     assert 0 < sum(op["ms_per_step"] for op in row["ops"]) <= row["ms_per_step"] <= row["wall_ms_per_step"]
@@ -153,7 +156,7 @@ def test_the_profile_gives_each_operations_calls_per_step_as_counted_apart(tmp_p
         assert profiled[name] == calls[name] >= 1, name
 
 
-def test_the_forms_asked_are_also_timed_with_torchs_library_products(monkeypatch):
+def test_the_forms_asked_are_also_timed_with_torchs_library_products(monkeypatch, capsys):
     """``--library-products graph``: the graph form's rows again, labelled and marked, with
     torch's batched matrix products (the CPU's choice) where the device computes elementwise;
     the other forms once. A bad form is refused in argparse's one line."""
@@ -178,3 +181,7 @@ def test_the_forms_asked_are_also_timed_with_torchs_library_products(monkeypatch
     ]
     with pytest.raises(SystemExit):
         device_bench.main(["--device", "cpu", "--library-products", "graph,jit"])
+    assert (
+        "argument --library-products: must be forms of the step (eager, graph, compiled), got 'graph,jit'"
+        in (capsys.readouterr().err)
+    )
