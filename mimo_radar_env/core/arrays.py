@@ -379,8 +379,9 @@ class TorchNamespace:
         which ``torch.compile`` fuses with their neighbours (torch's own einsum calls a batched
         matrix product, whose library kernels are slow for millions of tiny matrices on a GPU).
         Else torch's ``einsum``."""
-        plan = _einsum_plan(subscripts, tuple(operand.ndim for operand in operands))
-        if plan is not None and self.elementwise:
+        # (the CPU's einsums go straight to torch's: no plan looked up on its hot path)
+        plan = _einsum_plan(subscripts, tuple(o.ndim for o in operands)) if self.elementwise else None
+        if plan is not None:
             letters, axes, summed = plan
             sizes: dict[str, int] = {}
             for operand, own in zip(operands, axes, strict=True):

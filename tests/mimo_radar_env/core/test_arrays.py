@@ -1,5 +1,6 @@
 """The array namespaces: numpy's, and torch's on a device, which gives numpy's numbers."""
 
+import contextlib
 import subprocess
 import sys
 
@@ -81,8 +82,9 @@ EINSUMS = [
 ]
 
 
-def _library_products(function, *args):
-    """``function(*args)`` and how many matrix products of a library (bmm, mm) it called."""
+def _library_products(function, *args, elementwise=True):
+    """``function(*args)`` and how many matrix products of a library (bmm, mm) it called, with
+    the products computed as on CUDA (``elementwise``; None: the device's own choice)."""
     from torch.utils._python_dispatch import TorchDispatchMode
 
     called = []
@@ -93,7 +95,8 @@ def _library_products(function, *args):
                 called.append(func.__name__)
             return func(*args, **(kwargs or {}))
 
-    with Products(), elementwise_products(True):  # as on CUDA
+    chosen = contextlib.nullcontext() if elementwise is None else elementwise_products(elementwise)
+    with Products(), chosen:
         result = function(*args)
     return result, len(called)
 
@@ -112,19 +115,9 @@ def test_products_are_elementwise_on_cuda_and_torchs_on_the_cpu_unless_asked():
         with pytest.raises(TypeError, match="elementwise_products takes True or False, got"):
             with elementwise_products(bad):
                 pass
-    from torch.utils._python_dispatch import TorchDispatchMode
-
-    called = []
-
-    class Products(TorchDispatchMode):
-        def __torch_dispatch__(self, func, types, args=(), kwargs=None):
-            called.append(func.__name__.split(".")[0])
-            return func(*args, **(kwargs or {}))
-
-    with Products():
-        CPU.matmul(a, a)
-        CPU.einsum("bkij,bkjl->bkil", a, a)
-    assert called.count("bmm") == 2  # torch's own on the CPU
+    # torch's own on the CPU
+    assert _library_products(CPU.matmul, a, a, elementwise=None)[1] == 1
+    assert _library_products(CPU.einsum, "bkij,bkjl->bkil", a, a, elementwise=None)[1] == 1
 
 
 @pytest.mark.parametrize(("subscripts", "shapes"), EINSUMS, ids=[s for s, _ in EINSUMS])
