@@ -9,6 +9,17 @@ from mimo_radar_env import random_scenario
 from mimo_radar_env.core.superarm import random_super_arms
 
 
+def needs_torch_compiler():
+    """A mark that skips a test of the compiled form where this torch's compiler cannot keep eager's
+    numbers, as that form then refuses (``mimo_radar_env.envs.device_forms.COMPILE_TORCH``)."""
+    import pytest
+
+    from mimo_radar_env.envs.device_forms import COMPILE_TORCH, missing_compile_options
+
+    missing = missing_compile_options()
+    return pytest.mark.skipif(bool(missing), reason=f"the compiled form needs torch {COMPILE_TORCH} or later")
+
+
 def random_valid_actions(rng: np.random.Generator, batch: int, num_tx: int, num_rx: int, ms: int, ns: int):
     """Uniformly random valid super arms as (B, M + N) int8 actions."""
     return random_super_arms(rng, batch, num_tx, num_rx, ms, ns)

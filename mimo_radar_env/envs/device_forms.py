@@ -41,15 +41,37 @@ DEVICE_MODES = ("eager", "graph", "compiled")
 #: its C++ loops on the CPU contract nothing already). The compiled step adds
 #: ``mode="reduce-overhead"``'s CUDA graphs on CUDA; a :class:`CompiledFunction` adds none.
 COMPILE_OPTIONS = {"emulate_precision_casts": True, "eager_numerics.division_rounding": True}
+#: The first torch whose inductor has every option of :data:`COMPILE_OPTIONS` (2.10 has no
+#: ``eager_numerics``); the eager and graph forms run on the ``rl`` extra's oldest torch.
+COMPILE_TORCH = "2.11"
+
+
+def missing_compile_options() -> list[str]:
+    """The options of :data:`COMPILE_OPTIONS` that this torch's inductor does not have (none
+    where torch is not installed: what needs it says so)."""
+    try:
+        from torch._inductor import config
+    except ImportError:
+        return []
+    known = config.get_config_copy()
+    return [name for name in COMPILE_OPTIONS if name not in known]
 
 
 def check_device_mode(device_mode: Any, device: Any = "torch") -> None:
-    """Refuse a form that is not one of :data:`DEVICE_MODES`, or a traced form on numpy
-    (``device`` None)."""
+    """Refuse a form that is not one of :data:`DEVICE_MODES`, a traced form on numpy (``device``
+    None), and the compiled form on a torch whose inductor cannot keep eager's numerics."""
     if device_mode not in DEVICE_MODES:
         raise ValueError(f"device_mode must be one of {', '.join(DEVICE_MODES)}; got {device_mode!r}")
     if device_mode != "eager" and device is None:
         raise ValueError(f"device_mode={device_mode!r} runs on torch: give a device ('cpu', 'cuda')")
+    if device_mode == "compiled" and (missing := missing_compile_options()):
+        import torch
+
+        raise ValueError(
+            f"device_mode='compiled' needs torch {COMPILE_TORCH} or later, whose compiler keeps eager's "
+            f"numbers (inductor's {', '.join(missing)}); this is torch {torch.__version__}, on which the "
+            "'graph' and 'eager' forms run"
+        )
 
 
 #: This process's latest compiled steps by what they compute (:func:`_fingerprint`): an env whose

@@ -18,7 +18,7 @@ from mimo_radar_env.core.arrays import device_namespace  # noqa: E402
 from mimo_radar_env.core.counter_hash import Stream  # noqa: E402
 from mimo_radar_env.core.streams import TrialRandom  # noqa: E402
 from mimo_radar_env.envs import device_forms  # noqa: E402
-from tests.helpers import StandInGraph  # noqa: E402
+from tests.helpers import StandInGraph, needs_torch_compiler  # noqa: E402
 
 #: policy, its parameters, steps: the paper's policies (MG-CRB-CL with BPSO, as in the paper, and
 #: with the exact solver), the baselines, the oracles and tracking-ucb.
@@ -145,6 +145,7 @@ def test_bpso_replayed_as_a_graph_selects_what_it_selects_eagerly(monkeypatch):
         np.testing.assert_array_equal(ours, theirs)
 
 
+@needs_torch_compiler()
 def test_bpso_compiled_selects_what_it_selects_eagerly_with_one_compile_a_shape(monkeypatch):
     """In the compiled form each iteration runs as inductor's code (one fused loop on the CPU),
     compiled once per batch shape, every trial running every iteration: the eager selections,

@@ -5,6 +5,7 @@ step, and the CUDA graph's buffers handled as a real graph would hold them (a st
 the same contract)."""
 
 import os
+import re
 import warnings
 
 import numpy as np
@@ -19,9 +20,10 @@ from mimo_radar_env.core.superarm import random_super_arms  # noqa: E402
 from mimo_radar_env.envs import device_forms  # noqa: E402
 from mimo_radar_env.envs.engine import RadarEngine  # noqa: E402
 from mimo_radar_env.tracking import unscented  # noqa: E402
-from tests.helpers import StandInGraph  # noqa: E402
+from tests.helpers import StandInGraph, needs_torch_compiler  # noqa: E402
 
 DEVICE = os.environ.get("MIMO_RADAR_TEST_DEVICE", "cpu")
+needs_compiler = needs_torch_compiler()
 
 
 def _engine(version, fusion, trials, mode, precision="float64"):
@@ -197,6 +199,26 @@ def test_a_traced_form_needs_a_device_and_a_known_name():
         device_forms.check_device_mode("graph", None)
 
 
+def test_the_compiled_form_is_refused_on_a_torch_whose_compiler_cannot_keep_eagers_numbers(monkeypatch):
+    """torch 2.11 brought the last of inductor's options for eager's numbers (``eager_numerics``):
+    this torch has them all exactly where its version, read apart, is 2.11 or later; an option
+    it lacks is named, with the torch, before an engine is made, and the other forms run."""
+    installed = tuple(int(part) for part in re.findall(r"\d+", torch.__version__)[:2])
+    assert (device_forms.missing_compile_options() == []) == (installed >= (2, 11))
+    monkeypatch.setitem(device_forms.COMPILE_OPTIONS, "no_such_option", True)
+    refused = (
+        r"device_mode='compiled' needs torch 2\.11 or later, whose compiler keeps eager's numbers "
+        rf"\(inductor's (\S+, )*no_such_option\); this is torch {re.escape(torch.__version__)}, on which "
+        "the 'graph' and 'eager' forms run"
+    )
+    with pytest.raises(ValueError, match=refused):
+        device_forms.check_device_mode("compiled", "cpu")
+    with pytest.raises(ValueError, match=refused):
+        _engine("v1", "average", 2, "compiled")
+    device_forms.check_device_mode("graph", "cpu")
+
+
+@needs_compiler
 @pytest.mark.slow
 @pytest.mark.parametrize("elementwise", [False, True], ids=["library-products", "elementwise-products"])
 def test_the_compiled_form_gives_the_eager_numbers_to_round_off(elementwise):
@@ -213,6 +235,7 @@ def test_the_compiled_form_gives_the_eager_numbers_to_round_off(elementwise):
     assert engine._forms.eager_steps == 0 and engine._forms._function is not False  # it ran compiled
 
 
+@needs_compiler
 def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkeypatch):
     """inductor is asked for no fused multiply-adds, PyTorch's libdevice and IEEE division (where
     its Triton kernels would depart from the eager step) and, on CUDA only, the CUDA graphs of
@@ -236,6 +259,7 @@ def test_the_step_is_compiled_with_eagers_numerics_and_on_cuda_its_graphs(monkey
         assert inductor.config.emulate_precision_casts and inductor.config.eager_numerics.division_rounding
 
 
+@needs_compiler
 def test_engines_whose_steps_trace_alike_share_one_compiled_step(monkeypatch):
     """A study's policies, one engine each, on one scenario: the second engine's step traces to
     the first's function (another seed, the same code and constants) and runs its compiled step,
@@ -349,6 +373,7 @@ def test_a_traced_functions_host_constants_move_to_the_device():
     torch.testing.assert_close(again(x), function(x), rtol=0, atol=0)
 
 
+@needs_compiler
 def test_a_compiled_function_is_compiled_once_a_signature_and_gives_its_numbers():
     calls = []
 
