@@ -473,6 +473,22 @@ def threaded_task(runner: Runner, threads: int, *task: Any) -> dict:
         return runner(*task)
 
 
+@contextlib.contextmanager
+def _keeping_sigterm() -> Iterator[None]:
+    """SIGTERM's handler as it was before the block: ``ray.init`` replaces it with its own (one that
+    exits, and its core worker's, which prints a stack trace), so a command stopped by SIGTERM on
+    Ray exited 1, with no word of the tasks it had saved, where it should stop as on Ctrl-C
+    (``benchmarks.cli``). Off the main thread, where no handler can be set, nothing."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    handler = signal.getsignal(signal.SIGTERM)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, handler if handler is not None else signal.SIG_DFL)
+
+
 def run_ray(
     runner: Runner,
     todo: list[Task],
@@ -491,7 +507,10 @@ def run_ray(
     started_here = not ray.is_initialized()
     if started_here:
         try:
-            ray.init(address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True)
+            with _keeping_sigterm():
+                ray.init(
+                    address=address, include_dashboard=False, log_to_driver=False, ignore_reinit_error=True
+                )
         except (ConnectionError, RuntimeError) as exc:  # a gRPC server that is not Ray's, a cluster gone
             reason = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             if not address:

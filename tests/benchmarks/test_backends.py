@@ -104,6 +104,31 @@ def test_a_ray_runs_arrays_are_its_own_not_views_of_the_object_store(tmp_path):
         np.testing.assert_array_equal(value, on_disk["fix1"][key], strict=True)
 
 
+def test_a_run_on_ray_keeps_the_processs_sigterm_handler(tmp_path):
+    """``ray.init`` puts its own SIGTERM handling in place (a command stopped by SIGTERM on Ray then
+    exited 1 with a stack trace and no word of what it had saved); a run on Ray leaves the
+    handler the process had, as the command line's stop on SIGTERM needs (checked as the tasks
+    finish and after)."""
+    pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
+
+    def handler(signum, frame):
+        raise AssertionError("not called")
+
+    seen = []
+    previous = signal.signal(signal.SIGTERM, handler)
+    try:
+        backends.run_ray(
+            lambda payload, policy, shard: {"shard": shard},
+            [({"run": 0}, "fix1", shard) for shard in range(2)],
+            lambda number, result: seen.append(signal.getsignal(signal.SIGTERM)),
+            address=None,
+        )
+        assert seen == [handler, handler]
+        assert signal.getsignal(signal.SIGTERM) is handler
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
 def test_ray_backend_runs_a_studys_runs_together_with_the_numbers_of_each_alone(tmp_path):
     pytest.importorskip("ray", reason="the Ray backend needs the 'ray' extra: pip install -e '.[ray]'")
     configs = [
