@@ -334,12 +334,20 @@ def train_ppo(
     if seeds == 1 and not seed_folders:
         with output_lock(out):
             _clear_model(out, overwrite)
-            if config is None:
-                meta = _train(
-                    spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
-                )
-            else:
-                meta = _train_torch(sc, timesteps, out, seed, config, options, device, device_mode, progress)
+            try:
+                if config is None:
+                    meta = _train(
+                        spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
+                    )
+                else:
+                    meta = _train_torch(
+                        sc, timesteps, out, seed, config, options, device, device_mode, progress
+                    )
+            except KeyboardInterrupt:
+                raise RunInterrupted(
+                    f"interrupted: the training into {out} had not finished, and a training is saved "
+                    "only at its end; run the same command again to train it from its first step"
+                ) from None
             return _recorded(meta, record, out)
     with output_lock(out):
         done = train_jobs(

@@ -94,6 +94,29 @@ def test_the_folder_is_locked_and_an_old_model_is_replaced_only_when_asked(tmp_p
     assert (folder / "model.zip").exists() and not (folder / "vecnormalize.npz").exists()  # no stale file
 
 
+def test_ctrl_c_during_one_training_says_nothing_of_it_was_saved(tmp_path, monkeypatch, capsys):
+    """Ctrl-C during a single training: the command says that a training is saved only at its end
+    and how to train it again (exit 130), and the same command then trains it."""
+    pytest.importorskip("torch", reason="torch-ppo needs the rl extra")
+    from benchmarks import training
+
+    def interrupted(*arguments, **keywords):
+        raise KeyboardInterrupt
+
+    argv = ["train-ppo", "--algo", "torch-ppo", "--device", "cpu", "--timesteps", "64", "--quiet"]
+    with monkeypatch.context() as patch:
+        patch.setattr(training, "_train_torch", interrupted)
+        with pytest.raises(SystemExit) as exit_info:
+            main([*argv, "--out", str(tmp_path / "t")])
+    assert exit_info.value.code == 130
+    assert capsys.readouterr().err.strip() == (
+        f"mimo-radar-bench: interrupted: the training into {tmp_path / 't'} had not finished, and a "
+        "training is saved only at its end; run the same command again to train it from its first step"
+    )
+    assert main([*argv, "--out", str(tmp_path / "t")]) == 0
+    assert (tmp_path / "t" / training.META_FILE).is_file()
+
+
 def test_ctrl_c_between_seeds_says_what_was_saved_and_how_to_resume(tmp_path, monkeypatch, capsys):
     """Ctrl-C during a several-seed training: the finished seeds stay, and the command says how
     many and how to resume (exit 130), as an interrupted benchmark run does."""
