@@ -54,6 +54,9 @@ class Command:
 
     name: ClassVar[str] = ""
     description: ClassVar[str | None] = None
+    #: What the command keeps when it is stopped (Ctrl-C, SIGTERM) outside a run's tasks, whose
+    #: own message says what they saved: said after ``interrupted``.
+    when_stopped: ClassVar[str | None] = None
 
     def __init__(self, args: argparse.Namespace) -> None:
         self.args = args
@@ -405,10 +408,9 @@ def run(parser: argparse.ArgumentParser, args: Any) -> int:
             f"{PROG}: {'terminated (SIGTERM), ' if terminated else ''}{exc}\n",
         )
     except KeyboardInterrupt:
-        parser.exit(
-            INTERRUPTED_CODES[bool(terminated)],
-            f"{PROG}: {'terminated (SIGTERM)' if terminated else 'interrupted'}\n",
-        )
+        note = args.command_class.when_stopped
+        stopped = "terminated (SIGTERM)" if terminated else "interrupted"
+        parser.exit(INTERRUPTED_CODES[bool(terminated)], f"{PROG}: {stopped}{f'; {note}' if note else ''}\n")
     except (BenchError, ScenarioError) as exc:
         message = exc.for_command_line() if isinstance(exc, HarnessError) else str(exc)
         parser.exit(2, f"{PROG}: error: {message}\n")

@@ -190,6 +190,9 @@ class Study(Command):
     :meth:`report` (with :meth:`judge` where they judge statements).
     """
 
+    when_stopped: ClassVar[str | None] = (
+        "every task finished is kept in its run's folder: run the same command again to resume"
+    )
     #: The default of ``--trials``.
     default_trials: ClassVar[int] = DEFAULT_TRIALS
     #: Whether agent parameters start from the env version's paper study.

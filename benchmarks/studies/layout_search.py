@@ -219,6 +219,10 @@ class LayoutSearch(Study):
     name = "search-layouts"
     paper_study = True
     description = __doc__
+    when_stopped = (
+        "the search runs again from its start (the same --seed finds the same layouts) and every "
+        "scorecard task finished is kept: run the same command again to resume"
+    )
 
     @classmethod
     def add_study_arguments(cls, parser: argparse.ArgumentParser) -> None:

@@ -488,6 +488,34 @@ def test_the_commands_that_run_tasks_are_those_with_a_backend():
         assert entry.runs_tasks == ("--backend" in options), entry.name
 
 
+@pytest.mark.parametrize(
+    ("argv", "said"),
+    [
+        (["demo"], ""),
+        (["claims", "--workers", "1", "--out", "x"], "; every task finished is kept in its run's folder: run the same "
+         "command again to resume"),
+        (["search-layouts", "--workers", "1", "--out", "x"], "; the search runs again from its start (the same --seed "
+         "finds the same layouts) and every scorecard task finished is kept: run the same command again "
+         "to resume"),
+    ],
+)  # fmt: skip
+def test_a_command_stopped_outside_a_runs_tasks_says_what_it_keeps(monkeypatch, capsys, argv, said):
+    """Ctrl-C outside a run's tasks (whose own message counts what they saved): a study says that
+    its finished tasks are kept and how to resume, the layout search that its search starts over;
+    a command that keeps nothing says only that it was interrupted (exit 130)."""
+    from benchmarks import cli
+
+    def stopped(self):
+        raise KeyboardInterrupt
+
+    command = cli.COMMANDS[argv[0]].load()
+    monkeypatch.setattr(command, "main", stopped)
+    with pytest.raises(SystemExit) as exit_info:
+        main(argv)
+    assert exit_info.value.code == 130
+    assert capsys.readouterr().err.splitlines()[-1] == f"mimo-radar-bench: interrupted{said}"
+
+
 def test_a_process_forked_during_a_command_ends_on_sigterm_as_by_default():
     """A command stops on SIGTERM as on Ctrl-C; a process forked meanwhile with that handler (scipy's
     differential evolution's pool, in search-layouts) ends on its pool's SIGTERM as by default: raising
