@@ -8,8 +8,10 @@ Needs the ``rl`` extra (``pip install torch==2.13.0 && pip install 'mimo-radar-e
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import time
+from collections.abc import Iterator
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -275,6 +277,18 @@ def _check_training_time(
         say(f"{what}: about {duration(seconds)} on a machine like the developers' (a rough estimate)")
 
 
+@contextlib.contextmanager
+def _saved_only_at_its_end(out: Path) -> Iterator[None]:
+    """Ctrl-C or SIGTERM during a single training, said as what it means: nothing of it is kept."""
+    try:
+        yield
+    except KeyboardInterrupt:
+        raise RunInterrupted(
+            f"interrupted: the training into {out} had not finished, and a training is saved only at "
+            "its end; run the same command again to train it from its first step"
+        ) from None
+
+
 def train_ppo(
     scenario: str | Path | Scenario,
     timesteps: int | None,
@@ -332,22 +346,14 @@ def train_ppo(
     if n_envs != params.get("n_envs", 8):
         job["n_envs"] = n_envs  # recorded only when it overrides the entry's
     if seeds == 1 and not seed_folders:
-        with output_lock(out):
+        with output_lock(out), _saved_only_at_its_end(out):
             _clear_model(out, overwrite)
-            try:
-                if config is None:
-                    meta = _train(
-                        spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
-                    )
-                else:
-                    meta = _train_torch(
-                        sc, timesteps, out, seed, config, options, device, device_mode, progress
-                    )
-            except KeyboardInterrupt:
-                raise RunInterrupted(
-                    f"interrupted: the training into {out} had not finished, and a training is saved "
-                    "only at its end; run the same command again to train it from its first step"
-                ) from None
+            if config is None:
+                meta = _train(
+                    spec, sc, params, timesteps, out, seed, action, tensorboard, progress, options, n_envs
+                )
+            else:
+                meta = _train_torch(sc, timesteps, out, seed, config, options, device, device_mode, progress)
             return _recorded(meta, record, out)
     with output_lock(out):
         done = train_jobs(

@@ -488,17 +488,21 @@ def test_the_commands_that_run_tasks_are_those_with_a_backend():
         assert entry.runs_tasks == ("--backend" in options), entry.name
 
 
+KEPT = "every task finished is kept in its run's folder: run the same command again to resume"
+SEARCH_KEPT = (
+    "the search runs again from its start (the same --seed finds the same layouts) and every "
+    "scorecard task finished is kept: run the same command again to resume"
+)
+
+
 @pytest.mark.parametrize(
     ("argv", "said"),
     [
         (["demo"], ""),
-        (["claims", "--workers", "1", "--out", "x"], "; every task finished is kept in its run's folder: run the same "
-         "command again to resume"),
-        (["search-layouts", "--workers", "1", "--out", "x"], "; the search runs again from its start (the same --seed "
-         "finds the same layouts) and every scorecard task finished is kept: run the same command again "
-         "to resume"),
+        (["claims", "--workers", "1", "--out", "x"], f"; {KEPT}"),
+        (["search-layouts", "--workers", "1", "--out", "x"], f"; {SEARCH_KEPT}"),
     ],
-)  # fmt: skip
+)
 def test_a_command_stopped_outside_a_runs_tasks_says_what_it_keeps(monkeypatch, capsys, argv, said):
     """Ctrl-C outside a run's tasks (whose own message counts what they saved): a study says that
     its finished tasks are kept and how to resume, the layout search that its search starts over;
