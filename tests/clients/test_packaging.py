@@ -30,8 +30,8 @@ def test_the_wheel_in_a_fresh_venv_runs_demo_and_a_short_train_ppo():
 
 @pytest.mark.slow
 def test_the_lowest_declared_versions_run_the_demo_and_their_tests():
-    """Every core dependency, numba, the rl extra's learners and torch, and Ray at
-    pyproject.toml's lower bound, in a new venv (~7.5 min)."""
+    """Every core dependency, numba, the rl extra's learners and torch, Ray and the docs extra at
+    pyproject.toml's lower bound, in a new venv (~8 min): the demo, the tests, the docs site."""
     result = subprocess.run(
         ["bash", str(ROOT / ".ci" / "lowest-check")], capture_output=True, text=True, timeout=1800
     )
@@ -41,6 +41,7 @@ def test_the_lowest_declared_versions_run_the_demo_and_their_tests():
     assert ran in result.stdout
     torch_bound = re.search(r'"torch>=([0-9.]+)"', (ROOT / "pyproject.toml").read_text())[1]
     assert f" torch=={torch_bound} " in result.stdout.split(ran)[1].splitlines()[0] + " "
+    assert result.stdout.rstrip().endswith(", and the docs site built")
 
 
 def test_the_hyperparameters_are_package_data():
