@@ -104,7 +104,7 @@ def test_a_ray_runs_arrays_are_its_own_not_views_of_the_object_store(tmp_path):
         np.testing.assert_array_equal(value, on_disk["fix1"][key], strict=True)
 
 
-def test_a_run_on_ray_keeps_the_processs_sigterm_handler(tmp_path):
+def test_a_run_on_ray_keeps_the_processs_sigterm_handler():
     """``ray.init`` puts its own SIGTERM handling in place (a command stopped by SIGTERM on Ray then
     exited 1 with a stack trace and no word of what it had saved); a run on Ray leaves the
     handler the process had, as the command line's stop on SIGTERM needs (checked as the tasks
